@@ -1,0 +1,1 @@
+"""Speed benchmarks of fsrbayes; run with ``python -m benchmarks`` (results in BENCHMARKS.md)."""

@@ -1,0 +1,13 @@
+"""fsrbayes: Bayesian inference on the creep (drift) of Force Sensing Resistors.
+
+The forward model is Paredes-Madrid et al., Materials 2017, 10, 1334: quantum tunneling
+(Simmons) through a gap that creeps like a Burgers element, in series with a
+stress-dependent contact resistance.
+"""
+
+from .data.sensors import Sensor, available_sensors, load_sensor
+from .physics.sensor import DomainError, current, drift
+
+__version__ = "0.1.0"
+
+__all__ = ["current", "drift", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]

@@ -1,0 +1,181 @@
+"""Sensor definitions: ``models/*.toml`` read into :class:`Sensor` objects.
+
+The TOML files are found in the installed package (``fsrbayes/_models``, where the wheel
+puts the repository's ``models/`` folder) or, in a source checkout, in ``models/`` next to
+the package. ``load_sensor`` also accepts a path to a user's own TOML file.
+"""
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+from .distributions import Distribution, make_distribution
+
+__all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory", "CANONICAL_PARAMETERS"]
+
+CANONICAL_PARAMETERS = {
+    "A0": "m²", "A1": "m²·Pa^-A2", "A2": "–", "Va": "eV", "Vth": "V", "s0": "m", "Rpar": "Ω",
+    "alpha": "–", "Rc0": "Ω·Pa^alpha", "sigma0": "Pa", "k1": "Pa", "k2": "Pa", "b2": "Pa·s",
+    "inv_b1": "1/(Pa·s)", "psi": "1/(Pa·s^n)", "n": "–", "sigma_rel": "–", "nu": "–",
+}
+"""Every parameter a model file defines, with its unit (DESIGN.md §1)."""
+
+REQUIRED_SENSOR_KEYS = ("name", "description", "area_m2")
+
+
+def models_directory():
+    """The folder holding the bundled sensor TOML files.
+
+    Returns
+    -------
+    pathlib.Path
+        ``fsrbayes/_models`` in an installed wheel, else ``models/`` of the source checkout.
+    """
+    package = Path(__file__).resolve().parents[1]
+    for candidate in (package / "_models", package.parent / "models"):
+        if candidate.is_dir() and any(candidate.glob("*.toml")):
+            return candidate
+    raise FileNotFoundError(
+        f"no sensor model files found in {package / '_models'} or {package.parent / 'models'}; "
+        "reinstall fsrbayes or run from a source checkout"
+    )
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """A sensor type: physical area, default parameters and priors.
+
+    Attributes
+    ----------
+    name : str
+        Canonical short name (``"a201"``, ``"fsr402"``).
+    description : str
+        Long name.
+    area_m2 : float
+        Physical area A_FSR in m² (stress = force / area).
+    params : Mapping[str, float]
+        Default parameter values with the canonical names (read-only).
+    priors : Mapping[str, Distribution]
+        The prior of every parameter (read-only); ``fixed`` ones are not sampled.
+    aliases : tuple of str
+        Other names accepted by :func:`load_sensor`.
+    source : pathlib.Path
+        The TOML file read.
+    """
+
+    name: str
+    description: str
+    area_m2: float
+    params: MappingProxyType
+    priors: MappingProxyType
+    aliases: tuple = ()
+    source: Path = field(default=None, compare=False)
+    reference: str = ""
+
+    @property
+    def free_parameters(self):
+        """Names of the parameters whose prior is not ``fixed``, in file order."""
+        return tuple(name for name, dist in self.priors.items() if not dist.is_fixed)
+
+    def stress(self, force_N):
+        """Stress in Pa for a force in N on this sensor (eq. 8, σ = F/A_FSR)."""
+        return force_N / self.area_m2
+
+    def __repr__(self):
+        return f"Sensor({self.name!r}, {self.description!r}, area={self.area_m2:g} m², source={str(self.source)!r})"
+
+
+def _read(path):
+    try:
+        with open(path, "rb") as handle:
+            return tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML ({exc})") from None
+
+
+def _parse(path, raw):
+    where = str(path)
+    sensor = raw.get("sensor")
+    if not isinstance(sensor, dict):
+        raise ValueError(f"{where}: missing [sensor] table with keys {list(REQUIRED_SENSOR_KEYS)}")
+    missing = [k for k in REQUIRED_SENSOR_KEYS if k not in sensor]
+    if missing:
+        raise ValueError(f"{where}: [sensor] is missing {missing}")
+    area = sensor["area_m2"]
+    if not isinstance(area, (int, float)) or not (0 < area < 1):
+        raise ValueError(f"{where}: sensor.area_m2 must be a positive area in m² below 1, got {area!r}")
+    params = raw.get("params", {})
+    priors_raw = raw.get("priors", {})
+    for table, values in (("params", params), ("priors", priors_raw)):
+        unknown = sorted(set(values) - set(CANONICAL_PARAMETERS))
+        if unknown:
+            raise ValueError(f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(CANONICAL_PARAMETERS)}")
+    for name, value in params.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"{where}: params.{name} must be a finite number, got {value!r}")
+    missing_prior = sorted(set(params) - set(priors_raw))
+    if missing_prior:
+        raise ValueError(f"{where}: every parameter needs a prior; [priors] lacks {missing_prior}")
+    priors = {name: make_distribution(spec, f"{where}: priors.{name}") for name, spec in priors_raw.items()}
+    for name, dist in priors.items():
+        lo, hi = dist.support
+        if name in params and not (lo <= params[name] <= hi):
+            raise ValueError(f"{where}: params.{name} = {params[name]:g} lies outside its prior's support [{lo:g}, {hi:g}]")
+    return Sensor(
+        name=str(sensor["name"]),
+        description=str(sensor["description"]),
+        area_m2=float(area),
+        params=MappingProxyType({k: float(v) for k, v in params.items()}),
+        priors=MappingProxyType(priors),
+        aliases=tuple(str(a) for a in sensor.get("aliases", ())),
+        source=Path(path),
+        reference=str(sensor.get("reference", "")),
+    )
+
+
+def _normalise(name):
+    return name.strip().lower().replace("_", "-").replace(" ", "-")
+
+
+def _bundled():
+    return {path: _parse(path, _read(path)) for path in sorted(models_directory().glob("*.toml"))}
+
+
+def available_sensors():
+    """Canonical names of the bundled sensors."""
+    return sorted(sensor.name for sensor in _bundled().values())
+
+
+def load_sensor(name):
+    """Load a sensor by name or alias (``"a201"``, ``"FSR 402"``) or from a TOML path.
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        A bundled sensor's name or alias (case-insensitive), or the path of a TOML file in the
+        format of ``models/README.md``.
+
+    Returns
+    -------
+    Sensor
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (listing the known ones) or an invalid file.
+    """
+    path = Path(name)
+    if path.suffix == ".toml" or path.is_file():
+        if not path.is_file():
+            raise ValueError(f"sensor file {path} does not exist")
+        return _parse(path, _read(path))
+    wanted = _normalise(str(name))
+    known = []
+    for sensor in _bundled().values():
+        names = [sensor.name, *sensor.aliases]
+        known.append(sensor.name)
+        if wanted in {_normalise(n) for n in names} or wanted.replace("-", "") in {_normalise(n).replace("-", "") for n in names}:
+            return sensor
+    raise ValueError(f"unknown sensor {name!r}: expected one of {sorted(known)} (or an alias, or a .toml path)")

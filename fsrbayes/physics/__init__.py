@@ -1,0 +1,36 @@
+"""Pure, vectorised physics of FSR creep (Paredes-Madrid et al. 2017).
+
+No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything here is
+numpy/scipy functions of arrays in SI units (barrier height in eV).
+"""
+
+from . import constants, contact, loading, peers, rheology, solver, tunneling
+from .contact import contact_resistance, effective_area, gap, stress_from_force
+from .loading import StressHistory
+from .rheology import creep_compliance, creep_strain, strain_history
+from .sensor import (
+    DividerResult,
+    DomainError,
+    DomainWarning,
+    amplifier_output,
+    current,
+    current_from_amplifier,
+    current_history,
+    drift,
+    resistance_from_amplifier,
+    resistances,
+    sensor_state,
+    solve_current,
+    voltage_divider,
+)
+from .solver import BulkSolution, solve_bulk
+from .tunneling import paper_peak_voltage, tunneling_current
+
+__all__ = [
+    "constants", "contact", "loading", "peers", "rheology", "solver", "tunneling",
+    "contact_resistance", "effective_area", "gap", "stress_from_force", "StressHistory",
+    "creep_compliance", "creep_strain", "strain_history", "DividerResult", "DomainError",
+    "DomainWarning", "amplifier_output", "current", "current_from_amplifier", "current_history",
+    "drift", "resistance_from_amplifier", "resistances", "sensor_state", "solve_current",
+    "voltage_divider", "BulkSolution", "solve_bulk", "paper_peak_voltage", "tunneling_current",
+]
