@@ -221,11 +221,14 @@ def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", 
     v_bulk = np.empty(n)
     regime = np.empty(n, dtype=np.int8)
     iterations = 0
-    for begin in range(0, n, CHUNK):
-        block = slice(begin, begin + CHUNK)
-        parts = [None if x is None else x[block] for x in flat]
-        current[block], v_bulk[block], regime[block], its = _solve_block(*parts, law, finish, max_iter)
-        iterations = max(iterations, its)
+    # Invalid points are masked out explicitly (regime 0), so floating-point warnings from
+    # them (log of a negative resistance, sqrt of a negative gap) carry no information.
+    with np.errstate(all="ignore"):
+        for begin in range(0, n, CHUNK):
+            block = slice(begin, begin + CHUNK)
+            parts = [None if x is None else x[block] for x in flat]
+            current[block], v_bulk[block], regime[block], its = _solve_block(*parts, law, finish, max_iter)
+            iterations = max(iterations, its)
     valid = regime != INVALID
     return BulkSolution(
         current=current.reshape(shape),

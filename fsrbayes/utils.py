@@ -1,0 +1,34 @@
+"""Small helpers shared by every layer (no heavy imports)."""
+
+import json
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+__all__ = ["atomic_path", "write_json_atomic"]
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path next to ``path``; move it into place only if the block succeeds.
+
+    Readers never see a half-written file: the final ``os.replace`` is atomic on POSIX.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise ValueError(f"output directory {path.parent} does not exist")
+    handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(handle)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_json_atomic(path, payload):
+    """Write ``payload`` as indented JSON to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(payload, indent=2, allow_nan=False) + "\n")

@@ -1,0 +1,24 @@
+import numpy as np
+import pytest
+
+from fsrbayes import load_sensor
+
+
+@pytest.fixture(scope="session")
+def a201():
+    return dict(load_sensor("a201").params)
+
+
+@pytest.fixture(scope="session")
+def fsr402():
+    return dict(load_sensor("fsr402").params)
+
+
+@pytest.fixture(params=["a201", "fsr402"], scope="session")
+def sensor_params(request):
+    return dict(load_sensor(request.param).params)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20171334)

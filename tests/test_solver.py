@@ -1,0 +1,203 @@
+"""The implicit current equation: reference numbers, jumps, validity domain, properties."""
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.optimize import brentq
+
+import fsrbayes
+from fsrbayes import load_sensor
+from fsrbayes.physics import DomainError, DomainWarning, solve_bulk, solve_current, tunneling as tl
+from fsrbayes.physics.sensor import sensor_state
+from fsrbayes.physics.rheology import creep_strain
+
+# DESIGN.md §1: paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
+REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
+
+
+def test_reference_drift_table(a201):
+    stress = np.array(REFERENCE["stress_Pa"])[:, None]
+    drift = fsrbayes.drift(a201, REFERENCE["voltage_V"], stress, 3600.0, tunneling="paper")
+    np.testing.assert_allclose(drift, REFERENCE["drift_3600_percent"], atol=REFERENCE["tolerance_points"])
+
+
+def test_reference_current_at_200kpa_2v(a201):
+    solution = solve_current(a201, 2.0, 200e3, 0.0, tunneling="paper")
+    assert float(solution.current) == pytest.approx(REFERENCE["current_200kPa_2V_A"], rel=1e-3)
+    assert float(solution.v_bulk) == pytest.approx(REFERENCE["v_bulk_200kPa_2V"], abs=0.005)
+
+
+def _residual(solution, voltage, series):
+    return np.abs(solution.v_bulk + series * solution.current - voltage) / np.abs(voltage)
+
+
+@pytest.mark.parametrize("law", ["smooth", "paper"])
+def test_agrees_with_a_per_point_brentq(a201, law, rng):
+    v = np.exp(rng.uniform(np.log(0.01), np.log(3.5), 60))
+    sigma = np.exp(rng.uniform(np.log(2e4), np.log(3e5), 60))
+    t = rng.uniform(0, 3600, 60)
+    s, area, series = sensor_state(a201, sigma, creep_strain(sigma, t, a201))
+    solution = solve_bulk(v, series, s, a201["Va"], area, law=law, threshold=a201["Vth"])
+    assert solution.valid.all()
+    for i in np.flatnonzero(~solution.at_jump):
+        def f(x):
+            return x + series[i] * tl.tunneling_current(x, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"]) - v[i]
+        root = brentq(f, 0, v[i], xtol=1e-300, rtol=1e-15)
+        expected = tl.tunneling_current(root, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"])
+        assert solution.current[i] == pytest.approx(expected, rel=1e-10)
+
+
+def test_broadcasts_walkers_by_curves_by_times(a201, rng):
+    walkers = {k: v * np.exp(0.05 * rng.standard_normal((5, 1, 1))) for k, v in a201.items()}
+    voltage = np.array([0.1, 0.5, 2.0])[:, None]
+    stress = 1e5
+    time = np.linspace(0, 3600, 7)
+    block = fsrbayes.current(walkers, voltage, stress, time)
+    assert block.shape == (5, 3, 7)
+    for w in range(5):
+        single = fsrbayes.current({k: v[w, 0, 0] for k, v in walkers.items()}, voltage, stress, time)
+        np.testing.assert_allclose(block[w], single, rtol=1e-13)
+
+
+def test_ohmic_limit_of_the_circuit(a201):
+    # At millivolts the bulk dominates and I = V/(R_bulk + 2 Rc) is linear in V.
+    v = np.geomspace(1e-7, 1e-4, 4)
+    current = fsrbayes.current(a201, v, 1e5, 0.0)
+    np.testing.assert_allclose(current / v, current[0] / v[0], rtol=1e-5)
+
+
+def test_symmetric_in_the_voltage_sign(a201):
+    up = fsrbayes.current(a201, [0.3, 2.0], 1e5, 100.0)
+    down = fsrbayes.current(a201, [-0.3, -2.0], 1e5, 100.0)
+    np.testing.assert_allclose(down, -up, rtol=1e-15)
+    assert fsrbayes.current(a201, 0.0, 1e5, 0.0) == 0.0
+
+
+def test_zero_series_resistance_puts_the_whole_voltage_on_the_bulk():
+    solution = solve_bulk([0.05, 0.2, 1.0], 0.0, 4.41e-9, 0.229, 1e-16)
+    np.testing.assert_array_equal(solution.v_bulk, [0.05, 0.2, 1.0])
+    np.testing.assert_allclose(solution.current, tl.tunneling_current([0.05, 0.2, 1.0], 4.41e-9, 0.229, 1e-16),
+                               rtol=1e-14)
+
+
+def test_jump_at_va_returns_the_jump_point():
+    s, va, area, rs = 4.3e-9, 0.229, 1e-16, 2e4
+    low = tl.simmons_intermediate(va, s, va, area)
+    high = tl.simmons_high_voltage(va, s, va, area)
+    assert high > low
+    v = va + rs * 0.5 * (low + high)  # the circuit line crosses the jump, not the law
+    solution = solve_bulk(v, rs, s, va, area, law="paper", threshold=0.073)
+    assert solution.at_jump and solution.valid
+    assert solution.v_bulk == va
+    assert low < solution.current < high
+    assert _residual(solution, v, rs) < 1e-14
+
+
+def test_downward_jump_at_vth_returns_the_lowest_root():
+    s, va, area, vth, rs = 4.3e-9, 0.229, 1e-16, 0.073, 1e11
+    ohmic = tl.simmons_ohmic(vth, s, va, area)
+    mid = tl.simmons_intermediate(vth, s, va, area)
+    assert mid < ohmic
+    v = vth + rs * 0.5 * (ohmic + mid)  # both eq. 9 and eq. 10 hold a root here
+    upper_root = brentq(lambda x: x + rs * tl.simmons_intermediate(x, s, va, area) - v, vth, v)
+    solution = solve_bulk(v, rs, s, va, area, law="paper", threshold=vth)
+    assert solution.regime == 1 and not solution.at_jump
+    assert solution.v_bulk < vth < upper_root
+    assert _residual(solution, v, rs) < 1e-14
+
+
+def test_paper_law_outside_its_domain_is_flagged_never_silent(a201):
+    voltages = np.array([1.0, 3.0, 8.0, 9.0])
+    solution = solve_current(a201, voltages, 200e3, 3600.0, tunneling="paper")
+    np.testing.assert_array_equal(solution.valid, [True, True, False, False])
+    assert np.isnan(solution.current[2:]).all()
+    with pytest.raises(DomainError, match=r"2 of 4 points are outside the validity domain.*V_FSR=8 V"):
+        fsrbayes.current(a201, voltages, 200e3, 3600.0, tunneling="paper")
+    masked = fsrbayes.current(a201, voltages, 200e3, 3600.0, tunneling="paper", on_invalid="mask")
+    assert masked.mask.tolist() == [False, False, True, True]
+    with pytest.warns(DomainWarning, match="outside the validity domain"):
+        fsrbayes.current(a201, voltages, 200e3, 3600.0, tunneling="paper", on_invalid="nan")
+    # The smooth law holds everywhere here.
+    assert np.all(fsrbayes.current(a201, voltages, 200e3, 3600.0) > 0)
+
+
+def test_closed_gap_is_outside_the_domain(fsr402):
+    # FSR 402: k1 = 0.388 MPa, so 500 kPa would compress the gap to nothing.
+    solution = solve_current(fsr402, 1.0, 5e5, 0.0)
+    assert not solution.valid and np.isnan(solution.current)
+
+
+def test_nonsense_inputs_are_flagged_not_crashing():
+    solution = solve_bulk([1.0, 1.0, 1.0, np.nan, 1.0], [1e3, -1.0, 1e3, 1e3, np.inf], 4.4e-9, 0.229,
+                          [-1e-16, 1e-16, np.nan, 1e-16, 1e-16])
+    assert not solution.valid.any()
+    assert np.isnan(solution.current).all()
+
+
+@pytest.mark.parametrize("law", ["smooth", "paper"])
+def test_extremes_terminate(law):
+    v = np.array([1e-12, 1e-6, 0.5, 3.0, 50.0, 1e3])[:, None]
+    rs = np.array([1e-30, 1e-3, 1e4, 1e12, 1e30])[:, None, None]
+    area = np.array([1e-40, 1e-18, 1e-10])[:, None, None, None]
+    solution = solve_bulk(v, rs, 4.4e-9, 0.229, area, law=law, threshold=0.073, max_iter=100)
+    assert solution.iterations <= 100
+    ok = solution.valid
+    assert np.all(np.isfinite(solution.current[ok])) and np.all(solution.current[ok] > 0)
+
+
+def _prior_box(sensor_name, rng, n):
+    sensor = load_sensor(sensor_name)
+    params = {}
+    for name, dist in sensor.priors.items():
+        lo, hi = dist.ppf([0.005, 0.995]) if not dist.is_fixed else (dist.args["value"],) * 2
+        params[name] = rng.uniform(lo, hi, n) if name not in ("s0", "Va", "A0", "A1", "Rc0", "k2", "b2", "psi") \
+            else np.exp(rng.uniform(np.log(lo), np.log(hi), n))
+    return params
+
+
+@pytest.mark.parametrize("law", ["smooth", "paper"])
+@pytest.mark.parametrize("sensor_name", ["a201", "fsr402"])
+def test_property_sweep_over_the_prior_box(sensor_name, law, rng):
+    n = 20000
+    params = _prior_box(sensor_name, rng, n)
+    v = np.exp(rng.uniform(np.log(1e-3), np.log(12.0), n))
+    sigma = np.exp(rng.uniform(np.log(1e3), np.log(5e5), n))
+    t = rng.uniform(0, 1e5, n)
+    strain = creep_strain(sigma, t, params)
+    s, area, series = sensor_state(params, sigma, strain)
+    solution = solve_bulk(v, series, s, params["Va"], area, law=law, threshold=params["Vth"])
+    ok = solution.valid
+    assert np.all(np.isfinite(solution.current[ok])) and np.all(solution.current[ok] > 0)
+    assert np.max(_residual(solution, v, series)[ok]) < 1e-10
+    # Invalid points are NaN and have a reason: a closed gap or opacity for both laws, the
+    # eq. 11 peak for the paper law.
+    assert np.isnan(solution.current[~ok]).all()
+    opaque = tl.smooth_law_is_valid(s, params["Va"])
+    if law == "smooth":
+        np.testing.assert_array_equal(ok, opaque)
+    else:
+        # Beyond the opacity condition the paper law needs Vth < Va and a root below its peak.
+        other = ~ok & opaque & (params["Vth"] < params["Va"])
+        assert np.all(v[other] > tl.paper_peak_voltage(s[other], params["Va"][other]))
+    assert ok.mean() > 0.5
+
+
+@settings(max_examples=150, deadline=None)
+@given(v=st.floats(1e-3, 12.0), sigma=st.floats(1e3, 4e5), t=st.floats(0, 1e5),
+       s0=st.floats(3e-9, 6e-9), va=st.floats(0.12, 0.45), rc0=st.floats(1e4, 1e8), law=st.sampled_from(["smooth", "paper"]))
+def test_hypothesis_solutions_satisfy_the_implicit_equation(v, sigma, t, s0, va, rc0, law):
+    params = {**load_sensor("a201").params, "s0": s0, "Va": va, "Rc0": rc0}
+    strain = creep_strain(sigma, t, params)
+    s, area, series = sensor_state(params, sigma, strain)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        solution = solve_bulk(v, series, s, va, area, law=law, threshold=0.073 if va > 0.073 else va / 2)
+    if solution.valid:
+        assert np.isfinite(solution.current) and solution.current > 0
+        assert _residual(solution, v, series) < 1e-10
+    else:
+        assert np.isnan(solution.current)
