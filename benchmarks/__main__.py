@@ -8,7 +8,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from benchmarks import solver  # noqa: E402
+from benchmarks import csv_read, solver  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 
@@ -17,6 +17,7 @@ def main():
           f"python {platform.python_version()}, numpy {np.__version__}")
     params = dict(load_sensor("a201").params)
     print(solver.report(solver.run(params)))
+    print(csv_read.report(csv_read.run()))
 
 
 if __name__ == "__main__":

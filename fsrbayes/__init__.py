@@ -5,9 +5,8 @@ The forward model is Paredes-Madrid et al., Materials 2017, 10, 1334: quantum tu
 stress-dependent contact resistance.
 """
 
+from ._version import __version__
 from .data.sensors import Sensor, available_sensors, load_sensor
 from .physics.sensor import DomainError, current, drift
-
-__version__ = "0.1.0"
 
 __all__ = ["current", "drift", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]

@@ -9,8 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
+from .data import csvio, synthetic
 from .data.sensors import available_sensors, load_sensor
+from .physics.effects import EFFECTS
 from .physics import sensor as fsr
 from .physics.tunneling import paper_peak_voltage
 from .utils import write_json_atomic
@@ -71,14 +73,35 @@ def cmd_demo(args):
     peak = float(paper_peak_voltage(params["s0"] * (1 - strain0), params["Va"]))
     print(f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the bulk "
           f"at 200 kPa); the smooth law holds at any voltage.")
+    observed = _default_data_drift(args.time)
     if out is not None:
         payload = {"sensor": sensor.name, "time_s": args.time, "voltages_V": voltages.tolist(),
                    "stresses_Pa": stresses.tolist(),
                    "drift_percent": {law: [[None if not np.isfinite(x) else float(x) for x in row] for row in t]
-                                     for law, t in results.items()}}
+                                     for law, t in results.items()},
+                   "default_data_observed_drift": observed}
         write_json_atomic(out / "figure7_drift.json", payload)
         print(f"\nwrote {out / 'figure7_drift.json'}")
     return 0
+
+
+def _default_data_drift(time_s):
+    """Print and return the observed drift spread of the embedded data set (Figures 10/11 preview)."""
+    data = synthetic.default_data()
+    print(f"\n{data.summary()}")
+    print(f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per voltage")
+    summary = []
+    for sensor in data.sensors:
+        sub = data.select(sensor=sensor)
+        middle = sorted({t.stress_Pa for t in sub})[1]
+        cells = []
+        for volt in sorted({t.voltage_V for t in sub}):
+            drifts = np.array([t.observed_drift(time_s) for t in sub if t.voltage_V == volt and t.stress_Pa == middle])
+            q25, q50, q75 = np.percentile(drifts, [25, 50, 75])
+            cells.append(f"{volt:g} V: {q50:.2f} [{q25:.2f}, {q75:.2f}]")
+            summary.append({"sensor": sensor, "voltage_V": volt, "stress_Pa": middle, "q25": q25, "q50": q50, "q75": q75})
+        print(f"  {sensor} ({middle / 1e3:.1f} kPa): " + "; ".join(cells))
+    return summary
 
 
 def cmd_forward(args):
@@ -101,12 +124,47 @@ def cmd_forward(args):
     return 0
 
 
+def cmd_simulate(args):
+    """The virtual test bench: simulated creep tests with known truth."""
+    sensors = [s.strip() for s in args.sensor.split(",") if s.strip()]
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise UsageError(f"-o: directory {out.parent} does not exist")
+    common = dict(noise_rel=args.noise, amp_offset_V=args.amp_offset, readout=args.readout, rheology=args.rheology,
+                  tunneling=args.tunneling, effects=args.effect or (), seed=args.seed, scatter=args.scatter)
+    if args.preset == "paper":
+        for flag in ("voltages", "stresses", "forces"):
+            if getattr(args, flag) is not None:
+                raise UsageError(f"--preset paper fixes the protocol; drop --{flag}")
+        sim = synthetic.paper_protocol(sensors, samples=args.samples or 361, spacing=args.spacing or "linear",
+                                       n_specimens=args.specimens or 16, **common)
+    else:
+        sim = synthetic.simulate(
+            sensors, n_specimens=args.specimens or 16,
+            voltages=None if args.voltages is None else _floats(args.voltages, "voltages"),
+            stresses=None if args.stresses is None else _floats(args.stresses, "stresses"),
+            forces=None if args.forces is None else _floats(args.forces, "forces"),
+            duration=args.duration, samples=args.samples or 25, spacing=args.spacing or "log", **common)
+    csv_path, truth_path = synthetic.write_simulation(sim, out, args.truth, digits=args.digits)
+    print(sim.data.summary().replace(sim.data.source, str(csv_path), 1))
+    effects = ", ".join(sim.truth["effects"]) or "none"
+    print(f"hidden effects: {effects}; truth written to {truth_path}")
+    return 0
+
+
+def cmd_check(args):
+    """Read and validate a creep-test CSV; print what it holds."""
+    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    print(data.summary())
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="fsrbayes", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"fsrbayes {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="the main job on the built-in data (for now: the paper's Figure 7 grid)")
+    demo = sub.add_parser("demo", help="the main job (for now: the paper's Figure 7 grid and the built-in data)")
     demo.add_argument("--out", help="folder for the results (JSON)")
     demo.add_argument("--time", type=float, default=3600.0, help="time of the drift in s (default 3600)")
     demo.set_defaults(func=cmd_demo)
@@ -120,6 +178,41 @@ def build_parser():
     fwd.add_argument("--time", type=float, default=3600.0, help="time of the drift in s")
     fwd.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fwd.set_defaults(func=cmd_forward)
+
+    sim = sub.add_parser("simulate", help="the virtual test bench: creep tests with known truth (CSV + truth JSON)")
+    sim.add_argument("-o", "--output", required=True, help="CSV to write (.csv or .csv.gz)")
+    sim.add_argument("--truth", help="truth JSON (default: beside the CSV, <name>.truth.json)")
+    sim.add_argument("--preset", choices=("paper",), help="the paper's protocol: 16 specimens, 1.96/4.9/9.8 N, "
+                     "its voltage lists, 1 h sampled every 10 s")
+    sim.add_argument("--sensor", default="a201", help="sensor name(s), comma-separated (default a201)")
+    sim.add_argument("--specimens", type=int, help="specimens per sensor (default 16)")
+    sim.add_argument("--voltages", help="V_FSR list in V (default: the paper's list for the sensor)")
+    group = sim.add_mutually_exclusive_group()
+    group.add_argument("--stresses", help="stress list in Pa")
+    group.add_argument("--forces", help="force list in N (default 1.96,4.9,9.8)")
+    sim.add_argument("--duration", type=float, default=3600.0, help="length of each test in s (default 3600)")
+    sim.add_argument("--samples", type=int, help="samples per test (default 25; paper preset 361)")
+    sim.add_argument("--spacing", choices=("log", "linear"), help="sampling times (default log; preset linear)")
+    sim.add_argument("--scatter", type=float, default=1.0, help="specimen-to-specimen variation, x the "
+                     "documented population log-scales (0: identical specimens)")
+    sim.add_argument("--noise", type=float, default=0.005, help="relative noise of each sample (default 0.005)")
+    sim.add_argument("--amp-offset", type=float, default=0.0, help="sd of a constant amplifier offset per test, V")
+    sim.add_argument("--readout", choices=("current", "amplifier"), default="current",
+                     help="write current_A, or vo_V and rf_ohm (eq. 23)")
+    sim.add_argument("--rheology", choices=("burgers", "zener", "nutting"), default="burgers")
+    sim.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
+    sim.add_argument("--effect", action="append", metavar="NAME[=params]",
+                     help=f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets its "
+                     "main parameter, NAME=key=value,key=value any of them")
+    sim.add_argument("--seed", type=int, default=0, help="random seed (same seed, same bytes)")
+    sim.add_argument("--digits", type=int, help="significant digits in the CSV (default: exact round trip)")
+    sim.set_defaults(func=cmd_simulate)
+
+    chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
+    chk.add_argument("data", help="CSV file (DESIGN format)")
+    chk.add_argument("--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)")
+    chk.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    chk.set_defaults(func=cmd_check)
     return parser
 
 

@@ -42,8 +42,15 @@ def test_every_parameter_has_a_proper_prior(name, rng):
         if not prior.is_fixed:
             lo, hi = prior.support
             assert np.all((draws >= lo) & (draws <= hi))
-    assert {"s0", "Va", "k1", "inv_b1", "sigma_rel"} <= set(sensor.free_parameters)
-    assert "Vth" not in sensor.free_parameters
+    burgers = sensor.free_parameters("burgers")
+    assert {"s0", "Va", "k1", "inv_b1", "sigma_rel"} <= set(burgers)
+    assert "Vth" not in burgers and "area_creep" not in burgers and "sigma0" not in burgers
+    assert "inv_b1" not in sensor.free_parameters("zener")
+    assert {"psi", "n"} <= set(sensor.free_parameters("nutting")) and "k2" not in sensor.free_parameters("nutting")
+    assert sensor.free_parameters("burgers+area-creep")[-2:] == ("area_creep", "sigma_rel")
+    # Effects are off at their defaults: the default parameters are the base model.
+    for effect in ("area_creep", "contact_creep", "plc_psi", "deg_amp", "sigma0"):
+        assert sensor.params[effect] == 0.0
     # Savage–Dickey needs a finite, non-zero prior density at fluidity 0 (Zener).
     assert 0 < np.exp(sensor.priors["inv_b1"].logpdf(0.0)) < np.inf
 

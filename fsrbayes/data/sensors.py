@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
+from ..physics.effects import model_parameters
 from .distributions import Distribution, make_distribution
 
 __all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory", "CANONICAL_PARAMETERS"]
@@ -19,6 +20,8 @@ CANONICAL_PARAMETERS = {
     "A0": "m²", "A1": "m²·Pa^-A2", "A2": "–", "Va": "eV", "Vth": "V", "s0": "m", "Rpar": "Ω",
     "alpha": "–", "Rc0": "Ω·Pa^alpha", "sigma0": "Pa", "k1": "Pa", "k2": "Pa", "b2": "Pa·s",
     "inv_b1": "1/(Pa·s)", "psi": "1/(Pa·s^n)", "n": "–", "sigma_rel": "–", "nu": "–",
+    "area_creep": "–", "contact_creep": "–", "plc_psi": "1/(Pa·s^n)", "plc_n": "–", "deg_amp": "–",
+    "deg_onset": "V", "deg_tau": "s", "deg_width": "V",
 }
 """Every parameter a model file defines, with its unit (DESIGN.md §1)."""
 
@@ -74,10 +77,23 @@ class Sensor:
     source: Path = field(default=None, compare=False)
     reference: str = ""
 
-    @property
-    def free_parameters(self):
-        """Names of the parameters whose prior is not ``fixed``, in file order."""
-        return tuple(name for name, dist in self.priors.items() if not dist.is_fixed)
+    def free_parameters(self, model="burgers", noise=("sigma_rel",)):
+        """Parameters a model samples: those it uses whose prior is not ``fixed``.
+
+        Parameters
+        ----------
+        model : str
+            ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms.
+        noise : tuple of str
+            Likelihood parameters to append (``sigma_rel``; ``nu`` for Student-t).
+
+        Returns
+        -------
+        tuple of str
+            In a stable order: tunneling/contact, rheology, effects, noise.
+        """
+        names = model_parameters(model) + tuple(noise)
+        return tuple(n for n in names if n in self.priors and not self.priors[n].is_fixed)
 
     def stress(self, force_N):
         """Stress in Pa for a force in N on this sensor (eq. 8, σ = F/A_FSR)."""

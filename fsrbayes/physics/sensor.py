@@ -16,6 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dataclasses import replace
+
+from . import effects as fx
 from . import rheology as rh
 from .contact import contact_resistance, effective_area, gap
 from .solver import solve_bulk
@@ -80,15 +83,30 @@ def sensor_state(params, stress, strain):
     return gap(params["s0"], strain), area, series
 
 
-def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0):
+def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     s, area, series = sensor_state(params, stress, strain)
+    if effects:
+        creep = strain - np.asarray(stress, dtype=float) / params["k1"]
+        area, series = fx.adjust_state(params, effects, area, series, creep)
     threshold = params["Vth"] if tunneling == "paper" else None
-    return solve_bulk(voltage, series + extra_series, s, params["Va"], area, law=tunneling,
-                      threshold=threshold)
+    solution = solve_bulk(voltage, series + extra_series, s, params["Va"], area, law=tunneling,
+                          threshold=threshold)
+    if "voltage-degradation" in effects:
+        solution = replace(solution, current=solution.current * fx.degradation_factor(params, effects, voltage, time))
+    return solution
 
 
-def _strain_step(params, stress, time, rheology):
+def _check_effect_params(params, effects):
+    effects = fx.check_effects(effects)
+    for name in effects:
+        missing = [p for p in fx.EFFECTS[name].parameters if p not in params]
+        if missing:
+            raise KeyError(f"effect {name!r} needs parameter(s) {missing}")
+    return effects
+
+
+def _strain_step(params, stress, time, rheology, effects=()):
     _check_choice("rheology", rheology, rh.RHEOLOGIES)
     time = np.asarray(time, dtype=float)
     if np.any(time < 0):
@@ -96,11 +114,13 @@ def _strain_step(params, stress, time, rheology):
     stress = np.asarray(stress, dtype=float)
     if np.any(stress <= 0) and not np.any(np.asarray(params.get("sigma0", 0.0)) > 0):
         raise ValueError(f"stress must be > 0 Pa, got min {stress.min():g} Pa")
-    return rh.creep_strain(stress, time, params, rheology)
+    return rh.creep_strain(stress, time, params, rheology) + fx.extra_strain(params, effects, stress, time)
 
 
-def solve_current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth"):
+def solve_current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", effects=()):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
+
+    ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`).
 
     Returns
     -------
@@ -110,8 +130,9 @@ def solve_current(params, voltage, stress, time, *, rheology="burgers", tunnelin
     ----------
     Paper eqs. (17)–(21).
     """
-    strain = _strain_step(params, stress, time, rheology)
-    return _solve(params, voltage, stress, strain, tunneling)
+    effects = _check_effect_params(params, effects)
+    strain = _strain_step(params, stress, time, rheology, effects)
+    return _solve(params, voltage, stress, strain, tunneling, effects=effects, time=time)
 
 
 def _apply_policy(solution, on_invalid, voltage, stress, time):
@@ -137,7 +158,8 @@ def _apply_policy(solution, on_invalid, voltage, stress, time):
     return value
 
 
-def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise"):
+def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise",
+            effects=()):
     """Sensor current I(t) in A after a stress step held from t = 0 (eqs. 17–21).
 
     Parameters
@@ -167,11 +189,12 @@ def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smo
     ----------
     Paper eqs. (1), (4)–(6), (17)–(21).
     """
-    solution = solve_current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling)
+    solution = solve_current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling, effects=effects)
     return _apply_policy(solution, on_invalid, voltage, stress, time)
 
 
-def drift(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise"):
+def drift(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise",
+          effects=()):
     """Normalised current drift in %, 100·(I(t) − I(0))/I(0), eq. 22.
 
     Same arguments as :func:`current`; I(0) is the current right after the step (strain
@@ -182,14 +205,14 @@ def drift(params, voltage, stress, time, *, rheology="burgers", tunneling="smoot
     Paper eq. (22).
     """
     now = current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling,
-                  on_invalid=on_invalid)
+                  on_invalid=on_invalid, effects=effects)
     start = current(params, voltage, stress, np.zeros_like(np.asarray(time, dtype=float)),
-                    rheology=rheology, tunneling=tunneling, on_invalid=on_invalid)
+                    rheology=rheology, tunneling=tunneling, on_invalid=on_invalid, effects=effects)
     return 100.0 * (now - start) / start
 
 
 def current_history(params, voltage, history, time, *, rheology="burgers", tunneling="smooth",
-                    on_invalid="raise"):
+                    on_invalid="raise", effects=()):
     """Sensor current for an arbitrary stress history σ(t) (Boltzmann superposition).
 
     Parameters
@@ -213,12 +236,16 @@ def current_history(params, voltage, history, time, *, rheology="burgers", tunne
     Paper eq. (15) (superposition) with eqs. (5), (6), (19)–(21) at the momentary σ(t).
     """
     _check_choice("rheology", rheology, rh.RHEOLOGIES)
+    effects = _check_effect_params(params, effects)
     time = np.asarray(time, dtype=float)
     stress = history.at(time)
     if np.any(stress <= 0):
         raise ValueError(f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} Pa")
     strain = rh.strain_history(history, time, params, rheology)
-    solution = _solve(params, voltage, stress, strain, tunneling)
+    if "power-law-creep" in effects:
+        power_law = {"k1": np.inf, "psi": params["plc_psi"], "n": params["plc_n"]}
+        strain = strain + rh.strain_history(history, time, power_law, "nutting")
+    solution = _solve(params, voltage, stress, strain, tunneling, effects=effects, time=time)
     return _apply_policy(solution, on_invalid, voltage, stress, time)
 
 

@@ -1,0 +1,442 @@
+"""Creep-test data: the tidy CSV format of DESIGN.md §2, validated, grouped into tests.
+
+One row per sample. Required columns ``specimen, sensor, voltage_V, time_s`` plus the load
+(``stress_Pa``, or ``force_N`` with the sensor's area) and the reading (``current_A``, or the
+amplifier output ``vo_V`` with its feedback resistor ``rf_ohm``, eq. 23). An optional ``test``
+column tells repeated tests apart. One creep test is one (specimen, voltage, stress, test)
+group, stress stepped at t = 0 and held.
+
+Every problem is reported as a :class:`DataError`: one line naming the file, the line, the
+column and what was expected. No row is ever dropped: a file either reads whole or fails.
+"""
+
+import csv
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..physics.sensor import current_from_amplifier
+from ..utils import atomic_path
+from .sensors import load_sensor
+
+__all__ = ["DataError", "CreepTest", "CreepData", "read_csv", "write_csv"]
+
+STRESS_PLAUSIBLE_MIN_PA = 1e3
+"""Stresses below 1 kPa (0.04 N on an A201) are taken for kPa written into stress_Pa."""
+VOLTAGE_PLAUSIBLE_MAX_V = 100.0
+CURRENT_PLAUSIBLE_MAX_A = 1.0
+
+
+class DataError(ValueError):
+    """Bad input data: one line, naming where and what was expected.
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    line : int or None
+        1-based line number in the file (the header is line 1).
+    column : str or None
+        The column concerned.
+    """
+
+    def __init__(self, message, path="<data>", line=None, column=None):
+        where = str(path) + (f" line {line}" if line is not None else "") + (f", column {column}" if column else "")
+        super().__init__(f"{where}: {message}")
+        self.path, self.line, self.column = str(path), line, column
+
+
+@dataclass(frozen=True)
+class CreepTest:
+    """One creep test: a stress step held at a constant sourcing voltage.
+
+    Attributes
+    ----------
+    specimen, sensor, test : str
+        Specimen id, canonical sensor name, repeat label ("" without a ``test`` column).
+    voltage_V, stress_Pa : float
+        Sourcing voltage and held stress.
+    time_s, current_A : ndarray
+        Samples, time strictly increasing from 0.
+    lines : ndarray of int
+        The file line of each sample (for messages).
+    """
+
+    specimen: str
+    sensor: str
+    voltage_V: float
+    stress_Pa: float
+    test: str
+    time_s: np.ndarray = field(repr=False)
+    current_A: np.ndarray = field(repr=False)
+    lines: np.ndarray = field(repr=False, compare=False, default=None)
+
+    @property
+    def key(self):
+        """(specimen, voltage_V, stress_Pa, test): what identifies the test."""
+        return (self.specimen, self.voltage_V, self.stress_Pa, self.test)
+
+    def observed_drift(self, time_s=3600.0):
+        """Measured drift in % (eq. 22) at ``time_s`` by linear interpolation; NaN past the data."""
+        if time_s > self.time_s[-1]:
+            return float("nan")
+        return float(100.0 * (np.interp(time_s, self.time_s, self.current_A) / self.current_A[0] - 1.0))
+
+
+@dataclass(frozen=True)
+class CreepData:
+    """A set of creep tests, in the order they first appear in the file.
+
+    Attributes
+    ----------
+    tests : tuple of CreepTest
+    source : str
+        Where the data came from.
+    """
+
+    tests: tuple
+    source: str = "<memory>"
+
+    def __len__(self):
+        return len(self.tests)
+
+    def __iter__(self):
+        return iter(self.tests)
+
+    @property
+    def n_rows(self):
+        """Number of samples over all tests."""
+        return int(sum(t.time_s.size for t in self.tests))
+
+    @property
+    def specimens(self):
+        """Specimen ids in order of first appearance."""
+        return list(dict.fromkeys(t.specimen for t in self.tests))
+
+    @property
+    def sensors(self):
+        """Canonical sensor names in order of first appearance."""
+        return list(dict.fromkeys(t.sensor for t in self.tests))
+
+    def select(self, specimen=None, sensor=None):
+        """The tests of one specimen and/or one sensor, as a new :class:`CreepData`."""
+        if specimen is not None and specimen not in self.specimens:
+            raise ValueError(f"specimen {specimen!r} is not in {self.source}; it has {self.specimens[:10]}"
+                             + (" …" if len(self.specimens) > 10 else ""))
+        tests = tuple(t for t in self.tests if (specimen is None or t.specimen == specimen)
+                      and (sensor is None or t.sensor == sensor))
+        return CreepData(tests, self.source)
+
+    def columns(self):
+        """The data as flat columns (dict of arrays), one entry per sample, test by test."""
+        sizes = [t.time_s.size for t in self.tests]
+        rep = lambda values: np.repeat(np.array(values, dtype=object if isinstance(values[0], str) else float), sizes)  # noqa: E731
+        return {
+            "specimen": rep([t.specimen for t in self.tests]),
+            "sensor": rep([t.sensor for t in self.tests]),
+            "voltage_V": rep([t.voltage_V for t in self.tests]),
+            "stress_Pa": rep([t.stress_Pa for t in self.tests]),
+            "test": rep([t.test for t in self.tests]),
+            "time_s": np.concatenate([t.time_s for t in self.tests]),
+            "current_A": np.concatenate([t.current_A for t in self.tests]),
+        }
+
+    def summary(self):
+        """A few lines describing the data set."""
+        n_spec = len(self.specimens)
+        lines = [f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "
+                 f"{n_spec} specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"]
+        for sensor in self.sensors:
+            sub = self.select(sensor=sensor)
+            volts = sorted({t.voltage_V for t in sub})
+            stresses = sorted({t.stress_Pa for t in sub})
+            longest = max(t.time_s[-1] for t in sub)
+            lines.append(f"  {sensor}: {len(sub.specimens)} specimen{'s' if len(sub.specimens) != 1 else ''}, voltages {', '.join(f'{v:g}' for v in volts)} V, "
+                         f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s")
+        return "\n".join(lines)
+
+
+def _decode(path):
+    try:
+        raw = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise DataError("file not found", path) from None
+    except IsADirectoryError:
+        raise DataError("is a directory, expected a CSV file", path) from None
+    if raw.startswith(b"\x1f\x8b"):
+        import gzip
+
+        raw = gzip.decompress(raw)
+    try:
+        # utf-8-sig strips the byte-order mark Excel writes; the header then reads normally.
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"not UTF-8 text (byte {exc.start}); save the file as CSV UTF-8", path) from None
+
+
+def _parse_floats(values, name, line_no, path, decimal_comma):
+    if decimal_comma:
+        values = [v.replace(",", ".") for v in values]
+    try:
+        array = np.array(values, dtype=float)
+    except ValueError:
+        for i, value in enumerate(values):
+            try:
+                float(value)
+            except ValueError:
+                shown = value if value.strip() else "an empty field"
+                raise DataError(f"expected a number, got {shown!r}", path, int(line_no[i]), name) from None
+        raise
+    bad = ~np.isfinite(array)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataError(f"expected a finite number, got {values[i]!r}", path, int(line_no[i]), name)
+    return array
+
+
+def _require_positive(array, name, path, lines, what):
+    bad = array <= 0
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataError(f"{what} must be > 0, got {array[i]:g}", path, int(lines[i]), name)
+
+
+def _columns_of(header, path):
+    names = [h.strip() for h in header]
+    seen = set()
+    for name in names:
+        if name in seen:
+            raise DataError(f"column {name!r} appears twice in the header", path, 1)
+        seen.add(name)
+    missing = [c for c in ("specimen", "sensor", "voltage_V", "time_s") if c not in names]
+    if "stress_Pa" not in names and "force_N" not in names:
+        missing.append("stress_Pa (or force_N)")
+    if "current_A" not in names and not ("vo_V" in names and "rf_ohm" in names):
+        missing.append("current_A (or vo_V and rf_ohm)")
+    if missing:
+        raise DataError(f"missing column(s) {', '.join(missing)}; the header has {names}", path, 1)
+    return names
+
+
+def read_csv(path, *, sep=",", shift_time=False):
+    """Read and validate a creep-test CSV file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``.csv`` or gzip-compressed ``.csv.gz``).
+    sep : str
+        Field separator. With ``";"`` (European spreadsheet exports) decimal commas are read
+        as points.
+    shift_time : bool
+        Shift each test's times so that it starts at 0 (by default a test that does not start
+        at 0 is an error, since t = 0 is the stress step).
+
+    Returns
+    -------
+    CreepData
+
+    Raises
+    ------
+    DataError
+        One line naming the file, line, column and what was expected.
+    """
+    text = _decode(path)
+    if not text.strip():
+        raise DataError("the file is empty; expected a header line and data rows "
+                        "(specimen,sensor,voltage_V,stress_Pa,time_s,current_A)", path)
+    lines = text.splitlines()
+    if sep == "," and ";" in lines[0] and "," not in lines[0]:
+        raise DataError("fields are separated by ';', expected ','; re-export as comma-separated "
+                        "or read with sep=';' (CLI: --sep ';')", path, 1)
+    rows = list(csv.reader(io.StringIO(text), delimiter=sep))
+    names = _columns_of(rows[0], path)
+    width = len(names)
+    body, line_numbers = [], []
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != width:
+            if not row or (len(row) == 1 and not row[0].strip()):
+                continue  # a blank line holds no sample
+            raise DataError(f"expected {width} fields like the header, got {len(row)}", path, number)
+        body.append(row)
+        line_numbers.append(number)
+    if not body:
+        raise DataError("the file has a header but no data rows", path, 1)
+    return _validate(names, body, np.array(line_numbers), path, sep == ";", shift_time)
+
+
+def _validate(names, body, line_no, path, decimal_comma, shift_time):
+    cols = dict(zip(names, (list(c) for c in zip(*body))))
+
+    def floats(name):
+        return _parse_floats(cols[name], name, line_no, path, decimal_comma)
+
+    voltage = floats("voltage_V")
+    time = floats("time_s")
+    specimen = [s.strip() for s in cols["specimen"]]
+    empty = [i for i, s in enumerate(specimen) if not s]
+    if empty:
+        raise DataError("expected a specimen id, got an empty field", path, int(line_no[empty[0]]), "specimen")
+    sensor_names = _sensor_column(cols["sensor"], line_no, path)
+    if "stress_Pa" in cols:
+        stress = floats("stress_Pa")
+        _require_positive(stress, "stress_Pa", path, line_no, "stress")
+    else:
+        force = floats("force_N")
+        _require_positive(force, "force_N", path, line_no, "force")
+        area = np.array([load_sensor(s).area_m2 for s in sensor_names])
+        stress = force / area
+    if "current_A" in cols:
+        current = floats("current_A")
+        _require_positive(current, "current_A", path, line_no, "current")
+    else:
+        vo, rf = floats("vo_V"), floats("rf_ohm")
+        _require_positive(rf, "rf_ohm", path, line_no, "feedback resistance")
+        current = current_from_amplifier(vo, rf)
+        bad = current <= 0
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataError(f"the inverting amplifier's output must be negative for a positive current (eq. 23), "
+                            f"got vo_V = {vo[i]:g}", path, int(line_no[i]), "vo_V")
+    _require_positive(voltage, "voltage_V", path, line_no, "voltage")
+    _check_units(stress, voltage, current, line_no, path, "stress_Pa" in cols)
+    test = [t.strip() for t in cols["test"]] if "test" in cols else [""] * len(body)
+    return CreepData(_group(specimen, sensor_names, voltage, stress, test, time, current, line_no, path, body,
+                            shift_time), str(path))
+
+
+def _sensor_column(values, line_no, path):
+    canonical = {}
+    out = []
+    for i, value in enumerate(values):
+        name = value.strip()
+        if name not in canonical:
+            try:
+                canonical[name] = load_sensor(name).name
+            except ValueError as exc:
+                raise DataError(str(exc), path, int(line_no[i]), "sensor") from None
+        out.append(canonical[name])
+    return out
+
+
+def _check_units(stress, voltage, current, line_no, path, stress_given):
+    if stress_given and np.any(stress < STRESS_PLAUSIBLE_MIN_PA):
+        i = int(np.argmax(stress < STRESS_PLAUSIBLE_MIN_PA))
+        raise DataError(f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); "
+                        "stress_Pa must be in pascals: multiply by 1000", path, int(line_no[i]), "stress_Pa")
+    if np.any(voltage > VOLTAGE_PLAUSIBLE_MAX_V):
+        i = int(np.argmax(voltage > VOLTAGE_PLAUSIBLE_MAX_V))
+        raise DataError(f"voltage {voltage[i]:g} V looks like mV; voltage_V must be in volts", path,
+                        int(line_no[i]), "voltage_V")
+    if np.any(current > CURRENT_PLAUSIBLE_MAX_A):
+        i = int(np.argmax(current > CURRENT_PLAUSIBLE_MAX_A))
+        raise DataError(f"current {current[i]:g} A looks like mA or µA; current_A must be in amperes", path,
+                        int(line_no[i]), "current_A")
+
+
+def _codes(values):
+    """Integer codes of strings in order of first appearance."""
+    table = {}
+    return np.array([table.setdefault(v, len(table)) for v in values]), list(table)
+
+
+def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path, body, shift_time):
+    spec_code, spec_names = _codes(specimen)
+    sensor_code, sensor_names = _codes(sensor)
+    test_code, test_names = _codes(test)
+    # A specimen is one sensor: every (specimen, sensor) pair must repeat the first one seen.
+    first_sensor = np.full(len(spec_names), -1)
+    first_sensor[spec_code[::-1]] = sensor_code[::-1]
+    clash = sensor_code != first_sensor[spec_code]
+    if clash.any():
+        i = int(np.argmax(clash))
+        j = int(np.argmax(spec_code == spec_code[i]))
+        raise DataError(f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} here",
+                        path, int(line_no[i]), "sensor")
+    keys = np.rec.fromarrays([spec_code, voltage, stress, test_code])
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.argsort(inverse, kind="stable")  # rows of each test, in file order
+    bounds = np.cumsum(np.bincount(inverse, minlength=first.size))[:-1]
+    members = np.split(order, bounds)
+    tests = []
+    for g in np.argsort(first, kind="stable"):  # tests in order of first appearance
+        idx = members[g]
+        i0 = idx[0]
+        spec, volt, sigma, label = specimen[i0], float(voltage[i0]), float(stress[i0]), test[i0]
+        name = f"test (specimen {spec!r}, {volt:g} V, {sigma:g} Pa" + (f", test {label!r}" if label else "") + ")"
+        t, lines = time[idx], line_no[idx]
+        if idx.size < 3:
+            raise DataError(f"{name} has {idx.size} sample(s); a creep test needs at least 3", path, int(lines[0]))
+        steps = np.diff(t)
+        if np.any(steps <= 0):
+            j = int(np.argmax(steps <= 0)) + 1
+            _report_duplicate(body, idx, j, lines, path)
+            raise DataError(f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line {lines[j - 1]})",
+                            path, int(lines[j]), "time_s")
+        if t[0] != 0:
+            if not shift_time:
+                raise DataError(f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its times "
+                                "to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
+                                path, int(lines[0]), "time_s")
+            t = t - t[0]
+        tests.append(CreepTest(spec, sensor[i0], volt, sigma, label, t, current[idx], lines))
+    return tuple(tests)
+
+
+def _report_duplicate(body, idx, j, lines, path):
+    """Raise 'duplicate of line …' if row j of a test repeats an earlier row of it exactly."""
+    row = [cell.strip() for cell in body[idx[j]]]
+    for k in range(j):
+        if [cell.strip() for cell in body[idx[k]]] == row:
+            raise DataError(f"duplicate of line {lines[k]}", path, int(lines[j]))
+
+
+def _format(value):
+    return repr(float(value))
+
+
+def write_csv(data, path, *, readout="current", rf_ohm=None, digits=None):
+    """Write :class:`CreepData` in the tidy format, atomically.
+
+    Parameters
+    ----------
+    data : CreepData
+    path : str or os.PathLike
+        ``.csv``, or ``.csv.gz`` for a gzip-compressed file.
+    readout : {"current", "amplifier"}
+        Write ``current_A``, or ``vo_V`` and ``rf_ohm`` (eq. 23; ``rf_ohm`` per test from the
+        mapping ``rf_ohm`` keyed by test key, or one number).
+    digits : int, optional
+        Significant digits of the measured columns (time, current, amplifier output); by
+        default the shortest repr that reads back exactly. Voltage and stress, which key the
+        tests, are always written exactly.
+    """
+    if readout not in ("current", "amplifier"):
+        raise ValueError(f"readout must be 'current' or 'amplifier', got {readout!r}")
+    fmt = _format if digits is None else (lambda v: f"{float(v):.{digits}g}")
+    with_test = any(t.test for t in data.tests)
+    header = ["specimen", "sensor", "voltage_V", "stress_Pa"] + (["test"] if with_test else []) + ["time_s"]
+    header += ["current_A"] if readout == "current" else ["vo_V", "rf_ohm"]
+    out = [",".join(header)]
+    for test in data.tests:
+        prefix = f"{test.specimen},{test.sensor},{_format(test.voltage_V)},{_format(test.stress_Pa)}" + (
+            f",{test.test}" if with_test else "")
+        if readout == "current":
+            out += [f"{prefix},{fmt(t)},{fmt(i)}" for t, i in zip(test.time_s, test.current_A)]
+        else:
+            rf = rf_ohm[test.key] if isinstance(rf_ohm, dict) else rf_ohm
+            vo = -test.current_A * rf
+            out += [f"{prefix},{fmt(t)},{fmt(v)},{_format(rf)}" for t, v in zip(test.time_s, vo)]
+    payload = ("\n".join(out) + "\n").encode()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        if path.suffix == ".gz":
+            import gzip
+
+            with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as handle:
+                handle.write(payload)
+        else:
+            tmp.write_bytes(payload)
