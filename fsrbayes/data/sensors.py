@@ -13,6 +13,7 @@ from types import MappingProxyType
 
 from ..physics.effects import model_parameters
 from .distributions import Distribution, make_distribution
+from .prior import JointPrior
 
 __all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory", "CANONICAL_PARAMETERS"]
 
@@ -94,6 +95,22 @@ class Sensor:
         """
         names = model_parameters(model) + tuple(noise)
         return tuple(n for n in names if n in self.priors and not self.priors[n].is_fixed)
+
+    def prior_for(self, model="burgers", noise=("sigma_rel",)):
+        """The joint prior over what ``model`` samples (:meth:`free_parameters`).
+
+        Returns
+        -------
+        fsrbayes.data.prior.JointPrior
+            Can ``sample``, evaluate ``log_prob`` and map to and from the sampler's
+            unconstrained space.
+        """
+        return JointPrior.from_priors(self.priors, self.free_parameters(model, noise))
+
+    @property
+    def prior(self):
+        """The joint prior of the default model (Burgers, Gaussian log-current noise)."""
+        return self.prior_for("burgers")
 
     def stress(self, force_N):
         """Stress in Pa for a force in N on this sensor (eq. 8, σ = F/A_FSR)."""

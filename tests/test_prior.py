@@ -1,0 +1,77 @@
+"""Joint priors and the unconstrained parameterisation the samplers use."""
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+import fsrbayes
+from fsrbayes.data.distributions import make_distribution
+from fsrbayes.data.prior import JointPrior
+
+SPECS = {
+    "normal": {"dist": "normal", "mu": 1.0, "sigma": 2.0},
+    "lognormal": {"dist": "lognormal", "median": 4.4e-9, "sigma": 0.1},
+    "halfnormal": {"dist": "halfnormal", "scale": 1e-11},
+    "gamma": {"dist": "gamma", "shape": 2.0, "rate": 0.1},
+    "uniform": {"dist": "uniform", "lower": 0.05, "upper": 0.6},
+    "truncnormal": {"dist": "truncnormal", "mu": 0.44, "sigma": 0.1, "lower": 0.0, "upper": 2.0},
+    "loguniform": {"dist": "loguniform", "lower": 1e-3, "upper": 1e3},
+}
+
+
+def one(kind):
+    return JointPrior(("p",), (make_distribution(SPECS[kind]),))
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_round_trip_between_spaces(kind, rng):
+    prior = one(kind)
+    x = prior.sample(rng, 1000)
+    x_back, _ = prior.from_unconstrained(prior.to_unconstrained(x))
+    np.testing.assert_allclose(x_back, x, rtol=1e-9)
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_jacobian_matches_finite_differences(kind):
+    prior = one(kind)
+    u = np.linspace(-3, 3, 13)[:, None]
+    h = 1e-6
+    x_plus, _ = prior.from_unconstrained(u + h)
+    x_minus, _ = prior.from_unconstrained(u - h)
+    _, log_jac = prior.from_unconstrained(u)
+    np.testing.assert_allclose(log_jac, np.log(np.abs((x_plus - x_minus)[:, 0] / (2 * h))), rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_density_in_u_space_is_normalised(kind):
+    prior = one(kind)
+    mass, _ = integrate.quad(lambda u: np.exp(prior.log_prob_unconstrained(np.array([[u]]))[0]), -60, 60, limit=400)
+    assert mass == pytest.approx(1.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_u_space_is_well_scaled(kind, rng):
+    u = one(kind).to_unconstrained(one(kind).sample(rng, 20000))
+    assert 0.2 < u.std() < 3.0 and abs(np.median(u)) < 2.0
+
+
+def test_sensor_prior_samples_and_evaluates(rng):
+    sensor = fsrbayes.load_sensor("a201")
+    prior = sensor.prior
+    assert prior.names == sensor.free_parameters("burgers")
+    draws = prior.sample(rng, 500)
+    assert draws.shape == (500, prior.ndim)
+    assert np.all(np.isfinite(prior.log_prob(draws)))
+    assert prior.log_prob(np.full(prior.ndim, -1.0)) == -np.inf
+    # Independent priors: the joint log density is the sum of the marginals.
+    x = draws[0]
+    expected = sum(sensor.priors[n].logpdf(v) for n, v in zip(prior.names, x))
+    assert prior.log_prob(x) == pytest.approx(expected, rel=1e-12)
+    ks = stats.kstest(draws[:, prior.names.index("Va")], sensor.priors["Va"]._frozen().cdf)
+    assert ks.pvalue > 1e-3
+    assert "inv_b1" not in sensor.prior_for("zener").names
+
+
+def test_fixed_priors_are_refused():
+    with pytest.raises(ValueError, match="fixed parameters"):
+        JointPrior(("Vth",), (make_distribution({"dist": "fixed", "value": 0.07}),))
