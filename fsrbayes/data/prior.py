@@ -83,7 +83,7 @@ class JointPrior:
         u = np.asarray(u, dtype=float)
         x = np.empty_like(u)
         log_jac = np.zeros(u.shape[:-1])
-        with np.errstate(over="ignore", under="ignore"):
+        with np.errstate(all="ignore"):  # inf/NaN coordinates map to inf/NaN, caught as −inf later
             for i, d in enumerate(self.dists):
                 ui, a = u[..., i], d.args
                 if d.kind == "normal":

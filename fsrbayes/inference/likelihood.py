@@ -1,0 +1,122 @@
+"""Likelihood of measured creep currents: relative (log-current) Gaussian or Student-t.
+
+For each sample y = log I_obs, with the model current I(θ) at the same time,
+
+    gaussian:  y ~ Normal(log I(θ), sigma_rel)
+    student:   y ~ Student-t(nu, log I(θ), sigma_rel)
+
+and the density is that of the measured current, p(I_obs) = p(y)/I_obs. ``sigma_rel`` is
+the relative noise of the current; ``nu`` the Student-t degrees of freedom (robust to outlying
+samples). The pointwise log-likelihood (one value per sample) is kept for LOO.
+"""
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import special
+
+__all__ = ["LIKELIHOODS", "SpecimenData", "log_likelihood_pointwise"]
+
+LIKELIHOODS = ("gaussian", "student")
+_HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
+
+
+@dataclass(frozen=True)
+class SpecimenData:
+    """One specimen's creep tests packed into padded arrays for vectorised evaluation.
+
+    Attributes
+    ----------
+    specimen, sensor : str
+    voltage_V, stress_Pa : ndarray, shape (C,)
+        Per test.
+    time_s : ndarray, shape (C, T)
+        Sample times, padded with each test's last time.
+    log_current : ndarray, shape (C, T)
+        log of the measured current (padding repeats the last sample).
+    mask : ndarray of bool, shape (C, T)
+        True for real samples.
+    test_keys : tuple
+        (specimen, voltage_V, stress_Pa, test) per test.
+    """
+
+    specimen: str
+    sensor: str
+    voltage_V: np.ndarray
+    stress_Pa: np.ndarray
+    time_s: np.ndarray
+    log_current: np.ndarray
+    mask: np.ndarray
+    test_keys: tuple = field(default=())
+
+    @classmethod
+    def from_tests(cls, tests):
+        """Pack a sequence of :class:`fsrbayes.data.csvio.CreepTest` of one specimen."""
+        tests = list(tests)
+        if not tests:
+            raise ValueError("no creep tests to fit")
+        specimens = {t.specimen for t in tests}
+        if len(specimens) != 1:
+            raise ValueError(f"SpecimenData holds one specimen, got {sorted(specimens)}")
+        width = max(t.time_s.size for t in tests)
+        time = np.empty((len(tests), width))
+        logc = np.empty((len(tests), width))
+        mask = np.zeros((len(tests), width), dtype=bool)
+        for i, t in enumerate(tests):
+            n = t.time_s.size
+            time[i, :n], time[i, n:] = t.time_s, t.time_s[-1]
+            logc[i, :n], logc[i, n:] = np.log(t.current_A), np.log(t.current_A[-1])
+            mask[i, :n] = True
+        return cls(tests[0].specimen, tests[0].sensor, np.array([t.voltage_V for t in tests]),
+                   np.array([t.stress_Pa for t in tests]), time, logc, mask, tuple(t.key for t in tests))
+
+    @property
+    def n_tests(self):
+        return self.voltage_V.size
+
+    @property
+    def n_obs(self):
+        return int(self.mask.sum())
+
+    def fingerprint(self):
+        """SHA-256 of the arrays: changes whenever the data do."""
+        digest = hashlib.sha256()
+        for array in (self.voltage_V, self.stress_Pa, self.time_s, self.log_current, self.mask):
+            digest.update(np.ascontiguousarray(array).tobytes())
+        digest.update(repr(self.test_keys).encode())
+        return digest.hexdigest()
+
+
+def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian", nu=None):
+    """Log-likelihood of every observed sample.
+
+    Parameters
+    ----------
+    log_model : ndarray, shape (W, C, T)
+        log of the model current for W parameter vectors (−inf or NaN where invalid).
+    data : SpecimenData
+    sigma_rel : ndarray, shape (W,)
+        Relative noise scale.
+    likelihood : {"gaussian", "student"}
+    nu : ndarray, shape (W,), optional
+        Student-t degrees of freedom.
+
+    Returns
+    -------
+    ndarray, shape (W, N)
+        One value per observed sample (mask order, test by test); −inf where the model is
+        invalid, never NaN.
+    """
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    sigma = np.asarray(sigma_rel, dtype=float)[:, None]
+    y = data.log_current[data.mask]
+    resid = (y[None, :] - log_model[:, data.mask]) / sigma
+    if likelihood == "gaussian":
+        value = -0.5 * resid**2 - np.log(sigma) - _HALF_LOG_2PI - y
+    else:
+        nu = np.asarray(nu, dtype=float)[:, None]
+        value = (special.gammaln(0.5 * (nu + 1)) - special.gammaln(0.5 * nu) - 0.5 * np.log(nu * np.pi)
+                 - 0.5 * (nu + 1) * np.log1p(resid**2 / nu) - np.log(sigma) - y)
+    return np.where(np.isfinite(value), value, -np.inf)

@@ -1,0 +1,133 @@
+"""The log-posterior of one specimen's parameters, in the sampler's unconstrained space.
+
+A small, picklable object (numpy arrays and strings only, no closures): emcee calls it with
+all walkers at once (``vectorize=True``) and the forward model evaluates them together —
+parameters of shape (W, 1, 1) against tests × times of shape (C, T).
+"""
+
+import numpy as np
+
+from ..data.prior import JointPrior
+from ..physics.effects import model_parameters, parse_model
+from ..physics.sensor import solve_current
+from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
+
+__all__ = ["LogPosterior", "noise_parameters"]
+
+
+def noise_parameters(likelihood):
+    """Likelihood parameters: sigma_rel, plus nu for Student-t."""
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    return ("sigma_rel", "nu") if likelihood == "student" else ("sigma_rel",)
+
+
+class LogPosterior:
+    """log p(u | data) = β·log L(x(u)) + log p(x(u)) + log|dx/du|, vectorised over walkers.
+
+    Parameters
+    ----------
+    data : SpecimenData
+        One specimen's tests.
+    prior : JointPrior
+        Prior over the sampled parameters (their order is the order of u).
+    fixed : mapping
+        Values of the model's other parameters (not sampled).
+    model : str
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms.
+    tunneling : {"smooth", "paper"}
+    likelihood : {"gaussian", "student"}
+    beta : float
+        Likelihood power (1 for the posterior, < 1 for the power posteriors of the evidence).
+    """
+
+    def __init__(self, data, prior, fixed, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0):
+        if not isinstance(data, SpecimenData):
+            raise TypeError(f"data must be SpecimenData, got {type(data).__name__}")
+        if not isinstance(prior, JointPrior):
+            raise TypeError(f"prior must be a JointPrior, got {type(prior).__name__}")
+        self.rheology, self.effects = parse_model(model)
+        self.model = model
+        self.tunneling = tunneling
+        self.likelihood = likelihood
+        self.data = data
+        self.prior = prior
+        self.fixed = {k: float(v) for k, v in dict(fixed).items()}
+        self.beta = float(beta)
+        needed = set(model_parameters(model)) | set(noise_parameters(likelihood))
+        missing = sorted(needed - set(prior.names) - set(self.fixed))
+        if missing:
+            raise ValueError(f"model {model!r} needs parameter(s) {missing}: neither sampled nor fixed")
+        overlap = sorted(set(prior.names) & set(self.fixed))
+        if overlap:
+            raise ValueError(f"parameter(s) {overlap} are both sampled and fixed")
+
+    @classmethod
+    def for_sensor(cls, data, sensor, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0):
+        """Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at defaults."""
+        prior = sensor.prior_for(model, noise_parameters(likelihood))
+        fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
+        return cls(data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta)
+
+    @property
+    def ndim(self):
+        return self.prior.ndim
+
+    @property
+    def names(self):
+        return self.prior.names
+
+    def fingerprint(self):
+        """Changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
+        fixed = ";".join(f"{k}={v!r}" for k, v in sorted(self.fixed.items()))
+        return "|".join([self.data.fingerprint(), self.model, self.tunneling, self.likelihood,
+                         self.prior.fingerprint(), fixed])
+
+    def parameters(self, x):
+        """All physical parameters for x (W, ndim): sampled ones from x, the rest fixed."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        params = {name: x[:, i] for i, name in enumerate(self.names)}
+        params.update({k: np.full(x.shape[0], v) for k, v in self.fixed.items()})
+        return params
+
+    def log_model_current(self, x, time_s=None):
+        """log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
+
+        −inf where the parameters leave the model's validity domain.
+        """
+        params = {k: v[:, None, None] for k, v in self.parameters(x).items()}
+        time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
+        solution = solve_current(params, self.data.voltage_V[:, None], self.data.stress_Pa[:, None], time,
+                                 rheology=self.rheology, tunneling=self.tunneling, effects=self.effects)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            log_current = np.log(solution.current)
+        return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
+
+    def log_likelihood_pointwise(self, x):
+        """Log-likelihood per observed sample, shape (W, N)."""
+        params = self.parameters(x)
+        return log_likelihood_pointwise(self.log_model_current(x), self.data, params["sigma_rel"],
+                                        likelihood=self.likelihood, nu=params.get("nu"))
+
+    def log_prior(self, u):
+        """Log density of u under the prior (including the Jacobian)."""
+        return self.prior.log_prob_unconstrained(u)
+
+    def __call__(self, u):
+        """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
+        u = np.asarray(u, dtype=float)
+        single = u.ndim == 1
+        u2 = np.atleast_2d(u)
+        x, log_jac = self.prior.from_unconstrained(u2)
+        value = self.prior.log_prob(x) + log_jac
+        ok = np.isfinite(value)
+        if ok.any() and self.beta != 0.0:
+            try:
+                with np.errstate(all="ignore"):
+                    log_like = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
+            except Exception as exc:
+                exc.add_note(f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0]))}")
+                raise
+            value[ok] = value[ok] + self.beta * log_like
+        value = np.where(np.isnan(value), -np.inf, value)
+        return float(value[0]) if single else value
