@@ -1,0 +1,300 @@
+"""Several independent emcee ensembles, run until convergence is shown, with checkpoints.
+
+The walkers of one affine-invariant ensemble are not independent chains, so convergence is
+judged *across* ensembles started apart:
+
+* rank-normalised split R-hat (Vehtari et al. 2021) with each ensemble as one chain — its
+  draws taken step by step over all walkers — must be below ``rhat_target``;
+* the integrated autocorrelation time τ of each ensemble (emcee's walker-averaged estimate)
+  must be short: the kept chain is at least ``tau_factor``·τ steps long;
+* the bulk effective sample size must reach ``ess_target`` for every parameter; it is the
+  smaller of Σ_ensembles steps·walkers/τ and ArviZ's rank-normalised bulk ESS.
+
+The first half of the chain is discarded as warm-up at every check. Sampling goes on in
+chunks until all three hold or ``max_steps`` is spent; then a :class:`ConvergenceWarning`
+carrying the numbers is issued. Each ensemble has its own seeded random state, so the same
+seed gives the same chains, and a checkpoint (written atomically after every chunk) resumes a
+run exactly where it stopped.
+"""
+
+import warnings
+from dataclasses import asdict, dataclass, field
+
+import emcee
+import numpy as np
+
+from ..utils import atomic_path
+
+__all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
+           "run_ensembles", "convergence_report"]
+
+
+@dataclass(frozen=True)
+class SamplerSettings:
+    """How long and how hard to sample.
+
+    Attributes
+    ----------
+    n_ensembles : int
+        Independent ensembles (chains for R-hat); at least 2.
+    n_walkers : int or None
+        Walkers per ensemble; default max(32, 4·ndim), even.
+    chunk : int
+        Steps between convergence checks (and checkpoints).
+    max_steps : int
+        Step budget per ensemble.
+    min_steps : int
+        Never stop before this.
+    rhat_target, tau_factor, ess_target : float
+        The convergence criteria of the module docstring.
+    de_fraction : float
+        Share of differential-evolution moves; the rest are stretch moves.
+    """
+
+    n_ensembles: int = 4
+    n_walkers: int | None = None
+    chunk: int = 500
+    max_steps: int = 20000
+    min_steps: int = 500
+    rhat_target: float = 1.01
+    tau_factor: float = 50.0
+    ess_target: float = 400.0
+    de_fraction: float = 0.8
+
+    def walkers_for(self, ndim):
+        if self.n_walkers is not None:
+            if self.n_walkers < 2 * ndim or self.n_walkers % 2:
+                raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {self.n_walkers}")
+            return self.n_walkers
+        return max(32, 4 * ndim + (4 * ndim) % 2)
+
+
+@dataclass
+class ConvergenceReport:
+    """Convergence numbers at the last check.
+
+    Attributes
+    ----------
+    converged : bool
+    n_steps : int
+        Steps per ensemble so far.
+    n_kept : int
+        Steps per ensemble kept after warm-up.
+    tau : ndarray, shape (ndim,)
+        Largest integrated autocorrelation time over ensembles, in steps.
+    rhat : ndarray, shape (ndim,)
+    ess_bulk : ndarray, shape (ndim,)
+    names : tuple of str
+    """
+
+    converged: bool
+    n_steps: int
+    n_kept: int
+    tau: np.ndarray
+    rhat: np.ndarray
+    ess_bulk: np.ndarray
+    names: tuple = field(default=())
+
+    def worst(self):
+        """One line with the limiting numbers."""
+        name = lambda i: self.names[i] if self.names else str(i)  # noqa: E731
+        i_t, i_e = int(np.argmax(self.tau)), int(np.argmin(self.ess_bulk))
+        if np.all(np.isnan(self.rhat)):
+            rhat = "max R-hat not computed yet"
+        else:
+            i_r = int(np.nanargmax(self.rhat))
+            rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
+        return (f"after {self.n_steps} steps: {rhat}, kept chain "
+                f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), "
+                f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})")
+
+    def as_dict(self):
+        out = asdict(self)
+        for key in ("tau", "rhat", "ess_bulk"):
+            out[key] = [float(v) for v in out[key]]
+        out["names"] = list(self.names)
+        return out
+
+
+class ConvergenceWarning(UserWarning):
+    """Sampling stopped at its budget before the convergence criteria held.
+
+    Attributes
+    ----------
+    report : ConvergenceReport
+    """
+
+    def __init__(self, report):
+        super().__init__(f"not converged {report.worst()}; raise the step budget or check the model")
+        self.report = report
+
+
+class CheckpointMismatch(ValueError):
+    """A checkpoint was written for other data, model, priors or parameter order."""
+
+
+@dataclass
+class EnsembleRun:
+    """Chains of all ensembles.
+
+    Attributes
+    ----------
+    chain : ndarray, shape (E, steps, W, ndim)
+        Positions in the sampler's unconstrained space.
+    log_prob : ndarray, shape (E, steps, W)
+    acceptance : ndarray, shape (E, W)
+    report : ConvergenceReport
+    """
+
+    chain: np.ndarray
+    log_prob: np.ndarray
+    acceptance: np.ndarray
+    report: ConvergenceReport
+
+    def kept(self):
+        """(chain, log_prob) after the warm-up half."""
+        start = self.chain.shape[1] - self.report.n_kept
+        return self.chain[:, start:], self.log_prob[:, start:]
+
+
+def convergence_report(chain, settings, names=(), final=True):
+    """Convergence numbers of chains (E, steps, W, ndim), keeping the second half.
+
+    With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
+    chain is long enough by its autocorrelation time; otherwise they are reported as NaN.
+    """
+    from arviz_stats import ess as az_ess
+    from arviz_stats import rhat as az_rhat
+
+    n_ens, n_steps, n_walk, ndim = chain.shape
+    kept = chain[:, n_steps // 2:]
+    n_kept = kept.shape[1]
+    tau = np.max([emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)], axis=0)
+    tau = np.maximum(tau, 1.0)
+    ess_tau = n_ens * n_kept * n_walk / tau
+    long_enough = n_steps >= settings.min_steps and n_kept >= settings.tau_factor * tau.max()
+    if not (long_enough and np.all(ess_tau >= settings.ess_target)) and not final:
+        # The cheap criteria fail: R-hat and the rank ESS are not needed to decide to go on.
+        nan = np.full(ndim, np.nan)
+        return ConvergenceReport(False, n_steps, n_kept, tau, nan, np.minimum(ess_tau, np.inf), tuple(names))
+    per_ensemble = kept.reshape(n_ens, n_kept * n_walk, ndim)  # step-major: draws keep time order
+    rhat = np.array([az_rhat(per_ensemble[..., k], method="rank", chain_axis=0, draw_axis=1) for k in range(ndim)])
+    walkers_as_chains = np.moveaxis(kept, 2, 1).reshape(n_ens * n_walk, n_kept, ndim)
+    ess_rank = np.array([az_ess(walkers_as_chains[..., k], method="bulk", chain_axis=0, draw_axis=1)
+                         for k in range(ndim)])
+    ess = np.minimum(ess_tau, ess_rank)
+    converged = bool(long_enough and np.all(rhat < settings.rhat_target) and np.all(ess >= settings.ess_target))
+    return ConvergenceReport(converged, n_steps, n_kept, tau, rhat, ess, tuple(names))
+
+
+def _moves(settings):
+    return [(emcee.moves.DEMove(), settings.de_fraction), (emcee.moves.StretchMove(), 1.0 - settings.de_fraction)]
+
+
+def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez(handle, fingerprint=np.array(fingerprint), chain=chains, log_prob=log_probs,
+                     accepted=acceptance, settings=np.array(repr(asdict(settings))),
+                     **{f"state{e}_{k}": np.asarray(v) for e, st in enumerate(states) for k, v in enumerate(st)})
+
+
+def _load(path, fingerprint, n_ensembles):
+    with np.load(path, allow_pickle=False) as saved:
+        stored = str(saved["fingerprint"])
+        if stored != fingerprint:
+            raise CheckpointMismatch(f"checkpoint {path} was written for {_difference(stored, fingerprint)}; "
+                                     "remove it or fit with matching settings")
+        chain, log_prob, accepted = saved["chain"], saved["log_prob"], saved["accepted"]
+        if chain.shape[0] != n_ensembles:
+            raise CheckpointMismatch(f"checkpoint {path} has {chain.shape[0]} ensembles, this fit asks for {n_ensembles}")
+        states = [tuple(saved[f"state{e}_{k}"][()] for k in range(5)) for e in range(n_ensembles)]
+    states = [(str(s[0]), s[1], int(s[2]), int(s[3]), float(s[4])) for s in states]
+    return chain, log_prob, accepted, states
+
+
+_PARTS = ("other data", "another model", "another tunneling law", "another likelihood",
+          "other priors or another parameter order", "other fixed parameter values")
+
+
+def _difference(stored, current):
+    a, b = stored.split("|"), current.split("|")
+    if len(a) != len(b):
+        return "a different kind of fit"
+    return ", ".join(part for part, x, y in zip(_PARTS, a, b) if x != y) or "a different fit"
+
+
+def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=(), checkpoint=None,
+                  fingerprint="", resume=False, progress=False):
+    """Sample with ``settings.n_ensembles`` emcee ensembles until convergence or the budget.
+
+    Parameters
+    ----------
+    log_prob : callable
+        Vectorised log-density of u, (W, ndim) → (W,).
+    start : ndarray, shape (E, W, ndim)
+        Initial walker positions of each ensemble.
+    seed : int or numpy.random.SeedSequence
+        Seeds one random state per ensemble.
+    settings : SamplerSettings
+    names : sequence of str
+        Parameter names for reports.
+    checkpoint : path-like, optional
+        Saved after every chunk; with ``resume=True`` a run continues from it.
+    fingerprint : str
+        Identity of the fit (data, model, priors, order); a checkpoint with another one is refused.
+    progress : bool
+        Show emcee's progress bar (tqdm).
+
+    Returns
+    -------
+    EnsembleRun
+    """
+    start = np.asarray(start, dtype=float)
+    n_ens, n_walk, ndim = start.shape
+    if n_ens < 2:
+        raise ValueError(f"convergence across ensembles needs n_ensembles >= 2, got {n_ens}")
+    seeds = np.random.SeedSequence(seed).spawn(n_ens) if not isinstance(seed, np.random.SeedSequence) else seed.spawn(n_ens)
+    samplers = []
+    for e in range(n_ens):
+        sampler = emcee.EnsembleSampler(n_walk, ndim, log_prob, vectorize=True, moves=_moves(settings))
+        sampler.random_state = np.random.RandomState(seeds[e].generate_state(4)).get_state()
+        samplers.append(sampler)
+    chains = np.empty((n_ens, 0, n_walk, ndim))
+    log_probs = np.empty((n_ens, 0, n_walk))
+    accepted = np.zeros((n_ens, n_walk))
+    positions = [start[e] for e in range(n_ens)]
+    if resume and checkpoint is not None:
+        try:
+            chains, log_probs, accepted, states = _load(checkpoint, fingerprint, n_ens)
+        except FileNotFoundError:
+            pass
+        else:
+            positions = [chains[e, -1] for e in range(n_ens)]
+            for sampler, state in zip(samplers, states):
+                sampler.random_state = state
+    report = None
+    while True:
+        if chains.shape[1] >= settings.min_steps:
+            at_budget = chains.shape[1] >= settings.max_steps
+            report = convergence_report(chains, settings, names, final=at_budget)
+            if report.converged or at_budget:
+                break
+        steps = min(settings.chunk, settings.max_steps - chains.shape[1])
+        new_chain, new_lp = [], []
+        for e, sampler in enumerate(samplers):
+            sampler.reset()
+            log_start = log_probs[e, -1] if log_probs.shape[1] else None
+            state = emcee.State(positions[e], log_prob=log_start, random_state=sampler.random_state)
+            sampler.run_mcmc(state, steps, progress=progress, skip_initial_state_check=True)
+            positions[e] = sampler.get_last_sample().coords
+            new_chain.append(sampler.get_chain())
+            new_lp.append(sampler.get_log_prob())
+            accepted[e] += sampler.backend.accepted
+        chains = np.concatenate([chains, np.array(new_chain)], axis=1)
+        log_probs = np.concatenate([log_probs, np.array(new_lp)], axis=1)
+        if checkpoint is not None:
+            _save(checkpoint, fingerprint, chains, log_probs, accepted, [s.random_state for s in samplers], settings)
+    if not report.converged:
+        warnings.warn(ConvergenceWarning(report), stacklevel=2)
+    return EnsembleRun(chains, log_probs, accepted / chains.shape[1], report)

@@ -1,0 +1,114 @@
+"""The sampling machinery against targets with known answers."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import fsrbayes
+from fsrbayes.data import synthetic as syn
+from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.sampling import (CheckpointMismatch, ConvergenceWarning, SamplerSettings, run_ensembles)
+
+MU = np.array([1.0, -2.0, 0.5])
+SD = np.array([0.5, 2.0, 0.1])
+CORR = 0.9
+
+
+class Gaussian:
+    """A correlated 3-d Gaussian (picklable, vectorised)."""
+
+    def __init__(self):
+        cov = np.diag(SD**2)
+        cov[0, 1] = cov[1, 0] = CORR * SD[0] * SD[1]
+        self.precision = np.linalg.inv(cov)
+
+    def __call__(self, u):
+        d = np.atleast_2d(u) - MU
+        return -0.5 * np.einsum("wi,ij,wj->w", d, self.precision, d)
+
+
+def thinned(run):
+    chain, _ = run.kept()
+    step = int(np.ceil(run.report.tau.max()))
+    return chain[:, ::step].reshape(-1, chain.shape[-1])
+
+
+@pytest.fixture(scope="module")
+def gaussian_run():
+    rng = np.random.default_rng(5)
+    start = MU + rng.normal(size=(4, 32, 3)) * 3 * SD
+    return run_ensembles(Gaussian(), start, seed=42, settings=SamplerSettings(chunk=400, max_steps=8000))
+
+
+def test_gaussian_target_converges_with_right_moments(gaussian_run):
+    report = gaussian_run.report
+    assert report.converged, report.worst()
+    assert np.all(report.rhat < 1.01) and np.all(report.ess_bulk >= 400)
+    chain, _ = gaussian_run.kept()
+    flat = chain.reshape(-1, 3)
+    mcse = SD / np.sqrt(report.ess_bulk)
+    assert np.all(np.abs(flat.mean(axis=0) - MU) < 4 * mcse)
+    assert np.all(np.abs(flat.std(axis=0) / SD - 1) < 4 / np.sqrt(2 * report.ess_bulk) + 0.02)
+    assert np.corrcoef(flat[:, 0], flat[:, 1])[0, 1] == pytest.approx(CORR, abs=0.03)
+
+
+def test_gaussian_marginals_pass_ks(gaussian_run):
+    sample = thinned(gaussian_run)
+    for k in range(3):
+        assert stats.kstest(sample[:, k], stats.norm(MU[k], SD[k]).cdf).pvalue > 0.01 / 3
+
+
+def test_same_seed_same_chains():
+    start = MU + np.random.default_rng(1).normal(size=(2, 16, 3))
+    settings = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        a = run_ensembles(Gaussian(), start, seed=3, settings=settings)
+        b = run_ensembles(Gaussian(), start, seed=3, settings=settings)
+        c = run_ensembles(Gaussian(), start, seed=4, settings=settings)
+    assert np.array_equal(a.chain, b.chain) and not np.array_equal(a.chain, c.chain)
+
+
+def test_budget_exhausted_warns_with_the_numbers():
+    start = MU + np.random.default_rng(1).normal(size=(2, 16, 3))
+    with pytest.warns(ConvergenceWarning, match=r"not converged after 60 steps: max R-hat .* min bulk ESS") as record:
+        run_ensembles(Gaussian(), start, seed=3, settings=SamplerSettings(n_ensembles=2, chunk=30, max_steps=60, min_steps=30))
+    assert record[0].message.report.n_steps == 60
+
+
+def test_checkpoint_resume_is_exact_and_mismatches_are_refused(tmp_path):
+    start = MU + np.random.default_rng(2).normal(size=(2, 16, 3))
+    settings = SamplerSettings(n_ensembles=2, chunk=40, max_steps=120, min_steps=120)
+    path = tmp_path / "fit.ckpt.npz"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        full = run_ensembles(Gaussian(), start, seed=9, settings=settings)
+        # An interrupted run: stopped after 80 of 120 steps (its checkpoint holds 80).
+        run_ensembles(Gaussian(), start, seed=9, settings=SamplerSettings(n_ensembles=2, chunk=40, max_steps=80,
+                      min_steps=80), checkpoint=path, fingerprint="data|burgers|smooth|gaussian|p|f")
+        saved = np.load(path)["chain"].copy()
+        resumed = run_ensembles(Gaussian(), start, seed=9, settings=settings, checkpoint=path,
+                                fingerprint="data|burgers|smooth|gaussian|p|f", resume=True)
+    assert resumed.chain.shape[1] == 120
+    assert resumed.chain[:, :80].tobytes() == saved.tobytes()
+    assert np.array_equal(resumed.chain, full.chain)
+    with pytest.raises(CheckpointMismatch, match="written for another model, other priors or another parameter order"):
+        run_ensembles(Gaussian(), start, seed=9, settings=settings, checkpoint=path,
+                      fingerprint="data|zener|smooth|gaussian|q|f", resume=True)
+
+
+@pytest.mark.parametrize("model", ["burgers"])
+def test_prior_only_posterior_recovers_the_prior(model):
+    sim = syn.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5, seed=1)
+    sensor = fsrbayes.load_sensor("a201")
+    posterior = LogPosterior.for_sensor(SpecimenData.from_tests(sim.data.tests), sensor, model=model, beta=0.0)
+    rng = np.random.default_rng(0)
+    start = posterior.prior.to_unconstrained(posterior.prior.sample(rng, (4, 40)))
+    run = run_ensembles(posterior, start, seed=1, settings=SamplerSettings(chunk=500, max_steps=10000))
+    assert run.report.converged, run.report.worst()
+    x, _ = posterior.prior.from_unconstrained(thinned(run))
+    for k, name in enumerate(posterior.names):
+        p = stats.kstest(x[:, k], sensor.priors[name]._frozen().cdf).pvalue
+        assert p > 0.01 / posterior.ndim, name
