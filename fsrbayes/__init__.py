@@ -9,4 +9,13 @@ from ._version import __version__
 from .data.sensors import Sensor, available_sensors, load_sensor
 from .physics.sensor import DomainError, current, drift
 
-__all__ = ["current", "drift", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
+__all__ = ["current", "drift", "fit", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
+
+
+def __getattr__(name):
+    # fit pulls in emcee and ArviZ; load it on first use so that importing the physics stays light.
+    if name == "fit":
+        from .inference.fit import fit
+
+        return fit
+    raise AttributeError(f"module 'fsrbayes' has no attribute {name!r}")

@@ -4,7 +4,9 @@ Errors on bad input are one line on stderr and exit code 2, never a traceback.
 """
 
 import argparse
+import signal
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +18,8 @@ from .physics.effects import EFFECTS
 from .physics import sensor as fsr
 from .physics.tunneling import paper_peak_voltage
 from .utils import write_json_atomic
+
+CHECKPOINT = "checkpoint.npz"
 
 FIGURE7_STRESSES = (50e3, 100e3, 150e3, 200e3)
 FIGURE7_VOLTAGES = (0.03, 0.22, 0.4, 2.0)
@@ -159,6 +163,59 @@ def cmd_check(args):
     return 0
 
 
+def _writable(folder):
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"--out {folder} cannot be created ({exc.strerror}); choose another folder") from None
+    probe = folder / ".fsrbayes-write-test"
+    try:
+        probe.write_bytes(b"x" * 4096)
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"--out {folder} is not writable ({exc.strerror}); choose another folder") from None
+
+
+def _stop_on_sigterm(signum, frame):
+    raise KeyboardInterrupt
+
+
+def cmd_fit(args):
+    """Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen."""
+    from .inference.fit import fit
+    from .inference.output import save_fit
+    from .inference.sampling import ConvergenceWarning, SamplerSettings
+
+    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    if args.specimen is not None and args.specimen not in data.specimens:
+        raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
+    out = Path(args.out)
+    _writable(out)
+    settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
+                               max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps))
+    specimens = [args.specimen] if args.specimen else data.specimens
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
+    summaries = {}
+    for specimen in specimens:
+        folder = out if len(specimens) == 1 else out / specimen
+        folder.mkdir(parents=True, exist_ok=True)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ConvergenceWarning)
+            result = fit(data, specimen, model=args.model, tunneling=args.tunneling, likelihood=args.likelihood,
+                         rng=args.seed, settings=settings, checkpoint=folder / CHECKPOINT, resume=args.resume,
+                         progress=args.progress)
+        for w in caught:
+            if issubclass(w.category, ConvergenceWarning):
+                print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
+        summaries[specimen] = save_fit(result, folder)
+        state = "converged" if result.converged else "NOT converged"
+        print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
+    if len(specimens) > 1:
+        write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
+                                                 "specimens": summaries})
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="fsrbayes", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"fsrbayes {__version__}")
@@ -207,6 +264,24 @@ def build_parser():
     sim.add_argument("--seed", type=int, default=0, help="random seed (same seed, same bytes)")
     sim.add_argument("--digits", type=int, help="significant digits in the CSV (default: exact round trip)")
     sim.set_defaults(func=cmd_simulate)
+
+    fit_ = sub.add_parser("fit", help="Bayesian fit per specimen with emcee (posterior.nc + summary.json)")
+    fit_.add_argument("data", help="creep-test CSV")
+    fit_.add_argument("--out", required=True, help="output folder (one subfolder per specimen when several)")
+    fit_.add_argument("--specimen", help="fit only this specimen")
+    fit_.add_argument("--model", default="burgers", help="burgers, zener or nutting, optionally +effect terms")
+    fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
+    fit_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
+    fit_.add_argument("--ensembles", type=int, default=4, help="independent ensembles (default 4)")
+    fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
+    fit_.add_argument("--chunk", type=int, default=500, help="steps between convergence checks and checkpoints")
+    fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
+    fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
+    fit_.add_argument("--progress", action="store_true", help="show a progress bar")
+    fit_.add_argument("--sep", default=",", help="CSV field separator")
+    fit_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    fit_.set_defaults(func=cmd_fit)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
     chk.add_argument("data", help="CSV file (DESIGN format)")

@@ -1,0 +1,128 @@
+"""Fit results as an ArviZ DataTree (netCDF) and the JSON summary of DESIGN.md §4.
+
+Groups: ``posterior`` (sampled parameters, chain = ensemble), ``log_likelihood`` (pointwise,
+for LOO), ``posterior_predictive`` (replicated current per sample, model drift(t) per test on
+a time grid, drift(3600 s) per test), ``observed_data``, ``constant_data`` (voltage and stress
+per test, time and test index per sample, observed drift(3600 s)), ``sample_stats`` (log
+posterior; convergence numbers as attributes).
+"""
+
+import json
+
+import numpy as np
+
+from ..utils import atomic_path, write_json_atomic
+
+__all__ = ["to_datatree", "summary", "save_fit", "DRIFT_TIME_S"]
+
+DRIFT_TIME_S = 3600.0
+
+
+def _predictive(result, draws, rng, n_grid=61):
+    posterior = result.posterior
+    data = posterior.data
+    flat = draws.reshape(-1, draws.shape[-1])
+    log_model = posterior.log_model_current(flat)
+    sigma = posterior.parameters(flat)["sigma_rel"]
+    replicated = np.exp(log_model[:, data.mask] + sigma[:, None] * rng.standard_normal((flat.shape[0], data.n_obs)))
+    grid = np.linspace(0.0, max(DRIFT_TIME_S, float(data.time_s.max())), n_grid)
+    times = np.concatenate([grid, [DRIFT_TIME_S]])
+    log_on_grid = posterior.log_model_current(flat, np.broadcast_to(times, (data.n_tests, times.size)))
+    start = posterior.log_model_current(flat, np.zeros((data.n_tests, 1)))
+    drift = 100.0 * np.expm1(log_on_grid - start)
+    shape = draws.shape[:2]
+    return (replicated.reshape(*shape, -1), drift[..., :-1].reshape(*shape, data.n_tests, n_grid),
+            drift[..., -1].reshape(*shape, data.n_tests), grid)
+
+
+def _observed_drift(data):
+    out = []
+    for i in range(data.n_tests):
+        t = data.time_s[i][data.mask[i]]
+        current = np.exp(data.log_current[i][data.mask[i]])
+        out.append(100.0 * (np.interp(DRIFT_TIME_S, t, current) / current[0] - 1.0) if t[-1] >= DRIFT_TIME_S else np.nan)
+    return np.array(out)
+
+
+def to_datatree(result, *, max_draws=2000, seed=0):
+    """Build the ArviZ DataTree of a :class:`~fsrbayes.inference.fit.FitResult`."""
+    from arviz_base import from_dict
+
+    posterior = result.posterior
+    data = posterior.data
+    draws = result.draws(max_draws)
+    n_ens, n_draw, ndim = draws.shape
+    flat = draws.reshape(-1, ndim)
+    pointwise = posterior.log_likelihood_pointwise(flat).reshape(n_ens, n_draw, -1)
+    rng = np.random.default_rng(seed)
+    replicated, drift, drift_3600, grid = _predictive(result, draws, rng)
+    u = posterior.prior.to_unconstrained(flat)
+    log_post = posterior(u).reshape(n_ens, n_draw)
+    test_index = np.repeat(np.arange(data.n_tests), data.mask.sum(axis=1))
+    report = result.run.report
+    groups = {
+        "posterior": {name: draws[..., i] for i, name in enumerate(posterior.names)},
+        "log_likelihood": {"current": pointwise},
+        "posterior_predictive": {"current": replicated, "drift": drift, "drift_3600": drift_3600},
+        "observed_data": {"current": np.exp(data.log_current[data.mask])},
+        "constant_data": {"voltage_V": data.voltage_V, "stress_Pa": data.stress_Pa,
+                          "time_s": data.time_s[data.mask], "test_index": test_index,
+                          "observed_drift_3600": _observed_drift(data)},
+        "sample_stats": {"lp": log_post},
+    }
+    dims = {"current": ["obs"], "drift": ["test", "drift_time"], "drift_3600": ["test"], "voltage_V": ["test"],
+            "stress_Pa": ["test"], "time_s": ["obs"], "test_index": ["obs"], "observed_drift_3600": ["test"]}
+    coords = {"test": np.arange(data.n_tests), "obs": np.arange(data.n_obs), "drift_time": grid}
+    attrs = {"fsrbayes_model": posterior.model, "tunneling": posterior.tunneling,
+             "likelihood": posterior.likelihood, "specimen": data.specimen, "sensor": data.sensor,
+             "converged": int(report.converged), "seed": result.seed,
+             "convergence": json.dumps(report.as_dict(), allow_nan=True),
+             "fixed_parameters": json.dumps(posterior.fixed)}
+    tree = from_dict(groups, dims=dims, coords=coords)
+    tree.attrs.update(attrs)
+    return tree
+
+
+def _q(values):
+    q05, q50, q95 = np.percentile(values, [5, 50, 95])
+    return {"median": float(q50), "q05": float(q05), "q95": float(q95)}
+
+
+def _finite(value):
+    return None if value is None or not np.isfinite(value) else float(value)
+
+
+def summary(result, tree):
+    """The DESIGN.md §4 summary dict of one fitted specimen."""
+    posterior = result.posterior
+    report = result.run.report
+    parameters = {}
+    for i, name in enumerate(posterior.names):
+        entry = _q(tree.posterior[name].values.ravel())
+        entry.update(r_hat=_finite(report.rhat[i]), ess_bulk=_finite(report.ess_bulk[i]))
+        parameters[name] = entry
+    data = posterior.data
+    drift = tree.posterior_predictive["drift_3600"].values
+    observed = tree.constant_data["observed_drift_3600"].values
+    tests = [{"specimen": data.specimen, "voltage_V": float(data.voltage_V[i]), "stress_Pa": float(data.stress_Pa[i]),
+              "drift_3600": _q(drift[..., i].ravel()), "observed_drift_3600": _finite(observed[i])}
+             for i in range(data.n_tests)]
+    return {"converged": bool(report.converged), "specimen": data.specimen, "sensor": data.sensor,
+            "model": posterior.model, "tunneling": posterior.tunneling, "likelihood": posterior.likelihood,
+            "parameters": parameters, "tests": tests,
+            "convergence": {"n_steps": report.n_steps, "n_kept": report.n_kept,
+                            "max_r_hat": _finite(np.nanmax(report.rhat)) if np.isfinite(report.rhat).any() else None,
+                            "min_ess_bulk": _finite(np.min(report.ess_bulk)),
+                            "max_tau": _finite(np.max(report.tau)), "n_ensembles": int(result.run.chain.shape[0]),
+                            "n_walkers": int(result.run.chain.shape[2])},
+            "fixed_parameters": posterior.fixed}
+
+
+def save_fit(result, folder, *, stem="posterior"):
+    """Write ``<stem>.nc`` (DataTree) and ``summary.json`` into ``folder`` atomically; return the summary."""
+    tree = to_datatree(result, seed=result.seed)
+    with atomic_path(folder / f"{stem}.nc") as tmp:
+        tree.to_netcdf(tmp, engine="h5netcdf")
+    info = summary(result, tree)
+    write_json_atomic(folder / "summary.json", info)
+    return info

@@ -1,0 +1,123 @@
+"""fsrbayes.fit and 'fsrbayes fit': outputs, summary keys, kill-and-resume, mismatched checkpoints."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+import warnings
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import fsrbayes
+from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.output import save_fit
+from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+
+FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+
+
+@pytest.fixture(scope="module")
+def small():
+    return syn.simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2)
+
+
+@pytest.fixture(scope="module")
+def result(small):
+    with pytest.warns(ConvergenceWarning):
+        return fsrbayes.fit(small.data, rng=7, settings=FAST)
+
+
+def test_fit_returns_chains_and_a_map_near_the_truth(result, small):
+    assert result.run.chain.shape[:2] == (2, 200)
+    truth = small.truth["specimens"]["a201-01"]["params"]
+    u_truth = result.posterior.prior.to_unconstrained(np.array([truth[n] for n in result.posterior.names]))
+    assert result.posterior(result.map_u) >= result.posterior(u_truth) - 1.0
+
+
+def test_same_seed_same_fit(small, result):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        again = fsrbayes.fit(small.data, rng=7, settings=FAST)
+    assert np.array_equal(again.run.chain, result.run.chain)
+
+
+def test_output_groups_and_summary_keys(result, tmp_path):
+    info = save_fit(result, tmp_path)
+    tree = xr.open_datatree(tmp_path / "posterior.nc", engine="h5netcdf")
+    assert {"posterior", "log_likelihood", "posterior_predictive", "observed_data", "constant_data",
+            "sample_stats"} <= set(tree.children)
+    n_obs = result.posterior.data.n_obs
+    assert tree.log_likelihood["current"].shape[-1] == n_obs == tree.observed_data["current"].size
+    assert set(tree.posterior_predictive.data_vars) == {"current", "drift", "drift_3600"}
+    assert tree.posterior_predictive["drift_3600"].dims[-1] == "test"
+    assert tree.constant_data["voltage_V"].size == 4
+    assert tree.attrs["fsrbayes_model"] == "burgers" and tree.attrs["specimen"] == "a201-01"
+    saved = json.loads((tmp_path / "summary.json").read_text())
+    assert saved == json.loads(json.dumps(info))
+    assert isinstance(saved["converged"], bool)
+    for name in result.posterior.names:
+        assert set(saved["parameters"][name]) == {"median", "q05", "q95", "r_hat", "ess_bulk"}
+    test = saved["tests"][0]
+    assert set(test) == {"specimen", "voltage_V", "stress_Pa", "drift_3600", "observed_drift_3600"}
+    assert test["drift_3600"]["q05"] <= test["drift_3600"]["median"] <= test["drift_3600"]["q95"]
+
+
+def test_several_specimens_need_a_choice():
+    data = syn.simulate("a201", n_specimens=2, voltages=[1.0], forces=[4.9], samples=5).data
+    with pytest.raises(ValueError, match="hold 2 specimens; choose one with specimen="):
+        fsrbayes.fit(data, settings=FAST)
+
+
+def cli(*args, **kwargs):
+    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300,
+                          **kwargs)
+
+
+@pytest.fixture(scope="module")
+def csv_file(small, tmp_path_factory):
+    path = tmp_path_factory.mktemp("fitdata") / "one.csv"
+    syn.write_simulation(small, path)
+    return path
+
+
+def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path):
+    out = tmp_path / "fit"
+    args = [sys.executable, "-m", "fsrbayes", "fit", str(csv_file), "--out", str(out), "--ensembles", "2",
+            "--chunk", "50", "--max-steps", "400", "--seed", "3"]
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    checkpoint = out / "checkpoint.npz"
+    deadline = time.time() + 240
+    while not checkpoint.exists() and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+    assert checkpoint.exists(), proc.communicate()[1].decode()[-2000:]
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    saved = np.load(checkpoint)["chain"].copy()
+    assert 0 < saved.shape[1] < 400
+    result = cli("fit", str(csv_file), "--out", str(out), "--ensembles", "2", "--chunk", "50", "--max-steps", "400",
+                 "--seed", "3", "--resume")
+    assert result.returncode == 0, result.stderr
+    chain = np.load(checkpoint)["chain"]
+    assert chain.shape[1] == 400
+    assert chain[:, :saved.shape[1]].tobytes() == saved.tobytes()
+    assert (out / "posterior.nc").exists() and (out / "summary.json").exists()
+    # A checkpoint written for another model is refused in one line.
+    refused = cli("fit", str(csv_file), "--out", str(out), "--model", "zener", "--ensembles", "2", "--chunk", "50",
+                  "--max-steps", "400", "--resume")
+    assert refused.returncode == 2
+    assert "was written for another model, other priors or another parameter order" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_cli_fit_bad_input(csv_file, tmp_path):
+    result = cli("fit", str(csv_file), "--out", str(tmp_path / "x"), "--specimen", "nobody")
+    assert result.returncode == 2 and "--specimen 'nobody' is not in" in result.stderr
+    result = cli("fit", str(csv_file), "--out", str(tmp_path / "y"), "--model", "maxwell")
+    assert result.returncode == 2 and "the first term must be one of" in result.stderr
+    a_file = tmp_path / "a_file"
+    a_file.write_text("not a folder")
+    result = cli("fit", str(csv_file), "--out", str(a_file / "z"))
+    assert result.returncode == 2 and "cannot be created" in result.stderr and "Traceback" not in result.stderr
