@@ -8,7 +8,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from benchmarks import csv_read, solver  # noqa: E402
+from benchmarks import csv_read, likelihood, solver  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 
@@ -18,6 +18,7 @@ def main():
     params = dict(load_sensor("a201").params)
     print(solver.report(solver.run(params)))
     print(csv_read.report(csv_read.run()))
+    print(likelihood.report(likelihood.run()))
 
 
 if __name__ == "__main__":

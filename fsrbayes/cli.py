@@ -208,12 +208,26 @@ def cmd_fit(args):
             if issubclass(w.category, ConvergenceWarning):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
         summaries[specimen] = save_fit(result, folder)
+        if args.plots:
+            _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
     if len(specimens) > 1:
         write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
                                                  "specimens": summaries})
     return 0
+
+
+def _fit_plots(folder):
+    import xarray as xr
+
+    from . import plots
+
+    tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
+    plots.save_figure(plots.corner_plot(tree)[0], folder / "corner.png")
+    plots.save_figure(plots.band_plot(tree, "drift")[0], folder / "drift_bands.png")
+    plots.save_figure(plots.band_plot(tree, "current")[0], folder / "current_bands.png")
+    plots.save_figure(plots.drift_3600_plot(tree)[0], folder / "drift_3600.png")
 
 
 def build_parser():
@@ -279,6 +293,8 @@ def build_parser():
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
     fit_.add_argument("--progress", action="store_true", help="show a progress bar")
+    fit_.add_argument("--no-plots", dest="plots", action="store_false",
+                      help="skip the figures (corner, credible bands, drift(3600 s) per test)")
     fit_.add_argument("--sep", default=",", help="CSV field separator")
     fit_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     fit_.set_defaults(func=cmd_fit)

@@ -104,6 +104,7 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path):
     assert chain.shape[1] == 400
     assert chain[:, :saved.shape[1]].tobytes() == saved.tobytes()
     assert (out / "posterior.nc").exists() and (out / "summary.json").exists()
+    assert all((out / f).exists() for f in ("corner.png", "drift_bands.png", "current_bands.png", "drift_3600.png"))
     # A checkpoint written for another model is refused in one line.
     refused = cli("fit", str(csv_file), "--out", str(out), "--model", "zener", "--ensembles", "2", "--chunk", "50",
                   "--max-steps", "400", "--resume")
@@ -121,3 +122,20 @@ def test_cli_fit_bad_input(csv_file, tmp_path):
     a_file.write_text("not a folder")
     result = cli("fit", str(csv_file), "--out", str(a_file / "z"))
     assert result.returncode == 2 and "cannot be created" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_plots_return_figures_and_write_pngs(result, tmp_path):
+    from fsrbayes import plots
+    from fsrbayes.inference.output import to_datatree
+
+    tree = to_datatree(result)
+    fig, axes = plots.corner_plot(tree)
+    assert axes.shape == (11, 11)  # the physical parameters the Burgers model samples for an A201
+    plots.save_figure(fig, tmp_path / "corner.png")
+    fig, axes = plots.band_plot(tree, "drift")
+    assert axes.size >= 4
+    plots.save_figure(fig, tmp_path / "bands.png")
+    fig, _ = plots.drift_3600_plot(tree)
+    plots.save_figure(fig, tmp_path / "d.png")
+    for name in ("corner.png", "bands.png", "d.png"):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

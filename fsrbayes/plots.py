@@ -1,0 +1,104 @@
+"""Figures of fits: corner plot, credible bands of I(t) and drift(t), drift(3600 s) per test.
+
+Every function takes an ArviZ DataTree written by :func:`fsrbayes.inference.output.to_datatree`
+(or read back from ``posterior.nc``) and returns ``(fig, axes)``; nothing here is imported by
+the layers below.
+"""
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "save_figure"]
+
+PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "k1", "k2", "b2", "inv_b1", "psi", "n")
+
+
+def corner_plot(tree, names=None):
+    """Corner plot (``corner``) of the physical parameters, log10 of the positive ones."""
+    import corner
+
+    post = tree.posterior
+    names = [n for n in (names or PHYSICAL) if n in post.data_vars]
+    columns, labels = [], []
+    for name in names:
+        values = post[name].values.ravel()
+        if np.all(values > 0) and name not in ("A2", "alpha", "n"):
+            columns.append(np.log10(values))
+            labels.append(f"log10 {name}")
+        else:
+            columns.append(values)
+            labels.append(name)
+    fig = corner.corner(np.column_stack(columns), labels=labels, quantiles=[0.05, 0.5, 0.95], show_titles=False,
+                        label_kwargs={"fontsize": 8})
+    return fig, np.array(fig.axes).reshape(len(names), len(names))
+
+
+def _test_label(tree, i):
+    v = float(tree.constant_data["voltage_V"].values[i])
+    s = float(tree.constant_data["stress_Pa"].values[i])
+    return f"{v:g} V, {s / 1e3:.3g} kPa"
+
+
+def band_plot(tree, kind="drift", max_tests=12):
+    """Per test: 50 % and 90 % credible bands of drift(t) (or of I(t)) over the measured points."""
+    n_tests = tree.constant_data["voltage_V"].size
+    shown = min(n_tests, max_tests)
+    cols = min(3, shown)
+    rows = int(np.ceil(shown / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    observed = tree.observed_data["current"].values
+    time = tree.constant_data["time_s"].values
+    index = tree.constant_data["test_index"].values
+    for i, ax in enumerate(axes.ravel()):
+        if i >= shown:
+            ax.set_visible(False)
+            continue
+        mask = index == i
+        t, current = time[mask], observed[mask]
+        if kind == "drift":
+            grid = tree.posterior_predictive["drift_time"].values
+            draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
+            y, points, label = grid, 100 * (current / current[0] - 1), "drift (%)"
+        else:
+            draws = tree.posterior_predictive["current"].values[..., mask].reshape(-1, mask.sum())
+            y, points, label = t, current, "current (A)"
+        for (lo, hi), alpha in (((5, 95), 0.25), ((25, 75), 0.45)):
+            ax.fill_between(y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0)
+        ax.plot(y, np.median(draws, axis=0), "C0", lw=1)
+        ax.plot(t, points, "k.", ms=3)
+        ax.set(title=_test_label(tree, i), xlabel="time (s)", ylabel=label)
+    fig.suptitle(f"{tree.attrs.get('specimen', '')}: 50 % and 90 % credible bands", fontsize=10)
+    fig.tight_layout()
+    return fig, axes
+
+
+def drift_3600_plot(tree):
+    """Posterior predictive drift(3600 s) per test (median, 50 % and 90 %) with the observed value."""
+    drift = tree.posterior_predictive["drift_3600"].values.reshape(-1, tree.constant_data["voltage_V"].size)
+    observed = tree.constant_data["observed_drift_3600"].values
+    x = np.arange(drift.shape[1])
+    fig, ax = plt.subplots(figsize=(max(5, 0.6 * x.size + 2), 3.5))
+    q05, q25, q50, q75, q95 = np.percentile(drift, [5, 25, 50, 75, 95], axis=0)
+    ax.vlines(x, q05, q95, color="C0", lw=1, label="90 %")
+    ax.vlines(x, q25, q75, color="C0", lw=4, label="50 %")
+    ax.plot(x, q50, "o", color="C0", ms=4, label="median")
+    ax.plot(x, observed, "kx", label="observed")
+    ax.set_xticks(x, [_test_label(tree, i) for i in x], rotation=60, ha="right", fontsize=7)
+    ax.set(ylabel="drift(3600 s) (%)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig, ax
+
+
+def save_figure(fig, path, dpi=110):
+    """Save a figure atomically and close it."""
+    from .utils import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=str(path).rsplit(".", 1)[-1])
+    plt.close(fig)
+    return path
