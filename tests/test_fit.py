@@ -139,3 +139,20 @@ def test_plots_return_figures_and_write_pngs(result, tmp_path):
     plots.save_figure(fig, tmp_path / "d.png")
     for name in ("corner.png", "bands.png", "d.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+class _Gaussian2D:
+    ndim = 2
+    cov = np.array([[1.0, 0.8], [0.8, 4.0]])
+
+    def __call__(self, u):
+        d = np.atleast_2d(u)
+        value = -0.5 * np.einsum("wi,ij,wj->w", d, np.linalg.inv(self.cov), d)
+        return value if np.ndim(u) > 1 else float(value[0])
+
+
+def test_laplace_start_is_twice_the_posterior_spread():
+    from fsrbayes.inference.fit import laplace_start
+
+    start = laplace_start(_Gaussian2D(), np.zeros(2), np.random.default_rng(0), (4000,))
+    np.testing.assert_allclose(np.cov(start.T), 4 * _Gaussian2D.cov, rtol=0.08)

@@ -115,7 +115,8 @@ def summary(result, tree):
                             "min_ess_bulk": _finite(np.min(report.ess_bulk)),
                             "max_tau": _finite(np.max(report.tau)), "n_ensembles": int(result.run.chain.shape[0]),
                             "n_walkers": int(result.run.chain.shape[2])},
-            "fixed_parameters": posterior.fixed}
+            "fixed_parameters": posterior.fixed,
+            "map_log_posterior": [float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])]}
 
 
 def save_fit(result, folder, *, stem="posterior"):
