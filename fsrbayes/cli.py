@@ -4,6 +4,7 @@ Errors on bad input are one line on stderr and exit code 2, never a traceback.
 """
 
 import argparse
+import os
 import signal
 import sys
 import warnings
@@ -191,8 +192,12 @@ def cmd_fit(args):
         raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
     out = Path(args.out)
     _writable(out)
+    if args.processes is not None and args.processes < 1:
+        raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
-                               max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps))
+                               max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
+                               processes=processes)
     specimens = [args.specimen] if args.specimen else data.specimens
     signal.signal(signal.SIGTERM, _stop_on_sigterm)
     summaries = {}
@@ -292,7 +297,9 @@ def build_parser():
     fit_.add_argument("--chunk", type=int, default=500, help="steps between convergence checks and checkpoints")
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
-    fit_.add_argument("--progress", action="store_true", help="show a progress bar")
+    fit_.add_argument("--processes", type=int, help="processes running ensembles side by side "
+                      "(default: one per core, at most one per ensemble; same chains either way)")
+    fit_.add_argument("--progress", action="store_true", help="show a progress bar (with --processes 1)")
     fit_.add_argument("--no-plots", dest="plots", action="store_false",
                       help="skip the figures (corner, credible bands, drift(3600 s) per test)")
     fit_.add_argument("--sep", default=",", help="CSV field separator")

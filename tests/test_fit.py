@@ -1,6 +1,7 @@
 """fsrbayes.fit and 'fsrbayes fit': outputs, summary keys, kill-and-resume, mismatched checkpoints."""
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -83,6 +84,22 @@ def csv_file(small, tmp_path_factory):
     return path
 
 
+def _children_of(pid):
+    """Processes whose command line names the killed fit's output folder and whose parent was pid."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                status = open(f"/proc/{entry}/status").read()
+                cmdline = open(f"/proc/{entry}/cmdline", "rb").read()
+            except OSError:
+                continue
+            ppid = int(status.split("PPid:")[1].split()[0])
+            if (ppid == pid or ppid == 1) and b"fsrbayes" in cmdline and b"test_killed_fit" in cmdline:
+                found.append(int(entry))
+    return found
+
+
 def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path):
     out = tmp_path / "fit"
     args = [sys.executable, "-m", "fsrbayes", "fit", str(csv_file), "--out", str(out), "--ensembles", "2",
@@ -95,6 +112,11 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path):
     assert checkpoint.exists(), proc.communicate()[1].decode()[-2000:]
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
+    # Its worker processes (one per ensemble, on both cores) must not outlive it.
+    deadline = time.time() + 10
+    while _children_of(proc.pid) and time.time() < deadline:
+        time.sleep(0.2)
+    assert not _children_of(proc.pid)
     saved = np.load(checkpoint)["chain"].copy()
     assert 0 < saved.shape[1] < 400
     result = cli("fit", str(csv_file), "--out", str(out), "--ensembles", "2", "--chunk", "50", "--max-steps", "400",

@@ -112,3 +112,14 @@ def test_prior_only_posterior_recovers_the_prior(model):
     for k, name in enumerate(posterior.names):
         p = stats.kstest(x[:, k], sensor.priors[name]._frozen().cdf).pvalue
         assert p > 0.01 / posterior.ndim, name
+
+
+def test_ensembles_in_two_processes_give_the_same_chains():
+    start = MU + np.random.default_rng(1).normal(size=(2, 16, 3))
+    one = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100)
+    two = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100, processes=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        a = run_ensembles(Gaussian(), start, seed=3, settings=one)
+        b = run_ensembles(Gaussian(), start, seed=3, settings=two)
+    assert np.array_equal(a.chain, b.chain) and np.array_equal(a.log_prob, b.log_prob)

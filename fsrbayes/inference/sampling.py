@@ -17,7 +17,12 @@ seed gives the same chains, and a checkpoint (written atomically after every chu
 run exactly where it stopped.
 """
 
+import multiprocessing
+import os
+import threading
+import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 
 import emcee
@@ -49,6 +54,9 @@ class SamplerSettings:
         The convergence criteria of the module docstring.
     de_fraction : float
         Share of differential-evolution moves; the rest are stretch moves.
+    processes : int
+        Worker processes running ensembles side by side (1: in this process). Each ensemble
+        carries its own random state, so the chains are the same either way.
     """
 
     n_ensembles: int = 4
@@ -60,6 +68,7 @@ class SamplerSettings:
     tau_factor: float = 50.0
     ess_target: float = 400.0
     de_fraction: float = 0.8
+    processes: int = 1
 
     def walkers_for(self, ndim):
         if self.n_walkers is not None:
@@ -187,8 +196,31 @@ def convergence_report(chain, settings, names=(), final=True):
     return ConvergenceReport(converged, n_steps, n_kept, tau, rhat, ess, tuple(names))
 
 
-def _moves(settings):
-    return [(emcee.moves.DEMove(), settings.de_fraction), (emcee.moves.StretchMove(), 1.0 - settings.de_fraction)]
+def _moves(de_fraction):
+    return [(emcee.moves.DEMove(), de_fraction), (emcee.moves.StretchMove(), 1.0 - de_fraction)]
+
+
+def _exit_with_parent(parent_pid):
+    """Worker initializer: leave when the parent dies (a killed fit must not leave orphans).
+
+    Forked workers hold their own ends of the pool's pipes and would otherwise wait forever.
+    """
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, progress=False):
+    """Run one ensemble for ``steps`` from a position and random state; return its new pieces."""
+    n_walk, ndim = position.shape
+    sampler = emcee.EnsembleSampler(n_walk, ndim, log_prob, vectorize=True, moves=_moves(de_fraction))
+    sampler.random_state = random_state
+    state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
+    sampler.run_mcmc(state, steps, progress=progress, skip_initial_state_check=True)
+    return sampler.get_chain(), sampler.get_log_prob(), sampler.backend.accepted, sampler.random_state
 
 
 def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
@@ -255,46 +287,44 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
     if n_ens < 2:
         raise ValueError(f"convergence across ensembles needs n_ensembles >= 2, got {n_ens}")
     seeds = np.random.SeedSequence(seed).spawn(n_ens) if not isinstance(seed, np.random.SeedSequence) else seed.spawn(n_ens)
-    samplers = []
-    for e in range(n_ens):
-        sampler = emcee.EnsembleSampler(n_walk, ndim, log_prob, vectorize=True, moves=_moves(settings))
-        sampler.random_state = np.random.RandomState(seeds[e].generate_state(4)).get_state()
-        samplers.append(sampler)
+    states = [np.random.RandomState(seeds[e].generate_state(4)).get_state() for e in range(n_ens)]
     chains = np.empty((n_ens, 0, n_walk, ndim))
     log_probs = np.empty((n_ens, 0, n_walk))
     accepted = np.zeros((n_ens, n_walk))
-    positions = [start[e] for e in range(n_ens)]
     if resume and checkpoint is not None:
         try:
             chains, log_probs, accepted, states = _load(checkpoint, fingerprint, n_ens)
         except FileNotFoundError:
             pass
-        else:
-            positions = [chains[e, -1] for e in range(n_ens)]
-            for sampler, state in zip(samplers, states):
-                sampler.random_state = state
+    pool = None
+    if settings.processes > 1:
+        pool = ProcessPoolExecutor(min(settings.processes, n_ens), mp_context=multiprocessing.get_context("fork"),
+                                   initializer=_exit_with_parent, initargs=(os.getpid(),))
     report = None
-    while True:
-        if chains.shape[1] >= settings.min_steps:
-            at_budget = chains.shape[1] >= settings.max_steps
-            report = convergence_report(chains, settings, names, final=at_budget)
-            if report.converged or at_budget:
-                break
-        steps = min(settings.chunk, settings.max_steps - chains.shape[1])
-        new_chain, new_lp = [], []
-        for e, sampler in enumerate(samplers):
-            sampler.reset()
-            log_start = log_probs[e, -1] if log_probs.shape[1] else None
-            state = emcee.State(positions[e], log_prob=log_start, random_state=sampler.random_state)
-            sampler.run_mcmc(state, steps, progress=progress, skip_initial_state_check=True)
-            positions[e] = sampler.get_last_sample().coords
-            new_chain.append(sampler.get_chain())
-            new_lp.append(sampler.get_log_prob())
-            accepted[e] += sampler.backend.accepted
-        chains = np.concatenate([chains, np.array(new_chain)], axis=1)
-        log_probs = np.concatenate([log_probs, np.array(new_lp)], axis=1)
-        if checkpoint is not None:
-            _save(checkpoint, fingerprint, chains, log_probs, accepted, [s.random_state for s in samplers], settings)
+    try:
+        while True:
+            if chains.shape[1] >= settings.min_steps:
+                at_budget = chains.shape[1] >= settings.max_steps
+                report = convergence_report(chains, settings, names, final=at_budget)
+                if report.converged or at_budget:
+                    break
+            steps = min(settings.chunk, settings.max_steps - chains.shape[1])
+            jobs = [(log_prob, chains[e, -1] if chains.shape[1] else start[e],
+                     log_probs[e, -1] if log_probs.shape[1] else None, states[e], steps, settings.de_fraction)
+                    for e in range(n_ens)]
+            if pool is None:
+                results = [_advance(*job, progress=progress) for job in jobs]
+            else:
+                results = [f.result() for f in [pool.submit(_advance, *job) for job in jobs]]
+            chains = np.concatenate([chains, np.array([r[0] for r in results])], axis=1)
+            log_probs = np.concatenate([log_probs, np.array([r[1] for r in results])], axis=1)
+            accepted += np.array([r[2] for r in results])
+            states = [r[3] for r in results]
+            if checkpoint is not None:
+                _save(checkpoint, fingerprint, chains, log_probs, accepted, states, settings)
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
     if not report.converged:
         warnings.warn(ConvergenceWarning(report), stacklevel=2)
     return EnsembleRun(chains, log_probs, accepted / chains.shape[1], report)
