@@ -1,25 +1,39 @@
-"""Run every benchmark and print the results (``python -m benchmarks``)."""
+"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit]``.
+
+Without names all run; ``fit`` (a full converged Burgers fit) takes minutes.
+"""
 
 import os
 import platform
+import sys
 
 for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(var, "1")
 
 import numpy as np  # noqa: E402
 
-from benchmarks import csv_read, likelihood, solver  # noqa: E402
+from benchmarks import csv_read, fit, likelihood, solver  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
+BENCHMARKS = {
+    "solver": lambda: solver.report(solver.run(dict(load_sensor("a201").params))),
+    "csv": lambda: csv_read.report(csv_read.run()),
+    "likelihood": lambda: likelihood.report(likelihood.run()),
+    "fit": lambda: fit.report(fit.run()),
+}
 
-def main():
+
+def main(names):
+    unknown = [n for n in names if n not in BENCHMARKS]
+    if unknown:
+        print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
+        return 2
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, {platform.processor() or 'cpu n/a'}; "
           f"python {platform.python_version()}, numpy {np.__version__}")
-    params = dict(load_sensor("a201").params)
-    print(solver.report(solver.run(params)))
-    print(csv_read.report(csv_read.run()))
-    print(likelihood.report(likelihood.run()))
+    for name in names or BENCHMARKS:
+        print(BENCHMARKS[name](), flush=True)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main(sys.argv[1:]))

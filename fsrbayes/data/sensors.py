@@ -12,7 +12,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from ..physics.effects import model_parameters
-from .distributions import Distribution, make_distribution
+from .distributions import make_distribution
 from .prior import JointPrior
 
 __all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory", "CANONICAL_PARAMETERS"]
