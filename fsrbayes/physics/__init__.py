@@ -4,7 +4,7 @@ No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything h
 numpy/scipy functions of arrays in SI units (barrier height in eV).
 """
 
-from . import constants, contact, loading, peers, rheology, solver, tunneling
+from . import constants, contact, effects, loading, peers, rheology, solver, tunneling
 from .contact import contact_resistance, effective_area, gap, stress_from_force
 from .loading import StressHistory
 from .rheology import creep_compliance, creep_strain, strain_history
@@ -27,7 +27,7 @@ from .solver import BulkSolution, solve_bulk
 from .tunneling import paper_peak_voltage, tunneling_current
 
 __all__ = [
-    "constants", "contact", "loading", "peers", "rheology", "solver", "tunneling",
+    "constants", "contact", "effects", "loading", "peers", "rheology", "solver", "tunneling",
     "contact_resistance", "effective_area", "gap", "stress_from_force", "StressHistory",
     "creep_compliance", "creep_strain", "strain_history", "DividerResult", "DomainError",
     "DomainWarning", "amplifier_output", "current", "current_from_amplifier", "current_history",
