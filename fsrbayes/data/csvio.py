@@ -21,7 +21,7 @@ from ..physics.sensor import current_from_amplifier
 from ..utils import atomic_path
 from .sensors import load_sensor
 
-__all__ = ["DataError", "CreepTest", "CreepData", "read_csv", "write_csv"]
+__all__ = ["DataError", "CreepTest", "CreepData", "read_csv", "write_csv", "observed_drift"]
 
 STRESS_PLAUSIBLE_MIN_PA = 1e3
 """Stresses below 1 kPa (0.04 N on an A201) are taken for kPa written into stress_Pa."""
@@ -46,6 +46,13 @@ class DataError(ValueError):
         where = str(path) + (f" line {line}" if line is not None else "") + (f", column {column}" if column else "")
         super().__init__(f"{where}: {message}")
         self.path, self.line, self.column = str(path), line, column
+
+
+def observed_drift(time_s, current_A, at_s=3600.0):
+    """Measured drift in % (eq. 22) at ``at_s`` by linear interpolation; NaN past the last sample."""
+    if at_s > time_s[-1]:
+        return float("nan")
+    return float(100.0 * (np.interp(at_s, time_s, current_A) / current_A[0] - 1.0))
 
 
 @dataclass(frozen=True)
@@ -80,9 +87,7 @@ class CreepTest:
 
     def observed_drift(self, time_s=3600.0):
         """Measured drift in % (eq. 22) at ``time_s`` by linear interpolation; NaN past the data."""
-        if time_s > self.time_s[-1]:
-            return float("nan")
-        return float(100.0 * (np.interp(time_s, self.time_s, self.current_A) / self.current_A[0] - 1.0))
+        return observed_drift(self.time_s, self.current_A, time_s)
 
 
 @dataclass(frozen=True)

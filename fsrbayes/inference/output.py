@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 
+from ..data.csvio import observed_drift
 from ..utils import atomic_path, write_json_atomic
 
 __all__ = ["to_datatree", "summary", "save_fit", "DRIFT_TIME_S"]
@@ -36,12 +37,8 @@ def _predictive(result, draws, rng, n_grid=61):
 
 
 def _observed_drift(data):
-    out = []
-    for i in range(data.n_tests):
-        t = data.time_s[i][data.mask[i]]
-        current = np.exp(data.log_current[i][data.mask[i]])
-        out.append(100.0 * (np.interp(DRIFT_TIME_S, t, current) / current[0] - 1.0) if t[-1] >= DRIFT_TIME_S else np.nan)
-    return np.array(out)
+    return np.array([observed_drift(data.time_s[i][data.mask[i]], np.exp(data.log_current[i][data.mask[i]]),
+                                    DRIFT_TIME_S) for i in range(data.n_tests)])
 
 
 def to_datatree(result, *, max_draws=2000, seed=0):

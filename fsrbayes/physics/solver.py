@@ -292,7 +292,7 @@ def _solve_block(v_signed, rs, s, phi, a, vth, law, finish, max_iter):
     iterations = 0
     with np.errstate(divide="ignore", invalid="ignore"):
         opacity = tl.KAPPA * s * np.sqrt(phi)
-        log_g9 = np.log(0.75 * opacity / s**2 * tl.CURRENT_SCALE * a) - opacity
+        log_g9 = tl.log_ohmic_conductance(s, phi, a)
     if law == "smooth":
         regime[short] = np.where(v[short] <= phi[short], INTERMEDIATE, FORWARD)
         # Which side of Va holds the root: sign of h at Va (if V > Va).

@@ -57,10 +57,15 @@ TUNNELING_LAWS = ("paper", "smooth")
 # solver prepares once and evaluates in every Newton step; the public functions below
 # compose the two. ``evaluate`` also takes log(V_bulk), which the solver has for free.
 
+def log_ohmic_conductance(gap, barrier, area):
+    """log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
+    opacity = KAPPA * gap * np.sqrt(barrier)
+    return np.log(0.75 * opacity / gap**2 * CURRENT_SCALE * area) - opacity
+
+
 def _ohmic_conductance(gap, barrier, area):
     """Conductance of eq. 9 / Simmons eq. 25 in S."""
-    root = np.sqrt(barrier)
-    return 0.75 * KAPPA * root / gap * CURRENT_SCALE * area * np.exp(-KAPPA * gap * root)
+    return np.exp(log_ohmic_conductance(gap, barrier, area))
 
 
 def prepare_intermediate(gap, barrier, area):
