@@ -71,14 +71,16 @@ class _NegativeLogPosterior:
     call instead of 2·ndim (single-point calls are dominated by fixed overhead).
     """
 
-    def __init__(self, posterior, step=1e-5):
+    def __init__(self, posterior, step=1e-5, basis=None, origin=None):
         self.posterior = posterior
+        self.basis = np.eye(posterior.ndim) if basis is None else basis
+        self.origin = np.zeros(posterior.ndim) if origin is None else origin
         self.offsets = np.vstack([np.zeros(posterior.ndim), step * np.eye(posterior.ndim),
                                   -step * np.eye(posterior.ndim)])
         self.step = step
 
-    def __call__(self, u):
-        values = -self.posterior(u[None, :] + self.offsets)
+    def __call__(self, w):
+        values = -self.posterior(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
         n = self.posterior.ndim
         if not np.all(np.isfinite(values)):
             return (values[0] if np.isfinite(values[0]) else 1e300), np.zeros(n)
@@ -103,7 +105,7 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256):
             continue
         result = optimize.minimize(objective, candidates[index], jac=True, method="L-BFGS-B",
                                    options={"maxiter": 2000, "maxfun": 4000})
-        optima.append((-result.fun, result.x))
+        optima.append(_polish(posterior, result.x, -result.fun)[::-1])
     if not optima:
         raise RuntimeError("no prior draw gives a finite posterior: check the data against the model's domain")
     optima.sort(key=lambda item: -item[0])
@@ -111,16 +113,12 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256):
     return np.array([optima[i % len(optima)] for i in range(n_starts)])
 
 
-def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3):
-    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance.
+def _root_covariance(posterior, u_map, step=1e-3):
+    """A square root of the Laplace covariance at ``u_map`` (columns scaled by 1/sqrt(precision)).
 
     The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
     vectorised call. Directions where it is not negative definite get the prior's scale
     (u-space is prior-scaled, so 1).
-
-    Returns
-    -------
-    ndarray, shape ``shape + (ndim,)``
     """
     n = posterior.ndim
     eye = step * np.eye(n)
@@ -134,8 +132,38 @@ def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3
     hessian[j, i] = upper
     precision, vectors = np.linalg.eigh(-np.where(np.isfinite(hessian), hessian, 0.0))
     precision = np.where(precision > 1e-12, precision, 1.0)
-    root_cov = vectors / np.sqrt(precision)
-    return u_map + overdispersion * rng.standard_normal(shape + (n,)) @ root_cov.T
+    return vectors / np.sqrt(precision)
+
+
+def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3):
+    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance.
+
+    Returns
+    -------
+    ndarray, shape ``shape + (ndim,)``
+    """
+    root_cov = _root_covariance(posterior, u_map, step)
+    return u_map + overdispersion * rng.standard_normal(shape + (posterior.ndim,)) @ root_cov.T
+
+
+def _polish(posterior, u, value, rounds=4, tol=1e-3):
+    """Re-optimise in coordinates whitened by the local Laplace covariance, until the gain is < tol.
+
+    L-BFGS-B in the prior-scaled coordinates stops early on the creep posterior's ridges
+    (condition number ~1e8): on a 9-test specimen it ended 19 nats below the true parameters.
+    Whitened, the ridge is round near the optimum and a few rounds walk along it.
+    """
+    for _ in range(rounds):
+        root = _root_covariance(posterior, u)
+        objective = _NegativeLogPosterior(posterior, basis=root, origin=u)
+        result = optimize.minimize(objective, np.zeros(posterior.ndim), jac=True, method="L-BFGS-B",
+                                   options={"maxiter": 2000, "maxfun": 4000})
+        if not np.isfinite(result.fun) or -result.fun <= value + tol:
+            if np.isfinite(result.fun) and -result.fun > value:
+                u, value = u + root @ result.x, -result.fun
+            break
+        u, value = u + root @ result.x, -result.fun
+    return u, value
 
 
 def _select(data, specimen):

@@ -1,0 +1,93 @@
+"""Parameter recovery on the virtual test bench: do the credible intervals cover the truth?
+
+Specimens are drawn from the simulated population (:mod:`fsrbayes.data.synthetic`), each is
+fitted on its own, and for every parameter we record whether its central 90 % credible interval
+holds the true value, and for every creep test whether the 90 % interval of the predicted
+drift(3600 s) holds the noiseless truth. A parameter counts as *identified* by the creep data
+when its posterior sd is below half its prior sd (in the sampler's prior-scaled coordinates);
+one whose posterior sd is above 0.8 of the prior's is reported as not identified (posterior ≈
+prior).
+
+Run ``python -m fsrbayes.inference.recovery [N]`` for the table; the slow test runs 20.
+"""
+
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from ..data import synthetic
+from ..data.sensors import load_sensor
+from .fit import fit
+from .sampling import ConvergenceWarning, SamplerSettings
+
+__all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery"]
+
+RECOVERY_SETTINGS = SamplerSettings(n_ensembles=2, chunk=500, max_steps=4000, min_steps=2500, processes=2)
+"""Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
+
+DRIFT_TIME_S = 3600.0
+
+
+def _drift_3600(posterior, x):
+    times = np.broadcast_to(np.array([0.0, DRIFT_TIME_S]), (posterior.data.n_tests, 2))
+    log_current = posterior.log_model_current(x, times)
+    return 100.0 * np.expm1(log_current[..., 1] - log_current[..., 0])
+
+
+def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0, 3.0), forces=(1.96, 4.9, 9.8),
+                   settings=RECOVERY_SETTINGS, level=0.90, max_draws=1000):
+    """Simulate ``n_specimens`` A201 specimens, fit each, and score the credible intervals.
+
+    Returns
+    -------
+    dict
+        ``names``; ``inside`` (specimens × parameters, bool); ``sd_ratio`` (posterior/prior sd
+        in prior-scaled coordinates, specimens × parameters); ``drift_inside`` (list of bool per
+        creep test); ``converged`` (per specimen); ``seconds``.
+    """
+    sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
+                             samples=samples, seed=seed)
+    sensor = load_sensor("a201")
+    tail = (1.0 - level) / 2.0
+    inside, sd_ratio, drift_inside, converged, seconds = [], [], [], [], []
+    for k, specimen in enumerate(sim.data.specimens):
+        start = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            result = fit(sim.data, specimen, sensor=sensor, rng=seed + k, settings=settings)
+        seconds.append(time.perf_counter() - start)
+        converged.append(result.converged)
+        posterior = result.posterior
+        draws = result.draws(max_draws).reshape(-1, posterior.ndim)
+        truth = np.array([sim.truth["specimens"][specimen]["params"][n] for n in posterior.names])
+        low, high = np.quantile(draws, [tail, 1.0 - tail], axis=0)
+        inside.append((low <= truth) & (truth <= high))
+        u = posterior.prior.to_unconstrained(draws)
+        prior_u = posterior.prior.to_unconstrained(posterior.prior.sample(np.random.default_rng(k), 4000))
+        sd_ratio.append(u.std(axis=0) / prior_u.std(axis=0))
+        predicted = _drift_3600(posterior, draws)
+        true_drift = _drift_3600(posterior, truth[None, :])[0]
+        lo, hi = np.quantile(predicted, [tail, 1.0 - tail], axis=0)
+        drift_inside.extend(((lo <= true_drift) & (true_drift <= hi)).tolist())
+    return {"names": list(posterior.names), "inside": np.array(inside), "sd_ratio": np.array(sd_ratio),
+            "drift_inside": drift_inside, "converged": converged, "seconds": seconds}
+
+
+def format_recovery(study):
+    """A table: coverage and posterior/prior sd ratio per parameter, drift coverage, timing."""
+    lines = [f"{'parameter':10s} {'90% coverage':>13s} {'sd post/prior':>14s}  identified"]
+    for i, name in enumerate(study["names"]):
+        ratio = float(np.median(study["sd_ratio"][:, i]))
+        verdict = "yes" if ratio < 0.5 else ("no (posterior ~ prior)" if ratio > 0.8 else "weakly")
+        lines.append(f"{name:10s} {study['inside'][:, i].mean():13.2f} {ratio:14.3f}  {verdict}")
+    drift = np.array(study["drift_inside"])
+    lines.append(f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests")
+    lines.append(f"converged {sum(study['converged'])}/{len(study['converged'])}; "
+                 f"{np.mean(study['seconds']):.0f} s per fit")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(format_recovery(recovery_study(int(sys.argv[1]) if len(sys.argv) > 1 else 20)))
