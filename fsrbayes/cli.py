@@ -299,7 +299,7 @@ def build_parser():
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
     fit_.add_argument("--processes", type=int, help="processes running ensembles side by side "
                       "(default: one per core, at most one per ensemble; same chains either way)")
-    fit_.add_argument("--progress", action="store_true", help="show a progress bar (with --processes 1)")
+    fit_.add_argument("--progress", action="store_true", help="show a progress bar on stderr")
     fit_.add_argument("--no-plots", dest="plots", action="store_false",
                       help="skip the figures (corner, credible bands, drift(3600 s) per test)")
     fit_.add_argument("--sep", default=",", help="CSV field separator")

@@ -206,3 +206,10 @@ def test_parameter_recovery_on_twenty_simulated_specimens():
         if ok:
             assert 0.8 <= c <= 1.0, f"{name}: 90% interval covers the truth in {c:.2f} of the specimens"
     assert np.mean(study["drift_inside"]) >= 0.85
+
+
+def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
+    result = cli("fit", str(csv_file), "--out", str(tmp_path / "p"), "--ensembles", "2", "--chunk", "20",
+                 "--max-steps", "60", "--processes", "2", "--no-plots", "--progress")
+    assert result.returncode == 0, result.stderr
+    assert "sampling: 100%" in result.stderr and "60/60" in result.stderr and "step" in result.stderr

@@ -239,7 +239,7 @@ def _exit_with_parent(parent_pid):
     threading.Thread(target=watch, daemon=True).start()
 
 
-def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, progress=False, transport=None):
+def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, transport=None):
     """Run one ensemble for ``steps`` from a position and random state; return its new pieces.
 
     With a ``transport`` map the walkers move in v = T⁻¹(u); positions and log-densities come
@@ -252,7 +252,7 @@ def _advance(log_prob, position, log_prob_start, random_state, steps, de_fractio
     sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=_moves(de_fraction))
     sampler.random_state = random_state
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
-    sampler.run_mcmc(state, steps, progress=progress, skip_initial_state_check=True)
+    sampler.run_mcmc(state, steps, skip_initial_state_check=True)
     chain, values = sampler.get_chain(), sampler.get_log_prob()
     if transport is not None:
         chain, values = transport.forward(chain), values - transport.log_det_jacobian
@@ -279,6 +279,12 @@ def _transport_maps(chains, settings, max_draws=50000):
     except (ValueError, np.linalg.LinAlgError):
         transport = None  # too few or degenerate draws: sample the target's own coordinates
     return [transport] * n_ens
+
+
+def _progress_bar(settings, done):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=settings.max_steps, initial=done, unit="step", desc="sampling", dynamic_ncols=True)
 
 
 def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
@@ -334,7 +340,8 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
     fingerprint : str
         Identity of the fit (data, model, priors, order); a checkpoint with another one is refused.
     progress : bool
-        Show emcee's progress bar (tqdm).
+        Show a progress bar (tqdm, on stderr) over the step budget, updated after every chunk
+        with the latest convergence numbers; it works with worker processes too.
 
     Returns
     -------
@@ -359,11 +366,14 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
         pool = ProcessPoolExecutor(min(settings.processes, n_ens), mp_context=multiprocessing.get_context("fork"),
                                    initializer=_exit_with_parent, initargs=(os.getpid(),))
     report = None
+    bar = _progress_bar(settings, chains.shape[1]) if progress else None
     try:
         while True:
             if chains.shape[1] >= settings.min_steps and chains.shape[1] > settings.warmup_steps(chains.shape[1]):
                 at_budget = chains.shape[1] >= settings.max_steps
                 report = convergence_report(chains, settings, names, final=at_budget)
+                if bar is not None:
+                    bar.set_postfix_str(f"τ max {report.tau.max():.0f}, kept {report.n_kept} steps", refresh=True)
                 if report.converged or at_budget:
                     break
             steps = min(settings.chunk, settings.max_steps - chains.shape[1])
@@ -372,7 +382,7 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
                      log_probs[e, -1] if log_probs.shape[1] else None, states[e], steps, settings.de_fraction)
                     for e in range(n_ens)]
             if pool is None:
-                results = [_advance(*job, progress=progress, transport=t) for job, t in zip(jobs, maps)]
+                results = [_advance(*job, transport=t) for job, t in zip(jobs, maps)]
             else:
                 results = [f.result() for f in [pool.submit(_advance, *job, transport=t) for job, t in zip(jobs, maps)]]
             chains = np.concatenate([chains, np.array([r[0] for r in results])], axis=1)
@@ -381,7 +391,11 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
             states = [r[3] for r in results]
             if checkpoint is not None:
                 _save(checkpoint, fingerprint, chains, log_probs, accepted, states, settings)
+            if bar is not None:
+                bar.update(steps)
     finally:
+        if bar is not None:
+            bar.close()
         if pool is not None:
             pool.shutdown(cancel_futures=True)
     if not report.converged:
