@@ -113,6 +113,21 @@ class LogPosterior:
         """Log density of u under the prior (including the Jacobian)."""
         return self.prior.log_prob_unconstrained(u)
 
+    def log_likelihood(self, u):
+        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
+        u2 = np.atleast_2d(np.asarray(u, dtype=float))
+        x, log_jac = self.prior.from_unconstrained(u2)
+        ok = np.isfinite(self.prior.log_prob(x) + log_jac)
+        value = np.full(len(u2), -np.inf)
+        if ok.any():
+            with np.errstate(all="ignore"):
+                value[ok] = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
+        return np.where(np.isnan(value), -np.inf, value)
+
+    def sample_prior(self, rng, n):
+        """n independent prior draws in u-space, shape (n, ndim)."""
+        return self.prior.to_unconstrained(self.prior.sample(rng, n))
+
     def __call__(self, u):
         """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
         u = np.asarray(u, dtype=float)

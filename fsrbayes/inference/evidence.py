@@ -1,0 +1,378 @@
+"""Log-evidence from power posteriors sampled with emcee: stepping-stone, bridge, TI.
+
+The power posterior p_β(u) ∝ L(u)^β·π(u) is sampled on a ladder 0 = β_0 < … < β_{K−1} = 1,
+β_k = (k/(K−1))^5 (rungs crowd near β = 0, where E_β[log L] changes fastest; Calderhead &
+Girolami 2009; Xie et al. 2011). Rung 0 is the prior itself, drawn i.i.d. at every iteration;
+every other rung is an ensemble moved by the affine-invariant stretch move (emcee's
+``StretchMove``), all rungs evaluated in one vectorised likelihood call per half-step. During burn-in the rungs are annealed in
+turn — rung k starts from rung k−1's final ensemble — and during production every step is
+followed by swaps between neighbouring rungs (parallel tempering, Vousden et al. 2016), which
+cost no likelihood calls and let mode weights mix.
+
+Estimators, from the pooled log-likelihoods ll_{k,t,j} (rung, iteration, walker):
+
+* stepping-stone (the reported value): log r_k = log mean exp(d_k·ll_{k−1}), log Z = Σ log r_k;
+* geometric bridge per stone: log r_k = log mean exp(d_k/2·ll_{k−1}) − log mean exp(−d_k/2·ll_k);
+* thermodynamic integration (trapezoid, and with Friel et al.'s variance correction) — a
+  diagnostic only: its discretisation bias is nats on wide priors.
+
+Error bar: σ² = σ_MC² + σ_disc². σ_MC is the larger of the batch-means error (per-iteration,
+walker-averaged series, 25 batches, propagated through log by the delta method with the
+covariance across stones — swaps correlate the rungs) and the spread of ``replicates``
+independent ladders (SD/√R). Walkers of one ensemble are never treated as independent.
+σ_disc is |SS − bridge|: both are consistent, and they part only when the ladder is too coarse.
+
+References: ../shared/EVIDENCE.md; Xie et al., Syst. Biol. 60, 150 (2011); Friel, Hurn & Wyse,
+Stat. Comput. 24, 709 (2014); Meng & Wong, Stat. Sinica 6, 831 (1996).
+"""
+
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.special import logsumexp
+
+__all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
+           "combine_ladder"]
+
+
+@dataclass(frozen=True)
+class LadderSettings:
+    """How to sample the power posteriors.
+
+    Attributes
+    ----------
+    n_temps : int
+        Rungs K, including β = 0 and β = 1.
+    exponent : float
+        β_k = (k/(K−1))^exponent.
+    n_walkers : int or None
+        Walkers per rung; default max(32, 4·ndim), even.
+    burn, steps : int
+        Burn-in steps per rung (annealed, rung after rung) and production steps (all rungs).
+    swap : bool
+        Swap walkers between neighbouring rungs after every production step.
+    replicates : int
+        Independent ladders (different seeds); their spread enters the error bar.
+    n_batches : int
+        Batches for the batch-means Monte-Carlo error.
+    processes : int
+        Ladders run side by side in worker processes.
+    """
+
+    n_temps: int = 32
+    exponent: float = 5.0
+    n_walkers: int | None = None
+    burn: int = 500
+    steps: int = 2000
+    swap: bool = True
+    replicates: int = 4
+    n_batches: int = 25
+    processes: int = 1
+
+    def __post_init__(self):
+        if self.n_temps < 3:
+            raise ValueError(f"n_temps must be >= 3, got {self.n_temps}")
+        if self.replicates < 2:
+            raise ValueError(f"replicates must be >= 2 (their spread is part of the error bar), got {self.replicates}")
+        if self.steps < 10 * self.n_batches:
+            raise ValueError(f"steps must be >= 10 per batch ({10 * self.n_batches}), got {self.steps}")
+
+    def walkers_for(self, ndim):
+        if self.n_walkers is not None:
+            if self.n_walkers < 2 * ndim or self.n_walkers % 2:
+                raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {self.n_walkers}")
+            return self.n_walkers
+        return max(32, 4 * ndim + (4 * ndim) % 2)
+
+
+def beta_ladder(n_temps, exponent=5.0):
+    """β_k = (k/(K−1))^exponent, k = 0…K−1."""
+    return (np.arange(n_temps) / (n_temps - 1.0)) ** exponent
+
+
+# A prior this wide makes the evidence mostly a statement about the prior (the Occam factor
+# grows with log(prior width)) and thermodynamic integration diverge as it becomes improper.
+MAX_LOG_SIGMA = 5.0
+MAX_DECADES = 30.0
+
+
+def check_priors_for_evidence(prior):
+    """Refuse priors that make the evidence meaningless: improper or absurdly wide ones.
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter, its prior and the limit.
+    """
+    for name, dist in zip(prior.names, prior.dists):
+        args = dist.args
+        if dist.kind == "lognormal" and args["sigma"] > MAX_LOG_SIGMA:
+            raise ValueError(f"prior of {name}: lognormal sigma = {args['sigma']:g} is too wide for an evidence "
+                             f"(limit {MAX_LOG_SIGMA:g}, i.e. a factor e^{MAX_LOG_SIGMA:g} per sd)")
+        if dist.kind == "loguniform" and np.log10(args["upper"] / args["lower"]) > MAX_DECADES:
+            raise ValueError(f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} decades "
+                             f"is too wide for an evidence (limit {MAX_DECADES:g})")
+        for key, value in args.items():
+            if not np.isfinite(value):
+                raise ValueError(f"prior of {name}: {key} = {value} makes the prior improper; the evidence needs a "
+                                 "proper prior")
+
+
+def _evaluate(target, u):
+    """log π and log L at u (N, ndim); log L is −inf wherever log π is."""
+    lp = np.asarray(target.log_prior(u), dtype=float)
+    ll = np.full(len(u), -np.inf)
+    ok = np.isfinite(lp)
+    if ok.any():
+        ll[ok] = target.log_likelihood(u[ok])
+    return lp, np.where(np.isnan(ll), -np.inf, ll)
+
+
+def _tempered(lp, ll, beta):
+    """log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of the model)."""
+    beta = np.broadcast_to(beta, np.shape(lp))
+    with np.errstate(invalid="ignore"):
+        value = lp + beta * ll
+    return np.where(np.isfinite(lp) & np.isfinite(ll), value, -np.inf)
+
+
+class _Rungs:
+    """All tempered ensembles of one ladder, advanced together by the affine-invariant stretch move.
+
+    Each half-step is emcee's red–blue stretch update (``emcee.moves.StretchMove``, a = 2:
+    z ~ g(z) ∝ 1/sqrt(z) on [1/a, a], y = c + z·(x − c), accept with z^(d−1)·p(y)/p(x); Goodman &
+    Weare 2010) applied to every rung at once, so the proposals of all rungs go to the
+    likelihood in *one* vectorised call; acceptance is per rung at its own β.
+    """
+
+    def __init__(self, target, betas, coords, random, a=2.0):
+        self.target, self.betas, self.random, self.a = target, np.asarray(betas), random, a
+        n_rungs, n_walk, ndim = coords.shape
+        lp, ll = _evaluate(target, coords.reshape(-1, ndim))
+        self.coords, self.lp, self.ll = coords.copy(), lp.reshape(n_rungs, n_walk), ll.reshape(n_rungs, n_walk)
+
+    def step(self):
+        n_rungs, n_walk, ndim = self.coords.shape
+        half_size = n_walk // 2
+        order = np.argsort(self.random.rand(n_rungs, n_walk), axis=1)  # a random split per rung
+        rows = np.arange(n_rungs)[:, None]
+        for moving, fixed in ((order[:, :half_size], order[:, half_size:]), (order[:, half_size:], order[:, :half_size])):
+            x = self.coords[rows, moving]
+            z = ((self.a - 1.0) * self.random.rand(n_rungs, half_size) + 1.0) ** 2 / self.a
+            partners = self.coords[rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]]
+            proposal = partners - (partners - x) * z[..., None]
+            lp, ll = _evaluate(self.target, proposal.reshape(-1, ndim))
+            lp, ll = lp.reshape(n_rungs, half_size), ll.reshape(n_rungs, half_size)
+            beta = self.betas[:, None]
+            with np.errstate(invalid="ignore"):
+                diff = ((ndim - 1.0) * np.log(z) + _tempered(lp, ll, beta)
+                        - _tempered(self.lp[rows, moving], self.ll[rows, moving], beta))
+            accept = np.log(self.random.rand(n_rungs, half_size)) < np.where(np.isnan(diff), -np.inf, diff)
+            r, w = np.nonzero(accept)
+            self.coords[r, moving[r, w]] = proposal[r, w]
+            self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
+
+
+def _run_ladder(target, betas, settings, seed):
+    """One ladder: returns ll (K, steps, W) and the swap acceptance per neighbouring pair."""
+    seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    rng = np.random.default_rng(seed)
+    random = np.random.RandomState(seed.generate_state(4))
+    n_walk = settings.walkers_for(target.ndim)
+    n_temps = len(betas)
+    prior_draws = lambda: target.sample_prior(rng, n_walk)  # noqa: E731
+    # Annealed burn-in: rung k starts from rung k−1's final ensemble.
+    coords = np.empty((n_temps - 1, n_walk, target.ndim))
+    previous = prior_draws()
+    for k in range(1, n_temps):
+        rung = _Rungs(target, betas[k:k + 1], previous[None], random)
+        for _ in range(settings.burn):
+            rung.step()
+        coords[k - 1] = previous = rung.coords[0]
+    rungs = _Rungs(target, betas[1:], coords, random)
+    ll = np.empty((n_temps, settings.steps, n_walk))
+    tried = np.zeros(n_temps - 1)
+    accepted = np.zeros(n_temps - 1)
+    for t in range(settings.steps):
+        rungs.step()
+        u0 = prior_draws()
+        lp0, ll0 = _evaluate(target, u0)
+        coords = np.concatenate([u0[None], rungs.coords])
+        lps = np.concatenate([lp0[None], rungs.lp])
+        lls = np.concatenate([ll0[None], rungs.ll])
+        if settings.swap:
+            for k in range(n_temps - 1, 0, -1):
+                partner = rng.permutation(n_walk)
+                with np.errstate(invalid="ignore"):
+                    log_accept = (betas[k] - betas[k - 1]) * (lls[k - 1][partner] - lls[k])
+                swap = np.log(rng.uniform(size=n_walk)) < np.where(np.isnan(log_accept), -np.inf, log_accept)
+                tried[k - 1] += n_walk
+                accepted[k - 1] += swap.sum()
+                for arrays in (coords, lls, lps):
+                    mine, theirs = arrays[k][swap].copy(), arrays[k - 1][partner[swap]].copy()
+                    arrays[k][swap], arrays[k - 1][partner[swap]] = theirs, mine
+            rungs.coords, rungs.lp, rungs.ll = coords[1:].copy(), lps[1:].copy(), lls[1:].copy()
+        ll[:, t] = lls
+    return ll, accepted / np.maximum(tried, 1)
+
+
+def _log_mean_series(x):
+    """Per-iteration walker means of exp(x − max) (T,) and the shift max."""
+    finite = x[np.isfinite(x)]
+    shift = finite.max() if finite.size else 0.0
+    return np.exp(x - shift).mean(axis=1), shift
+
+
+def _batch_covariance(series, n_batches):
+    """Covariance of the time-means of series (T, M), from batch means."""
+    length = series.shape[0] // n_batches
+    batches = series[: length * n_batches].reshape(n_batches, length, -1).mean(axis=1)
+    return np.atleast_2d(np.cov(batches, rowvar=False)) / n_batches
+
+
+def combine_ladder(ll, betas, n_batches=25):
+    """Evidence estimates and batch-means variances of one ladder's log-likelihoods ll (K, T, W).
+
+    Returns
+    -------
+    dict
+        ``ss``, ``bridge``, ``ti``, ``ti_corrected``, ``ss_half`` (every other rung) and
+        ``var_ss``, ``var_bridge``, ``var_ti`` (batch means, delta method).
+    """
+    d = np.diff(betas)
+    n_k = len(betas)
+    # Stepping-stone: one series per stone.
+    ss_series, ss_log = [], 0.0
+    for k in range(1, n_k):
+        w, shift = _log_mean_series(d[k - 1] * ll[k - 1])
+        ss_series.append(w)
+        ss_log += shift + np.log(w.mean())
+    ss_series = np.column_stack(ss_series)
+    grad = 1.0 / ss_series.mean(axis=0)
+    var_ss = float(grad @ _batch_covariance(ss_series, n_batches) @ grad)
+    # Geometric bridge: two series per stone.
+    br_series, br_grad, br_log = [], [], 0.0
+    for k in range(1, n_k):
+        a, sa = _log_mean_series(0.5 * d[k - 1] * ll[k - 1])
+        b, sb = _log_mean_series(-0.5 * d[k - 1] * ll[k])
+        br_series += [a, b]
+        br_grad += [1.0 / a.mean(), -1.0 / b.mean()]
+        br_log += sa + np.log(a.mean()) - sb - np.log(b.mean())
+    br_series, br_grad = np.column_stack(br_series), np.array(br_grad)
+    var_bridge = float(br_grad @ _batch_covariance(br_series, n_batches) @ br_grad)
+    # Thermodynamic integration (diagnostic).
+    with np.errstate(invalid="ignore"):
+        means = ll.mean(axis=(1, 2))
+        variances = ll.reshape(n_k, -1).var(axis=1)
+    ti = float(np.sum(d * (means[1:] + means[:-1]) / 2.0))
+    ti_corrected = ti - float(np.sum(d**2 / 12.0 * (variances[1:] - variances[:-1])))
+    weights = np.zeros(n_k)
+    weights[:-1] += d / 2.0
+    weights[1:] += d / 2.0
+    z = np.einsum("k,kt->t", weights, ll.mean(axis=2))
+    var_ti = float(_batch_covariance(z[:, None], n_batches)[0, 0]) if np.all(np.isfinite(z)) else np.nan
+    # Stepping-stone on every other rung (a discretisation diagnostic).
+    half = list(range(0, n_k, 2)) + ([n_k - 1] if (n_k - 1) % 2 else [])
+    ss_half = 0.0
+    for a, b in zip(half[:-1], half[1:]):
+        x = (betas[b] - betas[a]) * ll[a]
+        ss_half += float(logsumexp(x) - np.log(x.size))
+    return {"ss": float(ss_log), "bridge": float(br_log), "ti": ti, "ti_corrected": ti_corrected,
+            "ss_half": ss_half, "var_ss": var_ss, "var_bridge": var_bridge, "var_ti": var_ti}
+
+
+@dataclass
+class EvidenceResult:
+    """log Z with its error budget.
+
+    Attributes
+    ----------
+    log_z, error : float
+        Stepping-stone estimate (mean over replicates) and total σ = sqrt(σ_MC² + σ_disc²).
+    sigma_batch, sigma_replicates, sigma_disc : float
+        Batch-means error of the mean, replicate spread SD/√R, and |SS − bridge|.
+    bridge, ti, ti_corrected, ss_half : float
+        The other estimators (means over replicates); TI is a diagnostic.
+    replicates : list of dict
+        Per-ladder estimates (:func:`combine_ladder`).
+    betas : ndarray
+    swap_acceptance : ndarray, shape (R, K−1)
+    n_evals : int
+        Likelihood evaluations.
+    seconds : float
+    """
+
+    log_z: float
+    error: float
+    sigma_batch: float
+    sigma_replicates: float
+    sigma_disc: float
+    bridge: float
+    ti: float
+    ti_corrected: float
+    ss_half: float
+    replicates: list
+    betas: np.ndarray
+    swap_acceptance: np.ndarray
+    n_evals: int
+    seconds: float
+    settings: dict = field(default_factory=dict)
+
+    def as_dict(self):
+        out = asdict(self)
+        out["betas"] = [float(b) for b in self.betas]
+        out["swap_acceptance"] = np.asarray(self.swap_acceptance).tolist()
+        return out
+
+    def __str__(self):
+        return (f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
+                f"{self.sigma_replicates:.3f}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}, "
+                f"TI+corr {self.ti_corrected:.3f})")
+
+
+def _ladder_job(target, betas, settings, seed):
+    ll, swaps = _run_ladder(target, betas, settings, seed)
+    return combine_ladder(ll, betas, settings.n_batches), swaps
+
+
+def log_evidence(target, settings=LadderSettings(), seed=0):
+    """log Z of a target with ``ndim``, ``log_prior(u)``, ``log_likelihood(u)`` and ``sample_prior(rng, n)``.
+
+    ``log_prior`` must be a normalised density of u (the creep posteriors' prior-scaled u-space
+    density includes the Jacobian), vectorised over rows like ``log_likelihood``.
+
+    Returns
+    -------
+    EvidenceResult
+    """
+    if hasattr(target, "prior") and hasattr(target.prior, "dists"):
+        check_priors_for_evidence(target.prior)
+    betas = beta_ladder(settings.n_temps, settings.exponent)
+    seeds = np.random.SeedSequence(seed).spawn(settings.replicates)
+    start = time.perf_counter()
+    jobs = [(target, betas, settings, s) for s in seeds]
+    if settings.processes > 1:
+        from .sampling import _exit_with_parent
+
+        with ProcessPoolExecutor(min(settings.processes, len(jobs)), mp_context=multiprocessing.get_context("fork"),
+                                 initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
+            results = list(pool.map(_ladder_job, *zip(*jobs)))
+    else:
+        results = [_ladder_job(*job) for job in jobs]
+    parts = [r[0] for r in results]
+    n_rep = len(parts)
+    ss = np.array([p["ss"] for p in parts])
+    mean = lambda key: float(np.mean([p[key] for p in parts]))  # noqa: E731
+    sigma_batch = float(np.sqrt(np.sum([p["var_ss"] for p in parts])) / n_rep)
+    sigma_replicates = float(ss.std(ddof=1) / np.sqrt(n_rep))
+    sigma_disc = abs(mean("ss") - mean("bridge"))
+    error = float(np.hypot(max(sigma_batch, sigma_replicates), sigma_disc))
+    n_walk = settings.walkers_for(target.ndim)
+    n_evals = n_rep * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
+    return EvidenceResult(mean("ss"), error, sigma_batch, sigma_replicates, sigma_disc, mean("bridge"), mean("ti"),
+                          mean("ti_corrected"), mean("ss_half"), parts, betas, np.array([r[1] for r in results]),
+                          int(n_evals), time.perf_counter() - start, asdict(settings))
