@@ -24,7 +24,7 @@ from .sampling import ConvergenceWarning, SamplerSettings
 
 __all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery"]
 
-RECOVERY_SETTINGS = SamplerSettings(n_ensembles=2, chunk=500, max_steps=4000, min_steps=2500, processes=2)
+RECOVERY_SETTINGS = SamplerSettings(n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2)
 """Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
 
 DRIFT_TIME_S = 3600.0
