@@ -9,7 +9,7 @@ from ._version import __version__
 from .data.sensors import Sensor, available_sensors, load_sensor
 from .physics.sensor import DomainError, current, drift
 
-__all__ = ["current", "drift", "fit", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
+__all__ = ["current", "drift", "fit", "compare", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
 
 
 def __getattr__(name):
@@ -18,4 +18,8 @@ def __getattr__(name):
         from .inference.fit import fit
 
         return fit
+    if name == "compare":
+        from .inference.compare import compare
+
+        return compare
     raise AttributeError(f"module 'fsrbayes' has no attribute {name!r}")

@@ -15,7 +15,7 @@ import numpy as np
 from ._version import __version__
 from .data import csvio, synthetic
 from .data.sensors import available_sensors, load_sensor
-from .physics.effects import EFFECTS
+from .physics.effects import EFFECTS, parse_model
 from .physics import sensor as fsr
 from .physics.tunneling import paper_peak_voltage
 from .utils import write_json_atomic
@@ -223,6 +223,35 @@ def cmd_fit(args):
     return 0
 
 
+def cmd_compare(args):
+    """Log-evidence per model and specimen, Bayes factors, PSIS-LOO; JSON with DESIGN §4 keys."""
+    from .inference.compare import compare
+    from .inference.evidence import LadderSettings
+
+    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    if len(models) < 2:
+        raise UsageError(f"--models needs at least two comma-separated models, got {args.models!r}")
+    for model in models:
+        parse_model(model)
+    if args.specimen is not None and args.specimen not in data.specimens:
+        raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
+    settings = LadderSettings(n_temps=args.temps, burn=args.burn, steps=args.steps, replicates=args.replicates,
+                              processes=args.processes or min(args.replicates, os.cpu_count() or 1))
+    if args.json:
+        _writable(Path(args.json).parent)
+    result = compare(data, models, [args.specimen] if args.specimen else None, tunneling=args.tunneling,
+                     likelihood=args.likelihood, settings=settings, seed=args.seed, with_loo=not args.no_loo)
+    for name, entry in result["models"].items():
+        print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
+    for name, bf in result["bayes_factors"].items():
+        print(f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± {bf['err']:.2f} "
+              f"({bf['strength']})")
+    if args.json:
+        write_json_atomic(Path(args.json), result)
+    return 0
+
+
 def _fit_plots(folder):
     import xarray as xr
 
@@ -305,6 +334,24 @@ def build_parser():
     fit_.add_argument("--sep", default=",", help="CSV field separator")
     fit_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     fit_.set_defaults(func=cmd_fit)
+
+    cmp_ = sub.add_parser("compare", help="model comparison by log-evidence (stepping-stone) with error bars")
+    cmp_.add_argument("data", help="creep-test CSV")
+    cmp_.add_argument("--models", default="zener,burgers", help="comma-separated models (default zener,burgers)")
+    cmp_.add_argument("--specimen", help="compare on this specimen only (default: all, summed)")
+    cmp_.add_argument("--json", help="write the result here (atomically)")
+    cmp_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
+    cmp_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    cmp_.add_argument("--temps", type=int, default=32, help="rungs of the beta ladder (default 32)")
+    cmp_.add_argument("--burn", type=int, default=500, help="burn-in steps per rung")
+    cmp_.add_argument("--steps", type=int, default=2000, help="production steps")
+    cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders (default 4)")
+    cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
+    cmp_.add_argument("--seed", type=int, default=0)
+    cmp_.add_argument("--no-loo", action="store_true", help="skip PSIS-LOO")
+    cmp_.add_argument("--sep", default=",", help="CSV field separator")
+    cmp_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    cmp_.set_defaults(func=cmd_compare)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
     chk.add_argument("data", help="CSV file (DESIGN format)")

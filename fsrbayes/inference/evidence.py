@@ -177,8 +177,9 @@ class _Rungs:
             self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
 
 
-def _run_ladder(target, betas, settings, seed):
-    """One ladder: returns ll (K, steps, W) and the swap acceptance per neighbouring pair."""
+def _run_ladder(target, betas, settings, seed, n_top=100):
+    """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and ``n_top``
+    evenly thinned ensembles of the β = 1 rung (posterior draws, (n_top, W, ndim))."""
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     rng = np.random.default_rng(seed)
     random = np.random.RandomState(seed.generate_state(4))
@@ -195,6 +196,8 @@ def _run_ladder(target, betas, settings, seed):
         coords[k - 1] = previous = rung.coords[0]
     rungs = _Rungs(target, betas[1:], coords, random)
     ll = np.empty((n_temps, settings.steps, n_walk))
+    keep = set(np.linspace(0, settings.steps - 1, min(n_top, settings.steps)).round().astype(int).tolist())
+    top = []
     tried = np.zeros(n_temps - 1)
     accepted = np.zeros(n_temps - 1)
     for t in range(settings.steps):
@@ -217,7 +220,9 @@ def _run_ladder(target, betas, settings, seed):
                     arrays[k][swap], arrays[k - 1][partner[swap]] = theirs, mine
             rungs.coords, rungs.lp, rungs.ll = coords[1:].copy(), lps[1:].copy(), lls[1:].copy()
         ll[:, t] = lls
-    return ll, accepted / np.maximum(tried, 1)
+        if t in keep:
+            top.append(coords[-1].copy())
+    return ll, accepted / np.maximum(tried, 1), np.array(top)
 
 
 def _log_mean_series(x):
@@ -304,6 +309,8 @@ class EvidenceResult:
     n_evals : int
         Likelihood evaluations.
     seconds : float
+    posterior_draws : ndarray, shape (R, draws, W, ndim)
+        Thinned ensembles of each ladder's β = 1 rung (the target's coordinates), e.g. for LOO.
     """
 
     log_z: float
@@ -321,9 +328,11 @@ class EvidenceResult:
     n_evals: int
     seconds: float
     settings: dict = field(default_factory=dict)
+    posterior_draws: np.ndarray = None
 
     def as_dict(self):
         out = asdict(self)
+        out.pop("posterior_draws")
         out["betas"] = [float(b) for b in self.betas]
         out["swap_acceptance"] = np.asarray(self.swap_acceptance).tolist()
         return out
@@ -335,8 +344,8 @@ class EvidenceResult:
 
 
 def _ladder_job(target, betas, settings, seed):
-    ll, swaps = _run_ladder(target, betas, settings, seed)
-    return combine_ladder(ll, betas, settings.n_batches), swaps
+    ll, swaps, top = _run_ladder(target, betas, settings, seed)
+    return combine_ladder(ll, betas, settings.n_batches), swaps, top
 
 
 def log_evidence(target, settings=LadderSettings(), seed=0):
@@ -375,4 +384,5 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
     n_evals = n_rep * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
     return EvidenceResult(mean("ss"), error, sigma_batch, sigma_replicates, sigma_disc, mean("bridge"), mean("ti"),
                           mean("ti_corrected"), mean("ss_half"), parts, betas, np.array([r[1] for r in results]),
-                          int(n_evals), time.perf_counter() - start, asdict(settings))
+                          int(n_evals), time.perf_counter() - start, asdict(settings),
+                          np.array([r[2] for r in results]))

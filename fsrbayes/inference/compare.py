@@ -1,0 +1,119 @@
+"""Model comparison by evidence: log Z ± error per specimen and model, Bayes factors, LOO.
+
+Specimens share no parameters in the per-specimen model and have independent priors, so
+log Z_total = Σ_specimens log Z_j with the errors added in quadrature (../shared/EVIDENCE.md).
+The strength of a preference is stated on Kass & Raftery's (1995) scale of 2·ln B:
+< 2 "not worth more than a bare mention", 2–6 "positive", 6–10 "strong", > 10 "very strong" —
+and called "inconclusive" when |ln B| is within two of its own error bars. PSIS-LOO (ArviZ)
+from the β = 1 rung is a second opinion on predictive accuracy.
+"""
+
+import warnings
+from dataclasses import asdict
+
+import numpy as np
+
+from ..data.sensors import load_sensor
+from .evidence import LadderSettings, log_evidence
+from .fit import _select
+from .posterior import LogPosterior
+
+__all__ = ["KASS_RAFTERY", "compare", "strength"]
+
+KASS_RAFTERY = ((2.0, "not worth more than a bare mention"), (6.0, "positive"), (10.0, "strong"),
+                (np.inf, "very strong"))
+"""Upper bounds on 2·ln B and their words (Kass & Raftery, JASA 90, 773, 1995)."""
+
+
+def strength(log_bf, error):
+    """Words for a log Bayes factor ≥ 0 with its error, on the Kass–Raftery scale."""
+    if log_bf < 2.0 * error:
+        return f"inconclusive (ln B = {log_bf:.2f} is within 2 σ = {2 * error:.2f})"
+    return next(words for bound, words in KASS_RAFTERY if 2.0 * log_bf < bound)
+
+
+def _loo(posterior, draws_u):
+    """PSIS-LOO elpd and its standard error from β = 1 draws (ladders as chains)."""
+    from arviz_base import from_dict
+    from arviz_stats import loo
+
+    n_chain, n_draw = draws_u.shape[:2]
+    flat = draws_u.reshape(-1, draws_u.shape[-1])
+    x, _ = posterior.prior.from_unconstrained(flat)
+    with np.errstate(all="ignore"):
+        pointwise = posterior.log_likelihood_pointwise(x)
+    tree = from_dict({"posterior": {"u": flat.reshape(n_chain, n_draw, -1)},
+                      "log_likelihood": {"current": pointwise.reshape(n_chain, n_draw, -1)}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # reported below as max_pareto_k / reliable
+        result = loo(tree, var_name="current", pointwise=True)
+    max_k = float(np.max(np.asarray(result.pareto_k)))
+    return {"elpd": float(result.elpd), "se": float(result.se), "p": float(result.p), "max_pareto_k": max_k,
+            "reliable": bool(max_k < 0.7)}
+
+
+def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, tunneling="smooth",
+            likelihood="gaussian", settings=None, seed=0, with_loo=True):
+    """Compare creep models on every (or the chosen) specimen by log-evidence.
+
+    Parameters
+    ----------
+    data : CreepData
+    models : sequence of str
+        Model names as in :func:`fsrbayes.fit` (``burgers``, ``zener``, ``nutting``, with
+        ``+effect`` terms).
+    specimens : sequence of str, optional
+        Default: all specimens in the data.
+    settings : LadderSettings, optional
+    seed : int
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``models.<name>`` with ``log_evidence``, ``log_evidence_err`` (summed over
+        specimens), ``per_specimen`` and ``loo``; ``preferred``; ``bayes_factors`` (ln B of the
+        preferred model over each other, with error); ``strength``; ``scale``.
+    """
+    models = list(dict.fromkeys(models))
+    if len(models) < 2:
+        raise ValueError(f"compare needs at least two models, got {models}")
+    settings = settings or LadderSettings()
+    specimens = list(specimens) if specimens is not None else list(data.specimens)
+    out = {"models": {}, "specimens": specimens, "scale": "Kass & Raftery 1995 on 2 ln B: <2 bare mention, "
+           "2-6 positive, 6-10 strong, >10 very strong; inconclusive when ln B < 2 sigma",
+           "settings": asdict(settings)}
+    for m_index, model in enumerate(models):
+        entry = {"per_specimen": {}, "loo": {}}
+        for s_index, specimen in enumerate(specimens):
+            packed = _select(data, specimen)
+            chosen = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
+            posterior = LogPosterior.for_sensor(packed, chosen, model=model, tunneling=tunneling,
+                                                likelihood=likelihood)
+            result = log_evidence(posterior, settings, seed=[seed, m_index, s_index])
+            entry["per_specimen"][specimen] = {
+                "log_evidence": result.log_z, "log_evidence_err": result.error, "bridge": result.bridge,
+                "ti_corrected": result.ti_corrected, "sigma_batch": result.sigma_batch,
+                "sigma_replicates": result.sigma_replicates, "sigma_disc": result.sigma_disc,
+                "min_swap_acceptance": float(result.swap_acceptance.min()), "seconds": result.seconds}
+            if with_loo:
+                entry["loo"][specimen] = _loo(posterior, result.posterior_draws.reshape(
+                    settings.replicates, -1, posterior.ndim))
+        values = [v["log_evidence"] for v in entry["per_specimen"].values()]
+        errors = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
+        entry["log_evidence"] = float(np.sum(values))
+        entry["log_evidence_err"] = float(np.sqrt(np.sum(np.square(errors))))
+        out["models"][model] = entry
+    preferred = max(models, key=lambda m: out["models"][m]["log_evidence"])
+    best = out["models"][preferred]
+    out["preferred"] = preferred
+    out["bayes_factors"] = {}
+    for model in models:
+        if model == preferred:
+            continue
+        other = out["models"][model]
+        log_bf = best["log_evidence"] - other["log_evidence"]
+        error = float(np.hypot(best["log_evidence_err"], other["log_evidence_err"]))
+        out["bayes_factors"][model] = {"log_bf_preferred_over": log_bf, "err": error, "strength": strength(log_bf, error)}
+    rank = {words: i for i, (_, words) in enumerate(KASS_RAFTERY)}  # the weakest comparison speaks
+    out["strength"] = min((v["strength"] for v in out["bayes_factors"].values()), key=lambda w: rank.get(w, -1))
+    return out

@@ -1,0 +1,65 @@
+"""fsrbayes.compare and 'fsrbayes compare': keys, Bayes factors, LOO, bad input (tiny settings)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.compare import strength
+from fsrbayes.inference.evidence import LadderSettings
+
+TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
+
+
+@pytest.fixture(scope="module")
+def small():
+    return syn.simulate("a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=5, seed=3)
+
+
+def test_compare_sums_specimens_and_states_a_preference(small):
+    out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1)
+    assert set(out["models"]) == {"zener", "burgers"} and out["preferred"] in out["models"]
+    for entry in out["models"].values():
+        per = [v["log_evidence"] for v in entry["per_specimen"].values()]
+        assert len(per) == 2 and entry["log_evidence"] == pytest.approx(sum(per))
+        errs = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
+        assert entry["log_evidence_err"] == pytest.approx(np.sqrt(np.sum(np.square(errs))))
+        assert all(np.isfinite(v["elpd"]) and "max_pareto_k" in v for v in entry["loo"].values())
+    other = next(m for m in out["models"] if m != out["preferred"])
+    bf = out["bayes_factors"][other]
+    assert bf["log_bf_preferred_over"] >= 0
+    assert out["strength"] == bf["strength"]
+    json.dumps(out)
+
+
+def test_strength_words():
+    assert strength(0.5, 0.1) == "not worth more than a bare mention"
+    assert strength(2.0, 0.1) == "positive"
+    assert strength(4.0, 0.1) == "strong"
+    assert strength(6.0, 0.1) == "very strong"
+    assert strength(6.0, 4.0).startswith("inconclusive")
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300)
+
+
+def test_cli_compare_writes_the_contract_keys(small, tmp_path):
+    data = tmp_path / "d.csv"
+    syn.write_simulation(small, data)
+    out = tmp_path / "cmp.json"
+    result = cli("compare", str(data), "--models", "zener,burgers", "--specimen", "a201-01", "--json", str(out),
+                 "--temps", "4", "--burn", "20", "--steps", "250", "--replicates", "2", "--no-loo")
+    assert result.returncode == 0, result.stderr
+    saved = json.loads(out.read_text())
+    assert {"log_evidence", "log_evidence_err"} <= set(saved["models"]["zener"]) and saved["preferred"]
+    assert "ln B =" in result.stdout
+    for bad, message in ((["--models", "burgers"], "at least two"), (["--models", "burgers,maxwell"], "maxwell"),
+                         (["--specimen", "nobody"], "is not in")):
+        r = cli("compare", str(data), *bad)
+        assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
