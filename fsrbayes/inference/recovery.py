@@ -45,13 +45,14 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
     dict
         ``names``; ``inside`` (specimens × parameters, bool); ``sd_ratio`` (posterior/prior sd
         in prior-scaled coordinates, specimens × parameters); ``drift_inside`` (list of bool per
-        creep test); ``converged`` (per specimen); ``seconds``.
+        creep test); ``converged`` (per specimen); ``seconds``; ``truth_quantile`` (share of
+        draws below the truth, specimens × parameters: uniform when calibrated).
     """
     sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
                              samples=samples, seed=seed)
     sensor = load_sensor("a201")
     tail = (1.0 - level) / 2.0
-    inside, sd_ratio, drift_inside, converged, seconds = [], [], [], [], []
+    inside, sd_ratio, drift_inside, converged, seconds, rank = [], [], [], [], [], []
     for k, specimen in enumerate(sim.data.specimens):
         start = time.perf_counter()
         with warnings.catch_warnings():
@@ -64,6 +65,7 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
         truth = np.array([sim.truth["specimens"][specimen]["params"][n] for n in posterior.names])
         low, high = np.quantile(draws, [tail, 1.0 - tail], axis=0)
         inside.append((low <= truth) & (truth <= high))
+        rank.append(np.mean(draws < truth, axis=0))
         u = posterior.prior.to_unconstrained(draws)
         prior_u = posterior.prior.to_unconstrained(posterior.prior.sample(np.random.default_rng(k), 4000))
         sd_ratio.append(u.std(axis=0) / prior_u.std(axis=0))
@@ -72,16 +74,19 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
         lo, hi = np.quantile(predicted, [tail, 1.0 - tail], axis=0)
         drift_inside.extend(((lo <= true_drift) & (true_drift <= hi)).tolist())
     return {"names": list(posterior.names), "inside": np.array(inside), "sd_ratio": np.array(sd_ratio),
-            "drift_inside": drift_inside, "converged": converged, "seconds": seconds}
+            "drift_inside": drift_inside, "converged": converged, "seconds": seconds,
+            "truth_quantile": np.array(rank)}
 
 
 def format_recovery(study):
     """A table: coverage and posterior/prior sd ratio per parameter, drift coverage, timing."""
-    lines = [f"{'parameter':10s} {'90% coverage':>13s} {'sd post/prior':>14s}  identified"]
+    lines = [f"{'parameter':10s} {'90% coverage':>13s} {'misses low/high':>16s} {'sd post/prior':>14s}  identified"]
     for i, name in enumerate(study["names"]):
         ratio = float(np.median(study["sd_ratio"][:, i]))
         verdict = "yes" if ratio < 0.5 else ("no (posterior ~ prior)" if ratio > 0.8 else "weakly")
-        lines.append(f"{name:10s} {study['inside'][:, i].mean():13.2f} {ratio:14.3f}  {verdict}")
+        q = study["truth_quantile"][:, i]
+        misses = f"{int(np.sum(q < 0.05))}/{int(np.sum(q > 0.95))}"
+        lines.append(f"{name:10s} {study['inside'][:, i].mean():13.2f} {misses:>16s} {ratio:14.3f}  {verdict}")
     drift = np.array(study["drift_inside"])
     lines.append(f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests")
     lines.append(f"converged {sum(study['converged'])}/{len(study['converged'])}; "
