@@ -35,6 +35,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.special import logsumexp
 
+from .sampling import walkers_for
+
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
            "combine_ladder"]
 
@@ -82,11 +84,7 @@ class LadderSettings:
             raise ValueError(f"steps must be >= 10 per batch ({10 * self.n_batches}), got {self.steps}")
 
     def walkers_for(self, ndim):
-        if self.n_walkers is not None:
-            if self.n_walkers < 2 * ndim or self.n_walkers % 2:
-                raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {self.n_walkers}")
-            return self.n_walkers
-        return max(32, 4 * ndim + (4 * ndim) % 2)
+        return walkers_for(self.n_walkers, ndim)
 
 
 def beta_ladder(n_temps, exponent=5.0):

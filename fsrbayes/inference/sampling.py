@@ -40,6 +40,15 @@ __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "Checkp
            "run_ensembles", "convergence_report"]
 
 
+def walkers_for(n_walkers, ndim):
+    """Walkers per ensemble: ``n_walkers`` checked (even, >= 2·ndim), or max(32, 4·ndim)."""
+    if n_walkers is not None:
+        if n_walkers < 2 * ndim or n_walkers % 2:
+            raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {n_walkers}")
+        return n_walkers
+    return max(32, 4 * ndim + (4 * ndim) % 2)
+
+
 @dataclass(frozen=True)
 class SamplerSettings:
     """How long and how hard to sample.
@@ -97,11 +106,7 @@ class SamplerSettings:
         return n_steps // 2
 
     def walkers_for(self, ndim):
-        if self.n_walkers is not None:
-            if self.n_walkers < 2 * ndim or self.n_walkers % 2:
-                raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {self.n_walkers}")
-            return self.n_walkers
-        return max(32, 4 * ndim + (4 * ndim) % 2)
+        return walkers_for(self.n_walkers, ndim)
 
 
 @dataclass
