@@ -122,6 +122,9 @@ def check_priors_for_evidence(prior):
 
 def _evaluate(target, u):
     """log π and log L at u (N, ndim); log L is −inf wherever log π is."""
+    if hasattr(target, "log_prior_and_likelihood"):  # one parameter transform for both
+        lp, ll = target.log_prior_and_likelihood(u)
+        return np.asarray(lp, dtype=float), np.where(np.isfinite(lp), ll, -np.inf)
     lp = np.asarray(target.log_prior(u), dtype=float)
     ll = np.full(len(u), -np.inf)
     ok = np.isfinite(lp)

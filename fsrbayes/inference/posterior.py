@@ -113,16 +113,26 @@ class LogPosterior:
         """Log density of u under the prior (including the Jacobian)."""
         return self.prior.log_prob_unconstrained(u)
 
-    def log_likelihood(self, u):
-        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
+    def log_prior_and_likelihood(self, u, with_likelihood=True):
+        """(log prior of u incl. Jacobian, total log-likelihood), each (W,); the likelihood is −inf
+        off the prior's support or the model's domain, never NaN. One transform for both."""
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
         x, log_jac = self.prior.from_unconstrained(u2)
-        ok = np.isfinite(self.prior.log_prob(x) + log_jac)
-        value = np.full(len(u2), -np.inf)
-        if ok.any():
-            with np.errstate(all="ignore"):
-                value[ok] = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
-        return np.where(np.isnan(value), -np.inf, value)
+        log_prior = self.prior.log_prob(x) + log_jac
+        ok = np.isfinite(log_prior)
+        log_like = np.full(len(u2), -np.inf)
+        if ok.any() and with_likelihood:
+            try:
+                with np.errstate(all="ignore"):
+                    log_like[ok] = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
+            except Exception as exc:
+                exc.add_note(f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0]))}")
+                raise
+        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
+
+    def log_likelihood(self, u):
+        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
+        return self.log_prior_and_likelihood(u)[1]
 
     def sample_prior(self, rng, n):
         """n independent prior draws in u-space, shape (n, ndim)."""
@@ -131,18 +141,10 @@ class LogPosterior:
     def __call__(self, u):
         """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
         u = np.asarray(u, dtype=float)
-        single = u.ndim == 1
-        u2 = np.atleast_2d(u)
-        x, log_jac = self.prior.from_unconstrained(u2)
-        value = self.prior.log_prob(x) + log_jac
-        ok = np.isfinite(value)
-        if ok.any() and self.beta != 0.0:
-            try:
-                with np.errstate(all="ignore"):
-                    log_like = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
-            except Exception as exc:
-                exc.add_note(f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0]))}")
-                raise
-            value[ok] = value[ok] + self.beta * log_like
+        log_prior, log_like = self.log_prior_and_likelihood(u, with_likelihood=self.beta != 0.0)
+        value = log_prior
+        if self.beta != 0.0:
+            with np.errstate(invalid="ignore"):
+                value = log_prior + self.beta * log_like
         value = np.where(np.isnan(value), -np.inf, value)
-        return float(value[0]) if single else value
+        return float(value[0]) if u.ndim == 1 else value
