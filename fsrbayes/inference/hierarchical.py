@@ -1,0 +1,271 @@
+"""Hierarchical inference across specimens: two routes to the population posterior.
+
+* :func:`two_stage` — fit every specimen on its own (in parallel, :func:`fit_specimens`), then
+  sample the hyper-posterior by reweighting their draws (:class:`~.population.TwoStageTarget`).
+  Scales to thousands of specimens; its Monte-Carlo error is each specimen's effective number
+  of draws, reported and warned about when small.
+* :func:`joint` — sample hyper-parameters and all specimens' parameters together with the same
+  emcee engine as a single fit (:class:`~.population.JointTarget`), started from the two-stage
+  answer when one is given.
+
+Both return a :class:`HierarchicalResult`.
+"""
+
+import concurrent.futures
+import os
+import warnings
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .fit import find_map, fit, laplace_start
+from .population import JointTarget, Population, TwoStageTarget
+from .sampling import SamplerSettings, run_ensembles
+
+__all__ = ["HierarchicalResult", "ReweightingWarning", "two_stage", "joint", "fit_specimens", "MIN_EFFECTIVE_DRAWS"]
+
+MIN_EFFECTIVE_DRAWS = 50
+"""Below this many effective draws for a specimen the two-stage estimate is flagged."""
+
+
+class ReweightingWarning(UserWarning):
+    """Too few effective draws for some specimen: the two-stage hyper-posterior is noisy there."""
+
+
+@dataclass
+class HierarchicalResult:
+    """A sampled population posterior.
+
+    Attributes
+    ----------
+    population : Population
+    target : TwoStageTarget or JointTarget
+    run : EnsembleRun
+    seed : int
+    route : str
+        ``"two-stage"`` or ``"joint"``.
+    specimens : list of str
+        Specimen labels in the order of the target.
+    effective_draws : ndarray or None
+        Two-stage: each specimen's effective number of draws, median over the hyper-posterior.
+    log_likelihood_mc_sd : float or None
+        Two-stage: Monte-Carlo sd of log L(Λ), median over the hyper-posterior.
+    specimen_draws : list of ndarray or None
+        Two-stage from fits: each specimen's draws of all its parameters (S, D), under π.
+    """
+
+    population: Population
+    target: object
+    run: object
+    seed: int
+    route: str
+    specimens: list = field(default_factory=list)
+    effective_draws: np.ndarray = None
+    log_likelihood_mc_sd: float = None
+    specimen_draws: list = None
+
+    @property
+    def converged(self):
+        return self.run.report.converged
+
+    def draws(self, max_draws=4000):
+        """Posterior draws in physical units, shape (D, ndim), thinned evenly over the kept chain."""
+        chain, _ = self.run.kept()
+        flat = chain.reshape(-1, chain.shape[-1])
+        index = np.unique(np.linspace(0, len(flat) - 1, min(max_draws, len(flat))).round().astype(int))
+        return self.target.prior.from_unconstrained(flat[index])[0]
+
+    def hyper_draws(self, max_draws=4000):
+        """Draws of the hyper-parameters (μ then ω), shape (D, 2P)."""
+        return self.draws(max_draws)[:, :2 * self.population.size]
+
+    def hyper_chains(self):
+        """Kept hyper-parameter chains in physical units with every walker as a chain, (E·W, steps, 2P)."""
+        chain, _ = self.run.kept()
+        n_hyper = 2 * self.population.size
+        values = self.population.hyper_prior.from_unconstrained(chain[..., :n_hyper])[0]
+        return np.moveaxis(values, 2, 1).reshape(-1, values.shape[1], n_hyper)
+
+    def summary(self):
+        """{hyper name: {median, q05, q95, mean, sd, mcse_mean, mcse_sd, r_hat, ess_bulk}}.
+
+        Monte-Carlo errors are ArviZ's for the mean and the sd, with walkers as chains (their
+        correlation within an ensemble is small next to the autocorrelation along the chain).
+        """
+        from arviz_stats import mcse
+
+        chains = self.hyper_chains()
+        report = self.run.report
+        out = {}
+        for k, name in enumerate(self.population.hyper_names):
+            values = chains[..., k]
+            q05, q50, q95 = np.quantile(values, [0.05, 0.5, 0.95])
+            out[name] = {"median": float(q50), "q05": float(q05), "q95": float(q95), "mean": float(values.mean()),
+                         "sd": float(values.std()),
+                         "mcse_mean": float(mcse(values, method="mean", chain_axis=0, draw_axis=1)),
+                         "mcse_sd": float(mcse(values, method="sd", chain_axis=0, draw_axis=1)),
+                         "r_hat": float(report.rhat[k]), "ess_bulk": float(report.ess_bulk[k])}
+        return out
+
+
+def _sample(target, seed, settings, start, progress):
+    rng = np.random.default_rng(seed)
+    n_walk = settings.walkers_for(target.ndim)
+    if start is None:
+        optima = find_map(target, rng, n_starts=settings.n_ensembles)
+        start = laplace_start(target, optima[0], rng, (settings.n_ensembles, n_walk))
+    return run_ensembles(target, start, seed, settings, names=target.names, fingerprint=target.fingerprint(),
+                         progress=progress)
+
+
+def _thin(values, n):
+    index = np.unique(np.linspace(0, len(values) - 1, n).round().astype(int))
+    return values[index]
+
+
+def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_effective=MIN_EFFECTIVE_DRAWS,
+              progress=False):
+    """Population posterior from independent per-specimen fits, by reweighting their draws.
+
+    Parameters
+    ----------
+    fits : mapping of label → FitResult, or sequence of ndarray (S, P)
+        Per-specimen posteriors under the same prior π; or, with ``population`` given, each
+        specimen's draws of the population parameters (taken under ``population.interim``).
+    population : Population, optional
+        Default: every non-noise parameter of the fits' prior.
+    n_draws : int
+        Draws kept per specimen (evenly thinned).
+    settings : SamplerSettings, optional
+    seed : int
+    min_effective : float
+        Warn (:class:`ReweightingWarning`) when a specimen's effective draws fall below this.
+
+    Returns
+    -------
+    HierarchicalResult
+    """
+    if isinstance(fits, dict):
+        labels = list(fits)
+        results = list(fits.values())
+        population = population or Population(results[0].posterior.prior)
+        full = [_thin(r.draws(10 * n_draws).reshape(-1, r.posterior.ndim), n_draws) for r in results]
+        full = [d[:min(len(x) for x in full)] for d in full]
+        draws = [d[:, population.index] for d in full]
+    else:
+        full = None
+        if population is None:
+            raise ValueError("two_stage needs a Population when it is given bare draws")
+        draws = [_thin(np.asarray(d, dtype=float), n_draws) for d in fits]
+        labels = [str(j) for j in range(len(draws))]
+    target = TwoStageTarget(population, draws)
+    settings = settings or SamplerSettings()
+    run = _sample(target, seed, settings, None, progress)
+    result = HierarchicalResult(population, target, run, seed, "two-stage", labels, specimen_draws=full)
+    hyper = result.hyper_draws(400)
+    result.effective_draws = np.median(target.effective_draws(hyper), axis=0)
+    result.log_likelihood_mc_sd = float(np.sqrt(np.median(target.log_likelihood_variance(hyper))))
+    worst = int(np.argmin(result.effective_draws))
+    if result.effective_draws[worst] < min_effective:
+        warnings.warn(f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of {target.n_draws} "
+                      f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far from the "
+                      "population for the two-stage estimate: fit it with more draws or use the joint route",
+                      ReweightingWarning, stacklevel=2)
+    return result
+
+
+def joint(specimens, population=None, *, settings=None, seed=0, start_from=None, labels=None, progress=False):
+    """Sample the hyper-parameters and every specimen's parameters jointly.
+
+    Parameters
+    ----------
+    specimens : sequence
+        Per-specimen targets (LogPosterior or alike), all over the same prior.
+    population : Population, optional
+    settings : SamplerSettings, optional
+    seed : int
+    start_from : HierarchicalResult, optional
+        A two-stage result over the same specimens: walkers start from its hyper-posterior
+        draws and, per specimen, draws reweighted to them — no joint MAP search needed.
+    labels : sequence of str, optional
+
+    Returns
+    -------
+    HierarchicalResult
+    """
+    specimens = list(specimens)
+    population = population or Population(specimens[0].prior)
+    target = JointTarget(population, specimens)
+    settings = settings or SamplerSettings()
+    start = None
+    if start_from is not None:
+        start = _start_from_two_stage(target, start_from, settings, np.random.default_rng(seed))
+    run = _sample(target, seed, settings, start, progress)
+    return HierarchicalResult(population, target, run, seed, "joint", list(labels or range(len(specimens))))
+
+
+def _start_from_two_stage(target, two, settings, rng):
+    """Walkers from a two-stage result: hyper draws, and per specimen a reweighted draw of its fit."""
+    n_walk = settings.walkers_for(target.ndim)
+    n = settings.n_ensembles * n_walk
+    if two.specimen_draws is None or len(two.specimen_draws) != len(target.specimens):
+        raise ValueError("start_from needs a two-stage result built from fits of the same specimens")
+    pool = two.hyper_draws(max(n, 400))
+    hyper = pool[rng.integers(0, len(pool), n)]
+    population = target.population
+    u = [population.hyper_prior.to_unconstrained(hyper)]
+    mu, omega = population.split(hyper)
+    for spec, full in zip(target.specimens, two.specimen_draws):
+        x_pop = full[:, population.index]
+        log_w = population.log_ratio(x_pop[None, :, :], mu[:, None, :], omega[:, None, :])
+        p = np.exp(log_w - log_w.max(axis=1, keepdims=True))
+        p /= p.sum(axis=1, keepdims=True)
+        pick = np.array([rng.choice(len(full), p=row) for row in p])
+        u.append(spec.prior.to_unconstrained(full[pick]))
+    return np.concatenate(u, axis=1).reshape(settings.n_ensembles, n_walk, -1)
+
+
+def _fit_one(args):
+    data, specimen, kwargs = args
+    return specimen, fit(data, specimen, **kwargs)
+
+
+def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, processes=None, settings=None, **kwargs):
+    """Fit specimens independently and in parallel; returns {specimen: FitResult} in data order.
+
+    Parameters
+    ----------
+    data : CreepData
+    specimens : sequence of str, optional
+        Default: all specimens of ``data``.
+    executor : concurrent.futures.Executor, optional
+        Where to run the fits (its ``map`` is used). Default: local processes.
+    scheduler : str, optional
+        Address of a ``dask.distributed`` scheduler (``tcp://host:8786``); fits are spread over
+        its workers (needs the ``dask`` extra: ``pip install 'fsrbayes[dask]'``).
+    processes : int, optional
+        Local worker processes (default: the CPU count).
+    settings : SamplerSettings, optional
+        Per fit; each fit runs its ensembles in its worker (``processes`` of the settings is set
+        to 1 so that workers do not nest pools).
+    **kwargs
+        Passed to :func:`~fsrbayes.inference.fit.fit` (model, tunneling, likelihood, sensor, rng).
+    """
+    specimens = list(specimens or data.specimens)
+    kwargs["settings"] = replace(settings or SamplerSettings(), processes=1)
+    base_seed = kwargs.pop("rng", 0)
+    jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k)) for k, s in enumerate(specimens)]
+    if executor is not None:
+        return dict(executor.map(_fit_one, jobs))
+    if scheduler is not None:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise ImportError("a dask scheduler needs dask.distributed: pip install 'fsrbayes[dask]'") from None
+        with Client(scheduler) as client:
+            return dict(client.get_executor().map(_fit_one, jobs))
+    workers = processes or os.cpu_count() or 1
+    if workers == 1 or len(jobs) == 1:
+        return dict(map(_fit_one, jobs))
+    with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+        return dict(pool.map(_fit_one, jobs))

@@ -1,0 +1,134 @@
+"""Hierarchical model: both routes against a normal–normal problem with a closed-form posterior."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from fsrbayes.data.distributions import Distribution
+from fsrbayes.data.prior import JointPrior
+from fsrbayes.inference.hierarchical import ReweightingWarning, joint, two_stage
+from fsrbayes.inference.population import Population, TwoStageTarget
+from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+
+INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
+SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])
+Y = 2.0 + 3.0 * np.random.default_rng(11).standard_normal(8) + SIGMA * np.random.default_rng(12).standard_normal(8)
+SETTINGS = SamplerSettings(n_ensembles=4, chunk=250, max_steps=8000, min_steps=500, processes=1)
+
+
+class GaussianSpecimen:
+    """y_j ~ N(θ_j, σ_j²) with the interim prior θ_j ~ N(0, 10²), in its prior-scaled u = θ/10."""
+
+    prior = INTERIM
+
+    def __init__(self, y, sigma):
+        self.y, self.sigma = y, sigma
+
+    def log_prior_and_likelihood(self, u, with_likelihood=True):
+        u = np.atleast_2d(u)
+        theta, log_jac = self.prior.from_unconstrained(u)
+        z = (self.y - theta[:, 0]) / self.sigma
+        log_like = -0.5 * z * z - np.log(self.sigma * np.sqrt(2 * np.pi)) if with_likelihood else -np.inf
+        return self.prior.log_prob(theta) + log_jac, np.broadcast_to(log_like, (len(u),))
+
+
+def analytic_moments():
+    """Posterior means and sds of μ and τ (μ ~ N(0, 10²), τ ~ HalfNormal(10)), by quadrature over τ."""
+    def log_tau_density(tau):
+        v = SIGMA**2 + tau**2
+        a = 1 / 100 + np.sum(1 / v)
+        b = np.sum(Y / v)
+        c = np.sum(Y**2 / v)
+        return (stats.halfnorm.logpdf(tau, scale=10) - 0.5 * np.log(a) - 0.5 * np.sum(np.log(v))
+                - 0.5 * (c - b * b / a)), b / a, 1 / a
+
+    grid = np.linspace(1e-6, 40, 40001)
+    parts = np.array([log_tau_density(t) for t in grid])
+    weight = np.exp(parts[:, 0] - parts[:, 0].max())
+    weight /= integrate.trapezoid(weight, grid)
+    mean = lambda f: integrate.trapezoid(weight * f, grid)  # noqa: E731
+    mu_mean = mean(parts[:, 1])
+    mu_sd = np.sqrt(mean(parts[:, 2] + parts[:, 1] ** 2) - mu_mean**2)
+    tau_mean = mean(grid)
+    tau_sd = np.sqrt(mean(grid**2) - tau_mean**2)
+    return {"mu_theta": (mu_mean, mu_sd), "omega_theta": (tau_mean, tau_sd)}
+
+
+def exact_specimen_draws(n, rng):
+    precision = 1 / SIGMA**2 + 1 / 100
+    mean = Y / SIGMA**2 / precision
+    return [m + rng.standard_normal((n, 1)) / np.sqrt(p) for m, p in zip(mean, precision)]
+
+
+def assert_matches(result, exact):
+    """Posterior mean and sd of μ and τ within 3 Monte-Carlo errors (ArviZ's, from the run itself)."""
+    assert result.converged, result.run.report.worst()
+    summary = result.summary()
+    for name, (mean, sd) in exact.items():
+        got = summary[name]
+        assert abs(got["mean"] - mean) < 3 * got["mcse_mean"], (name, got, mean)
+        assert abs(got["sd"] - sd) < 3 * got["mcse_sd"], (name, got, sd)
+
+
+def test_population_defaults_come_from_the_specimen_prior():
+    from fsrbayes.data.sensors import load_sensor
+
+    prior = load_sensor("a201").prior_for("burgers")
+    population = Population(prior)
+    assert "sigma_rel" not in population.names and "s0" in population.names
+    k = population.names.index("s0")
+    assert population.log_scale[k] and population.centre[k] == pytest.approx(np.log(4.41e-9))
+    assert population.scale[k] == pytest.approx(0.1)
+    j = population.names.index("A2")  # truncnormal on [0, 2]: log-moments by quadrature
+    z = np.log(prior.dists[prior.names.index("A2")].sample(np.random.default_rng(0), 200000))
+    assert population.centre[j] == pytest.approx(z.mean(), abs=0.003)
+    assert population.scale[j] == pytest.approx(z.std(), rel=0.01)
+
+
+def test_population_density_is_normalised_and_matches_lognormal():
+    from fsrbayes.data.sensors import load_sensor
+
+    population = Population(load_sensor("a201").prior_for("burgers"), names=["k1"])
+    x = np.array([[3e6], [5e6]])
+    mu, omega = np.log(4.73e6), 0.2
+    expected = stats.lognorm.logpdf(x[:, 0], s=omega, scale=np.exp(mu))
+    assert population.log_density(x, mu, omega) == pytest.approx(expected)
+
+
+def test_two_stage_weights_match_direct_evaluation():
+    population = Population(INTERIM)
+    draws = exact_specimen_draws(50, np.random.default_rng(0))
+    target = TwoStageTarget(population, draws)
+    hyper = np.array([[1.0, 2.0], [3.0, 0.5]])
+    direct = np.stack([population.log_ratio(np.stack(draws)[None], h[:1], h[1:])[0] for h in hyper])
+    assert target.log_weights(hyper) == pytest.approx(direct, rel=1e-10, abs=1e-9)
+
+
+def test_two_stage_matches_the_analytic_hyper_posterior():
+    population = Population(INTERIM)
+    result = two_stage(exact_specimen_draws(1000, np.random.default_rng(1)), population, n_draws=1000,
+                       settings=SETTINGS, seed=3)
+    assert_matches(result, analytic_moments())
+    assert result.effective_draws.min() > 250
+    assert result.log_likelihood_mc_sd < 0.1
+
+
+def test_joint_matches_the_analytic_hyper_posterior():
+    population = Population(INTERIM)
+    result = joint([GaussianSpecimen(y, s) for y, s in zip(Y, SIGMA)], population, settings=SETTINGS, seed=4)
+    assert_matches(result, analytic_moments())
+
+
+def test_two_stage_warns_when_a_specimen_keeps_few_draws():
+    population = Population(INTERIM)
+    draws = exact_specimen_draws(200, np.random.default_rng(2))
+    # A specimen whose fit says little (sd 8) and sits away from the others: few of its draws
+    # fall where the population is, so its importance weights concentrate on a handful.
+    draws[0] = -20.0 + 8.0 * np.random.default_rng(9).standard_normal((200, 1))
+    short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=400, min_steps=400, transport_rounds=1)
+    with pytest.warns(ReweightingWarning, match="specimen 0 keeps only"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)  # a short run: only the weights matter here
+        result = two_stage(draws, population, n_draws=200, settings=short, seed=5)
+    assert result.effective_draws[0] < 20 < result.effective_draws[1:].min()
