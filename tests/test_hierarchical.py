@@ -132,3 +132,44 @@ def test_two_stage_warns_when_a_specimen_keeps_few_draws():
         warnings.simplefilter("ignore", ConvergenceWarning)  # a short run: only the weights matter here
         result = two_stage(draws, population, n_draws=200, settings=short, seed=5)
     assert result.effective_draws[0] < 20 < result.effective_draws[1:].min()
+
+
+def _small_bench(n_specimens=3):
+    from fsrbayes.data import synthetic
+
+    return synthetic.simulate("a201", n_specimens=n_specimens, voltages=[0.2, 3.0], forces=[4.9], samples=11, seed=8)
+
+
+SHORT_FIT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1)
+
+
+def _fits(**kwargs):
+    from fsrbayes.inference.hierarchical import fit_specimens
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return fit_specimens(_small_bench().data, settings=SHORT_FIT, rng=7, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def serial_fits():
+    return _fits(processes=1)
+
+
+def test_parallel_specimen_fits_equal_serial_ones(serial_fits):
+    serial = serial_fits
+    parallel = _fits(processes=2)
+    assert list(serial) == list(parallel) == ["a201-01", "a201-02", "a201-03"]
+    for key in serial:
+        assert np.array_equal(serial[key].run.chain, parallel[key].run.chain)
+    assert not np.array_equal(serial["a201-01"].run.chain, serial["a201-02"].run.chain)
+
+
+def test_specimen_fits_on_a_dask_local_cluster_equal_local_ones(serial_fits):
+    from dask.distributed import LocalCluster
+
+    local = serial_fits
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = _fits(scheduler=cluster.scheduler_address)
+    for key in local:
+        assert np.array_equal(local[key].run.chain, remote[key].run.chain)
