@@ -4,6 +4,7 @@ Errors on bad input are one line on stderr and exit code 2, never a traceback.
 """
 
 import argparse
+import json
 import os
 import signal
 import sys
@@ -198,6 +199,8 @@ def cmd_fit(args):
     settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
                                max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
                                processes=processes)
+    if args.hierarchical:
+        return _fit_hierarchical(args, data, settings, out)
     specimens = [args.specimen] if args.specimen else data.specimens
     signal.signal(signal.SIGTERM, _stop_on_sigterm)
     summaries = {}
@@ -220,6 +223,124 @@ def cmd_fit(args):
     if len(specimens) > 1:
         write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
                                                  "specimens": summaries})
+    return 0
+
+
+def _fit_hierarchical(args, data, settings, out):
+    """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
+    from dataclasses import replace
+
+    from .inference.hierarchical import fit_specimens, joint, two_stage
+    from .inference.output import save_fit, save_population
+    from .inference.predictive import ForwardTemplate
+    from .inference.sampling import ConvergenceWarning
+
+    if args.specimen is not None:
+        raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
+    overall = {"converged": True, "sensors": {}}
+    for sensor in data.sensors:
+        part = data.select(sensor=sensor)
+        if len(part.specimens) < 2:
+            raise UsageError(f"--hierarchical needs at least 2 specimens of sensor {sensor!r} in {args.data}, "
+                             f"got {len(part.specimens)}")
+        folder = out if len(data.sensors) == 1 else out / sensor
+        folder.mkdir(parents=True, exist_ok=True)
+        print(f"{sensor}: fitting {len(part.specimens)} specimens ({args.processes or os.cpu_count()} processes)",
+              flush=True)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fits = fit_specimens(part, settings=settings, processes=args.processes, scheduler=args.scheduler,
+                                 model=args.model, tunneling=args.tunneling, likelihood=args.likelihood, rng=args.seed)
+            summaries = {}
+            for specimen, result in fits.items():
+                (folder / specimen).mkdir(exist_ok=True)
+                summaries[specimen] = save_fit(result, folder / specimen)
+                print(f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
+                      f"{result.run.report.worst()}", flush=True)
+            hyper_settings = replace(settings, processes=min(settings.n_ensembles, args.processes or os.cpu_count() or 1))
+            result = two_stage(fits, settings=hyper_settings, seed=args.seed)
+            if args.route == "joint":
+                result = joint([f.posterior for f in fits.values()], result.population, settings=hyper_settings,
+                               seed=args.seed, start_from=result, labels=list(fits))
+        for w in caught:
+            if issubclass(w.category, (ConvergenceWarning, UserWarning)) and "fsrbayes" in w.category.__module__:
+                print(f"fsrbayes fit: warning: {w.message}", file=sys.stderr)
+        template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
+        observed = [t for s in summaries.values() for t in s["tests"]]
+        info = save_population(result, template, observed, folder)
+        converged = all(s["converged"] for s in summaries.values()) and info["converged"]
+        write_json_atomic(folder / "summary.json", {"converged": converged, "specimens": summaries,
+                                                    "hierarchical": info})
+        overall["converged"] &= converged
+        overall["sensors"][sensor] = str(folder)
+        print(f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
+              f"{result.run.report.worst()}; wrote {folder / 'population.nc'}")
+    return 0
+
+
+def _population_folders(fit_dir):
+    folder = Path(fit_dir)
+    if (folder / "population.nc").is_file():
+        return [folder]
+    found = sorted(p.parent for p in folder.glob("*/population.nc"))
+    if not found:
+        raise UsageError(f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out {fit_dir}' "
+                         "first")
+    return found
+
+
+def cmd_drift(args):
+    """Population predictive drift(t) of a new specimen per (voltage, stress); optimal voltage."""
+    import xarray as xr
+
+    from .data.sensors import load_sensor
+    from .inference.population import Population
+    from .inference.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+
+    if args.time <= 0:
+        raise UsageError(f"--time must be > 0 s, got {args.time:g}")
+    v_range = _floats(args.optimal_voltage, "optimal-voltage") if args.optimal_voltage else None
+    if v_range is not None and (len(v_range) != 2 or not 0 < v_range[0] < v_range[1]):
+        raise UsageError(f"--optimal-voltage takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.optimal_voltage!r}")
+    for path in (args.json, args.plot):
+        if path:
+            _writable(Path(path).parent)
+    payload = {"time_s": args.time, "groups": [], "optimal_voltage": []}
+    figures = []
+    for folder in _population_folders(args.fit_dir):
+        tree = xr.open_datatree(folder / "population.nc", engine="h5netcdf")
+        attrs = tree.attrs
+        sensor = load_sensor(attrs["sensor"])
+        noise = json.loads(attrs["noise"])
+        template = ForwardTemplate.from_sensor(sensor, attrs["fsrbayes_model"], attrs["tunneling"],
+                                               "student" if "nu" in noise else "gaussian")
+        population = Population(template.prior, json.loads(attrs["population"]))
+        hyper = np.stack([tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1)
+        constant = {k: tree.constant_data[k].values for k in ("voltage_V", "stress_Pa", "observed_drift_3600")}
+        volts = _floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
+        stresses = _floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
+        specimens = new_specimens(population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed)
+        groups = drift_groups(specimens, volts, stresses, time_s=args.time)
+        payload["groups"] += groups
+        if v_range is not None:
+            for stress in stresses:
+                best = optimal_voltage(specimens, stress, v_range, time_s=args.time)
+                payload["optimal_voltage"].append({"sensor": sensor.name, **best})
+                print(f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} V "
+                      f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there {best['drift_at_optimum']['q50']:.2f} %")
+        for g in groups:
+            q = g["new_specimen"]
+            print(f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen drift "
+                  f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % {q['q05']:.2f}..{q['q95']:.2f}")
+        figures.append((groups, constant))
+    if args.json:
+        write_json_atomic(Path(args.json), payload)
+    if args.plot:
+        from . import plots
+
+        groups, constant = figures[0] if len(figures) == 1 else ([g for f in figures for g in f[0]], None)
+        plots.save_figure(plots.population_drift_plot(groups, constant, by=args.by)[0], Path(args.plot))
     return 0
 
 
@@ -329,6 +450,11 @@ def build_parser():
     fit_.add_argument("--processes", type=int, help="processes running ensembles side by side "
                       "(default: one per core, at most one per ensemble; same chains either way)")
     fit_.add_argument("--progress", action="store_true", help="show a progress bar on stderr")
+    fit_.add_argument("--hierarchical", action="store_true",
+                      help="fit all specimens (in parallel) and the population posterior across them")
+    fit_.add_argument("--route", choices=("two-stage", "joint"), default="two-stage",
+                      help="hierarchical: reweight per-specimen draws (default) or sample everything jointly")
+    fit_.add_argument("--scheduler", help="hierarchical: dask.distributed scheduler address for the specimen fits")
     fit_.add_argument("--no-plots", dest="plots", action="store_false",
                       help="skip the figures (corner, credible bands, drift(3600 s) per test)")
     fit_.add_argument("--sep", default=",", help="CSV field separator")
@@ -352,6 +478,21 @@ def build_parser():
     cmp_.add_argument("--sep", default=",", help="CSV field separator")
     cmp_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     cmp_.set_defaults(func=cmd_compare)
+
+    drf = sub.add_parser("drift", help="population drift(t) of a new specimen from a hierarchical fit; optimal voltage")
+    drf.add_argument("fit_dir", help="output folder of 'fsrbayes fit --hierarchical'")
+    drf.add_argument("--time", type=float, default=3600.0, help="time of the drift in s (default 3600)")
+    drf.add_argument("--json", help="write the groups (and optimal voltages) here, atomically")
+    drf.add_argument("--plot", help="box-plot figure (PNG/PDF/SVG)")
+    drf.add_argument("--by", choices=("voltage", "stress"), default="voltage",
+                     help="x axis of the figure: voltage (Figures 10, 11) or stress (Figures 13, 14)")
+    drf.add_argument("--voltages", help="V_FSR list in V (default: the data's)")
+    drf.add_argument("--stresses", help="stress list in Pa (default: the data's)")
+    drf.add_argument("--optimal-voltage", metavar="VMIN,VMAX",
+                     help="the sourcing voltage minimising |drift| of a new specimen per stress, within VMIN..VMAX")
+    drf.add_argument("--hyper-draws", type=int, default=200, help="hyper-posterior draws used (default 200)")
+    drf.add_argument("--seed", type=int, default=0)
+    drf.set_defaults(func=cmd_drift)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
     chk.add_argument("data", help="CSV file (DESIGN format)")

@@ -12,7 +12,7 @@ matplotlib.use("Agg", force=False)
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "save_figure"]
+__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "population_drift_plot", "save_figure"]
 
 PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "k1", "k2", "b2", "inv_b1", "psi", "n")
 
@@ -92,6 +92,56 @@ def drift_3600_plot(tree):
     ax.legend(fontsize=7)
     fig.tight_layout()
     return fig, ax
+
+
+def population_drift_plot(groups, observed=None, by="voltage"):
+    """Box plots of a new specimen's drift (the stand-ins for the paper's Figures 10, 11, 13, 14).
+
+    One panel per stress (``by="voltage"``: drift against voltage) or per voltage (``by="stress"``).
+    Boxes span the pooled 25–75 % quantiles with the median, whiskers the 5–95 %; each of the five
+    quantiles carries its 90 % credible interval over the hyper-posterior as a thin bar. Observed
+    per-specimen drifts are drawn beside each box.
+
+    Parameters
+    ----------
+    groups : list of dict
+        From :func:`fsrbayes.inference.predictive.drift_groups`.
+    observed : dict of arrays, optional
+        ``voltage_V``, ``stress_Pa``, ``observed_drift_3600`` per observed test.
+    by : {"voltage", "stress"}
+    """
+    panel_key, x_key = ("stress_Pa", "voltage_V") if by == "voltage" else ("voltage_V", "stress_Pa")
+    panels = sorted({g[panel_key] for g in groups})
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.6), sharey=True, squeeze=False)
+    names = ("q05", "q25", "q50", "q75", "q95")
+    for ax, panel in zip(axes[0], panels):
+        rows = sorted((g for g in groups if g[panel_key] == panel), key=lambda g: g[x_key])
+        for k, g in enumerate(rows):
+            q = [g["new_specimen"][n] for n in names]
+            ax.add_patch(plt.Rectangle((k - 0.2, q[1]), 0.4, q[3] - q[1], fc="C0", alpha=0.35, ec="C0"))
+            ax.hlines(q[2], k - 0.2, k + 0.2, color="C0", lw=2)
+            ax.vlines(k, q[0], q[1], color="C0")
+            ax.vlines(k, q[3], q[4], color="C0")
+            for j, n in enumerate(names):
+                lo, hi = g["quantile_intervals"][n]
+                ax.vlines(k + 0.24 + 0.03 * j, lo, hi, color="C1", lw=1)
+            if observed is not None:
+                near = (np.isclose(observed[panel_key], panel, rtol=1e-6)
+                        & np.isclose(observed[x_key], g[x_key], rtol=1e-6))
+                values = np.asarray(observed["observed_drift_3600"])[near]
+                ax.plot(k - 0.32 + 0.08 * np.linspace(-1, 1, max(len(values), 1))[:len(values)], values, "k.", ms=3)
+        labels = [f"{g[x_key]:g}" if x_key == "voltage_V" else f"{g[x_key] / 1e3:.0f}" for g in rows]
+        ax.set_xticks(range(len(rows)), labels)
+        title = f"{panel / 1e3:.0f} kPa" if panel_key == "stress_Pa" else f"{panel:g} V"
+        ax.set(title=title, xlabel="V_FSR (V)" if x_key == "voltage_V" else "stress (kPa)")
+    axes[0, 0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
+    axes[0, -1].plot([], [], "s", color="C0", alpha=0.35, label="new specimen (box 25–75 %, whiskers 5–95 %)")
+    axes[0, -1].plot([], [], "-", color="C1", label="90 % interval of each quantile")
+    if observed is not None:
+        axes[0, -1].plot([], [], "k.", label="observed specimens")
+    axes[0, -1].legend(fontsize=6, loc="best")
+    fig.tight_layout()
+    return fig, axes
 
 
 def save_figure(fig, path, dpi=110):

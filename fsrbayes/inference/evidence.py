@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.special import logsumexp
 
-from .sampling import walkers_for
+from .sampling import single_threaded_blas, walkers_for
 
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
            "combine_ladder"]
@@ -345,7 +345,8 @@ class EvidenceResult:
 
 
 def _ladder_job(target, betas, settings, seed):
-    ll, swaps, top = _run_ladder(target, betas, settings, seed)
+    with single_threaded_blas():
+        ll, swaps, top = _run_ladder(target, betas, settings, seed)
     return combine_ladder(ll, betas, settings.n_batches), swaps, top
 
 

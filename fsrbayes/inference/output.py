@@ -14,7 +14,7 @@ import numpy as np
 from ..data.csvio import observed_drift
 from ..utils import atomic_path, write_json_atomic
 
-__all__ = ["to_datatree", "summary", "save_fit", "DRIFT_TIME_S"]
+__all__ = ["to_datatree", "summary", "save_fit", "population_datatree", "save_population", "DRIFT_TIME_S"]
 
 DRIFT_TIME_S = 3600.0
 
@@ -123,4 +123,64 @@ def save_fit(result, folder, *, stem="posterior"):
         tree.to_netcdf(tmp, engine="h5netcdf")
     info = summary(result, tree)
     write_json_atomic(folder / "summary.json", info)
+    return info
+
+
+def population_datatree(result, template, observed, *, max_draws=4000):
+    """ArviZ DataTree of a :class:`~fsrbayes.inference.hierarchical.HierarchicalResult`.
+
+    Groups: ``posterior`` (hyper-parameters mu_<p>, omega_<p>; chain = ensemble),
+    ``constant_data`` (every specimen's observed drift(3600 s) per test with its voltage and
+    stress, for the box-plot figures), ``sample_stats`` (two-stage: effective draws per
+    specimen). Attributes name the sensor, model, tunneling law, likelihood, route and the
+    population parameters — enough for ``fsrbayes drift`` to rebuild new specimens.
+
+    Parameters
+    ----------
+    result : HierarchicalResult
+    template : ForwardTemplate
+    observed : list of dict
+        ``{specimen, voltage_V, stress_Pa, observed_drift_3600}`` per test.
+    """
+    from arviz_base import from_dict
+
+    chain, _ = result.run.kept()
+    n_ens = chain.shape[0]
+    n_hyper = 2 * result.population.size
+    flat = chain[..., :n_hyper].reshape(n_ens, -1, n_hyper)
+    per_ensemble = max(1, max_draws // n_ens)
+    index = np.unique(np.linspace(0, flat.shape[1] - 1, min(per_ensemble, flat.shape[1])).round().astype(int))
+    hyper = result.population.hyper_prior.from_unconstrained(flat[:, index])[0]
+    groups = {
+        "posterior": {name: hyper[..., k] for k, name in enumerate(result.population.hyper_names)},
+        "constant_data": {"observed_drift_3600": np.array([t["observed_drift_3600"] for t in observed], dtype=float),
+                          "voltage_V": np.array([t["voltage_V"] for t in observed], dtype=float),
+                          "stress_Pa": np.array([t["stress_Pa"] for t in observed], dtype=float),
+                          "specimen": np.array([t["specimen"] for t in observed])},
+    }
+    dims = {k: ["test"] for k in groups["constant_data"]}
+    if result.effective_draws is not None:
+        groups["sample_stats"] = {"effective_draws": np.broadcast_to(result.effective_draws, (n_ens, 1, len(
+            result.effective_draws)))}
+        dims["effective_draws"] = ["specimen_index"]
+    tree = from_dict(groups, dims=dims)
+    tree.attrs.update({"sensor": template.sensor, "fsrbayes_model": template.model, "tunneling": template.tunneling,
+                       "route": result.route, "population": json.dumps(list(result.population.names)),
+                       "noise": json.dumps([n for n in template.prior.names if n not in result.population.names]),
+                       "specimens": json.dumps([str(s) for s in result.specimens]),
+                       "converged": int(result.converged), "seed": result.seed,
+                       "convergence": json.dumps(result.run.report.as_dict(), allow_nan=True)})
+    return tree
+
+
+def save_population(result, template, observed, folder):
+    """Write ``population.nc`` and return the hierarchical part of ``summary.json``."""
+    tree = population_datatree(result, template, observed)
+    with atomic_path(folder / "population.nc") as tmp:
+        tree.to_netcdf(tmp, engine="h5netcdf")
+    info = {"route": result.route, "converged": bool(result.converged), "hyper_parameters": result.summary(),
+            "population_parameters": list(result.population.names)}
+    if result.effective_draws is not None:
+        info["effective_draws"] = dict(zip(map(str, result.specimens), map(float, result.effective_draws)))
+        info["log_likelihood_mc_sd"] = float(result.log_likelihood_mc_sd)
     return info

@@ -1,0 +1,72 @@
+"""`fsrbayes fit --hierarchical` and `fsrbayes drift` end to end on a tiny virtual bench."""
+
+import json
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+from fsrbayes.data import synthetic
+from fsrbayes.data.csvio import write_csv
+
+
+def fsrbayes(*args, timeout=600):
+    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def hierarchical_fit(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("population")
+    sim = synthetic.simulate("a201", n_specimens=3, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=4)
+    write_csv(sim.data, folder / "data.csv")
+    out = folder / "fit"
+    run = fsrbayes("fit", str(folder / "data.csv"), "--hierarchical", "--out", str(out), "--ensembles", "2",
+                   "--chunk", "100", "--max-steps", "200", "--no-plots", "--processes", "2")
+    assert run.returncode == 0, run.stderr
+    return out, run
+
+
+def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
+    out, run = hierarchical_fit
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["specimens"]) == {"a201-01", "a201-02", "a201-03"}
+    assert (out / "population.nc").is_file() and (out / "a201-02" / "posterior.nc").is_file()
+    hyper = summary["hierarchical"]["hyper_parameters"]
+    assert {"mu_s0", "omega_s0", "mu_k1", "omega_inv_b1"} <= set(hyper)
+    assert all(v["q05"] <= v["median"] <= v["q95"] for v in hyper.values())
+    assert set(summary["hierarchical"]["effective_draws"]) == set(summary["specimens"])
+    assert "population posterior (two-stage)" in run.stdout
+
+
+def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit, tmp_path):
+    out, _ = hierarchical_fit
+    run = fsrbayes("drift", str(out), "--time", "3600", "--json", str(tmp_path / "drift.json"), "--plot",
+                   str(tmp_path / "box.png"), "--optimal-voltage", "0.1,9", "--hyper-draws", "40")
+    assert run.returncode == 0, run.stderr
+    payload = json.loads((tmp_path / "drift.json").read_text())
+    assert len(payload["groups"]) == 4  # 2 voltages x 2 stresses of the data
+    for group in payload["groups"]:
+        q = group["new_specimen"]
+        assert group["sensor"] == "a201"
+        assert q["q05"] <= q["q25"] <= q["q50"] <= q["q75"] <= q["q95"]
+        lo, hi = group["quantile_intervals"]["q50"]
+        assert lo <= q["q50"] <= hi
+    assert len(payload["optimal_voltage"]) == 2
+    best = payload["optimal_voltage"][0]
+    assert 0.1 <= best["q05"] <= best["median"] <= best["q95"] <= 9
+    assert (tmp_path / "box.png").stat().st_size > 10000
+
+
+def test_drift_command_refuses_a_folder_without_population(tmp_path):
+    run = fsrbayes("drift", str(tmp_path))
+    assert run.returncode == 2 and "no population.nc" in run.stderr and "Traceback" not in run.stderr
+    assert run.stderr.count("\n") == 1
+
+
+def test_hierarchical_fit_refuses_a_single_specimen(tmp_path):
+    sim = synthetic.simulate("a201", n_specimens=1, voltages=[0.2], forces=[4.9], samples=5, seed=1)
+    write_csv(sim.data, tmp_path / "one.csv")
+    run = fsrbayes("fit", str(tmp_path / "one.csv"), "--hierarchical", "--out", str(tmp_path / "o"))
+    assert run.returncode == 2 and "at least 2 specimens" in run.stderr
