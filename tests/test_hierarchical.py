@@ -173,3 +173,21 @@ def test_specimen_fits_on_a_dask_local_cluster_equal_local_ones(serial_fits):
         remote = _fits(scheduler=cluster.scheduler_address)
     for key in local:
         assert np.array_equal(local[key].run.chain, remote[key].run.chain)
+
+
+@pytest.mark.slow
+def test_two_stage_recovers_the_simulated_population(tmp_path):
+    """16 specimens x 3 forces x 4 voltages: the hyper-parameters' 90 % intervals hold the
+    simulation's population values (22 intervals: at most 5 misses, a 4 % false-alarm rate when
+    calibrated), and the new-specimen 5-95 % range holds >= 80 % of the 192 observed drifts."""
+    from fsrbayes import plots
+    from fsrbayes.inference.population_study import format_population_study, population_study
+
+    study = population_study()
+    print(format_population_study(study))
+    misses = [row["name"] for row in study["hyper"] if not row["inside"]]
+    assert len(misses) <= 5, misses
+    assert study["observed_covered"] >= 0.80
+    assert study["hyper_converged"], study["hyper_report"]
+    fig, _ = plots.population_drift_plot(study["groups"], study["observed"])
+    assert plots.save_figure(fig, tmp_path / "population.png").stat().st_size > 20000

@@ -3,9 +3,7 @@
 import json
 import subprocess
 import sys
-import warnings
 
-import numpy as np
 import pytest
 
 from fsrbayes.data import synthetic
@@ -13,7 +11,8 @@ from fsrbayes.data.csvio import write_csv
 
 
 def fsrbayes(*args, timeout=600):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout)
+    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout,
+                          check=False)
 
 
 @pytest.fixture(scope="module")

@@ -99,7 +99,7 @@ class Distribution:
         a = self.args
         if self.kind == "fixed":
             return np.where(x == a["value"], 0.0, -np.inf)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if self.kind == "normal":
                 z = (x - a["mu"]) / a["sigma"]
                 return -0.5 * z * z - math.log(a["sigma"]) - _HALF_LOG_2PI

@@ -29,6 +29,7 @@ import hashlib
 import numpy as np
 from ..data.distributions import Distribution
 from ..data.prior import JointPrior
+from .posterior import PriorScaledTarget
 
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
@@ -149,37 +150,7 @@ class Population:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-class _HyperTarget:
-    """Shared parts of the targets: prior, dimensions, the posterior as prior + likelihood."""
-
-    prior = None
-
-    @property
-    def ndim(self):
-        return self.prior.ndim
-
-    @property
-    def names(self):
-        return self.prior.names
-
-    def sample_prior(self, rng, n):
-        """n independent prior draws in u-space, shape (n, ndim)."""
-        return self.prior.to_unconstrained(self.prior.sample(rng, n))
-
-    def log_likelihood(self, u):
-        return self.log_prior_and_likelihood(u)[1]
-
-    def __call__(self, u):
-        """log-posterior at u (W, ndim) → (W,) or (ndim,) → float; −inf, never NaN."""
-        u = np.asarray(u, dtype=float)
-        log_prior, log_like = self.log_prior_and_likelihood(u)
-        with np.errstate(invalid="ignore"):
-            value = log_prior + log_like
-        value = np.where(np.isnan(value), -np.inf, value)
-        return float(value[0]) if u.ndim == 1 else value
-
-
-class TwoStageTarget(_HyperTarget):
+class TwoStageTarget(PriorScaledTarget):
     """Hyper-posterior p(Λ | all data) from per-specimen posterior draws (module docstring).
 
     Parameters
@@ -248,7 +219,7 @@ class TwoStageTarget(_HyperTarget):
         return "two-stage:" + digest.hexdigest()[:16]
 
 
-class JointTarget(_HyperTarget):
+class JointTarget(PriorScaledTarget):
     """Joint posterior of the hyper-parameters and every specimen's parameters.
 
     Parameters
@@ -307,5 +278,6 @@ class JointTarget(_HyperTarget):
         return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
 
     def fingerprint(self):
-        parts = [self.population.fingerprint()] + [getattr(t, "fingerprint", lambda: repr(t))() for t in self.specimens]
+        parts = [self.population.fingerprint()]
+        parts += [t.fingerprint() if hasattr(t, "fingerprint") else repr(t) for t in self.specimens]
         return "joint:" + hashlib.sha256("|".join(parts).encode()).hexdigest()[:16]

@@ -12,7 +12,7 @@ from ..physics.effects import model_parameters, parse_model
 from ..physics.sensor import solve_current
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 
-__all__ = ["LogPosterior", "noise_parameters"]
+__all__ = ["LogPosterior", "PriorScaledTarget", "noise_parameters"]
 
 
 def noise_parameters(likelihood):
@@ -22,7 +22,43 @@ def noise_parameters(likelihood):
     return ("sigma_rel", "nu") if likelihood == "student" else ("sigma_rel",)
 
 
-class LogPosterior:
+class PriorScaledTarget:
+    """What every target sampled in prior-scaled u-space offers the MAP search, the ensemble
+    engine and the evidence ladder. Subclasses set ``prior`` (a JointPrior) and define
+    ``log_prior_and_likelihood(u, with_likelihood=True)``; ``beta`` tempers the likelihood."""
+
+    prior = None
+    beta = 1.0
+
+    @property
+    def ndim(self):
+        return self.prior.ndim
+
+    @property
+    def names(self):
+        return self.prior.names
+
+    def log_likelihood(self, u):
+        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
+        return self.log_prior_and_likelihood(u)[1]
+
+    def sample_prior(self, rng, n):
+        """n independent prior draws in u-space, shape (n, ndim)."""
+        return self.prior.to_unconstrained(self.prior.sample(rng, n))
+
+    def __call__(self, u):
+        """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
+        u = np.asarray(u, dtype=float)
+        log_prior, log_like = self.log_prior_and_likelihood(u, with_likelihood=self.beta != 0.0)
+        value = log_prior
+        if self.beta != 0.0:
+            with np.errstate(invalid="ignore"):
+                value = log_prior + self.beta * log_like
+        value = np.where(np.isnan(value), -np.inf, value)
+        return float(value[0]) if u.ndim == 1 else value
+
+
+class LogPosterior(PriorScaledTarget):
     """log p(u | data) = β·log L(x(u)) + log p(x(u)) + log|dx/du|, vectorised over walkers.
 
     Parameters
@@ -68,14 +104,6 @@ class LogPosterior:
         prior = sensor.prior_for(model, noise_parameters(likelihood))
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
         return cls(data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta)
-
-    @property
-    def ndim(self):
-        return self.prior.ndim
-
-    @property
-    def names(self):
-        return self.prior.names
 
     def fingerprint(self):
         """Changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
@@ -130,21 +158,3 @@ class LogPosterior:
                 raise
         return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
 
-    def log_likelihood(self, u):
-        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
-        return self.log_prior_and_likelihood(u)[1]
-
-    def sample_prior(self, rng, n):
-        """n independent prior draws in u-space, shape (n, ndim)."""
-        return self.prior.to_unconstrained(self.prior.sample(rng, n))
-
-    def __call__(self, u):
-        """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
-        u = np.asarray(u, dtype=float)
-        log_prior, log_like = self.log_prior_and_likelihood(u, with_likelihood=self.beta != 0.0)
-        value = log_prior
-        if self.beta != 0.0:
-            with np.errstate(invalid="ignore"):
-                value = log_prior + self.beta * log_like
-        value = np.where(np.isnan(value), -np.inf, value)
-        return float(value[0]) if u.ndim == 1 else value

@@ -202,7 +202,7 @@ def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=3600.0, n_grid=161)
         shift = np.where(curvature > 0, 0.5 * h * (y0 - y2) / curvature, 0.0)
     edge = (best == 0) | (best == n_grid - 1)
     log_opt = np.where(edge, log_v[best], log_v[inner] + np.clip(shift, -h, h))
-    v_opt = np.exp(log_opt)
+    v_opt = np.where(edge, grid[best], np.exp(log_opt))
     left = rows, np.clip(np.searchsorted(grid, v_opt) - 1, 0, n_grid - 2)
     w = (log_opt - log_v[left[1]]) / h
     at_opt = (1 - w) * drift[left] + w * drift[left[0], left[1] + 1]

@@ -26,10 +26,15 @@ import numpy as np
 __all__ = ["TriangularMap", "MappedLogProb"]
 
 
-def _features(z):
-    """[z_j, z_j·z_k (j ≤ k)] of standardised coordinates z (…, m)."""
+QUADRATIC_MAX_DIM = 14
+"""Above this many dimensions maps are linear (a triangular whitening): a quadratic map's
+fit costs ~d⁵ (22-d hyper-posterior: minutes per refit) and its forward pass ~d³ per call."""
+
+
+def _features(z, quadratic=True):
+    """[z_j, z_j·z_k (j ≤ k)] of standardised coordinates z (…, m); only z when not quadratic."""
     m = z.shape[-1]
-    if m == 0:
+    if m == 0 or not quadratic:
         return z
     j, k = np.triu_indices(m)
     return np.concatenate([z, z[..., j] * z[..., k]], axis=-1)
@@ -47,9 +52,11 @@ class TriangularMap:
         Standardisation of u used in the features.
     intercept : ndarray, shape (ndim,)
     weights : tuple of ndarray
-        Feature weights of stage i (length i + i(i+1)/2).
+        Feature weights of stage i (length i + i(i+1)/2, or i when linear).
     diagonal : ndarray, shape (ndim,)
         c_i, the residual scale of stage i.
+    quadratic : bool
+        False: h_i is linear (used above :data:`QUADRATIC_MAX_DIM` dimensions).
     """
 
     order: tuple
@@ -58,6 +65,7 @@ class TriangularMap:
     intercept: np.ndarray
     weights: tuple
     diagonal: np.ndarray
+    quadratic: bool = True
 
     @property
     def ndim(self):
@@ -75,25 +83,32 @@ class TriangularMap:
         return cls(tuple(range(ndim)), np.zeros(ndim), np.ones(ndim), np.zeros(ndim), weights, np.ones(ndim))
 
     @classmethod
-    def fit(cls, draws, *, ridge=1e-8):
+    def fit(cls, draws, *, ridge=1e-8, quadratic=None):
         """Fit to draws (n, ndim) of the target, e.g. the second half of a pilot run.
 
         The order puts the tightly constrained coordinates last, each expressed through the
-        loosely constrained ones before it (:func:`_order_by_predictability`).
+        loosely constrained ones before it (:func:`_order_by_predictability`). ``quadratic``
+        defaults to ndim <= :data:`QUADRATIC_MAX_DIM`; a linear map keeps the given order and
+        uses at most 50·ndim evenly spaced draws.
         """
         draws = np.asarray(draws, dtype=float)
         n, ndim = draws.shape
-        if n < 4 * (ndim + ndim * (ndim + 1) // 2):
-            raise ValueError(f"fitting a quadratic map in {ndim} dimensions needs at least "
-                             f"{4 * (ndim + ndim * (ndim + 1) // 2)} draws, got {n}")
+        quadratic = ndim <= QUADRATIC_MAX_DIM if quadratic is None else bool(quadratic)
+        n_features = ndim + ndim * (ndim + 1) // 2 if quadratic else ndim
+        if n < 4 * n_features:
+            raise ValueError(f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions needs "
+                             f"at least {4 * n_features} draws, got {n}")
+        if not quadratic:
+            draws = draws[np.linspace(0, n - 1, min(n, 50 * ndim)).astype(int)]
+            n = len(draws)
         centre, spread = draws.mean(axis=0), draws.std(axis=0)
         if np.any(spread <= 0):
             raise ValueError("a coordinate does not move in the draws; the map cannot be fitted")
         z = (draws - centre) / spread
-        order = _order_by_predictability(z)
+        order = _order_by_predictability(z) if quadratic else tuple(range(ndim))
         intercept, diagonal, weights = np.empty(ndim), np.empty(ndim), []
         for stage, i in enumerate(order):
-            features = _features(z[:, list(order[:stage])])
+            features = _features(z[:, list(order[:stage])], quadratic)
             design = np.column_stack([np.ones(n), features])
             gram = design.T @ design + ridge * n * np.diag(np.r_[0.0, np.ones(features.shape[1])])
             coef = np.linalg.solve(gram, design.T @ draws[:, i])
@@ -101,18 +116,20 @@ class TriangularMap:
             intercept[i] = coef[0]
             weights.append(coef[1:])
             diagonal[i] = max(residual.std(), 1e-12 * spread[i])
-        return cls(tuple(int(i) for i in order), centre, spread, intercept, tuple(weights), diagonal)
+        return cls(tuple(int(i) for i in order), centre, spread, intercept, tuple(weights), diagonal, quadratic)
 
     def forward(self, v):
-        """u(v) for v (…, ndim)."""
+        """u(v) for v (…, ndim); walkers proposed far out may overflow to inf/NaN (the target
+        then rejects them)."""
         v = np.asarray(v, dtype=float)
         u = np.empty_like(v)
         z = np.empty_like(v)
-        for stage, i in enumerate(self.order):
-            previous = list(self.order[:stage])
-            mean = self.intercept[i] + _features(z[..., previous]) @ self.weights[stage]
-            u[..., i] = mean + self.diagonal[i] * v[..., i]
-            z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
+        with np.errstate(over="ignore", invalid="ignore"):
+            for stage, i in enumerate(self.order):
+                previous = list(self.order[:stage])
+                mean = self.intercept[i] + _features(z[..., previous], self.quadratic) @ self.weights[stage]
+                u[..., i] = mean + self.diagonal[i] * v[..., i]
+                z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
         return u
 
     def inverse(self, u):
@@ -121,7 +138,7 @@ class TriangularMap:
         z = (u - self.centre) / self.spread
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
-            mean = self.intercept[i] + _features(z[..., list(self.order[:stage])]) @ self.weights[stage]
+            mean = self.intercept[i] + _features(z[..., list(self.order[:stage])], self.quadratic) @ self.weights[stage]
             v[..., i] = (u[..., i] - mean) / self.diagonal[i]
         return v
 
@@ -131,7 +148,7 @@ class TriangularMap:
 
         digest = hashlib.sha256()
         for part in (np.asarray(self.order, float), self.centre, self.spread, self.intercept, self.diagonal,
-                     *self.weights):
+                     np.array([float(self.quadratic)]), *self.weights):
             digest.update(np.ascontiguousarray(part, dtype=float).tobytes())
         return digest.hexdigest()[:16]
 

@@ -1,0 +1,76 @@
+"""Hierarchical fits of 16 simulated specimens: wall time of the two-stage and joint routes.
+
+The virtual bench: 16 A201 specimens drawn from the population, 3 forces x 4 voltages, 21
+log-spaced samples per test. The two-stage route fits the specimens independently with
+``FIT_SETTINGS`` (two ensembles, a short budget: the reweighting needs a few hundred draws per
+specimen, not a converged-to-the-last-digit chain), then samples the 22 hyper-parameters. The
+speed-up from 1 to 2 worker processes is measured side by side on the first 4 specimens. The
+joint route (16 x 12 + 22 = 214 parameters) is timed per step from the two-stage start and its
+cost to convergence extrapolated from the autocorrelation time it shows.
+"""
+
+import time
+import warnings
+
+import numpy as np
+
+from fsrbayes.data import synthetic
+from fsrbayes.inference.hierarchical import fit_specimens, joint, two_stage
+from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+
+FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
+HYPER_SETTINGS = SamplerSettings(processes=2)
+
+
+def bench(n_specimens=16, seed=31):
+    return synthetic.simulate("a201", n_specimens=n_specimens, voltages=[0.2, 0.5, 1.0, 3.0],
+                              forces=list(synthetic.PAPER_FORCES_N), samples=21, seed=seed)
+
+
+def _fits(data, processes, specimens=None):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return fit_specimens(data, specimens, settings=FIT_SETTINGS, processes=processes, rng=1)
+
+
+def run(joint_steps=200):
+    sim = bench()
+    out = {}
+    subset = sim.data.specimens[:4]
+    for processes in (1, 2):
+        start = time.perf_counter()
+        _fits(sim.data, processes, subset)
+        out[f"fits_4_specimens_{processes}_processes_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    fits = _fits(sim.data, 2)
+    out["fits_16_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    result = two_stage(fits, settings=HYPER_SETTINGS, seed=2)
+    out["hyper_s"] = time.perf_counter() - start
+    out["two_stage_s"] = out["fits_16_s"] + out["hyper_s"]
+    out["hyper_report"] = result.run.report.worst()
+    out["min_effective_draws"] = float(result.effective_draws.min())
+    short = SamplerSettings(n_ensembles=2, chunk=joint_steps, max_steps=joint_steps, min_steps=joint_steps,
+                            transport_rounds=0, processes=2, n_walkers=2 * 214 + 2)
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        joint_result = joint([f.posterior for f in fits.values()], result.population, settings=short, seed=3,
+                             start_from=result)
+    seconds = time.perf_counter() - start
+    out["joint_s_per_step"] = seconds / joint_steps
+    out["joint_tau"] = float(np.max(joint_result.run.report.tau))
+    out["joint_walkers"] = short.n_walkers
+    return out
+
+
+def report(r):
+    speedup = r["fits_4_specimens_1_processes_s"] / r["fits_4_specimens_2_processes_s"]
+    projected = r["joint_s_per_step"] * (50 * r["joint_tau"] + 3 * 500)
+    return (f"hierarchical, 16 specimens x 12 tests x 21 samples: two-stage {r['two_stage_s']:.0f} s "
+            f"(fits {r['fits_16_s']:.0f} s on 2 processes, hyper-posterior {r['hyper_s']:.0f} s: {r['hyper_report']}; "
+            f"min effective draws {r['min_effective_draws']:.0f}); target <= 600 s. "
+            f"Fits of 4 specimens: 1 process {r['fits_4_specimens_1_processes_s']:.0f} s, 2 processes "
+            f"{r['fits_4_specimens_2_processes_s']:.0f} s, speed-up {speedup:.2f}x. "
+            f"Joint (214 parameters, {r['joint_walkers']} walkers x 2 ensembles): {r['joint_s_per_step']:.2f} s per step, "
+            f"tau >= {r['joint_tau']:.0f} steps (lower bound from a short run) -> >= {projected / 3600:.1f} h to 50 tau")

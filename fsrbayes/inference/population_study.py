@@ -1,0 +1,95 @@
+"""The hierarchical model on the virtual test bench: is the simulated population recovered?
+
+16 A201 specimens are drawn from the bench's population (log-normal around the sensor defaults
+with the log-sds of :data:`fsrbayes.data.synthetic.POPULATION_SCATTER`), each tested at 3 forces
+× 4 voltages. The two-stage route fits them and samples the hyper-parameters; we record whether
+each 90 % interval holds the simulation's value (μ_p = log of the default, ω_p = its scatter),
+and whether the new-specimen predictive drift(3600 s) per (voltage, stress) covers the observed
+specimens (the share of observed drifts inside the predictive 5–95 % range; 90 % expected).
+
+Run ``python -m fsrbayes.inference.population_study`` for the table; the slow test runs it.
+"""
+
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from ..data import synthetic
+from ..data.sensors import load_sensor
+from .hierarchical import fit_specimens, two_stage
+from .output import DRIFT_TIME_S
+from .predictive import ForwardTemplate, drift_groups, new_specimens
+from .sampling import ConvergenceWarning, SamplerSettings
+
+__all__ = ["population_study", "format_population_study", "STUDY_FIT_SETTINGS"]
+
+STUDY_FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
+"""Per-specimen fits for the two-stage route: two ensembles and a short budget (the reweighting
+needs a few hundred draws per specimen)."""
+
+
+def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5, 1.0, 3.0),
+                     forces=synthetic.PAPER_FORCES_N, processes=2, fit_settings=STUDY_FIT_SETTINGS,
+                     hyper_settings=None):
+    """Simulate, fit hierarchically (two-stage) and score; returns a JSON-ready dict."""
+    sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
+                             samples=samples, seed=seed)
+    sensor = load_sensor("a201")
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        fits = fit_specimens(sim.data, settings=fit_settings, processes=processes, rng=seed)
+    fit_seconds = time.perf_counter() - start
+    result = two_stage(fits, settings=hyper_settings or SamplerSettings(processes=processes), seed=seed)
+    summary = result.summary()
+    rows = []
+    for name in result.population.names:
+        truth = {"mu": float(np.log(sensor.params[name])), "omega": synthetic.POPULATION_SCATTER[name]}
+        for kind in ("mu", "omega"):
+            entry = summary[f"{kind}_{name}"]
+            rows.append({"name": f"{kind}_{name}", "truth": truth[kind], "q05": entry["q05"], "median": entry["median"],
+                         "q95": entry["q95"], "inside": entry["q05"] <= truth[kind] <= entry["q95"]})
+    template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
+    specimens = new_specimens(result.population, result.hyper_draws(), template, seed=seed)
+    stresses = np.unique([t.stress_Pa for t in sim.data.tests])
+    groups = drift_groups(specimens, np.array(voltages, dtype=float), stresses, time_s=DRIFT_TIME_S)
+    observed = {"voltage_V": [], "stress_Pa": [], "observed_drift_3600": []}
+    covered = []
+    for test in sim.data.tests:
+        value = test.observed_drift(DRIFT_TIME_S)
+        group = next(g for g in groups if np.isclose(g["voltage_V"], test.voltage_V)
+                     and np.isclose(g["stress_Pa"], test.stress_Pa))
+        covered.append(group["new_specimen"]["q05"] <= value <= group["new_specimen"]["q95"])
+        observed["voltage_V"].append(test.voltage_V)
+        observed["stress_Pa"].append(test.stress_Pa)
+        observed["observed_drift_3600"].append(value)
+    return {"hyper": rows, "groups": groups, "observed": {k: np.array(v) for k, v in observed.items()},
+            "observed_covered": float(np.mean(covered)), "n_observed": len(covered),
+            "hyper_converged": bool(result.converged), "hyper_report": result.run.report.worst(),
+            "fits_converged": int(sum(f.converged for f in fits.values())), "n_specimens": n_specimens,
+            "fit_seconds": fit_seconds, "seconds": time.perf_counter() - start,
+            "min_effective_draws": float(result.effective_draws.min()),
+            "log_likelihood_mc_sd": result.log_likelihood_mc_sd}
+
+
+def format_population_study(study):
+    """A plain-text table of the study."""
+    lines = [f"{'hyper-parameter':18s} {'truth':>9s} {'q05':>9s} {'median':>9s} {'q95':>9s}  inside"]
+    for row in study["hyper"]:
+        lines.append(f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} {row['q95']:9.4f}"
+                     f"  {'yes' if row['inside'] else 'NO'}")
+    inside = sum(r["inside"] for r in study["hyper"])
+    lines.append(f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value")
+    lines.append(f"observed drift(3600 s) inside the new-specimen 5-95 % range: {study['observed_covered']:.2f} of "
+                 f"{study['n_observed']} tests (0.90 expected)")
+    lines.append(f"hyper-posterior: {study['hyper_report']}; min effective draws {study['min_effective_draws']:.0f}; "
+                 f"log L MC sd {study['log_likelihood_mc_sd']:.2f}")
+    lines.append(f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; fits "
+                 f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(format_population_study(population_study(int(sys.argv[1]) if len(sys.argv) > 1 else 16)))
