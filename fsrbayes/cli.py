@@ -268,7 +268,8 @@ def _fit_hierarchical(args, data, settings, out):
                 print(f"fsrbayes fit: warning: {w.message}", file=sys.stderr)
         template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
         observed = [t for s in summaries.values() for t in s["tests"]]
-        info = save_population(result, template, observed, folder)
+        noise = float(np.median([s["parameters"]["sigma_rel"]["median"] for s in summaries.values()]))
+        info = save_population(result, template, observed, folder, noise_rel=noise)
         converged = all(s["converged"] for s in summaries.values()) and info["converged"]
         write_json_atomic(folder / "summary.json", {"converged": converged, "specimens": summaries,
                                                     "hierarchical": info})
@@ -321,7 +322,8 @@ def cmd_drift(args):
         volts = _floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
         stresses = _floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
         specimens = new_specimens(population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed)
-        groups = drift_groups(specimens, volts, stresses, time_s=args.time)
+        noise = float(attrs.get("measurement_noise", 0.0)) if args.as_measured else None
+        groups = drift_groups(specimens, volts, stresses, time_s=args.time, noise_rel=noise, seed=args.seed)
         payload["groups"] += groups
         if v_range is not None:
             for stress in stresses:
@@ -490,6 +492,9 @@ def build_parser():
     drf.add_argument("--stresses", help="stress list in Pa (default: the data's)")
     drf.add_argument("--optimal-voltage", metavar="VMIN,VMAX",
                      help="the sourcing voltage minimising |drift| of a new specimen per stress, within VMIN..VMAX")
+    drf.add_argument("--as-measured", action="store_true",
+                     help="drift as a rig measures it: add the fitted measurement noise to both readings "
+                          "(the fair comparison with observed drifts; default: the physical, noise-free drift)")
     drf.add_argument("--hyper-draws", type=int, default=200, help="hyper-posterior draws used (default 200)")
     drf.add_argument("--seed", type=int, default=0)
     drf.set_defaults(func=cmd_drift)

@@ -135,7 +135,8 @@ def population_drift_plot(groups, observed=None, by="voltage"):
         title = f"{panel / 1e3:.0f} kPa" if panel_key == "stress_Pa" else f"{panel:g} V"
         ax.set(title=title, xlabel="V_FSR (V)" if x_key == "voltage_V" else "stress (kPa)")
     axes[0, 0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
-    axes[0, -1].plot([], [], "s", color="C0", alpha=0.35, label="new specimen (box 25–75 %, whiskers 5–95 %)")
+    what = "as measured" if groups[0].get("as_measured") else "noise-free"
+    axes[0, -1].plot([], [], "s", color="C0", alpha=0.35, label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)")
     axes[0, -1].plot([], [], "-", color="C1", label="90 % interval of each quantile")
     if observed is not None:
         axes[0, -1].plot([], [], "k.", label="observed specimens")

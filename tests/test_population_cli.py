@@ -42,13 +42,13 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
 def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit, tmp_path):
     out, _ = hierarchical_fit
     run = fsrbayes("drift", str(out), "--time", "3600", "--json", str(tmp_path / "drift.json"), "--plot",
-                   str(tmp_path / "box.png"), "--optimal-voltage", "0.1,9", "--hyper-draws", "40")
+                   str(tmp_path / "box.png"), "--optimal-voltage", "0.1,9", "--hyper-draws", "40", "--as-measured")
     assert run.returncode == 0, run.stderr
     payload = json.loads((tmp_path / "drift.json").read_text())
     assert len(payload["groups"]) == 4  # 2 voltages x 2 stresses of the data
     for group in payload["groups"]:
         q = group["new_specimen"]
-        assert group["sensor"] == "a201"
+        assert group["sensor"] == "a201" and group["as_measured"]
         assert q["q05"] <= q["q25"] <= q["q50"] <= q["q75"] <= q["q95"]
         lo, hi = group["quantile_intervals"]["q50"]
         assert lo <= q["q50"] <= hi

@@ -126,7 +126,7 @@ def save_fit(result, folder, *, stem="posterior"):
     return info
 
 
-def population_datatree(result, template, observed, *, max_draws=4000):
+def population_datatree(result, template, observed, *, noise_rel=None, max_draws=4000):
     """ArviZ DataTree of a :class:`~fsrbayes.inference.hierarchical.HierarchicalResult`.
 
     Groups: ``posterior`` (hyper-parameters mu_<p>, omega_<p>; chain = ensemble),
@@ -141,6 +141,8 @@ def population_datatree(result, template, observed, *, max_draws=4000):
     template : ForwardTemplate
     observed : list of dict
         ``{specimen, voltage_V, stress_Pa, observed_drift_3600}`` per test.
+    noise_rel : float, optional
+        The specimens' typical measurement noise (median sigma_rel), kept for drift "as measured".
     """
     from arviz_base import from_dict
 
@@ -169,17 +171,18 @@ def population_datatree(result, template, observed, *, max_draws=4000):
                        "noise": json.dumps([n for n in template.prior.names if n not in result.population.names]),
                        "specimens": json.dumps([str(s) for s in result.specimens]),
                        "converged": int(result.converged), "seed": result.seed,
+                       "measurement_noise": float(noise_rel) if noise_rel else 0.0,
                        "convergence": json.dumps(result.run.report.as_dict(), allow_nan=True)})
     return tree
 
 
-def save_population(result, template, observed, folder):
+def save_population(result, template, observed, folder, *, noise_rel=None):
     """Write ``population.nc`` and return the hierarchical part of ``summary.json``."""
-    tree = population_datatree(result, template, observed)
+    tree = population_datatree(result, template, observed, noise_rel=noise_rel)
     with atomic_path(folder / "population.nc") as tmp:
         tree.to_netcdf(tmp, engine="h5netcdf")
     info = {"route": result.route, "converged": bool(result.converged), "hyper_parameters": result.summary(),
-            "population_parameters": list(result.population.names)}
+            "population_parameters": list(result.population.names), "measurement_noise": noise_rel}
     if result.effective_draws is not None:
         info["effective_draws"] = dict(zip(map(str, result.specimens), map(float, result.effective_draws)))
         info["log_likelihood_mc_sd"] = float(result.log_likelihood_mc_sd)
