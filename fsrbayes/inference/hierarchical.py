@@ -20,7 +20,7 @@ import numpy as np
 
 from .fit import find_map, fit, laplace_start
 from .population import JointTarget, Population, TwoStageTarget
-from .sampling import SamplerSettings, run_ensembles
+from .sampling import SamplerSettings, run_ensembles, single_threaded_blas
 
 __all__ = ["HierarchicalResult", "ReweightingWarning", "two_stage", "joint", "fit_specimens", "MIN_EFFECTIVE_DRAWS"]
 
@@ -226,8 +226,12 @@ def _start_from_two_stage(target, two, settings, rng):
 
 
 def _fit_one(args):
+    """One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the
+    cores (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s
+    with OMP_NUM_THREADS=1 — other fit seeds)."""
     data, specimen, kwargs = args
-    return specimen, fit(data, specimen, **kwargs)
+    with single_threaded_blas():
+        return specimen, fit(data, specimen, **kwargs)
 
 
 def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, processes=None, settings=None, **kwargs):
