@@ -181,9 +181,10 @@ def save_population(result, template, observed, folder, *, noise_rel=None):
     tree = population_datatree(result, template, observed, noise_rel=noise_rel)
     with atomic_path(folder / "population.nc") as tmp:
         tree.to_netcdf(tmp, engine="h5netcdf")
-    info = {"route": result.route, "converged": bool(result.converged), "hyper_parameters": result.summary(),
+    hyper = {name: {k: _finite(v) for k, v in entry.items()} for name, entry in result.summary().items()}
+    info = {"route": result.route, "converged": bool(result.converged), "hyper_parameters": hyper,
             "population_parameters": list(result.population.names), "measurement_noise": noise_rel}
     if result.effective_draws is not None:
-        info["effective_draws"] = dict(zip(map(str, result.specimens), map(float, result.effective_draws)))
-        info["log_likelihood_mc_sd"] = float(result.log_likelihood_mc_sd)
+        info["effective_draws"] = dict(zip(map(str, result.specimens), map(_finite, result.effective_draws)))
+        info["log_likelihood_mc_sd"] = _finite(result.log_likelihood_mc_sd)
     return info
