@@ -16,7 +16,7 @@ from ..data.csvio import CreepData
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
 from .posterior import LogPosterior
-from .sampling import EnsembleRun, SamplerSettings, run_ensembles
+from .sampling import EnsembleRun, SamplerSettings, even_index, run_ensembles
 
 __all__ = ["FitResult", "fit", "find_map"]
 
@@ -59,7 +59,7 @@ class FitResult:
         n_ens, n_steps, n_walk, ndim = chain.shape
         flat = chain.reshape(n_ens, n_steps * n_walk, ndim)
         per_ensemble = max(1, max_draws // n_ens)
-        index = np.unique(np.linspace(0, flat.shape[1] - 1, min(per_ensemble, flat.shape[1])).round().astype(int))
+        index = even_index(flat.shape[1], per_ensemble)
         x, _ = self.posterior.prior.from_unconstrained(flat[:, index])
         return x
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from .fit import find_map, fit, laplace_start
 from .population import JointTarget, Population, TwoStageTarget
-from .sampling import SamplerSettings, run_ensembles, single_threaded_blas
+from .sampling import SamplerSettings, even_index, run_ensembles, single_threaded_blas
 
 __all__ = ["HierarchicalResult", "ReweightingWarning", "two_stage", "joint", "fit_specimens", "MIN_EFFECTIVE_DRAWS"]
 
@@ -71,13 +71,15 @@ class HierarchicalResult:
     def draws(self, max_draws=4000):
         """Posterior draws in physical units, shape (D, ndim), thinned evenly over the kept chain."""
         chain, _ = self.run.kept()
-        flat = chain.reshape(-1, chain.shape[-1])
-        index = np.unique(np.linspace(0, len(flat) - 1, min(max_draws, len(flat))).round().astype(int))
-        return self.target.prior.from_unconstrained(flat[index])[0]
+        return self.target.prior.from_unconstrained(_thin(chain.reshape(-1, chain.shape[-1]), max_draws))[0]
 
     def hyper_draws(self, max_draws=4000):
-        """Draws of the hyper-parameters (μ then ω), shape (D, 2P)."""
-        return self.draws(max_draws)[:, :2 * self.population.size]
+        """Draws of the hyper-parameters (μ then ω), shape (D, 2P); only their columns are converted
+        (a joint run carries every specimen's parameters too)."""
+        chain, _ = self.run.kept()
+        n_hyper = 2 * self.population.size
+        flat = _thin(chain[..., :n_hyper].reshape(-1, n_hyper), max_draws)
+        return self.population.hyper_prior.from_unconstrained(flat)[0]
 
     def hyper_chains(self):
         """Kept hyper-parameter chains in physical units with every walker as a chain, (E·W, steps, 2P)."""
@@ -119,8 +121,7 @@ def _sample(target, seed, settings, start, progress):
 
 
 def _thin(values, n):
-    index = np.unique(np.linspace(0, len(values) - 1, n).round().astype(int))
-    return values[index]
+    return values[even_index(len(values), n)]
 
 
 def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_effective=MIN_EFFECTIVE_DRAWS,

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..data.csvio import observed_drift
 from ..utils import atomic_path, write_json_atomic
+from .sampling import even_index
 
 __all__ = ["to_datatree", "summary", "save_fit", "population_datatree", "save_population", "DRIFT_TIME_S"]
 
@@ -151,7 +152,7 @@ def population_datatree(result, template, observed, *, noise_rel=None, max_draws
     n_hyper = 2 * result.population.size
     flat = chain[..., :n_hyper].reshape(n_ens, -1, n_hyper)
     per_ensemble = max(1, max_draws // n_ens)
-    index = np.unique(np.linspace(0, flat.shape[1] - 1, min(per_ensemble, flat.shape[1])).round().astype(int))
+    index = even_index(flat.shape[1], per_ensemble)
     hyper = result.population.hyper_prior.from_unconstrained(flat[:, index])[0]
     groups = {
         "posterior": {name: hyper[..., k] for k, name in enumerate(result.population.hyper_names)},

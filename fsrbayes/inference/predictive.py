@@ -19,6 +19,7 @@ import numpy as np
 from ..physics.effects import parse_model
 from ..physics.sensor import solve_current
 from .posterior import noise_parameters
+from .sampling import even_index
 
 __all__ = ["ForwardTemplate", "NewSpecimens", "new_specimens", "drift_groups", "optimal_voltage", "BOX_QUANTILES"]
 
@@ -134,7 +135,7 @@ def new_specimens(population, hyper_draws, template, *, n_hyper=200, n_per_hyper
     """
     rng = np.random.default_rng(seed)
     pool = np.asarray(hyper_draws, dtype=float)
-    hyper = pool[np.unique(np.linspace(0, len(pool) - 1, n_hyper).round().astype(int))]
+    hyper = pool[even_index(len(pool), n_hyper)]
     x = np.empty((len(hyper), n_per_hyper, template.ndim))
     x[...] = [d.median() for d in template.prior.dists]
     mu, omega = population.split(hyper)

@@ -40,6 +40,11 @@ __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "Checkp
            "run_ensembles", "convergence_report"]
 
 
+def even_index(length, n):
+    """At most ``n`` evenly spaced, distinct indices into a sequence of ``length`` (both ends kept)."""
+    return np.unique(np.linspace(0, length - 1, min(n, length)).round().astype(int))
+
+
 def walkers_for(n_walkers, ndim):
     """Walkers per ensemble: ``n_walkers`` checked (even, >= 2·ndim), or max(32, 4·ndim)."""
     if n_walkers is not None:
