@@ -11,14 +11,13 @@
 Both return a :class:`HierarchicalResult`.
 """
 
-import concurrent.futures
-import os
 import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .fit import find_map, fit, laplace_start
+from .parallel import map_jobs
 from .population import JointTarget, Population, TwoStageTarget
 from .sampling import SamplerSettings, even_index, run_ensembles, single_threaded_blas
 
@@ -260,17 +259,4 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
     kwargs["settings"] = replace(settings or SamplerSettings(), processes=1)
     base_seed = kwargs.pop("rng", 0)
     jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k)) for k, s in enumerate(specimens)]
-    if executor is not None:
-        return dict(executor.map(_fit_one, jobs))
-    if scheduler is not None:
-        try:
-            from dask.distributed import Client
-        except ImportError:
-            raise ImportError("a dask scheduler needs dask.distributed: pip install 'fsrbayes[dask]'") from None
-        with Client(scheduler) as client:
-            return dict(client.get_executor().map(_fit_one, jobs))
-    workers = processes or os.cpu_count() or 1
-    if workers == 1 or len(jobs) == 1:
-        return dict(map(_fit_one, jobs))
-    with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
-        return dict(pool.map(_fit_one, jobs))
+    return dict(map_jobs(_fit_one, jobs, executor=executor, scheduler=scheduler, processes=processes))
