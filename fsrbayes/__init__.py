@@ -9,7 +9,7 @@ from ._version import __version__
 from .data.sensors import Sensor, available_sensors, load_sensor
 from .physics.sensor import DomainError, current, drift
 
-__all__ = ["current", "drift", "fit", "compare", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
+__all__ = ["current", "drift", "fit", "compare", "diagnose", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
 
 
 def __getattr__(name):
@@ -22,4 +22,8 @@ def __getattr__(name):
         from .inference.compare import compare
 
         return compare
+    if name == "diagnose":
+        from .discrepancy import diagnose
+
+        return diagnose
     raise AttributeError(f"module 'fsrbayes' has no attribute {name!r}")

@@ -19,7 +19,7 @@ from .data.sensors import available_sensors, load_sensor
 from .physics.effects import EFFECTS, parse_model
 from .physics import sensor as fsr
 from .physics.tunneling import paper_peak_voltage
-from .utils import write_json_atomic
+from .utils import json_ready, write_json_atomic
 
 CHECKPOINT = "checkpoint.npz"
 
@@ -375,6 +375,42 @@ def cmd_compare(args):
     return 0
 
 
+def cmd_diagnose(args):
+    """Find what the base model misses, name the missing effect, show the gap shrink (JSON + report)."""
+    from .discrepancy import diagnose
+    from .report import write_diagnosis_report
+
+    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    parse_model(args.base)
+    effects = None
+    if args.effects:
+        effects = [e.strip() for e in args.effects.split(",") if e.strip()]
+        unknown = [e for e in effects if e not in EFFECTS]
+        if unknown:
+            raise UsageError(f"--effects: unknown effect(s) {unknown}; expected names from {sorted(EFFECTS)}")
+    specimens = [s.strip() for s in args.specimens.split(",")] if args.specimens else None
+    missing = [s for s in specimens or () if s not in data.specimens]
+    if missing:
+        raise UsageError(f"--specimens {missing} not in {args.data}; it has {data.specimens[:8]}")
+    for path in (Path(args.json).parent if args.json else None, Path(args.report) if args.report else None):
+        if path is not None:
+            _writable(path)
+    if args.processes is not None and args.processes < 1:
+        raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    result = diagnose(data, args.base, effects=effects, specimens=specimens, tunneling=args.tunneling,
+                      likelihood=args.likelihood, threshold=args.threshold, seed=args.seed, processes=args.processes)
+    print(f"gap before ({args.base}): {result.gap_before:.2f}")
+    for c in result.candidates:
+        print(f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = {c['gap_after']:.2f}")
+    named = f": {result.effect} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})" if result.effect else ""
+    print(f"verdict: {result.verdict}{named}")
+    if args.json:
+        write_json_atomic(Path(args.json), json_ready(result.as_dict()))
+    if args.report:
+        print(f"report: {write_diagnosis_report(result, args.report)}")
+    return 0
+
+
 def _fit_plots(folder):
     import xarray as xr
 
@@ -480,6 +516,23 @@ def build_parser():
     cmp_.add_argument("--sep", default=",", help="CSV field separator")
     cmp_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     cmp_.set_defaults(func=cmd_compare)
+
+    dia = sub.add_parser("diagnose", help="find what the model misses, name the missing effect, show the gap shrink")
+    dia.add_argument("data", help="creep-test CSV")
+    dia.add_argument("--json", help="write the result here (atomically; keys verdict, effect, gap_before, ...)")
+    dia.add_argument("--report", metavar="DIR", help="folder for report.html/.md, figures and diagnosis.json")
+    dia.add_argument("--base", default="burgers", help="base model (default burgers)")
+    dia.add_argument("--effects", help=f"candidate effects, comma-separated (default all: {','.join(EFFECTS)})")
+    dia.add_argument("--specimens", help="specimens to use, comma-separated (default all)")
+    dia.add_argument("--threshold", type=float, default=10.0,
+                     help="ln B over the base model (summed over specimens) needed to name an effect (default 10)")
+    dia.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
+    dia.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    dia.add_argument("--processes", type=int, help="specimens side by side (default: one per core)")
+    dia.add_argument("--seed", type=int, default=0)
+    dia.add_argument("--sep", default=",", help="CSV field separator")
+    dia.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    dia.set_defaults(func=cmd_diagnose)
 
     drf = sub.add_parser("drift", help="population drift(t) of a new specimen from a hierarchical fit; optimal voltage")
     drf.add_argument("fit_dir", help="output folder of 'fsrbayes fit --hierarchical'")

@@ -6,7 +6,7 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_json_atomic"]
+__all__ = ["atomic_path", "json_ready", "write_json_atomic"]
 
 
 @contextmanager
@@ -35,3 +35,19 @@ def write_json_atomic(path, payload):
     """Write ``payload`` as indented JSON to ``path`` atomically."""
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(payload, indent=2, allow_nan=False) + "\n")
+
+
+def json_ready(value):
+    """A copy of nested dicts/lists with NaN and inf as None and numpy scalars as Python numbers
+    (JSON has no NaN)."""
+    import math
+
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return value

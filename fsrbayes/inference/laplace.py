@@ -69,6 +69,38 @@ class LaplaceFit:
         """n draws of the Gaussian approximation in u-space, shape (n, ndim)."""
         return self.u_map + rng.standard_normal((n, self.posterior.ndim)) @ self.root_cov.T
 
+    def local_draws(self, rng, n, *, steps=400, n_walkers=None):
+        """n posterior draws (physical units) from a short ensemble run started at the mode.
+
+        The Gaussian of :meth:`draws` is a poor posterior where the creep posterior bends or is
+        bounded only by its prior: on a 9-test specimen its draws put the model current 0.7 σ
+        above the data on average, while the mode fits them without bias. Walkers started in a
+        small ball around the mode (a tenth of the Laplace spread) and moved ``steps`` times
+        with emcee's stretch and differential-evolution moves stay on the posterior's ridge;
+        the second half of the run is thinned to n draws. This is local exploration for
+        predictive checks, not a converged run (use :func:`fsrbayes.fit` for that).
+
+        Returns
+        -------
+        ndarray, shape (n, ndim)
+        """
+        import emcee
+
+        from .sampling import _moves
+
+        d = self.posterior.ndim
+        n_walkers = n_walkers or max(32, 2 * d + 2)
+        start = self.u_map + 0.1 * rng.standard_normal((n_walkers, d)) @ self.root_cov.T
+        bad = ~np.isfinite(self.posterior(start))
+        start[bad] = self.u_map + 1e-4 * rng.standard_normal((int(bad.sum()), d))
+        sampler = emcee.EnsembleSampler(n_walkers, d, self.posterior, vectorize=True, moves=_moves(0.2))
+        sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
+        sampler.run_mcmc(start, steps)
+        kept = sampler.get_chain(discard=steps // 2, flat=True)
+        index = np.linspace(0, len(kept) - 1, n).round().astype(int)
+        x, _ = self.posterior.prior.from_unconstrained(kept[index])
+        return x
+
     def draws(self, rng, n):
         """n draws in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
         out = np.empty((0, self.posterior.ndim))

@@ -1,0 +1,239 @@
+"""Posterior predictive checks of a creep fit on statistics that carry physics.
+
+For posterior draws θ_s of one specimen, replicated data y_rep,s = log I(θ_s) + noise are drawn
+from the likelihood, and each statistic T is computed on the observed and on the replicated
+data. The statistics (Gelman, Meng & Stern 1996 call those that also depend on θ "realised
+discrepancies"):
+
+| name | per | what it measures |
+|---|---|---|
+| ``drift_3600`` | test | drift(3600 s) in % (eq. 22), by the same interpolation as the observed one |
+| ``early_late`` | test | mean standardised residual of the later half of the samples minus that of the earlier half: a creep curve of the wrong shape |
+| ``logtime_trend`` | test | slope of the standardised residuals over ln t: kinetics that are not Burgers-like |
+| ``stress_trend`` | specimen | slope of the drift(3600 s) misfit over ln σ: drift that grows with stress differently than the model says (the paper's area-creep puzzle) |
+| ``voltage_trend`` | specimen | slope of the drift(3600 s) misfit over ln V_FSR: voltage-activated effects |
+
+Two-sided posterior predictive p-values, p ≈ 2·min(P(T_rep ≥ T_obs), P(T_rep ≤ T_obs)) (with a
+normal tail, see :func:`two_sided_p`). They are conservative (under an adequate model they crowd towards 0.5 instead of spreading
+uniformly), so a small one is a real signal and a moderate one is no clearance.
+
+The headline gap is the standardised misfit of drift(3600 s): per test
+z = (D_obs − mean D_rep)/sd D_rep, and gap = √(mean z²) over tests. Measurement noise is in
+D_rep, so an adequate model gives a gap near 1 or below; a gap of 3 means the model misses the
+hour's drift by three predictive standard deviations on a typical test.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import special
+
+__all__ = ["DRIFT_TIME_S", "TEST_STATISTICS", "SPECIMEN_STATISTICS", "SpecimenChecks", "predictive_checks",
+           "gap", "two_sided_p"]
+
+DRIFT_TIME_S = 3600.0
+"""The time of the headline drift (the paper's one-hour creep tests)."""
+TEST_STATISTICS = ("drift_3600", "early_late", "logtime_trend")
+SPECIMEN_STATISTICS = ("stress_trend", "voltage_trend")
+
+
+def two_sided_p(observed, replicated):
+    """Two-sided predictive p-value of each observed statistic against its replicates (axis 0).
+
+    The difference T_rep − T_obs over the draws is taken as normal, p = 2·Φ(−|mean|/sd): the
+    statistics here are sums over many samples, and the normal tail resolves the small
+    p-values a Bonferroni correction asks for, which S draws alone cannot (their smallest
+    empirical p is ~1/S).
+
+    Parameters
+    ----------
+    observed, replicated : ndarray, shape (S, ...)
+        The statistic on the observed data and on replicated data, draw by draw.
+
+    Returns
+    -------
+    ndarray
+        Shape ``(...)``; NaN where the statistic is undefined.
+    """
+    difference = np.asarray(replicated, float) - np.asarray(observed, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        score = np.abs(difference.mean(axis=0)) / difference.std(axis=0, ddof=1)
+    return np.where(np.isfinite(score), 2.0 * special.ndtr(-score), np.nan)
+
+
+def _interpolation(time_s, mask, at_s):
+    """Index j and weight w per test so that f(at) ≈ (1 − w)·f[j] + w·f[j + 1]; at = min(at_s, last time)."""
+    n_tests = time_s.shape[0]
+    j = np.zeros(n_tests, dtype=int)
+    w = np.zeros(n_tests)
+    at = np.empty(n_tests)
+    for i in range(n_tests):
+        t = time_s[i][mask[i]]
+        at[i] = min(at_s, t[-1])
+        k = int(np.clip(np.searchsorted(t, at[i], side="right") - 1, 0, t.size - 2))
+        j[i], w[i] = k, (at[i] - t[k]) / (t[k + 1] - t[k])
+    return j, w, at
+
+
+def _residual_weights(time_s, mask):
+    """Per test, weight vectors a (C, T) so that a·r gives the early/late difference and the ln t slope."""
+    early_late = np.zeros(time_s.shape)
+    slope = np.zeros(time_s.shape)
+    for i in range(time_s.shape[0]):
+        index = np.flatnonzero(mask[i] & (time_s[i] > 0))
+        if index.size < 4:
+            early_late[i], slope[i] = np.nan, np.nan
+            continue
+        half = index.size // 2
+        early_late[i, index[:half]] = -1.0 / half
+        early_late[i, index[half:]] = 1.0 / (index.size - half)
+        log_t = np.log(time_s[i, index])
+        centred = log_t - log_t.mean()
+        slope[i, index] = centred / np.sum(centred**2)
+    return early_late, slope
+
+
+def _slope_over(values, covariate):
+    """OLS slope of values (S, C) over a covariate (C,) with intercept; NaN if the covariate is constant."""
+    centred = covariate - covariate.mean()
+    denominator = np.sum(centred**2)
+    if denominator <= 1e-12 * max(1.0, np.sum(covariate**2)):
+        return np.full(values.shape[0], np.nan)
+    return (values - values.mean(axis=1, keepdims=True)) @ centred / denominator
+
+
+@dataclass
+class SpecimenChecks:
+    """Posterior predictive checks of one specimen's fit.
+
+    Attributes
+    ----------
+    specimen, sensor, model : str
+    test_keys : tuple
+        (specimen, voltage_V, stress_Pa, test) per test.
+    voltage_V, stress_Pa : ndarray, shape (C,)
+    drift_time_s : ndarray, shape (C,)
+        Where drift is evaluated: 3600 s, or a shorter test's last sample.
+    observed_drift : ndarray, shape (C,)
+        Measured drift in %.
+    replicated_drift : ndarray, shape (S, C)
+        Posterior predictive drift in % (model and measurement noise).
+    model_drift : ndarray, shape (S, C)
+        Noiseless model drift in % per draw.
+    p_values : dict
+        Statistic → p-values, shape (C,) for the per-test statistics, scalar for the trends.
+    observed, replicated : dict
+        Statistic → its values on the observed data (S, …) and on the replicates (S, …).
+    times_s : ndarray, shape (C, T)
+    residual_observed : ndarray, shape (C, T)
+        Posterior-mean standardised residual (y − log I(θ))/σ of every sample (NaN where padded).
+    draws : ndarray, shape (S, ndim)
+        The posterior draws used (those inside the model's domain); columns as ``names``.
+    names : tuple of str
+    """
+
+    specimen: str
+    sensor: str
+    model: str
+    test_keys: tuple
+    voltage_V: np.ndarray
+    stress_Pa: np.ndarray
+    drift_time_s: np.ndarray
+    observed_drift: np.ndarray
+    replicated_drift: np.ndarray
+    model_drift: np.ndarray
+    p_values: dict
+    observed: dict
+    replicated: dict
+    times_s: np.ndarray
+    residual_observed: np.ndarray
+    draws: np.ndarray = None
+    names: tuple = ()
+
+    @property
+    def z(self):
+        """Standardised misfit of drift(3600 s) per test, (D_obs − mean D_rep)/sd D_rep."""
+        return (self.observed_drift - self.replicated_drift.mean(axis=0)) / self.replicated_drift.std(axis=0, ddof=1)
+
+    def predicted_drift(self):
+        """Posterior predictive q05, q50, q95 of drift(3600 s) per test, shape (3, C)."""
+        return np.quantile(self.replicated_drift, [0.05, 0.5, 0.95], axis=0)
+
+
+def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
+    """Posterior predictive checks of one specimen.
+
+    Parameters
+    ----------
+    posterior : fsrbayes.inference.posterior.LogPosterior
+        The fitted model and its data.
+    draws : ndarray, shape (S, ndim)
+        Posterior draws in physical units (S ≥ 20); draws outside the model's domain are dropped.
+    rng : numpy.random.Generator
+    at_s : float
+        Time of the drift statistic.
+
+    Returns
+    -------
+    SpecimenChecks
+    """
+    data = posterior.data
+    log_mu = posterior.log_model_current(draws)
+    keep = np.all(np.isfinite(log_mu[:, data.mask]), axis=1)
+    if keep.sum() < 20:
+        raise ValueError(f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside the "
+                         f"model's domain; need at least 20 for predictive checks")
+    draws, log_mu = draws[keep], log_mu[keep]
+    params = posterior.parameters(draws)
+    sigma = params["sigma_rel"][:, None, None]
+    noise = rng.standard_normal(log_mu.shape)
+    if posterior.likelihood == "student":
+        nu = params["nu"][:, None, None]
+        noise = noise / np.sqrt(rng.chisquare(nu, size=log_mu.shape) / nu)
+    y_rep = log_mu + sigma * noise
+    y_obs = np.broadcast_to(data.log_current, log_mu.shape)
+
+    j, w, at = _interpolation(data.time_s, data.mask, at_s)
+    rows = np.arange(data.n_tests)
+
+    def drift(log_current):
+        current = np.exp(log_current)
+        late = (1.0 - w) * current[..., rows, j] + w * current[..., rows, j + 1]
+        return 100.0 * (late / current[..., 0] - 1.0)
+
+    early_late_w, slope_w = _residual_weights(data.time_s, data.mask)
+    observed, replicated = {}, {}
+    d_obs, d_rep, d_model = drift(y_obs), drift(y_rep), drift(log_mu)
+    observed["drift_3600"], replicated["drift_3600"] = d_obs, d_rep
+    with np.errstate(invalid="ignore"):
+        r_obs, r_rep = (y_obs - log_mu) / sigma, (y_rep - log_mu) / sigma
+        for name, weights in (("early_late", early_late_w), ("logtime_trend", slope_w)):
+            observed[name] = np.einsum("sct,ct->sc", np.where(data.mask, r_obs, 0.0), np.nan_to_num(weights))
+            replicated[name] = np.einsum("sct,ct->sc", np.where(data.mask, r_rep, 0.0), np.nan_to_num(weights))
+            undefined = np.isnan(weights[:, 0])
+            observed[name][:, undefined] = np.nan
+            replicated[name][:, undefined] = np.nan
+    for name, covariate in (("stress_trend", np.log(data.stress_Pa)), ("voltage_trend", np.log(data.voltage_V))):
+        observed[name] = _slope_over(d_obs - d_model, covariate)
+        replicated[name] = _slope_over(d_rep - d_model, covariate)
+    p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
+    residual = np.where(data.mask, r_obs.mean(axis=0), np.nan)
+    return SpecimenChecks(data.specimen, data.sensor, posterior.model, data.test_keys, data.voltage_V.copy(),
+                          data.stress_Pa.copy(), at, d_obs[0].copy(), d_rep, d_model, p_values, observed, replicated,
+                          data.time_s.copy(), residual, draws, tuple(posterior.names))
+
+
+def gap(checks):
+    """The headline gap over specimens: √(mean z²) of the drift(3600 s) misfit over all tests.
+
+    Parameters
+    ----------
+    checks : sequence of SpecimenChecks
+
+    Returns
+    -------
+    float
+    """
+    z = np.concatenate([c.z for c in checks])
+    z = z[np.isfinite(z)]
+    return float(np.sqrt(np.mean(z**2))) if z.size else float("nan")

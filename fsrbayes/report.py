@@ -1,0 +1,176 @@
+"""Reports: the narrative, figures and tables of a run, as Markdown and self-contained HTML.
+
+The HTML embeds its figures (base64 PNG), so one file can be mailed or archived. Everything is
+written atomically into the report folder. Nothing below the top layer imports this module.
+"""
+
+import base64
+import html
+import json
+from pathlib import Path
+
+from . import plots
+from .utils import atomic_path, json_ready
+
+__all__ = ["diagnosis_narrative", "write_diagnosis_report", "markdown_to_html"]
+
+_CSS = """body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;line-height:1.45;color:#222}
+table{border-collapse:collapse;margin:1em 0;font-size:0.92em}td,th{border:1px solid #bbb;padding:0.25em 0.6em;text-align:right}
+th{background:#eee}td:first-child,th:first-child{text-align:left}img{max-width:100%;border:1px solid #ddd}
+code{background:#f3f3f3;padding:0 0.2em}h1{font-size:1.6em}h2{font-size:1.25em;margin-top:1.6em}"""
+
+
+def _where_worst(rows, attribute, unit, scale=1.0):
+    """A phrase for the level with the largest mean |z| (over- or under-prediction)."""
+    if not rows:
+        return ""
+    worst = max(rows, key=lambda r: abs(r["mean_z"]))
+    way = "over-predicts" if worst["mean_misfit_pct"] < 0 else "under-predicts"
+    return (f"{way} drift(3600 s) most at {worst[attribute] * scale:g} {unit} (observed − predicted "
+            f"{worst['mean_misfit_pct']:+.2f} percentage points, mean z = {worst['mean_z']:+.1f})")
+
+
+def _parameter_text(parameters):
+    return ", ".join(f"{name} = {v['median']:.3g} (5–95 %: {v['q05']:.3g} … {v['q95']:.3g})"
+                     for name, v in parameters.items())
+
+
+def diagnosis_narrative(result):
+    """Markdown text of a diagnosis (``Diagnosis.as_dict()``), without figures.
+
+    Returns
+    -------
+    str
+    """
+    n_spec = len(result["specimens"])
+    lines = [f"# fsrbayes diagnose: {result['verdict']}" + (f" — {result['effect']}" if result["effect"] else ""), ""]
+    voltage = _where_worst(result["misfit_by_voltage_before"], "voltage_V", "V")
+    stress = _where_worst(result["misfit_by_stress_before"], "stress_Pa", "kPa", 1e-3)
+    lines.append(f"The base model (`{result['base']}`), fitted to {n_spec} specimen(s) and {result['n_tests']} creep "
+                 f"tests, misses drift(3600 s) by **gap_before = {result['gap_before']:.2f}** ({result['gap_metric']}). "
+                 f"Across voltages it {voltage}; across stresses it {stress}.")
+    failed = result["findings_before"]["failed"]
+    lines += ["", (f"Posterior predictive checks failing at p < {result['findings_before']['bonferroni_level']:.2g} "
+                   f"(0.01 after a Bonferroni correction over {result['findings_before']['n_checks']} checks): "
+                   f"{len(failed)}.")]
+    for f in sorted(failed, key=lambda f: f["p_value"])[:8]:
+        where = f" at {f['voltage_V']:g} V, {f['stress_Pa'] / 1e3:.0f} kPa" if "voltage_V" in f else ""
+        lines.append(f"- `{f['statistic']}` of {f['specimen']}{where}: observed {f['observed']:.3g}, "
+                     f"predicted {f['predicted']:.3g} (p = {f['p_value']:.1e})")
+    best = result["candidates"][0]
+    lines.append("")
+    if result["effect"]:
+        lines.append(f"Adding **{best['effect']}** ({best['summary']}) with {_parameter_text(best['parameters'])} "
+                     f"raises the evidence by ln B = {best['log_bf']:.1f} summed over {n_spec} specimen(s) "
+                     f"({best['specimens_favouring']} of {n_spec} favour it; the runner-up is "
+                     f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
+                     f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
+                     f"({100 * best['gap_closed']:.0f} % closed).")
+    else:
+        lines.append(f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base model "
+                     f"(best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is **adequate** for "
+                     f"these data.")
+    lines += ["", "## Candidates", "", ("| rank | effect | ln B over base | specimens favouring | gap after | "
+                                        "gap closed | parameters |"), "|---|---|---|---|---|---|---|"]
+    for c in result["candidates"]:
+        lines.append(f"| {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | {c['specimens_favouring']}/{n_spec} | "
+                     f"{c['gap_after']:.2f} | {100 * c['gap_closed']:.0f} % | {_parameter_text(c['parameters'])} |")
+    lines += ["", (f"Evidence: {result['evidence_method']}. Threshold to name an effect: ln B ≥ "
+                   f"{result['threshold_log_bf']:g}. Run time {result['seconds']:.0f} s.")]
+    return "\n".join(lines) + "\n"
+
+
+def _inline(text):
+    """Markdown inline → HTML: `code` and **bold** (text already escaped)."""
+    parts = text.split("`")
+    out = []
+    for k, part in enumerate(parts):
+        if k % 2:
+            out.append(f"<code>{part}</code>")
+        else:
+            bold = part.split("**")
+            out.append("".join(f"<b>{b}</b>" if j % 2 else b for j, b in enumerate(bold)))
+    return "".join(out)
+
+
+def markdown_to_html(markdown, title="fsrbayes report"):
+    """The small Markdown subset the reports use (#/## headings, paragraphs, lists, tables,
+    images with data URIs or files, `code`, **bold**) → a standalone HTML page."""
+    body, in_list = [], False
+    lines = markdown.splitlines()
+    k = 0
+    while k < len(lines):
+        line = lines[k]
+        if line.startswith("|"):
+            rows = []
+            while k < len(lines) and lines[k].startswith("|"):
+                if not set(lines[k]) <= set("|-: "):
+                    rows.append([html.escape(c.strip()) for c in lines[k].strip("|").split("|")])
+                k += 1
+            head = "".join(f"<th>{_inline(c)}</th>" for c in rows[0])
+            cells = "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows[1:])
+            body.append(f"<table><tr>{head}</tr>{cells}</table>")
+            continue
+        if in_list and not line.startswith("- "):
+            body.append("</ul>")
+            in_list = False
+        if line.startswith("## "):
+            body.append(f"<h2>{_inline(html.escape(line[3:]))}</h2>")
+        elif line.startswith("# "):
+            body.append(f"<h1>{_inline(html.escape(line[2:]))}</h1>")
+        elif line.startswith("!["):
+            alt, _, src = line[2:].partition("](")
+            body.append(f'<p><img alt="{html.escape(alt)}" src="{html.escape(src.rstrip(")"), quote=True)}"></p>')
+        elif line.startswith("- "):
+            if not in_list:
+                body.append("<ul>")
+                in_list = True
+            body.append(f"<li>{_inline(html.escape(line[2:]))}</li>")
+        elif line.strip():
+            body.append(f"<p>{_inline(html.escape(line))}</p>")
+        k += 1
+    if in_list:
+        body.append("</ul>")
+    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
+            f"<style>{_CSS}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
+
+
+FIGURES = (("drift_before_after.png", "Observed and predicted drift(3600 s) per test", plots.diagnosis_drift_plot),
+           ("misfit_by_level.png", "Standardised drift misfit per voltage and stress", plots.diagnosis_misfit_plot),
+           ("residuals_over_time.png", "Residuals over time", plots.diagnosis_residual_plot))
+
+
+def write_diagnosis_report(diagnosis, folder):
+    """Write ``report.md``, ``report.html`` (figures embedded), the figures and ``diagnosis.json``.
+
+    Parameters
+    ----------
+    diagnosis : fsrbayes.discrepancy.Diagnosis
+    folder : path-like
+        Created if needed.
+
+    Returns
+    -------
+    pathlib.Path
+        The HTML report.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    result = diagnosis.as_dict()
+    text = diagnosis_narrative(result)
+    md_figures, html_figures = ["", "## Figures", ""], ["", "## Figures", ""]
+    for name, caption, make in FIGURES:
+        fig, _ = make(diagnosis)
+        plots.save_figure(fig, folder / name)
+        encoded = base64.b64encode((folder / name).read_bytes()).decode("ascii")
+        md_figures.append(f"![{caption}]({name})")
+        html_figures.append(f"![{caption}](data:image/png;base64,{encoded})")
+    with atomic_path(folder / "diagnosis.json") as tmp:
+        tmp.write_text(json.dumps(json_ready(result), indent=2, allow_nan=False) + "\n")
+    with atomic_path(folder / "report.md") as tmp:
+        tmp.write_text(text + "\n".join(md_figures) + "\n")
+    page = folder / "report.html"
+    with atomic_path(page) as tmp:
+        tmp.write_text(markdown_to_html(text + "\n".join(html_figures), title="fsrbayes diagnose"))
+    return page
+

@@ -1,0 +1,73 @@
+"""The discrepancy workflow: checks are calibrated at the truth, hidden effects are named, the gap
+shrinks, and data without an effect are called adequate. The full matrix is in
+``test_diagnose_matrix.py`` (slow)."""
+
+import numpy as np
+import pytest
+
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.data.synthetic import simulate
+from fsrbayes.discrepancy import diagnose, predictive_checks
+from fsrbayes.discrepancy.checks import gap, two_sided_p
+from fsrbayes.inference.fit import _select
+from fsrbayes.inference.posterior import LogPosterior
+
+A201_VOLTAGES = (0.5, 2.0, 4.5)
+
+
+def test_two_sided_p_is_uniform_when_observed_and_replicated_share_a_distribution():
+    rng = np.random.default_rng(0)
+    observed = rng.normal(size=(1, 4000)).repeat(400, axis=0)
+    replicated = rng.normal(size=(400, 4000))
+    p = two_sided_p(observed, replicated)
+    counts = np.histogram(p, bins=10, range=(0, 1))[0]
+    assert np.all(np.abs(counts - 400) < 5 * np.sqrt(400))  # each decile within 5 binomial sd
+    far = two_sided_p(np.full((400, 1), 6.0), rng.normal(size=(400, 1)))
+    assert far[0] < 1e-6  # the normal tail resolves what 400 draws alone cannot
+
+
+def test_checks_at_the_true_parameters_give_a_gap_near_one():
+    """With the posterior a point mass at the truth, z of drift(3600 s) is N(0, 1): gap² ~ chi²_n / n."""
+    sim = simulate("a201", n_specimens=6, voltages=A201_VOLTAGES, samples=21, seed=11)
+    sensor = load_sensor("a201")
+    checks = []
+    for specimen, entry in sim.truth["specimens"].items():
+        posterior = LogPosterior.for_sensor(_select(sim.data, specimen), sensor, model="burgers")
+        truth = np.array([entry["params"][name] for name in posterior.names])
+        checks.append(predictive_checks(posterior, np.tile(truth, (400, 1)), np.random.default_rng(1)))
+    n = sum(len(c.z) for c in checks)
+    assert n == 54
+    assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(2.0 / n)
+    p = np.concatenate([c.p_values["early_late"] for c in checks])
+    assert np.mean(p < 0.05) < 0.2
+
+
+def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
+    sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, effects=["area-creep=-30"], seed=3)
+    result = diagnose(sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=1)
+    assert result.verdict == "missing-effect" and result.effect == "area-creep"
+    assert result.gap_after <= 0.5 * result.gap_before
+    best = result.candidates[0]
+    assert best["log_bf"] >= result.threshold and best["margin_over_next"] > 10
+    assert best["parameters"]["area_creep"]["q05"] < -30 < best["parameters"]["area_creep"]["q95"]
+    out = result.as_dict()
+    for key in ("verdict", "effect", "gap_before", "gap_after", "gap_metric", "candidates"):
+        assert key in out
+
+
+def test_diagnose_calls_burgers_data_adequate():
+    sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, seed=4)
+    result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=1)
+    assert result.verdict == "adequate" and result.effect is None
+    assert result.gap_after == result.gap_before < 1.5
+    assert all(c["log_bf"] < 0 for c in result.candidates)  # the Occam factor of unneeded parameters
+
+
+def test_diagnose_rejects_bad_arguments():
+    sim = simulate("a201", n_specimens=1, voltages=(1.0,), samples=5, seed=0)
+    with pytest.raises(ValueError, match="unknown effect"):
+        diagnose(sim.data, effects=("area-crepe",))
+    with pytest.raises(ValueError, match="threshold must be > 0"):
+        diagnose(sim.data, threshold=0)
+    with pytest.raises(ValueError, match="no candidate effect"):
+        diagnose(sim.data, base="burgers+area-creep", effects=("area-creep",))
