@@ -1,6 +1,6 @@
-"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [hierarchical]``.
+"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [hierarchical] [diagnose]``.
 
-Without names all run; ``fit`` (a full converged Burgers fit), ``evidence`` and ``hierarchical`` take minutes.
+Without names all run; ``fit`` (a full converged Burgers fit), ``evidence``, ``hierarchical`` and ``diagnose`` take minutes.
 """
 
 import os
@@ -12,7 +12,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from benchmarks import csv_read, evidence, fit, hierarchical, likelihood, solver  # noqa: E402
+from benchmarks import csv_read, diagnose, evidence, fit, hierarchical, likelihood, solver  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 BENCHMARKS = {
@@ -22,6 +22,7 @@ BENCHMARKS = {
     "fit": lambda: fit.report(fit.run()),
     "evidence": lambda: evidence.report(evidence.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
+    "diagnose": lambda: diagnose.report(diagnose.run()),
 }
 
 

@@ -1,0 +1,29 @@
+"""Wall time of ``fsrbayes.diagnose`` on the issue's design: 6 specimens x 9 creep tests x 61 samples.
+
+Six A201 specimens from the virtual bench (3 forces x 0.5/2/4.5 V, 61 log-spaced samples over
+the hour) with a contact-creep hidden (contact_creep = 40); the base Burgers model and the five
+catalogue extensions are fitted on every specimen (6 x 6 Laplace fits and short ensemble runs
+for the predictive checks), on 2 processes. Target: <= 15 minutes.
+"""
+
+import time
+
+from fsrbayes.data import synthetic
+from fsrbayes.discrepancy import diagnose
+from fsrbayes.discrepancy.study import STUDY_VOLTAGES
+
+
+def run(processes=2):
+    sim = synthetic.simulate("a201", n_specimens=6, voltages=STUDY_VOLTAGES["a201"], samples=61,
+                             effects=["contact-creep=contact_creep=40"], seed=17)
+    start = time.perf_counter()
+    result = diagnose(sim.data, processes=processes, seed=1)
+    return {"seconds": time.perf_counter() - start, "verdict": result.verdict, "effect": result.effect,
+            "gap_before": result.gap_before, "gap_after": result.gap_after, "processes": processes,
+            "log_bf": {c["effect"]: c["log_bf"] for c in result.candidates}}
+
+
+def report(r):
+    return (f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: {r['seconds']:.0f} s "
+            f"(target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap {r['gap_before']:.2f} -> "
+            f"{r['gap_after']:.2f}; ln B " + ", ".join(f"{k} {v:.0f}" for k, v in r["log_bf"].items()))
