@@ -55,8 +55,8 @@ def diagnosis_narrative(result):
                    f"{len(failed)}.")]
     for f in sorted(failed, key=lambda f: f["p_value"])[:8]:
         where = f" at {f['voltage_V']:g} V, {f['stress_Pa'] / 1e3:.0f} kPa" if "voltage_V" in f else ""
-        lines.append(f"- `{f['statistic']}` of {f['specimen']}{where}: observed {f['observed']:.3g}, "
-                     f"predicted {f['predicted']:.3g} (p = {f['p_value']:.1e})")
+        values = f", observed {f['observed']:.3g}, predicted {f['predicted']:.3g}" if "observed" in f else ""
+        lines.append(f"- `{f['statistic']}` of {f['specimen']}{where}{values} (p = {f['p_value']:.1e})")
     best = result["candidates"][0]
     lines.append("")
     if result["effect"]:

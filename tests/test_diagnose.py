@@ -40,6 +40,10 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
     assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(2.0 / n)
     p = np.concatenate([c.p_values["early_late"] for c in checks])
     assert np.mean(p < 0.05) < 0.2
+    pit_p = np.concatenate([c.p_values["loo_pit"] for c in checks])
+    assert np.mean(pit_p < 0.1) < 0.1 + 3 * np.sqrt(0.09 / n)  # calibrated: uniform at the truth
+    pit = np.concatenate([c.loo_pit[np.isfinite(c.loo_pit)] for c in checks])
+    assert abs(np.mean(pit) - 0.5) < 4 * np.sqrt(1 / 12 / pit.size)
 
 
 def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():

@@ -106,12 +106,13 @@ def _findings(checks, alpha=0.01):
     found = []
     for c in checks:
         z = c.z
-        for name in TEST_STATISTICS:
+        for name in (*TEST_STATISTICS, "loo_pit"):
             for i in np.flatnonzero(c.p_values[name] < level):
                 entry = {"statistic": name, "specimen": c.specimen, "voltage_V": float(c.voltage_V[i]),
-                         "stress_Pa": float(c.stress_Pa[i]), "p_value": float(c.p_values[name][i]),
-                         "observed": float(np.mean(c.observed[name][:, i])),
-                         "predicted": float(np.mean(c.replicated[name][:, i]))}
+                         "stress_Pa": float(c.stress_Pa[i]), "p_value": float(c.p_values[name][i])}
+                if name in c.observed:
+                    entry["observed"] = float(np.mean(c.observed[name][:, i]))
+                    entry["predicted"] = float(np.mean(c.replicated[name][:, i]))
                 if name == "drift_3600":
                     entry["z"] = float(z[i])
                 found.append(entry)
@@ -121,7 +122,8 @@ def _findings(checks, alpha=0.01):
                 found.append({"statistic": name, "specimen": c.specimen, "p_value": p,
                               "observed": float(np.nanmean(c.observed[name])),
                               "predicted": float(np.nanmean(c.replicated[name]))})
-    return {"alpha": alpha, "n_checks": int(n_checks), "bonferroni_level": level, "failed": found}
+    return {"alpha": alpha, "n_checks": int(n_checks), "bonferroni_level": level, "failed": found,
+            "loo_pit_max_pareto_k": float(max(c.max_pareto_k for c in checks))}
 
 
 def _misfit_by(checks, attribute):
