@@ -1,0 +1,191 @@
+"""Commands that sample posteriors: fit (per specimen or hierarchical) and drift (population predictive)."""
+
+import json
+import os
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..data import csvio
+from ..utils import write_json_atomic
+from .common import UsageError, floats, install_sigterm_handler, writable
+
+CHECKPOINT = "checkpoint.npz"
+
+
+def cmd_fit(args):
+    """Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen."""
+    from ..inference.fit import fit
+    from ..inference.output import save_fit
+    from ..inference.sampling import ConvergenceWarning, SamplerSettings
+
+    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    if args.specimen is not None and args.specimen not in data.specimens:
+        raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
+    out = Path(args.out)
+    writable(out)
+    if args.processes is not None and args.processes < 1:
+        raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
+    settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
+                               max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
+                               processes=processes)
+    if args.hierarchical:
+        return _fit_hierarchical(args, data, settings, out)
+    specimens = [args.specimen] if args.specimen else data.specimens
+    install_sigterm_handler()
+    summaries = {}
+    for specimen in specimens:
+        folder = out if len(specimens) == 1 else out / specimen
+        folder.mkdir(parents=True, exist_ok=True)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ConvergenceWarning)
+            result = fit(data, specimen, model=args.model, tunneling=args.tunneling, likelihood=args.likelihood,
+                         rng=args.seed, settings=settings, checkpoint=folder / CHECKPOINT, resume=args.resume,
+                         progress=args.progress)
+        for w in caught:
+            if issubclass(w.category, ConvergenceWarning):
+                print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
+        summaries[specimen] = save_fit(result, folder)
+        if args.plots:
+            _fit_plots(folder)
+        state = "converged" if result.converged else "NOT converged"
+        print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
+    if len(specimens) > 1:
+        write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
+                                                 "specimens": summaries})
+    return 0
+
+
+def _fit_hierarchical(args, data, settings, out):
+    """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
+    from dataclasses import replace
+
+    from ..inference.hierarchical import fit_specimens, joint, two_stage
+    from ..inference.output import save_fit, save_population
+    from ..inference.predictive import ForwardTemplate
+    from ..inference.sampling import ConvergenceWarning
+
+    if args.specimen is not None:
+        raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
+    install_sigterm_handler()
+    overall = {"converged": True, "sensors": {}}
+    for sensor in data.sensors:
+        part = data.select(sensor=sensor)
+        if len(part.specimens) < 2:
+            raise UsageError(f"--hierarchical needs at least 2 specimens of sensor {sensor!r} in {args.data}, "
+                             f"got {len(part.specimens)}")
+        folder = out if len(data.sensors) == 1 else out / sensor
+        folder.mkdir(parents=True, exist_ok=True)
+        print(f"{sensor}: fitting {len(part.specimens)} specimens ({args.processes or os.cpu_count()} processes)",
+              flush=True)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fits = fit_specimens(part, settings=settings, processes=args.processes, scheduler=args.scheduler,
+                                 model=args.model, tunneling=args.tunneling, likelihood=args.likelihood, rng=args.seed)
+            summaries = {}
+            for specimen, result in fits.items():
+                (folder / specimen).mkdir(exist_ok=True)
+                summaries[specimen] = save_fit(result, folder / specimen)
+                print(f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
+                      f"{result.run.report.worst()}", flush=True)
+            hyper_settings = replace(settings, processes=min(settings.n_ensembles, args.processes or os.cpu_count() or 1))
+            result = two_stage(fits, settings=hyper_settings, seed=args.seed)
+            if args.route == "joint":
+                result = joint([f.posterior for f in fits.values()], result.population, settings=hyper_settings,
+                               seed=args.seed, start_from=result, labels=list(fits))
+        for w in caught:
+            if issubclass(w.category, (ConvergenceWarning, UserWarning)) and "fsrbayes" in w.category.__module__:
+                print(f"fsrbayes fit: warning: {w.message}", file=sys.stderr)
+        template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
+        observed = [t for s in summaries.values() for t in s["tests"]]
+        noise = float(np.median([s["parameters"]["sigma_rel"]["median"] for s in summaries.values()]))
+        info = save_population(result, template, observed, folder, noise_rel=noise)
+        converged = all(s["converged"] for s in summaries.values()) and info["converged"]
+        write_json_atomic(folder / "summary.json", {"converged": converged, "specimens": summaries,
+                                                    "hierarchical": info})
+        overall["converged"] &= converged
+        overall["sensors"][sensor] = str(folder)
+        print(f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
+              f"{result.run.report.worst()}; wrote {folder / 'population.nc'}")
+    return 0
+
+
+def _population_folders(fit_dir):
+    folder = Path(fit_dir)
+    if (folder / "population.nc").is_file():
+        return [folder]
+    found = sorted(p.parent for p in folder.glob("*/population.nc"))
+    if not found:
+        raise UsageError(f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out {fit_dir}' "
+                         "first")
+    return found
+
+
+def cmd_drift(args):
+    """Population predictive drift(t) of a new specimen per (voltage, stress); optimal voltage."""
+    import xarray as xr
+
+    from ..data.sensors import load_sensor
+    from ..inference.population import Population
+    from ..inference.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+
+    if args.time <= 0:
+        raise UsageError(f"--time must be > 0 s, got {args.time:g}")
+    v_range = floats(args.optimal_voltage, "optimal-voltage") if args.optimal_voltage else None
+    if v_range is not None and (len(v_range) != 2 or not 0 < v_range[0] < v_range[1]):
+        raise UsageError(f"--optimal-voltage takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.optimal_voltage!r}")
+    for path in (args.json, args.plot):
+        if path:
+            writable(Path(path).parent)
+    payload = {"time_s": args.time, "groups": [], "optimal_voltage": []}
+    figures = []
+    for folder in _population_folders(args.fit_dir):
+        tree = xr.open_datatree(folder / "population.nc", engine="h5netcdf")
+        attrs = tree.attrs
+        sensor = load_sensor(attrs["sensor"])
+        noise = json.loads(attrs["noise"])
+        template = ForwardTemplate.from_sensor(sensor, attrs["fsrbayes_model"], attrs["tunneling"],
+                                               "student" if "nu" in noise else "gaussian")
+        population = Population(template.prior, json.loads(attrs["population"]))
+        hyper = np.stack([tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1)
+        constant = {k: tree.constant_data[k].values for k in ("voltage_V", "stress_Pa", "observed_drift_3600")}
+        volts = floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
+        stresses = floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
+        specimens = new_specimens(population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed)
+        noise = float(attrs.get("measurement_noise", 0.0)) if args.as_measured else None
+        groups = drift_groups(specimens, volts, stresses, time_s=args.time, noise_rel=noise, seed=args.seed)
+        payload["groups"] += groups
+        if v_range is not None:
+            for stress in stresses:
+                best = optimal_voltage(specimens, stress, v_range, time_s=args.time)
+                payload["optimal_voltage"].append({"sensor": sensor.name, **best})
+                print(f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} V "
+                      f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there {best['drift_at_optimum']['q50']:.2f} %")
+        for g in groups:
+            q = g["new_specimen"]
+            print(f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen drift "
+                  f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % {q['q05']:.2f}..{q['q95']:.2f}")
+        figures.append((groups, constant))
+    if args.json:
+        write_json_atomic(Path(args.json), payload)
+    if args.plot:
+        from .. import plots
+
+        groups, constant = figures[0] if len(figures) == 1 else ([g for f in figures for g in f[0]], None)
+        plots.save_figure(plots.population_drift_plot(groups, constant, by=args.by)[0], Path(args.plot))
+    return 0
+
+
+def _fit_plots(folder):
+    import xarray as xr
+
+    from .. import plots
+
+    tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
+    plots.save_figure(plots.corner_plot(tree)[0], folder / "corner.png")
+    plots.save_figure(plots.band_plot(tree, "drift")[0], folder / "drift_bands.png")
+    plots.save_figure(plots.band_plot(tree, "current")[0], folder / "current_bands.png")
+    plots.save_figure(plots.drift_3600_plot(tree)[0], folder / "drift_3600.png")
