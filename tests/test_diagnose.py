@@ -8,7 +8,7 @@ import pytest
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import simulate
 from fsrbayes.discrepancy import diagnose, predictive_checks
-from fsrbayes.discrepancy.checks import gap, two_sided_p
+from fsrbayes.discrepancy.checks import drift_gap, gap, two_sided_p
 from fsrbayes.inference.fit import _select
 from fsrbayes.inference.posterior import LogPosterior
 
@@ -27,7 +27,8 @@ def test_two_sided_p_is_uniform_when_observed_and_replicated_share_a_distributio
 
 
 def test_checks_at_the_true_parameters_give_a_gap_near_one():
-    """With the posterior a point mass at the truth, z of drift(3600 s) is N(0, 1): gap² ~ chi²_n / n."""
+    """With the posterior a point mass at the truth, each z (drift(3600 s), quarter means) is N(0, 1)
+    and each test's quarter distance is chi²_4 / 4."""
     sim = simulate("a201", n_specimens=6, voltages=A201_VOLTAGES, samples=21, seed=11)
     sensor = load_sensor("a201")
     checks = []
@@ -37,7 +38,11 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
         checks.append(predictive_checks(posterior, np.tile(truth, (400, 1)), np.random.default_rng(1)))
     n = sum(len(c.z) for c in checks)
     assert n == 54
-    assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(2.0 / n)
+    assert abs(drift_gap(checks) ** 2 - 1.0) < 4 * np.sqrt(2.0 / n)
+    assert sum(np.isfinite(c.quarter_z).sum() for c in checks) == 4 * n
+    assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(0.5 / n)  # mean of n chi2_4 / 4: sd sqrt(0.5 / n)
+    p = np.concatenate([c.p_values["quarter_means"].ravel() for c in checks])
+    assert abs(np.mean(p < 0.1) - 0.1) < 4 * np.sqrt(0.09 / p.size)  # z ~ N(0, 1): p uniform
     p = np.concatenate([c.p_values["early_late"] for c in checks])
     assert np.mean(p < 0.05) < 0.2
     pit_p = np.concatenate([c.p_values["loo_pit"] for c in checks])

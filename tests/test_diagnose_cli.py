@@ -28,7 +28,8 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert "verdict: missing-effect: area-creep" in result.stdout
     payload = json.loads(out.read_text())
     assert payload["verdict"] == "missing-effect" and payload["effect"] == "area-creep"
-    assert payload["gap_after"] < payload["gap_before"] and "drift(3600 s)" in payload["gap_metric"]
+    assert payload["gap_after"] < payload["gap_before"] and "quarter" in payload["gap_metric"]
+    assert payload["drift_gap_after"] < payload["drift_gap_before"]
     assert [c["effect"] for c in payload["candidates"]] == ["area-creep", "offset-stress"]
     html = (report / "report.html").read_text()
     assert html.count("data:image/png;base64,") == 3 and "area-creep" in html

@@ -1,7 +1,7 @@
-"""The acceptance matrix of the discrepancy workflow (slow: ~30 min on 2 cores).
+"""The acceptance matrix of the discrepancy workflow (slow: ~32 min on 2 cores).
 
 Every catalogue effect hidden at two magnitudes on each sensor is named, with gap_after ≤ 0.5 ×
-gap_before; Burgers and Zener truths are called adequate; the paper's own mismatch (drift nearly
+gap_before where the base model's misfit is significant (``Case.gap_check``); Burgers and Zener truths are called adequate; the paper's own mismatch (drift nearly
 independent of stress, from a negative area creep) is diagnosed as area-creep. Results are
 printed as a table (``pytest -m slow -s``).
 """
@@ -27,7 +27,8 @@ def test_case(matrix, case):
         assert max(row["log_bf"].values()) < 10, row
     else:
         assert row["verdict"] == "missing-effect" and row["effect"] == case.expected, row
-        assert row["gap_after"] <= 0.5 * row["gap_before"], row
+        if case.gap_check:
+            assert row["gap_after"] <= 0.5 * row["gap_before"], row
 
 
 @pytest.mark.slow
