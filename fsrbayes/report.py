@@ -12,7 +12,7 @@ from pathlib import Path
 from . import plots
 from .utils import atomic_path, json_ready
 
-__all__ = ["diagnosis_narrative", "write_diagnosis_report", "markdown_to_html"]
+__all__ = ["diagnosis_narrative", "write_diagnosis_report", "markdown_to_html", "embed_figure"]
 
 _CSS = """body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;line-height:1.45;color:#222}
 table{border-collapse:collapse;margin:1em 0;font-size:0.92em}td,th{border:1px solid #bbb;padding:0.25em 0.6em;text-align:right}
@@ -47,7 +47,8 @@ def diagnosis_narrative(result):
     voltage = _where_worst(result["misfit_by_voltage_before"], "voltage_V", "V")
     stress = _where_worst(result["misfit_by_stress_before"], "stress_Pa", "kPa", 1e-3)
     lines.append(f"The base model (`{result['base']}`), fitted to {n_spec} specimen(s) and {result['n_tests']} creep "
-                 f"tests, misses drift(3600 s) by **gap_before = {result['gap_before']:.2f}** ({result['gap_metric']}). "
+                 f"tests, misses the measured creep curves by **gap_before = {result['gap_before']:.2f}** "
+                 f"({result['gap_metric']}); drift(3600 s) alone by {result['drift_gap_before']:.2f}. "
                  f"Across voltages it {voltage}; across stresses it {stress}.")
     failed = result["findings_before"]["failed"]
     lines += ["", (f"Posterior predictive checks failing at p < {result['findings_before']['bonferroni_level']:.2g} "
@@ -65,7 +66,8 @@ def diagnosis_narrative(result):
                      f"({best['specimens_favouring']} of {n_spec} favour it; the runner-up is "
                      f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
                      f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
-                     f"({100 * best['gap_closed']:.0f} % closed).")
+                     f"({100 * best['gap_closed']:.0f} % closed; drift(3600 s) misfit {result['drift_gap_before']:.2f} → "
+                     f"{result['drift_gap_after']:.2f}).")
     else:
         lines.append(f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base model "
                      f"(best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is **adequate** for "
@@ -135,6 +137,14 @@ def markdown_to_html(markdown, title="fsrbayes report"):
             f"<style>{_CSS}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
 
 
+def embed_figure(line, folder):
+    """A Markdown image line ``![caption](file.png)`` with the PNG (relative to ``folder``) inlined
+    as a data URI, so the HTML page stands alone."""
+    caption, _, name = line[2:].rstrip(")").partition("](")
+    encoded = base64.b64encode((Path(folder) / name).read_bytes()).decode("ascii")
+    return f"![{caption}](data:image/png;base64,{encoded})"
+
+
 FIGURES = (("drift_before_after.png", "Observed and predicted drift(3600 s) per test", plots.diagnosis_drift_plot),
            ("misfit_by_level.png", "Standardised drift misfit per voltage and stress", plots.diagnosis_misfit_plot),
            ("residuals_over_time.png", "Residuals over time", plots.diagnosis_residual_plot))
@@ -158,13 +168,12 @@ def write_diagnosis_report(diagnosis, folder):
     folder.mkdir(parents=True, exist_ok=True)
     result = diagnosis.as_dict()
     text = diagnosis_narrative(result)
-    md_figures, html_figures = ["", "## Figures", ""], ["", "## Figures", ""]
+    md_figures = ["", "## Figures", ""]
     for name, caption, make in FIGURES:
         fig, _ = make(diagnosis)
         plots.save_figure(fig, folder / name)
-        encoded = base64.b64encode((folder / name).read_bytes()).decode("ascii")
         md_figures.append(f"![{caption}]({name})")
-        html_figures.append(f"![{caption}](data:image/png;base64,{encoded})")
+    html_figures = [embed_figure(line, folder) if line.startswith("![") else line for line in md_figures]
     with atomic_path(folder / "diagnosis.json") as tmp:
         tmp.write_text(json.dumps(json_ready(result), indent=2, allow_nan=False) + "\n")
     with atomic_path(folder / "report.md") as tmp:

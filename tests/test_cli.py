@@ -16,7 +16,7 @@ def run(*args):
 
 
 def test_demo_prints_and_writes_the_figure7_table(tmp_path):
-    result = run("demo", "--out", str(tmp_path / "out"))
+    result = run("demo", "--figure7-only", "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     assert "15.61" in result.stdout and "tunneling='smooth'" in result.stdout
     payload = json.loads((tmp_path / "out" / "figure7_drift.json").read_text())
@@ -36,6 +36,7 @@ def test_forward_command_marks_invalid_points():
     (("forward", "--voltages", "-1"), "--voltages must be > 0 V"),
     (("forward", "--stresses", "0"), "stresses must be > 0 Pa"),
     (("demo", "--time", "-5"), "time must be >= 0"),
+    (("demo", "--processes", "0"), "--processes must be >= 1"),
 ])
 def test_bad_input_is_one_line_exit_2(args, message):
     result = run(*args)

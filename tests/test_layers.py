@@ -1,4 +1,4 @@
-"""Imports flow upwards only: physics ← data ← inference ← discrepancy ← plots ← report ← cli."""
+"""Imports flow upwards only: physics ← data ← inference ← discrepancy ← plots ← report ← demo ← cli."""
 
 import ast
 import subprocess
@@ -8,7 +8,7 @@ from pathlib import Path
 import fsrbayes
 
 PACKAGE = Path(fsrbayes.__file__).resolve().parent
-LAYERS = ["physics", "data", "inference", "discrepancy", "plots", "report", "cli"]
+LAYERS = ["physics", "data", "inference", "discrepancy", "plots", "report", "demo", "cli"]
 NEUTRAL = {"_version", "utils"}  # no dependencies of their own: importable from any layer
 HEAVY = {"emcee", "arviz", "matplotlib", "corner"}
 

@@ -22,9 +22,14 @@ def build_parser():
     parser.add_argument("--version", action="version", version=f"fsrbayes {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="the main job (for now: the paper's Figure 7 grid and the built-in data)")
-    demo.add_argument("--out", help="folder for the results (JSON)")
-    demo.add_argument("--time", type=float, default=3600.0, help="time of the drift in s (default 3600)")
+    demo = sub.add_parser("demo", help="the main job: the paper's study re-done the Bayesian way on the embedded data "
+                          "(HTML report, JSON, netCDF)")
+    demo.add_argument("--out", default="fsrbayes-demo", help="folder for the results (default fsrbayes-demo)")
+    demo.add_argument("--quick", action="store_true", help="a look in about a minute: fewer specimens and voltages")
+    demo.add_argument("--processes", type=int, help="specimen fits side by side (default: one per core)")
+    demo.add_argument("--seed", type=int, default=2017)
+    demo.add_argument("--time", type=float, default=3600.0, help="time of the Figure 7 drift table in s (default 3600)")
+    demo.add_argument("--figure7-only", action="store_true", help="only the forward-model table (seconds)")
     demo.set_defaults(func=cmd_demo)
 
     fwd = sub.add_parser("forward", help="drift table of a sensor's default model over voltages and stresses")

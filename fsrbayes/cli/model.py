@@ -1,4 +1,4 @@
-"""Commands on the forward model and data: demo, forward, simulate, check."""
+"""Commands on the forward model and data: demo (which goes on to the Bayesian study), forward, simulate, check."""
 
 from pathlib import Path
 
@@ -10,7 +10,7 @@ from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
 from ..utils import write_json_atomic
-from .common import UsageError, floats
+from .common import UsageError, floats, writable
 
 FIGURE7_STRESSES = (50e3, 100e3, 150e3, 200e3)
 FIGURE7_VOLTAGES = (0.03, 0.22, 0.4, 2.0)
@@ -32,10 +32,42 @@ def _format_table(table, voltages, stresses):
 
 
 def cmd_demo(args):
-    """Figure 7 of the paper from Table 1: drift(3600 s) over stress × voltage (A201)."""
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
+    """The main job: the paper's Figure 7 from Table 1, then the Bayesian study of the default data
+    (:func:`fsrbayes.demo.run_demo`); one HTML report, JSON and netCDF results in ``--out``."""
+    if args.time < 0:
+        raise UsageError(f"--time must be >= 0 s, got {args.time:g}")
+    if args.processes is not None and args.processes < 1:
+        raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    out = Path(args.out)
+    writable(out)
+    _figure7(args.time, out)
+    if args.figure7_only:
+        return 0
+    from ..demo import FULL, QUICK, run_demo
+
+    plan = QUICK if args.quick else FULL
+    print(f"\nThe Bayesian study ({plan.name} plan; progress below, report at the end):", flush=True)
+    results = run_demo(out, plan, processes=args.processes, seed=args.seed,
+                       echo=lambda line: print(line, flush=True))
+    print("\nSummary")
+    for sensor, e in results["evidence"].items():
+        print(f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, summed over "
+              f"{len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}")
+    for sensor, pop in results["population"].items():
+        best = ", ".join(f"{o['stress_Pa'] / 1e3:.0f} kPa: {o['median']:.2g} V" for o in pop["optimal_voltage"])
+        print(f"  {sensor}: optimal sourcing voltage (new specimen, median) {best}")
+    d = results["diagnose"]
+    print(f"  diagnose ({', '.join(d['specimens'])}): verdict {d['verdict']}"
+          + (f" ({d['effect']})" if d["effect"] else "") + f", gap {d['gap_before']:.2f}")
+    for note in results["warnings"]:
+        print(f"  note: {note}")
+    print(f"report: {results['report']} ({results['seconds']:.0f} s)")
+    return 0
+
+
+def _figure7(time_s, out):
+    """Figure 7 of the paper from Table 1: drift(3600 s) over stress × voltage (A201), printed and
+    written to ``figure7_drift.json``."""
     sensor = load_sensor("a201")
     params = dict(sensor.params)
     voltages, stresses = np.array(FIGURE7_VOLTAGES), np.array(FIGURE7_STRESSES)
@@ -43,7 +75,7 @@ def cmd_demo(args):
     print("Burgers creep k2 = 10 k1, b2 = 5000 k1, b1 = 70e3 k1; drift(3600 s) in %:\n")
     results = {}
     for law in ("paper", "smooth"):
-        table = _drift_table(params, voltages, stresses, args.time, law)
+        table = _drift_table(params, voltages, stresses, time_s, law)
         results[law] = table
         print(f"tunneling={law!r}")
         print(_format_table(table, voltages, stresses))
@@ -54,16 +86,14 @@ def cmd_demo(args):
     peak = float(paper_peak_voltage(params["s0"] * (1 - strain0), params["Va"]))
     print(f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the bulk "
           f"at 200 kPa); the smooth law holds at any voltage.")
-    observed = _default_data_drift(args.time)
-    if out is not None:
-        payload = {"sensor": sensor.name, "time_s": args.time, "voltages_V": voltages.tolist(),
-                   "stresses_Pa": stresses.tolist(),
-                   "drift_percent": {law: [[None if not np.isfinite(x) else float(x) for x in row] for row in t]
-                                     for law, t in results.items()},
-                   "default_data_observed_drift": observed}
-        write_json_atomic(out / "figure7_drift.json", payload)
-        print(f"\nwrote {out / 'figure7_drift.json'}")
-    return 0
+    observed = _default_data_drift(time_s)
+    payload = {"sensor": sensor.name, "time_s": time_s, "voltages_V": voltages.tolist(),
+               "stresses_Pa": stresses.tolist(),
+               "drift_percent": {law: [[None if not np.isfinite(x) else float(x) for x in row] for row in t]
+                                 for law, t in results.items()},
+               "default_data_observed_drift": observed}
+    write_json_atomic(out / "figure7_drift.json", payload)
+    print(f"\nwrote {out / 'figure7_drift.json'}", flush=True)
 
 
 def _default_data_drift(time_s):

@@ -25,7 +25,7 @@ import numpy as np
 
 from .fit import _polish, _root_covariance, find_map
 
-__all__ = ["LaplaceFit", "laplace_fit"]
+__all__ = ["LocalDraws", "LaplaceFit", "laplace_fit"]
 
 _HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 
@@ -173,3 +173,30 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
                 u_best, value = u_nested, v_nested
     return LaplaceFit(posterior, u_best, float(value), _root_covariance(posterior, u_best))
 
+
+
+@dataclass
+class LocalDraws:
+    """Posterior draws from :meth:`LaplaceFit.local_draws`, shaped like a fit's output for
+    :func:`fsrbayes.inference.output.to_datatree` (one "ensemble", no convergence report).
+
+    Attributes
+    ----------
+    posterior : LogPosterior
+    values : ndarray, shape (n, ndim)
+        Draws in physical units.
+    seed : int
+    method : str
+        How they were drawn (stored in the DataTree's ``convergence`` attribute).
+    """
+
+    posterior: object
+    values: np.ndarray
+    seed: int = 0
+    method: str = "short ensemble run at the Laplace mode (local exploration, not a converged fit)"
+    run: object = None
+
+    def draws(self, max_draws=2000):
+        """Draws in physical units, shape (1, D, ndim), evenly thinned to at most ``max_draws``."""
+        index = np.linspace(0, len(self.values) - 1, min(max_draws, len(self.values))).round().astype(int)
+        return self.values[index][None]

@@ -57,7 +57,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
     u = posterior.prior.to_unconstrained(flat)
     log_post = posterior(u).reshape(n_ens, n_draw)
     test_index = np.repeat(np.arange(data.n_tests), data.mask.sum(axis=1))
-    report = result.run.report
+    report = result.run.report if result.run is not None else None
     groups = {
         "posterior": {name: draws[..., i] for i, name in enumerate(posterior.names)},
         "log_likelihood": {"current": pointwise},
@@ -73,8 +73,8 @@ def to_datatree(result, *, max_draws=2000, seed=0):
     coords = {"test": np.arange(data.n_tests), "obs": np.arange(data.n_obs), "drift_time": grid}
     attrs = {"fsrbayes_model": posterior.model, "tunneling": posterior.tunneling,
              "likelihood": posterior.likelihood, "specimen": data.specimen, "sensor": data.sensor,
-             "converged": int(report.converged), "seed": result.seed,
-             "convergence": json.dumps(report.as_dict(), allow_nan=True),
+             "converged": int(report.converged) if report else 0, "seed": result.seed,
+             "convergence": json.dumps(report.as_dict() if report else {"method": result.method}, allow_nan=True),
              "fixed_parameters": json.dumps(posterior.fixed)}
     tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(attrs)
