@@ -69,6 +69,8 @@ class DemoPlan:
         Sensor → the sourcing voltages kept (default: all eleven of the paper's).
     n_draws : int
         Posterior draws per specimen.
+    n_starts, draw_steps : int
+        MAP optimisations per Laplace fit, and steps of the short ensemble run at the mode.
     hyper : SamplerSettings
         The two-stage hyper-posterior run.
     n_hyper, n_per_hyper : int
@@ -83,6 +85,8 @@ class DemoPlan:
     specimens_per_sensor: int
     voltages: dict = None
     n_draws: int = 400
+    n_starts: int = 2
+    draw_steps: int = 400
     hyper: SamplerSettings = field(default_factory=lambda: SamplerSettings(
         n_ensembles=2, chunk=500, max_steps=3000, min_steps=1000, transport_rounds=2))
     n_hyper: int = 100
@@ -95,8 +99,8 @@ FULL = DemoPlan("full", specimens_per_sensor=4, diagnose_specimens=1)
 """Four specimens per sensor at all eleven voltages (264 creep tests); diagnose (all five effects)
 on one specimen per sensor."""
 QUICK = DemoPlan("quick", specimens_per_sensor=2, voltages={"a201": (0.2, 1.0, 4.5), "fsr402": (0.2, 1.0, 5.0)},
-                 n_draws=200, hyper=SamplerSettings(n_ensembles=2, chunk=200, max_steps=400, min_steps=400,
-                                                    transport_rounds=0),
+                 n_draws=200, n_starts=1, draw_steps=200,
+                 hyper=SamplerSettings(n_ensembles=2, chunk=200, max_steps=400, min_steps=400, transport_rounds=0),
                  n_hyper=50, n_per_hyper=40, diagnose_specimens=1, diagnose_effects=("area-creep",))
 """A look in about a minute: two specimens per sensor at three voltages, one effect diagnosed."""
 
@@ -114,17 +118,17 @@ def _subset(data, plan):
 
 def _fit_specimen(job):
     """Burgers (Laplace + local draws) and Zener (Laplace) fits of one specimen."""
-    data, specimen, n_draws, seed = job
+    data, specimen, plan, seed = job
     rng = np.random.default_rng(seed)
     packed = _select(data, specimen)
     sensor = load_sensor(packed.sensor)
     started = time.perf_counter()
     with single_threaded_blas():
         burgers = LogPosterior.for_sensor(packed, sensor, model="burgers")
-        fit_burgers = laplace_fit(burgers, rng)
-        draws = fit_burgers.local_draws(rng, n_draws)
+        fit_burgers = laplace_fit(burgers, rng, n_starts=plan.n_starts)
+        draws = fit_burgers.local_draws(rng, plan.n_draws, steps=plan.draw_steps)
         zener = LogPosterior.for_sensor(packed, sensor, model="zener")
-        fit_zener = laplace_fit(zener, rng)
+        fit_zener = laplace_fit(zener, rng, n_starts=plan.n_starts)
     return {"specimen": specimen, "sensor": packed.sensor, "posterior": burgers, "draws": draws,
             "log_z": {"burgers": fit_burgers.log_evidence, "zener": fit_zener.log_evidence},
             "seconds": time.perf_counter() - started}
@@ -265,7 +269,7 @@ def _run(out, plan, processes, seed, echo):
     specimens = list(data.specimens)
     echo(f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} creep tests "
          f"({plan.name} plan): Burgers and Zener fits")
-    jobs = [(data.select(specimen=s), s, plan.n_draws, [seed, k]) for k, s in enumerate(specimens)]
+    jobs = [(data.select(specimen=s), s, plan, [seed, k]) for k, s in enumerate(specimens)]
     fits = map_jobs(_fit_specimen, jobs, processes=processes, on_result=lambda k, r: echo(
         f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): "
         f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} ({r['seconds']:.0f} s)"))
@@ -283,7 +287,8 @@ def _run(out, plan, processes, seed, echo):
         results["population"][sensor] = {k: v for k, v in pop.items() if k != "observed"}
     chosen = [s for sensor in data.sensors for s in data.select(sensor=sensor).specimens[:plan.diagnose_specimens]]
     echo(f"[{time.perf_counter() - started:5.0f} s] diagnose on {', '.join(chosen)}")
-    diagnosis = diagnose(data, effects=plan.diagnose_effects, specimens=chosen, processes=processes, seed=seed)
+    diagnosis = diagnose(data, effects=plan.diagnose_effects, specimens=chosen, n_draws=plan.n_draws,
+                         n_starts=plan.n_starts, processes=processes, seed=seed)
     page = write_diagnosis_report(diagnosis, out / "diagnose")
     summary = diagnosis.as_dict()
     results["diagnose"] = {k: summary[k] for k in ("verdict", "effect", "gap_before", "gap_after", "gap_metric",
