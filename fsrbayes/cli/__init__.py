@@ -8,9 +8,10 @@ import sys
 
 from .._version import __version__
 from ..data.sensors import available_sensors
+from ..inference.parallel import JobError
 from ..physics.effects import EFFECTS
 from .analysis import cmd_compare, cmd_diagnose
-from .common import UsageError
+from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
 from .model import cmd_check, cmd_demo, cmd_forward, cmd_simulate
 
@@ -169,6 +170,9 @@ def main(argv=None):
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         print(f"fsrbayes {args.command}: error: {message}", file=sys.stderr)
         return 2
+    except (FitFailed, JobError) as exc:
+        print(f"fsrbayes {args.command}: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"fsrbayes {args.command}: interrupted", file=sys.stderr)
         return 130

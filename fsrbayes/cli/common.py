@@ -1,14 +1,20 @@
 """Shared pieces of the command line: the usage error, argument parsing helpers, folder checks."""
 
+import shutil
 import signal
 
 import numpy as np
 
-__all__ = ["UsageError", "floats", "writable", "install_sigterm_handler"]
+__all__ = ["UsageError", "FitFailed", "floats", "writable", "fit_output_bytes", "enough_space",
+           "install_sigterm_handler"]
 
 
 class UsageError(Exception):
     """Bad input from the user: reported in one line, exit code 2."""
+
+
+class FitFailed(Exception):
+    """A computation that failed after the input was accepted (e.g. a worker died): one line, exit code 1."""
 
 
 def floats(text, name):
@@ -34,6 +40,27 @@ def writable(folder):
         probe.unlink()
     except OSError as exc:
         raise UsageError(f"--out {folder} is not writable ({exc.strerror}); choose another folder") from None
+
+
+def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_grid=61):
+    """Upper estimate of what one specimen's fit writes, in bytes.
+
+    The checkpoint holds every step of every walker (chain and log-probability, float64) up to
+    the step budget; ``posterior.nc`` holds ``max_draws`` draws of the parameters, the pointwise
+    log-likelihood and predictive current per sample, and drift(t) on ``n_grid`` times per test.
+    """
+    walkers = settings.walkers_for(ndim)
+    checkpoint = settings.n_ensembles * settings.max_steps * walkers * (ndim + 1) * 8
+    tree = max_draws * (ndim + 2 * n_samples + n_tests * (n_grid + 1)) * 8
+    return checkpoint + tree
+
+
+def enough_space(folder, need_bytes, what):
+    """UsageError before any sampling when ``folder``'s disk has less than 1.2 × ``need_bytes`` free."""
+    free = shutil.disk_usage(folder).free
+    if free < 1.2 * need_bytes:
+        raise UsageError(f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to {need_bytes / 1e6:.0f} MB "
+                         "(checkpoint and posterior); free some space or choose another folder")
 
 
 def stop_on_sigterm(signum, frame):

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..data import csvio
 from ..utils import write_json_atomic
-from .common import UsageError, floats, install_sigterm_handler, writable
+from .common import FitFailed, UsageError, enough_space, fit_output_bytes, floats, install_sigterm_handler, writable
 
 CHECKPOINT = "checkpoint.npz"
 
@@ -32,9 +32,10 @@ def cmd_fit(args):
     settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
                                max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
                                processes=processes)
+    specimens = [args.specimen] if args.specimen else data.specimens
+    _check_space(args, data, specimens, settings, out)
     if args.hierarchical:
         return _fit_hierarchical(args, data, settings, out)
-    specimens = [args.specimen] if args.specimen else data.specimens
     install_sigterm_handler()
     summaries = {}
     for specimen in specimens:
@@ -57,6 +58,21 @@ def cmd_fit(args):
         write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
                                                  "specimens": summaries})
     return 0
+
+
+def _check_space(args, data, specimens, settings, out):
+    """Refuse before sampling when the output folder's disk cannot hold the checkpoints and posteriors."""
+    from ..data.sensors import load_sensor
+    from ..inference import LogPosterior, SpecimenData
+
+    need = 0
+    for specimen in specimens:
+        part = data.select(specimen=specimen)
+        packed = SpecimenData.from_tests(part.tests)
+        ndim = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=args.model, tunneling=args.tunneling,
+                                       likelihood=args.likelihood).ndim
+        need += fit_output_bytes(part.n_rows, len(part.tests), ndim, settings)
+    enough_space(out, need, f"fitting {len(specimens)} specimen{'s' if len(specimens) != 1 else ''}")
 
 
 def _fit_hierarchical(args, data, settings, out):
@@ -85,6 +101,10 @@ def _fit_hierarchical(args, data, settings, out):
             warnings.simplefilter("always")
             fits = fit_specimens(part, settings=settings, processes=args.processes, scheduler=args.scheduler,
                                  model=args.model, tunneling=args.tunneling, likelihood=args.likelihood, rng=args.seed)
+            failed = [s for s in part.specimens if s not in fits]
+            if len(fits) < 2:
+                raise FitFailed(f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a population "
+                                f"needs 2 (failed: {', '.join(failed)})")
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)
@@ -105,11 +125,15 @@ def _fit_hierarchical(args, data, settings, out):
         info = save_population(result, template, observed, folder, noise_rel=noise)
         converged = all(s["converged"] for s in summaries.values()) and info["converged"]
         write_json_atomic(folder / "summary.json", {"converged": converged, "specimens": summaries,
-                                                    "hierarchical": info})
+                                                    "failed_specimens": failed, "hierarchical": info})
         overall["converged"] &= converged
         overall["sensors"][sensor] = str(folder)
+        overall.setdefault("failed", []).extend(failed)
         print(f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
               f"{result.run.report.worst()}; wrote {folder / 'population.nc'}")
+    if overall.get("failed"):
+        raise FitFailed(f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning above); "
+                        "the population was built from the other specimens")
     return 0
 
 

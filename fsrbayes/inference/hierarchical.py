@@ -17,14 +17,18 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .fit import find_map, fit, laplace_start
-from .parallel import map_jobs
+from .parallel import JobFailure, map_jobs
 from .population import JointTarget, Population, TwoStageTarget
 from .sampling import SamplerSettings, even_index, run_ensembles, single_threaded_blas
 
-__all__ = ["HierarchicalResult", "ReweightingWarning", "two_stage", "joint", "fit_specimens", "MIN_EFFECTIVE_DRAWS"]
+__all__ = ["HierarchicalResult", "ReweightingWarning", "SpecimenFitWarning", "two_stage", "joint", "fit_specimens", "MIN_EFFECTIVE_DRAWS"]
 
 MIN_EFFECTIVE_DRAWS = 50
 """Below this many effective draws for a specimen the two-stage estimate is flagged."""
+
+
+class SpecimenFitWarning(UserWarning):
+    """Some specimens' fits failed (an error, or a worker process that died); the others were kept."""
 
 
 class ReweightingWarning(UserWarning):
@@ -234,7 +238,8 @@ def _fit_one(args):
         return specimen, fit(data, specimen, **kwargs)
 
 
-def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, processes=None, settings=None, **kwargs):
+def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, processes=None, settings=None, errors="warn",
+                  **kwargs):
     """Fit specimens independently and in parallel; returns {specimen: FitResult} in data order.
 
     Parameters
@@ -252,6 +257,10 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
     settings : SamplerSettings, optional
         Per fit; each fit runs its ensembles in its worker (``processes`` of the settings is set
         to 1 so that workers do not nest pools).
+    errors : {"warn", "raise"}
+        A fit that raises or whose worker dies: ``"warn"`` keeps the other specimens' fits and
+        warns (:class:`SpecimenFitWarning`) naming each failed specimen and why; ``"raise"``
+        raises :class:`~fsrbayes.inference.parallel.JobError` naming them.
     **kwargs
         Passed to :func:`~fsrbayes.inference.fit.fit` (model, tunneling, likelihood, sensor, rng).
     """
@@ -259,4 +268,12 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
     kwargs["settings"] = replace(settings or SamplerSettings(), processes=1)
     base_seed = kwargs.pop("rng", 0)
     jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k)) for k, s in enumerate(specimens)]
-    return dict(map_jobs(_fit_one, jobs, executor=executor, scheduler=scheduler, processes=processes))
+    if errors not in ("warn", "raise"):
+        raise ValueError(f"errors must be 'warn' or 'raise', got {errors!r}")
+    results = map_jobs(_fit_one, jobs, executor=executor, scheduler=scheduler, processes=processes, labels=specimens,
+                       errors="keep" if errors == "warn" else "raise")
+    failed = [r for r in results if isinstance(r, JobFailure)]
+    if failed:
+        warnings.warn(f"{len(failed)} of {len(specimens)} specimen fits failed, the other {len(specimens) - len(failed)} "
+                      "kept: " + "; ".join(str(f) for f in failed), SpecimenFitWarning, stacklevel=2)
+    return dict(r for r in results if not isinstance(r, JobFailure))

@@ -1,0 +1,122 @@
+"""Faults: a job that raises or whose worker process dies is named, and the others' results are kept."""
+
+import os
+import signal
+import warnings
+
+import pytest
+
+from fsrbayes.data import synthetic
+from fsrbayes.inference import hierarchical
+from fsrbayes.inference.hierarchical import SpecimenFitWarning, fit_specimens
+from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
+from fsrbayes.inference.sampling import SamplerSettings
+
+
+def square_or_fail(job):
+    """Module level (picklable): 'kill' kills its own worker, 'raise' raises, a number is squared."""
+    if job == "kill":
+        os.kill(os.getpid(), signal.SIGKILL)
+    if job == "raise":
+        raise ValueError("bad job\nsecond line")
+    return job * job
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_a_raising_job_is_named_and_the_others_kept(processes):
+    seen = []
+    out = map_jobs(square_or_fail, [1, "raise", 3], processes=processes, labels=["a", "b", "c"], errors="keep",
+                   on_result=lambda k, r: seen.append(k))
+    assert out[0] == 1 and out[2] == 9
+    assert out[1] == JobFailure("b", "ValueError: bad job")
+    assert seen == [0, 2]
+
+
+def test_a_killed_worker_fails_only_its_own_job():
+    out = map_jobs(square_or_fail, [1, 2, "kill", 4, 5], processes=2, labels=list("abcde"), errors="keep")
+    assert [out[k] for k in (0, 1, 3, 4)] == [1, 4, 16, 25]
+    assert isinstance(out[2], JobFailure) and out[2].label == "c" and "worker process died" in out[2].reason
+
+
+def test_errors_raise_names_every_failed_job():
+    with pytest.raises(JobError, match=r"2 job\(s\) failed: b: ValueError: bad job; c: its worker process died") as info:
+        map_jobs(square_or_fail, [1, "raise", "kill"], processes=2, labels="abc")
+    assert [f.label for f in info.value.failures] == ["b", "c"]
+    assert isinstance(info.value.__cause__, ValueError)
+
+
+def _fit_one_or_die(args):
+    if args[1] == "a201-02":
+        os.kill(os.getpid(), signal.SIGKILL)
+    return REAL_FIT_ONE(args)
+
+
+REAL_FIT_ONE = hierarchical._fit_one
+
+
+def test_specimen_fits_keep_the_others_when_one_worker_dies(monkeypatch):
+    # Fork start method: the workers inherit the patched module attribute.
+    monkeypatch.setattr(hierarchical, "_fit_one", _fit_one_or_die)
+    sim = synthetic.simulate("a201", n_specimens=3, voltages=[1.0], forces=[4.9], samples=5, seed=2)
+    short = SamplerSettings(n_ensembles=2, chunk=20, max_steps=20, min_steps=20, transport_rounds=0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fits = fit_specimens(sim.data, processes=2, settings=short, rng=1)
+    assert list(fits) == ["a201-01", "a201-03"]
+    messages = [str(w.message) for w in caught if w.category is SpecimenFitWarning]
+    assert messages == ["1 of 3 specimen fits failed, the other 2 kept: a201-02: its worker process died "
+                        "(killed by a signal or out of memory)"]
+
+
+def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(monkeypatch, tmp_path, capsys):
+    import json
+
+    from fsrbayes.cli import main
+
+    monkeypatch.setattr(hierarchical, "_fit_one", _fit_one_or_die)
+    sim = synthetic.simulate("a201", n_specimens=3, voltages=[1.0], forces=[4.9], samples=5, seed=2)
+    data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
+    out = tmp_path / "pop"
+    previous = signal.getsignal(signal.SIGTERM)  # the CLI turns SIGTERM into KeyboardInterrupt; not for pytest
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            code = main(["fit", str(data), "--hierarchical", "--out", str(out), "--processes", "2", "--ensembles", "2",
+                         "--chunk", "20", "--max-steps", "20"])
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "a201-02: its worker process died" in err
+    assert err.strip().splitlines()[-1] == ("fsrbayes fit: error: the fits of a201-02 failed (the reasons are in the "
+                                            "warning above); the population was built from the other specimens")
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["failed_specimens"] == ["a201-02"] and sorted(summary["specimens"]) == ["a201-01", "a201-03"]
+    assert (out / "population.nc").exists() and not (out / "a201-02").exists()
+
+
+def test_a_full_disk_is_refused_before_sampling(monkeypatch, tmp_path, capsys):
+    import collections
+    import time
+
+    from fsrbayes.cli import common, main
+
+    sim = synthetic.simulate("a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=11, seed=2)
+    data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(common.shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 20 * 10**6, 20 * 10**6))
+    started = time.perf_counter()
+    code = main(["fit", str(data), "--out", str(tmp_path / "fit")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert err[0].startswith(f"fsrbayes fit: error: --out {tmp_path / 'fit'} has 20 MB free; fitting 2 specimens "
+                             "writes up to ")
+    assert time.perf_counter() - started < 10 and not list((tmp_path / "fit").iterdir())
+
+
+def test_output_estimate_counts_the_checkpoint_and_the_posterior():
+    from fsrbayes.cli.common import fit_output_bytes
+
+    settings = SamplerSettings(n_ensembles=4, max_steps=20000)
+    # 4 ensembles x 20,000 steps x 48 walkers x (12 + 1) float64 = 399 MB of checkpoint at most.
+    assert fit_output_bytes(549, 9, 12, settings) == 4 * 20000 * 48 * 13 * 8 + 2000 * (12 + 2 * 549 + 9 * 62) * 8
