@@ -53,7 +53,7 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
 
 def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
     sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, effects=["area-creep=-30"], seed=3)
-    result = diagnose(sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=1)
+    result = diagnose(sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=2)
     assert result.verdict == "missing-effect" and result.effect == "area-creep"
     assert result.gap_after <= 0.5 * result.gap_before
     best = result.candidates[0]
@@ -66,7 +66,7 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
 
 def test_diagnose_calls_burgers_data_adequate():
     sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, seed=4)
-    result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=1)
+    result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=2)
     assert result.verdict == "adequate" and result.effect is None
     assert result.gap_after == result.gap_before < 1.5
     assert all(c["log_bf"] < 0 for c in result.candidates)  # the Occam factor of unneeded parameters

@@ -23,7 +23,7 @@ def area_creep_csv(tmp_path_factory):
 def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     out, report = tmp_path / "diagnosis.json", tmp_path / "report"
     result = run("diagnose", str(area_creep_csv), "--json", str(out), "--report", str(report),
-                 "--effects", "area-creep,offset-stress", "--processes", "1")
+                 "--effects", "area-creep,offset-stress", "--processes", "2")
     assert result.returncode == 0, result.stderr
     assert "verdict: missing-effect: area-creep" in result.stdout
     payload = json.loads(out.read_text())
