@@ -1,6 +1,6 @@
-"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [hierarchical] [diagnose]``.
+"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [hierarchical] [diagnose] [demo]``.
 
-Without names all run; ``fit`` (a full converged Burgers fit), ``evidence``, ``hierarchical`` and ``diagnose`` take minutes.
+Without names all run; ``fit`` (a full converged Burgers fit), ``evidence``, ``hierarchical``, ``diagnose`` and ``demo`` take minutes.
 """
 
 import os
@@ -12,7 +12,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from benchmarks import csv_read, diagnose, evidence, fit, hierarchical, likelihood, solver  # noqa: E402
+from benchmarks import csv_read, demo, diagnose, evidence, fit, hierarchical, likelihood, solver  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 BENCHMARKS = {
@@ -23,6 +23,7 @@ BENCHMARKS = {
     "evidence": lambda: evidence.report(evidence.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
     "diagnose": lambda: diagnose.report(diagnose.run()),
+    "demo": lambda: demo.report(demo.run()),
 }
 
 
