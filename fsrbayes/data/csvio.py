@@ -172,8 +172,13 @@ def _decode(path):
         raise DataError("is a directory, expected a CSV file", path) from None
     if raw.startswith(b"\x1f\x8b"):
         import gzip
+        import zlib
 
-        raw = gzip.decompress(raw)
+        try:
+            raw = gzip.decompress(raw)
+        except (OSError, EOFError, zlib.error) as exc:
+            raise DataError(f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or a "
+                            "whole .csv.gz", path) from None
     try:
         # utf-8-sig strips the byte-order mark Excel writes; the header then reads normally.
         return raw.decode("utf-8-sig")
@@ -256,7 +261,12 @@ def read_csv(path, *, sep=",", shift_time=False):
     if sep == "," and ";" in lines[0] and "," not in lines[0]:
         raise DataError("fields are separated by ';', expected ','; re-export as comma-separated "
                         "or read with sep=';' (CLI: --sep ';')", path, 1)
-    rows = list(csv.reader(io.StringIO(text), delimiter=sep))
+    reader = csv.reader(io.StringIO(text), delimiter=sep, strict=True)
+    try:
+        rows = list(reader)
+    except csv.Error as exc:  # a NUL byte, an unclosed quote, a field past csv's size limit
+        raise DataError(f"not readable as CSV ({exc}); expected plain comma-separated fields", path,
+                        reader.line_num) from None
     names = _columns_of(rows[0], path)
     width = len(names)
     body, line_numbers = [], []

@@ -145,8 +145,10 @@ class LogPosterior(PriorScaledTarget):
         """(log prior of u incl. Jacobian, total log-likelihood), each (W,); the likelihood is −inf
         off the prior's support or the model's domain, never NaN. One transform for both."""
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
-        x, log_jac = self.prior.from_unconstrained(u2)
-        log_prior = self.prior.log_prob(x) + log_jac
+        with np.errstate(all="ignore"):  # inf or nan in u: −inf below, not a warning in the sampler
+            x, log_jac = self.prior.from_unconstrained(u2)
+            log_prior = self.prior.log_prob(x) + log_jac
+        log_prior[~np.isfinite(u2).all(axis=1)] = -np.inf
         ok = np.isfinite(log_prior)
         log_like = np.full(len(u2), -np.inf)
         if ok.any() and with_likelihood:
