@@ -101,7 +101,8 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     One panel per stress (``by="voltage"``: drift against voltage) or per voltage (``by="stress"``).
     Boxes span the pooled 25–75 % quantiles with the median, whiskers the 5–95 %; each of the five
     quantiles carries its 90 % credible interval over the hyper-posterior as a thin bar. Observed
-    per-specimen drifts are drawn beside each box.
+    per-specimen drifts are drawn beside each box. The y-range covers the whiskers and the
+    observations; quantile intervals reaching beyond it are cut there and marked with an arrow head.
 
     Parameters
     ----------
@@ -115,6 +116,7 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     panels = sorted({g[panel_key] for g in groups})
     fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.6), sharey=True, squeeze=False)
     names = ("q05", "q25", "q50", "q75", "q95")
+    shown, bars = [], []  # values that set the y-range; (axis, x, lo, hi) of the quantile intervals
     for ax, panel in zip(axes[0], panels):
         rows = sorted((g for g in groups if g[panel_key] == panel), key=lambda g: g[x_key])
         for k, g in enumerate(rows):
@@ -123,22 +125,39 @@ def population_drift_plot(groups, observed=None, by="voltage"):
             ax.hlines(q[2], k - 0.2, k + 0.2, color="C0", lw=2)
             ax.vlines(k, q[0], q[1], color="C0")
             ax.vlines(k, q[3], q[4], color="C0")
+            shown += [q[0], q[4]]
             for j, n in enumerate(names):
                 lo, hi = g["quantile_intervals"][n]
-                ax.vlines(k + 0.24 + 0.03 * j, lo, hi, color="C1", lw=1)
+                bars.append((ax, k + 0.24 + 0.03 * j, lo, hi))
             if observed is not None:
                 near = (np.isclose(observed[panel_key], panel, rtol=1e-6)
                         & np.isclose(observed[x_key], g[x_key], rtol=1e-6))
                 values = np.asarray(observed["observed_drift_3600"])[near]
+                shown += list(values)
                 ax.plot(k - 0.32 + 0.08 * np.linspace(-1, 1, max(len(values), 1))[:len(values)], values, "k.", ms=3)
         labels = [f"{g[x_key]:g}" if x_key == "voltage_V" else f"{g[x_key] / 1e3:.0f}" for g in rows]
         ax.set_xticks(range(len(rows)), labels)
         title = f"{panel / 1e3:.0f} kPa" if panel_key == "stress_Pa" else f"{panel:g} V"
         ax.set(title=title, xlabel="V_FSR (V)" if x_key == "voltage_V" else "stress (kPa)")
+    # The y-range follows the boxes' whiskers and the observations; a quantile's interval over the
+    # hyper-posterior can reach much further (a short hyper run, a wide population scale) and
+    # would flatten every box: it is cut at the axis and the cut marked with an arrow head.
+    finite = np.asarray(shown, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    low, high = (finite.min(), finite.max()) if finite.size else (-1.0, 1.0)
+    pad = 0.1 * max(high - low, 1e-3)
+    low, high = low - pad, high + pad
+    for ax, x, lo, hi in bars:
+        ax.vlines(x, max(lo, low), min(hi, high), color="C1", lw=1)
+        if hi > high:
+            ax.plot(x, high, "^", color="C1", ms=3, clip_on=False)
+        if lo < low:
+            ax.plot(x, low, "v", color="C1", ms=3, clip_on=False)
+    axes[0, 0].set_ylim(low, high)
     axes[0, 0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
     what = "as measured" if groups[0].get("as_measured") else "noise-free"
     axes[0, -1].plot([], [], "s", color="C0", alpha=0.35, label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)")
-    axes[0, -1].plot([], [], "-", color="C1", label="90 % interval of each quantile")
+    axes[0, -1].plot([], [], "-", color="C1", label="90 % interval of each quantile (▲ cut at the axis)")
     if observed is not None:
         axes[0, -1].plot([], [], "k.", label="observed specimens")
     axes[0, -1].legend(fontsize=6, loc="best")
