@@ -120,3 +120,21 @@ def test_output_estimate_counts_the_checkpoint_and_the_posterior():
     settings = SamplerSettings(n_ensembles=4, max_steps=20000)
     # 4 ensembles x 20,000 steps x 48 walkers x (12 + 1) float64 = 399 MB of checkpoint at most.
     assert fit_output_bytes(549, 9, 12, settings) == 4 * 20000 * 48 * 13 * 8 + 2000 * (12 + 2 * 549 + 9 * 62) * 8
+
+
+def test_cli_hierarchical_fit_with_fewer_than_two_fits_left_says_why(monkeypatch, tmp_path, capsys):
+    from fsrbayes.cli import main
+
+    monkeypatch.setattr(hierarchical, "_fit_one", _fit_one_or_die)
+    sim = synthetic.simulate("a201", n_specimens=2, voltages=[1.0], forces=[4.9], samples=5, seed=2)
+    data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
+    previous = signal.getsignal(signal.SIGTERM)
+    try:
+        code = main(["fit", str(data), "--hierarchical", "--out", str(tmp_path / "pop"), "--processes", "2",
+                     "--ensembles", "2", "--chunk", "20", "--max-steps", "20"])
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(err) == 1
+    assert err[0].startswith("fsrbayes fit: error: a201: 1 of 2 specimen fits succeeded, a population needs 2 (1 of 2 "
+                             "specimen fits failed, the other 1 kept: a201-02: its worker process died")

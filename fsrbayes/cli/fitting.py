@@ -79,7 +79,7 @@ def _fit_hierarchical(args, data, settings, out):
     """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
     from dataclasses import replace
 
-    from ..inference.hierarchical import fit_specimens, joint, two_stage
+    from ..inference.hierarchical import SpecimenFitWarning, fit_specimens, joint, two_stage
     from ..inference.output import save_fit, save_population
     from ..inference.predictive import ForwardTemplate
     from ..inference.sampling import ConvergenceWarning
@@ -103,8 +103,9 @@ def _fit_hierarchical(args, data, settings, out):
                                  model=args.model, tunneling=args.tunneling, likelihood=args.likelihood, rng=args.seed)
             failed = [s for s in part.specimens if s not in fits]
             if len(fits) < 2:
+                why = "; ".join(str(w.message) for w in caught if issubclass(w.category, SpecimenFitWarning))
                 raise FitFailed(f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a population "
-                                f"needs 2 (failed: {', '.join(failed)})")
+                                f"needs 2 ({why})")
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)
