@@ -95,10 +95,15 @@ def drift_3600_plot(tree):
     return fig, ax
 
 
+PANELS_PER_ROW = 4
+"""Population box plots wrap after this many panels (eleven voltages in one row were unreadable)."""
+
+
 def population_drift_plot(groups, observed=None, by="voltage"):
     """Box plots of a new specimen's drift (the stand-ins for the paper's Figures 10, 11, 13, 14).
 
-    One panel per stress (``by="voltage"``: drift against voltage) or per voltage (``by="stress"``).
+    One panel per stress (``by="voltage"``: drift against voltage) or per voltage (``by="stress"``),
+    at most ``PANELS_PER_ROW`` to a row.
     Boxes span the pooled 25–75 % quantiles with the median, whiskers the 5–95 %; each of the five
     quantiles carries its 90 % credible interval over the hyper-posterior as a thin bar. Observed
     per-specimen drifts are drawn beside each box. The y-range covers the whiskers and the
@@ -114,10 +119,14 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     """
     panel_key, x_key = ("stress_Pa", "voltage_V") if by == "voltage" else ("voltage_V", "stress_Pa")
     panels = sorted({g[panel_key] for g in groups})
-    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.6), sharey=True, squeeze=False)
+    n_cols = min(len(panels), PANELS_PER_ROW)
+    n_rows = -(-len(panels) // n_cols)
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(3.6 * n_cols, 3.6 * n_rows), sharey=True, squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
     names = ("q05", "q25", "q50", "q75", "q95")
     shown, bars = [], []  # values that set the y-range; (axis, x, lo, hi) of the quantile intervals
-    for ax, panel in zip(axes[0], panels):
+    for ax, panel in zip(axes.flat, panels):
         rows = sorted((g for g in groups if g[panel_key] == panel), key=lambda g: g[x_key])
         for k, g in enumerate(rows):
             q = [g["new_specimen"][n] for n in names]
@@ -136,7 +145,7 @@ def population_drift_plot(groups, observed=None, by="voltage"):
                 shown += list(values)
                 ax.plot(k - 0.32 + 0.08 * np.linspace(-1, 1, max(len(values), 1))[:len(values)], values, "k.", ms=3)
         labels = [f"{g[x_key]:g}" if x_key == "voltage_V" else f"{g[x_key] / 1e3:.0f}" for g in rows]
-        ax.set_xticks(range(len(rows)), labels)
+        ax.set_xticks(range(len(rows)), labels, rotation=90 if len(rows) > 6 else 0)
         title = f"{panel / 1e3:.0f} kPa" if panel_key == "stress_Pa" else f"{panel:g} V"
         ax.set(title=title, xlabel="V_FSR (V)" if x_key == "voltage_V" else "stress (kPa)")
     # The y-range follows the boxes' whiskers and the observations; a quantile's interval over the
@@ -154,13 +163,15 @@ def population_drift_plot(groups, observed=None, by="voltage"):
         if lo < low:
             ax.plot(x, low, "v", color="C1", ms=3, clip_on=False)
     axes[0, 0].set_ylim(low, high)
-    axes[0, 0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
+    for row in axes:
+        row[0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
     what = "as measured" if groups[0].get("as_measured") else "noise-free"
-    axes[0, -1].plot([], [], "s", color="C0", alpha=0.35, label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)")
-    axes[0, -1].plot([], [], "-", color="C1", label="90 % interval of each quantile (▲ cut at the axis)")
+    last = axes.flat[len(panels) - 1]
+    last.plot([], [], "s", color="C0", alpha=0.35, label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)")
+    last.plot([], [], "-", color="C1", label="90 % interval of each quantile (▲ cut at the axis)")
     if observed is not None:
-        axes[0, -1].plot([], [], "k.", label="observed specimens")
-    axes[0, -1].legend(fontsize=6, loc="best")
+        last.plot([], [], "k.", label="observed specimens")
+    last.legend(fontsize=6, loc="best")
     fig.tight_layout()
     return fig, axes
 
