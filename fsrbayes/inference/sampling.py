@@ -214,8 +214,9 @@ def convergence_report(chain, settings, names=(), final=True):
     n_ens, n_steps, n_walk, ndim = chain.shape
     kept = chain[:, settings.warmup_steps(n_steps):]
     n_kept = kept.shape[1]
-    tau = np.max([emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)], axis=0)
-    tau = np.maximum(tau, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
+        tau = np.max([emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)], axis=0)
+    tau = np.where(np.isfinite(tau), np.maximum(tau, 1.0), float(n_kept))  # no estimate: as long as the chain
     ess_tau = n_ens * n_kept * n_walk / tau
     long_enough = n_steps >= settings.min_steps and n_kept >= settings.tau_factor * tau.max()
     if not (long_enough and np.all(ess_tau >= settings.ess_target)) and not final:
