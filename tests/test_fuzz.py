@@ -79,6 +79,23 @@ def test_corrupt_gzip_gives_one_error(tmp_path):
     assert read_or_data_error(path) is None
 
 
+def test_gzip_bomb_and_oversize_files_are_refused_before_they_fill_memory(tmp_path, monkeypatch):
+    from fsrbayes.data import csvio
+
+    monkeypatch.setattr(csvio, "MAX_TEXT_BYTES", 20_000_000)
+    bomb = tmp_path / "bomb.csv.gz"
+    with gzip.open(bomb, "wb") as handle:  # 200 MB of zeros in ~200 kB
+        for _ in range(200):
+            handle.write(b"0" * 1_000_000)
+    assert bomb.stat().st_size < 1_000_000
+    with pytest.raises(DataError, match="decompresses to more than"):
+        read_csv(bomb)
+    big = tmp_path / "big.csv"
+    big.write_bytes(b"x" * 20_000_001)
+    with pytest.raises(DataError, match="split it"):
+        read_csv(big)
+
+
 def test_cli_check_on_hostile_bytes_exits_2_without_traceback(tmp_path):
     path = tmp_path / "hostile.csv"
     path.write_bytes(HEADER.encode() + b"s1,a201,1.0,117085.0,0\x00,2.9e-06\n")

@@ -163,8 +163,17 @@ class CreepData:
         return "\n".join(lines)
 
 
+MAX_TEXT_BYTES = 4 * 2**30
+"""Largest CSV text read (after decompression): a guard against gzip bombs and files that would
+not fit in memory. The paper's whole protocol is ~25 MB."""
+
+
 def _decode(path):
     try:
+        size = Path(path).stat().st_size
+        if size > MAX_TEXT_BYTES:
+            raise DataError(f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in memory; "
+                            "split it (per sensor or specimen)", path)
         raw = Path(path).read_bytes()
     except FileNotFoundError:
         raise DataError("file not found", path) from None
@@ -172,13 +181,18 @@ def _decode(path):
         raise DataError("is a directory, expected a CSV file", path) from None
     if raw.startswith(b"\x1f\x8b"):
         import gzip
+        import io
         import zlib
 
         try:
-            raw = gzip.decompress(raw)
+            with gzip.GzipFile(fileobj=io.BytesIO(raw)) as handle:
+                raw = handle.read(MAX_TEXT_BYTES + 1)  # never more than the cap in memory, however it unpacks
         except (OSError, EOFError, zlib.error) as exc:
             raise DataError(f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or a "
                             "whole .csv.gz", path) from None
+        if len(raw) > MAX_TEXT_BYTES:
+            raise DataError(f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too large to read "
+                            "in memory); split it (per sensor or specimen)", path)
     try:
         # utf-8-sig strips the byte-order mark Excel writes; the header then reads normally.
         return raw.decode("utf-8-sig")
