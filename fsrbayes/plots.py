@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ["corner_plot", "band_plot", "drift_3600_plot", "population_drift_plot", "diagnosis_drift_plot",
-           "diagnosis_misfit_plot", "diagnosis_residual_plot", "save_figure"]
+           "diagnosis_misfit_plot", "diagnosis_residual_plot", "sbc_rank_plot", "save_figure"]
 
 PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "k1", "k2", "b2", "inv_b1", "psi", "n")
 
@@ -257,6 +257,44 @@ def diagnosis_residual_plot(diagnosis):
         ax.set(xscale="log", title=title, xlabel="time (s)")
     axes[0, 0].set_ylabel("mean standardised residual of log I")
     axes[0, -1].legend(fontsize=7, title="V_FSR", title_fontsize=7)
+    fig.tight_layout()
+    return fig, axes
+
+
+def sbc_rank_plot(result, bins=10, per_row=4):
+    """Rank histograms of a simulation-based calibration (Talts et al. 2018, Figure 1 style).
+
+    One panel per quantity: counts of the truth's rank in ``bins`` equal bins, the grey band a
+    calibrated histogram's bars stay in with 99 % probability each (Binomial(N, 1/B)), the line
+    its mean N/B, and the panel's χ² uniformity p-value.
+
+    Parameters
+    ----------
+    result : fsrbayes.inference.calibration.SBCResult
+    """
+    counts = result.histogram(bins)
+    p_values = result.uniformity(bins)["chi2"]
+    low, high = result.band(bins)
+    n_q = len(result.names)
+    n_cols = min(per_row, n_q)
+    n_rows = -(-n_q // n_cols)
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(3.0 * n_cols, 2.3 * n_rows), sharex=True, squeeze=False)
+    edges = np.arange(bins + 1)
+    for q, ax in enumerate(axes.flat):
+        if q >= n_q:
+            ax.set_visible(False)
+            continue
+        ax.axhspan(low, high, color="0.85", zorder=0)
+        ax.axhline(result.n_reps / bins, color="0.5", lw=0.8, zorder=1)
+        ax.stairs(counts[:, q], edges, fill=True, color="C0" if p_values[q] >= 0.01 / n_q else "C3", alpha=0.8)
+        ax.set_title(f"{result.names[q]}\np = {p_values[q]:.2f}", fontsize=8)
+        ax.set_xticks([0, bins], ["0", f"{result.n_draws}"])
+        ax.set_ylim(0, max(high, counts.max()) * 1.15)
+        ax.tick_params(labelsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("rank of the truth", fontsize=8)
+    fig.suptitle(f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; "
+                 f"grey: 99 % band of a calibrated bin", fontsize=9)
     fig.tight_layout()
     return fig, axes
 

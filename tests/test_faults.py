@@ -114,6 +114,31 @@ def test_a_full_disk_is_refused_before_sampling(monkeypatch, tmp_path, capsys):
     assert time.perf_counter() - started < 10 and not list((tmp_path / "fit").iterdir())
 
 
+def test_an_unwritable_output_folder_is_refused_before_sampling(monkeypatch, tmp_path, capsys):
+    # Root ignores file modes, so the refusal is simulated where it happens: the probe write.
+    import pathlib
+    import time
+
+    from fsrbayes.cli import main
+
+    sim = synthetic.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=11, seed=2)
+    data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
+    real_write = pathlib.Path.write_bytes
+
+    def deny_probe(self, payload):
+        if self.name == ".fsrbayes-write-test":
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_write(self, payload)
+
+    monkeypatch.setattr(pathlib.Path, "write_bytes", deny_probe)
+    started = time.perf_counter()
+    code = main(["fit", str(data), "--out", str(tmp_path / "fit")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and err == [f"fsrbayes fit: error: --out {tmp_path / 'fit'} is not writable (Permission denied); "
+                                 "choose another folder"]
+    assert time.perf_counter() - started < 10
+
+
 def test_output_estimate_counts_the_checkpoint_and_the_posterior():
     from fsrbayes.cli.common import fit_output_bytes
 

@@ -10,7 +10,7 @@ from .._version import __version__
 from ..data.sensors import available_sensors
 from ..inference.parallel import JobError
 from ..physics.effects import EFFECTS
-from .analysis import cmd_compare, cmd_diagnose
+from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
 from .model import cmd_check, cmd_demo, cmd_forward, cmd_simulate
@@ -133,6 +133,22 @@ def build_parser():
     dia.add_argument("--sep", default=",", help="CSV field separator")
     dia.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     dia.set_defaults(func=cmd_diagnose)
+
+    cal = sub.add_parser("calibrate", help="simulation-based calibration of the per-specimen fit: rank "
+                         "histograms, uniformity tests, coverage at 50/80/90 % (exit 1 if not calibrated)")
+    cal.add_argument("--out", required=True, help="folder for sbc.json and rank_histograms.png")
+    cal.add_argument("--sensor", default="a201", help=f"priors of one of {available_sensors()} (default a201)")
+    cal.add_argument("--model", default="burgers", help="creep law, optionally +effect terms (default burgers)")
+    cal.add_argument("--reps", type=int, default=100, help="replications (default 100)")
+    cal.add_argument("--draws", type=int, default=99, help="posterior draws per replication, L (default 99)")
+    cal.add_argument("--bins", type=int, default=10, help="rank histogram bins; must divide L + 1 (default 10)")
+    cal.add_argument("--steps", type=int, default=3000, help="sampler steps per ensemble and fit (default 3000)")
+    cal.add_argument("--voltages", default="0.2,3", help="V_FSR of the simulated tests (default 0.2,3)")
+    cal.add_argument("--forces", default="1.96,9.8", help="forces in N of the simulated tests (default 1.96,9.8)")
+    cal.add_argument("--samples", type=int, default=12, help="log-spaced samples per test over 1 h (default 12)")
+    cal.add_argument("--processes", type=int, help="replications side by side (default: one per core)")
+    cal.add_argument("--seed", type=int, default=0)
+    cal.set_defaults(func=cmd_calibrate)
 
     drf = sub.add_parser("drift", help="population drift(t) of a new specimen from a hierarchical fit; optimal voltage")
     drf.add_argument("fit_dir", help="output folder of 'fsrbayes fit --hierarchical'")

@@ -72,3 +72,44 @@ def cmd_diagnose(args):
     if args.report:
         print(f"report: {write_diagnosis_report(result, args.report)}")
     return 0
+
+
+def cmd_calibrate(args):
+    """Simulation-based calibration of the per-specimen fit: sbc.json, rank_histograms.png, a table."""
+    from dataclasses import replace
+
+    from ..data.sensors import load_sensor
+    from ..inference.calibration import SBC_SETTINGS, SBCDesign, calibrate_specimen, format_sbc
+    from ..plots import sbc_rank_plot, save_figure
+    from .common import floats
+
+    load_sensor(args.sensor)
+    parse_model(args.model)
+    for name in ("reps", "draws", "steps", "samples"):
+        if getattr(args, name) < 1:
+            raise UsageError(f"--{name} must be >= 1, got {getattr(args, name)}")
+    if (args.draws + 1) % args.bins:
+        raise UsageError(f"--bins must divide --draws + 1 = {args.draws + 1}, got {args.bins}")
+    if args.processes is not None and args.processes < 1:
+        raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    design = SBCDesign(args.sensor, args.model, tuple(floats(args.voltages, "voltages")),
+                       tuple(floats(args.forces, "forces")), args.samples)
+    settings = replace(SBC_SETTINGS, min_steps=args.steps, max_steps=args.steps,
+                       chunk=min(SBC_SETTINGS.chunk, max(1, args.steps // 4)))
+    out = Path(args.out)
+    writable(out)
+    done = []
+
+    def progress(index, rep):
+        done.append(index)
+        print(f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS {rep['ess_min']:.0f}, "
+              f"max R-hat {rep['rhat_max']:.3f}", flush=True)
+
+    result = calibrate_specimen(args.reps, design=design, settings=settings, n_draws=args.draws, seed=args.seed,
+                                processes=args.processes, on_result=progress)
+    print(format_sbc(result, bins=args.bins))
+    record = result.as_dict(bins=args.bins)
+    write_json_atomic(out / "sbc.json", json_ready(record))
+    save_figure(sbc_rank_plot(result, bins=args.bins)[0], out / "rank_histograms.png")
+    print(f"written: {out / 'sbc.json'}, {out / 'rank_histograms.png'}")
+    return 0 if record["calibrated"] else 1

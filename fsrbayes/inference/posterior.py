@@ -131,6 +131,13 @@ class LogPosterior(PriorScaledTarget):
             log_current = np.log(solution.current)
         return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
 
+    def drift_percent(self, x, time_s=3600.0):
+        """Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C)."""
+        times = np.broadcast_to(np.array([0.0, float(time_s)]), (self.data.n_tests, 2))
+        log_current = self.log_model_current(x, times)
+        with np.errstate(invalid="ignore"):
+            return 100.0 * np.expm1(log_current[..., 1] - log_current[..., 0])
+
     def log_likelihood_pointwise(self, x):
         """Log-likelihood per observed sample, shape (W, N)."""
         params = self.parameters(x)

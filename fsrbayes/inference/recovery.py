@@ -22,18 +22,12 @@ from ..data.sensors import load_sensor
 from .fit import fit
 from .sampling import ConvergenceWarning, SamplerSettings
 
-__all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery"]
+__all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
 
 RECOVERY_SETTINGS = SamplerSettings(n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2)
 """Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
 
 DRIFT_TIME_S = 3600.0
-
-
-def _drift_3600(posterior, x):
-    times = np.broadcast_to(np.array([0.0, DRIFT_TIME_S]), (posterior.data.n_tests, 2))
-    log_current = posterior.log_model_current(x, times)
-    return 100.0 * np.expm1(log_current[..., 1] - log_current[..., 0])
 
 
 def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0, 3.0), forces=(1.96, 4.9, 9.8),
@@ -69,8 +63,8 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
         u = posterior.prior.to_unconstrained(draws)
         prior_u = posterior.prior.to_unconstrained(posterior.prior.sample(np.random.default_rng(k), 4000))
         sd_ratio.append(u.std(axis=0) / prior_u.std(axis=0))
-        predicted = _drift_3600(posterior, draws)
-        true_drift = _drift_3600(posterior, truth[None, :])[0]
+        predicted = posterior.drift_percent(draws, DRIFT_TIME_S)
+        true_drift = posterior.drift_percent(truth[None, :], DRIFT_TIME_S)[0]
         lo, hi = np.quantile(predicted, [tail, 1.0 - tail], axis=0)
         drift_inside.extend(((lo <= true_drift) & (true_drift <= hi)).tolist())
     return {"names": list(posterior.names), "inside": np.array(inside), "sd_ratio": np.array(sd_ratio),
@@ -78,15 +72,25 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
             "truth_quantile": np.array(rank)}
 
 
+def coverage_at(study, levels=(0.5, 0.8, 0.9)):
+    """Share of specimens whose central ``level`` interval holds the truth, per level and parameter
+    (from the share of draws below the truth)."""
+    q = study["truth_quantile"]
+    return {level: np.mean((q >= (1 - level) / 2) & (q <= (1 + level) / 2), axis=0) for level in levels}
+
+
 def format_recovery(study):
-    """A table: coverage and posterior/prior sd ratio per parameter, drift coverage, timing."""
-    lines = [f"{'parameter':10s} {'90% coverage':>13s} {'misses low/high':>16s} {'sd post/prior':>14s}  identified"]
+    """A table: coverage at 50/80/90 % and posterior/prior sd ratio per parameter, drift coverage, timing."""
+    coverage = coverage_at(study)
+    lines = [f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} {'misses low/high':>16s} "
+             f"{'sd post/prior':>14s}  identified"]
     for i, name in enumerate(study["names"]):
         ratio = float(np.median(study["sd_ratio"][:, i]))
         verdict = "yes" if ratio < 0.5 else ("no (posterior ~ prior)" if ratio > 0.8 else "weakly")
         q = study["truth_quantile"][:, i]
         misses = f"{int(np.sum(q < 0.05))}/{int(np.sum(q > 0.95))}"
-        lines.append(f"{name:10s} {study['inside'][:, i].mean():13.2f} {misses:>16s} {ratio:14.3f}  {verdict}")
+        cover = " ".join(f"{coverage[level][i]:8.2f}" for level in (0.5, 0.8, 0.9))
+        lines.append(f"{name:10s} {cover} {misses:>16s} {ratio:14.3f}  {verdict}")
     drift = np.array(study["drift_inside"])
     lines.append(f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests")
     lines.append(f"converged {sum(study['converged'])}/{len(study['converged'])}; "
