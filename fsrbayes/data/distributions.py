@@ -132,10 +132,31 @@ class Distribution:
         return self._frozen().rvs(size=size, random_state=rng)
 
     def ppf(self, q):
-        """Quantile function."""
+        """Quantile function; closed forms (nested sampling's prior transform calls it per point,
+        where building a frozen scipy distribution cost ~1 ms), scipy for the gamma."""
+        q = np.asarray(q, dtype=float)
+        a = self.args
         if self.kind == "fixed":
-            return np.full(np.shape(q), float(self.args["value"]))
-        return self._frozen().ppf(q)
+            return np.full(np.shape(q), float(a["value"]))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if self.kind == "normal":
+                return a["mu"] + a["sigma"] * special.ndtri(q)
+            if self.kind == "lognormal":
+                return a["median"] * np.exp(a["sigma"] * special.ndtri(q))
+            if self.kind == "halfnormal":
+                return a["scale"] * special.ndtri(0.5 + 0.5 * q)
+            if self.kind == "uniform":
+                return a["lower"] + (a["upper"] - a["lower"]) * q
+            if self.kind == "loguniform":
+                return a["lower"] * np.exp(q * math.log(a["upper"] / a["lower"]))
+            if self.kind == "truncnormal":
+                lo, hi = (a["lower"] - a["mu"]) / a["sigma"], (a["upper"] - a["mu"]) / a["sigma"]
+                if lo > 0:  # both bounds in the upper tail: invert the mirrored, accurate lower tail
+                    z = -special.ndtri(special.ndtr(-lo) - q * (special.ndtr(-lo) - special.ndtr(-hi)))
+                else:
+                    z = special.ndtri(special.ndtr(lo) + q * (special.ndtr(hi) - special.ndtr(lo)))
+                return np.clip(a["mu"] + a["sigma"] * z, a["lower"], a["upper"])
+        return self._frozen().ppf(q)  # gamma
 
     def median(self):
         """The distribution's median."""
