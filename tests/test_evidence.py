@@ -108,3 +108,25 @@ def test_error_bars_cover_the_exact_log_z_at_their_nominal_rates(label, make_pro
     for k in NOMINAL:
         low, high = study["range_99"][k]
         assert low <= study["coverage"][k] <= high, format_evidence_coverage(study, label)
+
+
+def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
+    from fsrbayes.inference.evidence import _replace_dead_walkers
+
+    target = LinearGaussian(3)
+
+    class HalfDomain:  # the likelihood is -inf for w0 > 0
+        ndim = 3
+        log_prior = staticmethod(target.log_prior)
+
+        @staticmethod
+        def log_likelihood(w):
+            return np.where(np.atleast_2d(w)[:, 0] > 0, -np.inf, target.log_likelihood(w))
+
+    rng = np.random.default_rng(0)
+    start = target.sample_prior(rng, 40)
+    rung = _Rungs(HalfDomain(), np.array([0.5]), start[None], np.random.RandomState(0))
+    assert not np.isfinite(rung.ll).all()
+    _replace_dead_walkers(rung, rng)
+    assert np.isfinite(rung.ll).all() and np.all(rung.coords[0, :, 0] <= 0)
+    assert np.allclose(HalfDomain.log_likelihood(rung.coords[0]), rung.ll[0])

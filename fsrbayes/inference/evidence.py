@@ -178,6 +178,19 @@ class _Rungs:
             self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
 
 
+def _replace_dead_walkers(rung, rng):
+    """Walkers whose tempered density is −inf (a prior or reference draw outside the model's
+    domain) take the place of randomly chosen live ones: a walker at −inf accepts any proposal
+    but may never be offered one during a short burn-in, and its −inf would then reach the
+    production rungs (the bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC."""
+    dead = ~np.isfinite(_tempered(rung.lp[0], rung.ll[0], rung.betas[0]))
+    live = np.flatnonzero(~dead)
+    if dead.any() and live.size >= 2:
+        donors = rng.choice(live, size=int(dead.sum()))
+        rung.coords[0, dead], rung.lp[0, dead], rung.ll[0, dead] = (rung.coords[0, donors], rung.lp[0, donors],
+                                                                    rung.ll[0, donors])
+
+
 def _run_ladder(target, betas, settings, seed, n_top=100):
     """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and ``n_top``
     evenly thinned ensembles of the β = 1 rung (posterior draws, (n_top, W, ndim))."""
@@ -192,6 +205,7 @@ def _run_ladder(target, betas, settings, seed, n_top=100):
     previous = prior_draws()
     for k in range(1, n_temps):
         rung = _Rungs(target, betas[k:k + 1], previous[None], random)
+        _replace_dead_walkers(rung, rng)
         for _ in range(settings.burn):
             rung.step()
         coords[k - 1] = previous = rung.coords[0]
@@ -363,7 +377,8 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
     if hasattr(target, "prior") and hasattr(target.prior, "dists"):
         check_priors_for_evidence(target.prior)
     betas = beta_ladder(settings.n_temps, settings.exponent)
-    seeds = np.random.SeedSequence(seed).spawn(settings.replicates)
+    seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    seeds = seed.spawn(settings.replicates)
     start = time.perf_counter()
     jobs = [(target, betas, settings, s) for s in seeds]
     if settings.processes > 1:
