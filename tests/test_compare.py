@@ -11,8 +11,10 @@ import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.compare import strength
 from fsrbayes.inference.evidence import LadderSettings
+from fsrbayes.inference.sampling import SamplerSettings
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
+TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=40, min_steps=200, max_steps=200)
 
 
 @pytest.fixture(scope="module")
@@ -21,8 +23,14 @@ def small():
 
 
 def test_compare_sums_specimens_and_states_a_preference(small):
-    out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1)
+    out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1, pilot=TINY_PILOT)
     assert set(out["models"]) == {"zener", "burgers"} and out["preferred"] in out["models"]
+    assert out["settings"]["path"] == "reference"
+    assert set(out["savage_dickey"]["per_specimen"]) == set(small.data.specimens)
+    for specimen, check in out["savage_dickey"]["per_specimen"].items():
+        assert np.isfinite(check["log_b_zener_over_burgers"]) and check["err"] > 0
+        z, b = (out["models"][m]["per_specimen"][specimen]["log_evidence"] for m in ("zener", "burgers"))
+        assert check["evidence_difference"] == pytest.approx(z - b)
     for entry in out["models"].values():
         per = [v["log_evidence"] for v in entry["per_specimen"].values()]
         assert len(per) == 2 and entry["log_evidence"] == pytest.approx(sum(per))
@@ -53,13 +61,14 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
     syn.write_simulation(small, data)
     out = tmp_path / "cmp.json"
     result = cli("compare", str(data), "--models", "zener,burgers", "--specimen", "a201-01", "--json", str(out),
-                 "--temps", "4", "--burn", "20", "--steps", "250", "--replicates", "2", "--no-loo")
+                 "--temps", "4", "--burn", "20", "--steps", "250", "--replicates", "2", "--no-loo",
+                 "--pilot-steps", "200")
     assert result.returncode == 0, result.stderr
     saved = json.loads(out.read_text())
     assert {"log_evidence", "log_evidence_err"} <= set(saved["models"]["zener"]) and saved["preferred"]
     assert "ln B =" in result.stdout
     for bad, message in ((["--models", "burgers"], "at least two"), (["--models", "burgers,maxwell"], "maxwell"),
-                         (["--specimen", "nobody"], "is not in")):
+                         (["--specimen", "nobody"], "is not in"), (["--pilot-steps", "5"], "--pilot-steps must be")):
         r = cli("compare", str(data), *bad)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1

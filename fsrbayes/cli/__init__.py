@@ -106,9 +106,16 @@ def build_parser():
     cmp_.add_argument("--json", help="write the result here (atomically)")
     cmp_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     cmp_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
-    cmp_.add_argument("--temps", type=int, default=32, help="rungs of the beta ladder (default 32)")
-    cmp_.add_argument("--burn", type=int, default=500, help="burn-in steps per rung")
-    cmp_.add_argument("--steps", type=int, default=2000, help="production steps")
+    cmp_.add_argument("--path", choices=("reference", "prior"), default="reference",
+                      help="where the beta ladder starts: a reference density fitted to a pilot run (default) "
+                           "or the prior (needs a far denser ladder on creep data)")
+    cmp_.add_argument("--temps", type=int, help="rungs of the beta ladder (default 8 from the reference, 32 from "
+                                                "the prior)")
+    cmp_.add_argument("--burn", type=int, help="burn-in steps per rung (default 100 / 500)")
+    cmp_.add_argument("--steps", type=int, help="production steps (default 600 / 2000)")
+    cmp_.add_argument("--pilot-steps", type=int, default=1250,
+                      help="steps of the pilot run the reference is fitted to (default 1250; 3 transport rounds "
+                           "take the first 60 %%)")
     cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders (default 4)")
     cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
     cmp_.add_argument("--seed", type=int, default=0)

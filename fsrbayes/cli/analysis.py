@@ -1,6 +1,7 @@
 """Commands that compare models and diagnose what they miss: compare, diagnose."""
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 from ..data import csvio
@@ -13,6 +14,8 @@ def cmd_compare(args):
     """Log-evidence per model and specimen, Bayes factors, PSIS-LOO; JSON with DESIGN §4 keys."""
     from ..inference.compare import compare
     from ..inference.evidence import LadderSettings
+    from ..inference.reference import REFERENCED_LADDER
+    from ..inference.sampling import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     models = [m.strip() for m in args.models.split(",") if m.strip()]
@@ -22,12 +25,22 @@ def cmd_compare(args):
         parse_model(model)
     if args.specimen is not None and args.specimen not in data.specimens:
         raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
-    settings = LadderSettings(n_temps=args.temps, burn=args.burn, steps=args.steps, replicates=args.replicates,
-                              processes=args.processes or min(args.replicates, os.cpu_count() or 1))
+    base = REFERENCED_LADDER if args.path == "reference" else LadderSettings()
+    chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
+    try:
+        settings = replace(base, **{k: v for k, v in chosen.items() if v is not None}, replicates=args.replicates,
+                           processes=args.processes or min(args.replicates, os.cpu_count() or 1))
+    except ValueError as exc:
+        raise UsageError(f"compare settings: {exc}") from None
+    if args.pilot_steps < 100:
+        raise UsageError(f"--pilot-steps must be >= 100, got {args.pilot_steps}")
+    chunk = args.pilot_steps // 5
+    pilot = SamplerSettings(n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3)
     if args.json:
         writable(Path(args.json).parent)
     result = compare(data, models, [args.specimen] if args.specimen else None, tunneling=args.tunneling,
-                     likelihood=args.likelihood, settings=settings, seed=args.seed, with_loo=not args.no_loo)
+                     likelihood=args.likelihood, settings=settings, seed=args.seed, with_loo=not args.no_loo,
+                     path=args.path, pilot=pilot)
     for name, entry in result["models"].items():
         print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
     for name, bf in result["bayes_factors"].items():

@@ -14,8 +14,11 @@ from dataclasses import asdict
 import numpy as np
 
 from ..data.sensors import load_sensor
+from ..utils import json_ready
 from .evidence import LadderSettings, log_evidence
 from .fit import _select
+from .reference import PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
+from .savage_dickey import savage_dickey_posterior
 from .posterior import LogPosterior
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
@@ -52,8 +55,13 @@ def _loo(posterior, draws_u):
             "reliable": bool(max_k < 0.7)}
 
 
+PATHS = ("reference", "prior")
+"""Where the ladder starts: a reference density fitted to a pilot run (default; few nats to
+cross) or the prior (thousands of nats on creep data; kept for the closed-form validation)."""
+
+
 def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, tunneling="smooth",
-            likelihood="gaussian", settings=None, seed=0, with_loo=True):
+            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None):
     """Compare creep models on every (or the chosen) specimen by log-evidence.
 
     Parameters
@@ -65,23 +73,33 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
     specimens : sequence of str, optional
         Default: all specimens in the data.
     settings : LadderSettings, optional
+        Default: :data:`~fsrbayes.inference.reference.REFERENCED_LADDER` on the reference path,
+        ``LadderSettings()`` on the prior path.
     seed : int
+    path : {"reference", "prior"}
+        The ladder's β = 0 end: a Student-t reference in transport-map coordinates fitted to a
+        pilot run (:mod:`~fsrbayes.inference.reference`), or the prior.
+    pilot : SamplerSettings, optional
+        The reference path's pilot run (default :data:`~fsrbayes.inference.reference.PILOT_SETTINGS`).
 
     Returns
     -------
     dict
-        JSON-ready: ``models.<name>`` with ``log_evidence``, ``log_evidence_err`` (summed over
+        JSON-ready (non-finite numbers as None): ``models.<name>`` with ``log_evidence``, ``log_evidence_err`` (summed over
         specimens), ``per_specimen`` and ``loo``; ``preferred``; ``bayes_factors`` (ln B of the
         preferred model over each other, with error); ``strength``; ``scale``.
     """
     models = list(dict.fromkeys(models))
     if len(models) < 2:
         raise ValueError(f"compare needs at least two models, got {models}")
-    settings = settings or LadderSettings()
+    if path not in PATHS:
+        raise ValueError(f"path must be one of {PATHS}, got {path!r}")
+    settings = settings or (REFERENCED_LADDER if path == "reference" else LadderSettings())
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     out = {"models": {}, "specimens": specimens, "scale": "Kass & Raftery 1995 on 2 ln B: <2 bare mention, "
            "2-6 positive, 6-10 strong, >10 very strong; inconclusive when ln B < 2 sigma",
-           "settings": asdict(settings)}
+           "settings": {**asdict(settings), "path": path}}
+    burgers_draws = {}
     for m_index, model in enumerate(models):
         entry = {"per_specimen": {}, "loo": {}}
         for s_index, specimen in enumerate(specimens):
@@ -89,7 +107,10 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
             chosen = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
             posterior = LogPosterior.for_sensor(packed, chosen, model=model, tunneling=tunneling,
                                                 likelihood=likelihood)
-            result = log_evidence(posterior, settings, seed=[seed, m_index, s_index])
+            job_seed = [seed, m_index, s_index]
+            result = (referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS)
+                      if path == "reference"
+                      else log_evidence(posterior, settings, seed=job_seed))
             entry["per_specimen"][specimen] = {
                 "log_evidence": result.log_z, "log_evidence_err": result.error, "bridge": result.bridge,
                 "ti_corrected": result.ti_corrected, "sigma_batch": result.sigma_batch,
@@ -98,6 +119,8 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
             if with_loo:
                 entry["loo"][specimen] = _loo(posterior, result.posterior_draws.reshape(
                     settings.replicates, -1, posterior.ndim))
+            if model == "burgers" and "zener" in models:
+                burgers_draws[specimen] = (posterior, result.posterior_draws)
         values = [v["log_evidence"] for v in entry["per_specimen"].values()]
         errors = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
         entry["log_evidence"] = float(np.sum(values))
@@ -116,4 +139,26 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
         out["bayes_factors"][model] = {"log_bf_preferred_over": log_bf, "err": error, "strength": strength(log_bf, error)}
     rank = {words: i for i, (_, words) in enumerate(KASS_RAFTERY)}  # the weakest comparison speaks
     out["strength"] = min((v["strength"] for v in out["bayes_factors"].values()), key=lambda w: rank.get(w, -1))
-    return out
+    if burgers_draws:
+        out["savage_dickey"] = _savage_dickey_check(out, burgers_draws)
+    return json_ready(out)
+
+
+def _savage_dickey_check(out, burgers_draws, max_draws=8000):
+    """Savage–Dickey ln B(zener over burgers) per specimen from the Burgers β = 1 draws, beside
+    the evidence difference (both ± error); ``reliable`` is False when the posterior of the
+    fluidity lies so far from 0 (mean > 3.5 sd) that the density at 0 is a far-tail estimate, or
+    when fewer than 200 effective draws carry the estimate."""
+    per = {}
+    for specimen, (posterior, draws_u) in burgers_draws.items():
+        flat = draws_u.reshape(-1, posterior.ndim)
+        flat = flat[np.linspace(0, len(flat) - 1, min(len(flat), max_draws)).astype(int)]
+        x, _ = posterior.prior.from_unconstrained(flat)
+        result = savage_dickey_posterior(posterior, x)
+        phi = x[:, posterior.names.index("inv_b1")]
+        z, b = (out["models"][m]["per_specimen"][specimen] for m in ("zener", "burgers"))
+        per[specimen] = {"log_b_zener_over_burgers": result.log_b01, "err": result.error,
+                         "evidence_difference": z["log_evidence"] - b["log_evidence"],
+                         "evidence_difference_err": float(np.hypot(z["log_evidence_err"], b["log_evidence_err"])),
+                         "ess": result.ess, "reliable": bool(phi.mean() < 3.5 * phi.std() and result.ess >= 200)}
+    return {"per_specimen": per, "method": "Chen's importance-weighted density of inv_b1 at 0 (Savage-Dickey)"}
