@@ -1,5 +1,7 @@
 """The referenced evidence path (generalised stepping-stone) against closed forms."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -14,7 +16,7 @@ LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates
 def exact_posterior(target):
     precision = np.eye(target.ndim) / target.tau**2 + target.X.T @ target.X / target.s**2
     cov = np.linalg.inv(precision)
-    return cov @ (target.X.T @ target.y / target.s**2), cov
+    return cov @ (target.m0 / target.tau**2 + target.X.T @ target.y / target.s**2), cov
 
 
 @pytest.mark.parametrize("ndim", [2, 10])
@@ -80,3 +82,24 @@ def test_referenced_target_gives_minus_inf_not_nan_off_the_support():
     log_g, log_ratio = referenced.log_prior_and_likelihood(w)
     assert np.isfinite(log_ratio[0]) and log_ratio[1] == -np.inf and log_ratio[2] == -np.inf
     assert not np.any(np.isnan(log_ratio))
+
+
+def _referenced_from_a_poor_reference(problem, settings, seed):
+    # g fitted to exact posterior draws shifted by half a posterior sd and 1.5x too wide.
+    rng = np.random.default_rng([seed, 99])
+    exact = problem.posterior_draws(rng, 4000)
+    centre = exact.mean(axis=0)
+    draws = centre + 0.5 * exact.std(axis=0) + 1.5 * (exact - centre)
+    return referenced_log_evidence(problem, settings, seed=seed, draws=draws)
+
+
+@pytest.mark.slow
+def test_referenced_error_bars_cover_the_exact_log_z_at_their_nominal_rates():
+    from fsrbayes.inference.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
+
+    study = evidence_coverage(lambda k: LinearGaussian(10, seed=3000 + k), 40, replace(LADDER, processes=2), seed=11,
+                              estimator=_referenced_from_a_poor_reference)
+    print(format_evidence_coverage(study, "referenced path, linear-Gaussian 10-d, poor reference"))
+    for k in NOMINAL:
+        low, high = study["range_99"][k]
+        assert low <= study["coverage"][k] <= high, format_evidence_coverage(study, "referenced")
