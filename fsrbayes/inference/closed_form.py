@@ -44,12 +44,15 @@ class LinearGaussian:
     def sample_prior(self, rng, n):
         return self.m0 + self.tau * rng.standard_normal((n, self.ndim))
 
-    def posterior_draws(self, rng, n):
-        """n exact posterior draws (the conjugate Gaussian)."""
+    def posterior_moments(self):
+        """Mean and covariance of the (conjugate Gaussian) posterior."""
         precision = np.eye(self.ndim) / self.tau**2 + self.X.T @ self.X / self.s**2
         cov = np.linalg.inv(precision)
-        mean = cov @ (self.m0 / self.tau**2 + self.X.T @ self.y / self.s**2)
-        return rng.multivariate_normal(mean, cov, n)
+        return cov @ (self.m0 / self.tau**2 + self.X.T @ self.y / self.s**2), cov
+
+    def posterior_draws(self, rng, n):
+        """n exact posterior draws."""
+        return rng.multivariate_normal(*self.posterior_moments(), n)
 
     def exact_log_z(self):
         cov = self.s**2 * np.eye(len(self.y)) + self.tau**2 * self.X @ self.X.T

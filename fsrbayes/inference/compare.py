@@ -17,9 +17,9 @@ from ..data.sensors import load_sensor
 from ..utils import json_ready
 from .evidence import LadderSettings, log_evidence
 from .fit import _select
+from .posterior import LogPosterior
 from .reference import PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
 from .savage_dickey import savage_dickey_posterior
-from .posterior import LogPosterior
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
 

@@ -25,6 +25,7 @@ Implemented as a target for :func:`~fsrbayes.inference.evidence.log_evidence`: i
 the t density in w and its "log-likelihood" is log[L·π/g] — the ladder code is unchanged.
 """
 
+import time
 import warnings
 from dataclasses import dataclass, replace
 
@@ -140,14 +141,11 @@ REFERENCED_LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600,
 def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000):
     """Posterior draws in u (n, ndim) from a short run started at the MAP (ConvergenceWarnings
     of the pilot are silenced: its quality only affects the evidence's precision)."""
-    from .fit import find_map, laplace_start
+    from .fit import ensemble_start, find_map
 
     rng = np.random.default_rng(seed)
     optimum = find_map(posterior, rng, n_starts=2)[0]
-    n_walk = settings.walkers_for(posterior.ndim)
-    start = laplace_start(posterior, optimum, rng, (settings.n_ensembles, n_walk))
-    bad = ~np.isfinite(posterior(start.reshape(-1, posterior.ndim))).reshape(start.shape[:2])
-    start[bad] = optimum + 1e-3 * rng.standard_normal((int(bad.sum()), posterior.ndim))
+    start = ensemble_start(posterior, optimum, rng, (settings.n_ensembles, settings.walkers_for(posterior.ndim)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         run = run_ensembles(posterior, start, seed, replace(settings, processes=processes))
@@ -177,8 +175,6 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
         With ``posterior_draws`` mapped back to u and ``settings`` noting the reference; its
         ``seconds`` include the pilot.
     """
-    import time
-
     if hasattr(posterior, "prior") and hasattr(posterior.prior, "dists"):
         check_priors_for_evidence(posterior.prior)
     start = time.perf_counter()
