@@ -15,7 +15,7 @@ import numpy as np  # noqa: E402
 __all__ = ["corner_plot", "band_plot", "drift_3600_plot", "population_drift_plot", "diagnosis_drift_plot",
            "diagnosis_misfit_plot", "diagnosis_residual_plot", "sbc_rank_plot", "save_figure"]
 
-PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "k1", "k2", "b2", "inv_b1", "psi", "n")
+PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "R0", "k1", "k2", "b2", "inv_b1", "psi", "n")
 
 
 def corner_plot(tree, names=None):

@@ -72,3 +72,20 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
         r = cli("compare", str(data), *bad)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
+    """Eq. 14 is ohmic (I ∝ V): on its own data across 0.2–3 V the paper's tunneling law cannot follow, and
+    on the paper's model's data the ohmic law cannot follow the voltage dependence."""
+    verdicts = {}
+    for truth in ("kalantari", "zener"):
+        sim = syn.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[4.9], samples=5, seed=4,
+                           rheology=truth)
+        out = fsrbayes.compare(sim.data, ["kalantari", "zener"], settings=TINY, seed=1, pilot=TINY_PILOT,
+                               with_loo=False)
+        assert "savage_dickey" not in out or not out["savage_dickey"].get("per_specimen")
+        loser = next(m for m in out["models"] if m != out["preferred"])
+        verdicts[truth] = (out["preferred"], out["bayes_factors"][loser])
+    for truth, (preferred, bf) in verdicts.items():
+        assert preferred == truth, verdicts
+        assert bf["log_bf_preferred_over"] > 20 and bf["strength"] == "very strong", verdicts

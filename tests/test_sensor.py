@@ -5,6 +5,8 @@ import pytest
 
 import fsrbayes
 from fsrbayes.physics import loading, peers, sensor as fsr
+from fsrbayes.physics.effects import model_parameters, parse_model
+from fsrbayes.physics.sensor import resistances, voltage_divider
 from fsrbayes.physics.constants import KAPPA
 
 
@@ -114,6 +116,39 @@ def test_kalantari_eq14_limits_and_voltage_independence():
     drift_high = peers.kalantari_current(5.0, t, 4.9, 41.85e-6, **kwargs)
     np.testing.assert_allclose(drift_low / drift_low[0], drift_high / drift_high[0], rtol=1e-14)
     assert np.all(np.diff(drift_low) > 0)
+
+
+def test_kalantari_model_in_canonical_names_is_eq14(a201):
+    """rheology="kalantari": eq. 14 with s_rest = s0, Zener (E0, E1, μ1) = (k1, k2, b2) and the
+    Hertzian contact (ρ1 + ρ2)/2·sqrt(πH/F) = 2·Rc0·σ^(−1/2)."""
+    area, sigma, theta, hardness = 41.85e-6, 1.2e5, 0.2, 1e8
+    diameter = a201["s0"] / ((np.pi / (6 * theta)) ** (1 / 3) - 1)
+    rho = 2 * 2 * a201["Rc0"] * np.sqrt(area) / np.sqrt(np.pi * hardness)
+    t = np.linspace(0, 3600, 6)[:, None]
+    volts = np.array([0.1, 1.0, 5.0])
+    expected = peers.kalantari_current(volts, t, sigma * area, area, R0=a201["R0"], E0=a201["k1"], E1=a201["k2"],
+                                       mu1=a201["b2"], Va=a201["Va"], diameter=diameter, volume_fraction=theta,
+                                       rho1=rho, rho2=0.0, hardness=hardness)
+    current = fsrbayes.current(a201, volts, sigma, t, rheology="kalantari")
+    np.testing.assert_allclose(current, expected, rtol=1e-12)
+    drift = fsrbayes.drift(a201, volts, sigma, 3600.0, rheology="kalantari")
+    np.testing.assert_allclose(drift, drift[0], rtol=1e-12)  # ohmic: the drift ignores V (the paper's objection)
+    assert drift[0] > 0
+    parts = resistances(a201, 1.0, sigma, 3600.0, rheology="kalantari")
+    assert parts["R_fsr"] == pytest.approx(parts["R_bulk"] + 2 * parts["Rc"], rel=1e-12)
+    divider = voltage_divider(a201, 5.0, 1e12, sigma, 3600.0, rheology="kalantari")
+    assert divider.v_fsr / divider.current == pytest.approx(parts["R_fsr"], rel=1e-12)
+    with pytest.warns(fsr.DomainWarning, match="outside the validity domain"):
+        closed = fsrbayes.current({**a201, "k1": 1e4}, 1.0, 1e5, 0.0, rheology="kalantari", on_invalid="nan")
+    assert np.isnan(closed)  # ε = 10 ≥ 1: the gap is closed, not a negative current
+
+
+def test_kalantari_takes_no_effects_and_needs_r0(a201):
+    with pytest.raises(ValueError, match="takes no"):
+        parse_model("kalantari+area-creep")
+    assert model_parameters("kalantari") == ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2")
+    with pytest.raises(KeyError, match="R0"):
+        fsrbayes.current({k: v for k, v in a201.items() if k != "R0"}, 1.0, 1e5, 0.0, rheology="kalantari")
 
 
 def test_bad_arguments_are_named(a201):

@@ -9,7 +9,7 @@ import sys
 from .._version import __version__
 from ..data.sensors import available_sensors
 from ..inference.parallel import JobError
-from ..physics.effects import EFFECTS
+from ..physics.effects import EFFECTS, MODEL_FAMILIES
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
@@ -63,7 +63,8 @@ def build_parser():
     sim.add_argument("--amp-offset", type=float, default=0.0, help="sd of a constant amplifier offset per test, V")
     sim.add_argument("--readout", choices=("current", "amplifier"), default="current",
                      help="write current_A, or vo_V and rf_ohm (eq. 23)")
-    sim.add_argument("--rheology", choices=("burgers", "zener", "nutting"), default="burgers")
+    sim.add_argument("--rheology", choices=MODEL_FAMILIES, default="burgers",
+                     help="creep law of the paper's model, or kalantari (the peer model of eq. 14; no --effect)")
     sim.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     sim.add_argument("--effect", action="append", metavar="NAME[=params]",
                      help=f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets its "
@@ -76,7 +77,8 @@ def build_parser():
     fit_.add_argument("data", help="creep-test CSV")
     fit_.add_argument("--out", required=True, help="output folder (one subfolder per specimen when several)")
     fit_.add_argument("--specimen", help="fit only this specimen")
-    fit_.add_argument("--model", default="burgers", help="burgers, zener or nutting, optionally +effect terms")
+    fit_.add_argument("--model", default="burgers", help="burgers, zener or nutting, optionally +effect terms; or kalantari "
+                      "(Kalantari et al.'s eq. 14)")
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fit_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
@@ -101,7 +103,8 @@ def build_parser():
 
     cmp_ = sub.add_parser("compare", help="model comparison by log-evidence (stepping-stone) with error bars")
     cmp_.add_argument("data", help="creep-test CSV")
-    cmp_.add_argument("--models", default="zener,burgers", help="comma-separated models (default zener,burgers)")
+    cmp_.add_argument("--models", default="zener,burgers", help="comma-separated models: burgers, zener, nutting (+effects), "
+                      "kalantari (default zener,burgers)")
     cmp_.add_argument("--specimen", help="compare on this specimen only (default: all, summed)")
     cmp_.add_argument("--json", help="write the result here (atomically)")
     cmp_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")

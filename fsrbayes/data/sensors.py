@@ -22,7 +22,7 @@ CANONICAL_PARAMETERS = {
     "alpha": "–", "Rc0": "Ω·Pa^alpha", "sigma0": "Pa", "k1": "Pa", "k2": "Pa", "b2": "Pa·s",
     "inv_b1": "1/(Pa·s)", "psi": "1/(Pa·s^n)", "n": "–", "sigma_rel": "–", "nu": "–",
     "area_creep": "–", "contact_creep": "–", "plc_psi": "1/(Pa·s^n)", "plc_n": "–", "deg_amp": "–",
-    "deg_onset": "V", "deg_tau": "s", "deg_width": "V",
+    "deg_onset": "V", "deg_tau": "s", "deg_width": "V", "R0": "Ω",
 }
 """Every parameter a model file defines, with its unit (DESIGN.md §1)."""
 
@@ -84,7 +84,7 @@ class Sensor:
         Parameters
         ----------
         model : str
-            ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms.
+            ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
         noise : tuple of str
             Likelihood parameters to append (``sigma_rel``; ``nu`` for Student-t).
 

@@ -246,7 +246,10 @@ def diagnose(data, base="burgers", *, effects=None, specimens=None, sensor=None,
     import time
 
     started = time.perf_counter()
-    _, had = parse_model(base)
+    family, had = parse_model(base)
+    if family == "kalantari":
+        raise ValueError("diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) takes "
+                         "none: use burgers, zener or nutting")
     effects = check_effects(effects if effects is not None else [e for e in EFFECTS if e not in had])
     effects = tuple(e for e in effects if e not in had)
     if not effects:

@@ -69,7 +69,7 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
     data : CreepData
     models : sequence of str
         Model names as in :func:`fsrbayes.fit` (``burgers``, ``zener``, ``nutting``, with
-        ``+effect`` terms).
+        ``+effect`` terms, and the peer model ``kalantari`` of eq. 14).
     specimens : sequence of str, optional
         Default: all specimens in the data.
     settings : LadderSettings, optional

@@ -198,7 +198,7 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     specimen : str, optional
         Which specimen (needed when the data hold several).
     model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms.
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     sensor : Sensor or str, optional

@@ -70,7 +70,7 @@ class LogPosterior(PriorScaledTarget):
     fixed : mapping
         Values of the model's other parameters (not sampled).
     model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms.
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     beta : float

@@ -29,7 +29,7 @@ import numpy as np
 
 from .rheology import RHEOLOGIES
 
-__all__ = ["Effect", "EFFECTS", "parse_model", "check_effects"]
+__all__ = ["Effect", "EFFECTS", "MODEL_FAMILIES", "CREEP_LAW", "parse_model", "check_effects", "model_parameters"]
 
 
 @dataclass(frozen=True)
@@ -80,13 +80,22 @@ def check_effects(effects):
     return effects
 
 
+MODEL_FAMILIES = RHEOLOGIES + ("kalantari",)
+"""First terms of a model name: the paper's circuit with a creep law of the gap, or the peer
+model of Kalantari et al. (eq. 14: ohmic bulk, Zener creep, Hertzian contact)."""
+CREEP_LAW = {"burgers": "burgers", "zener": "zener", "nutting": "nutting", "kalantari": "zener"}
+"""The creep law each model family uses for the strain ε(t)."""
+
+
 def parse_model(model):
-    """Split a model name such as ``"burgers+area-creep"`` into (rheology, effects).
+    """Split a model name such as ``"burgers+area-creep"`` into (family, effects).
 
     Parameters
     ----------
     model : str
-        A rheology (``burgers``, ``zener``, ``nutting``) optionally followed by ``+effect`` terms.
+        A rheology of the paper's model (``burgers``, ``zener``, ``nutting``) optionally followed
+        by ``+effect`` terms, or ``kalantari`` (the peer model of eq. 14, which takes no effects:
+        the catalogue extends the paper's circuit).
 
     Returns
     -------
@@ -95,8 +104,11 @@ def parse_model(model):
     """
     parts = [p.strip() for p in str(model).split("+")]
     rheology, effects = parts[0].lower(), parts[1:]
-    if rheology not in RHEOLOGIES:
-        raise ValueError(f"model {model!r}: the first term must be one of {RHEOLOGIES}, got {rheology!r}")
+    if rheology not in MODEL_FAMILIES:
+        raise ValueError(f"model {model!r}: the first term must be one of {MODEL_FAMILIES}, got {rheology!r}")
+    if rheology == "kalantari" and effects:
+        raise ValueError(f"model {model!r}: the Kalantari et al. model (eq. 14) takes no +effect terms; "
+                         f"the effect catalogue extends the paper's model ({', '.join(RHEOLOGIES)})")
     return rheology, check_effects(effects)
 
 
@@ -131,6 +143,10 @@ BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0")
 """Parameters of the tunneling and contact laws every model uses (Vth: paper law only)."""
 RHEOLOGY_PARAMETERS = {"burgers": ("k1", "k2", "b2", "inv_b1"), "zener": ("k1", "k2", "b2"), "nutting": ("k1", "psi", "n")}
 """Parameters of each creep law."""
+KALANTARI_PARAMETERS = ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2")
+"""Kalantari et al.'s eq. 14 in the canonical names: bulk resistance at rest R0, rest gap s0
+(their D·[(π/6θ)^(1/3) − 1]) and barrier Va, the Hertzian contact 2·Rc0·σ^(−1/2) (their
+(ρ1 + ρ2)/2·sqrt(πH/F)) and the Zener element E0, E1, μ1 = k1, k2, b2."""
 
 
 def model_parameters(model="burgers"):
@@ -139,13 +155,16 @@ def model_parameters(model="burgers"):
     Parameters
     ----------
     model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally with ``+effect`` terms.
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally with ``+effect`` terms, or
+        ``"kalantari"``.
 
     Returns
     -------
     tuple of str
     """
     rheology, effects = parse_model(model)
+    if rheology == "kalantari":
+        return KALANTARI_PARAMETERS
     names = list(BASE_PARAMETERS) + list(RHEOLOGY_PARAMETERS[rheology])
     for effect in effects:
         names += [p for p in EFFECTS[effect].parameters if p not in names]

@@ -17,7 +17,7 @@ import numpy as np
 from .constants import KAPPA
 from .rheology import burgers_compliance
 
-__all__ = ["rest_gap", "zhang_resistance_ratio", "kalantari_resistance", "kalantari_current"]
+__all__ = ["rest_gap", "zhang_resistance_ratio", "kalantari_bulk_resistance", "kalantari_resistance", "kalantari_current"]
 
 
 def rest_gap(diameter, volume_fraction):
@@ -52,6 +52,31 @@ def zhang_resistance_ratio(t, stress, psi, n, eps0, Va, diameter, volume_fractio
     creep = psi * np.asarray(stress, dtype=float) * np.maximum(np.asarray(t, dtype=float), 0.0) ** n
     s_rest = rest_gap(diameter, volume_fraction)
     return (1.0 - creep / (1.0 - eps0)) * np.exp(-KAPPA * np.sqrt(Va) * s_rest * creep)
+
+
+def kalantari_bulk_resistance(strain, R0, rest_gap, Va):
+    """Bulk term of eq. 14, R0·(1 − ε)·exp(−(4π/h)·sqrt(2 m Va)·s_rest·ε), in Ω.
+
+    Simmons' low-voltage law (eq. 9 form) for a gap s = s_rest·(1 − ε): the prefactor is the gap
+    ratio, the exponential the thinner barrier. Ohmic: independent of the voltage.
+
+    Parameters
+    ----------
+    strain : array_like
+        Creep strain ε (< 1).
+    R0 : array_like
+        Bulk resistance at rest in Ω.
+    rest_gap : array_like
+        Inter-particle gap at rest s_rest in m.
+    Va : array_like
+        Barrier height in eV.
+
+    References
+    ----------
+    Paper eq. (14).
+    """
+    strain = np.asarray(strain, dtype=float)
+    return R0 * (1.0 - strain) * np.exp(-KAPPA * np.sqrt(Va) * rest_gap * strain)
 
 
 def kalantari_resistance(t, force, sensor_area, *, R0, E0, E1, mu1, Va, diameter, volume_fraction,
@@ -96,8 +121,7 @@ def kalantari_resistance(t, force, sensor_area, *, R0, E0, E1, mu1, Va, diameter
     stress = force / sensor_area
     strain = stress * burgers_compliance(t, E0, E1, mu1, 0.0)
     contact = 0.5 * (rho1 + rho2) * np.sqrt(np.pi * hardness / force)
-    s_rest = rest_gap(diameter, volume_fraction)
-    return contact + R0 * (1.0 - strain) * np.exp(-KAPPA * np.sqrt(Va) * s_rest * strain)
+    return contact + kalantari_bulk_resistance(strain, R0, rest_gap(diameter, volume_fraction), Va)
 
 
 def kalantari_current(voltage, t, force, sensor_area, **kwargs):
