@@ -86,6 +86,7 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
         assert "savage_dickey" not in out or not out["savage_dickey"].get("per_specimen")
         loser = next(m for m in out["models"] if m != out["preferred"])
         verdicts[truth] = (out["preferred"], out["bayes_factors"][loser])
+    print(verdicts)
     for truth, (preferred, bf) in verdicts.items():
         assert preferred == truth, verdicts
         assert bf["log_bf_preferred_over"] > 20 and bf["strength"] == "very strong", verdicts

@@ -7,7 +7,7 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.transport import MappedLogProb, TriangularMap
+from fsrbayes.inference.transport import IndependenceProposal, MappedLogProb, TriangularMap, student_t_log_density
 
 BEND, WIDTH = 1.0, 0.05
 
@@ -62,25 +62,62 @@ def test_identity_map_and_too_few_draws():
         TriangularMap.fit(x[:, :3].repeat(2, axis=0))
 
 
-def _banana_run(rounds):
+def _banana_run(rounds, independence_fraction):
     start = np.random.default_rng(5).normal(size=(4, 32, 3)) * 0.3
-    settings = SamplerSettings(chunk=500, max_steps=4000, min_steps=4000, transport_rounds=rounds)
+    settings = SamplerSettings(chunk=500, max_steps=4000, min_steps=4000, transport_rounds=rounds,
+                               independence_fraction=independence_fraction)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         return run_ensembles(Banana(), start, seed=11, settings=settings)
 
 
-def test_sampling_through_the_map_is_exact_and_faster_on_a_banana():
-    plain, mapped = _banana_run(0), _banana_run(3)
-    assert mapped.report.tau.max() < 0.5 * plain.report.tau.max(), (plain.report.worst(), mapped.report.worst())
-    assert mapped.report.converged, mapped.report.worst()
-    chain, _ = mapped.kept()
-    flat = chain[:, :: int(np.ceil(mapped.report.tau.max()))].reshape(-1, 3)
+def _assert_banana_draws(run):
+    chain, _ = run.kept()
+    flat = chain[:, :: int(np.ceil(run.report.tau.max()))].reshape(-1, 3)
     assert stats.kstest(flat[:, 0], "norm").pvalue > 0.003
     assert stats.kstest(flat[:, 2], "norm").pvalue > 0.003
     reference = banana_draws(200000, np.random.default_rng(6))[:, 1]
     assert stats.ks_2samp(flat[:, 1], reference).pvalue > 0.003
+
+
+@pytest.fixture(scope="module")
+def mapped_banana():
+    return _banana_run(3, independence_fraction=0.0)
+
+
+def test_sampling_through_the_map_is_exact_and_faster_on_a_banana(mapped_banana):
+    plain, mapped = _banana_run(0, independence_fraction=0.0), mapped_banana
+    assert mapped.report.tau.max() < 0.5 * plain.report.tau.max(), (plain.report.worst(), mapped.report.worst())
+    assert mapped.report.converged, mapped.report.worst()
+    _assert_banana_draws(mapped)
     assert mapped.chain.shape[1] - mapped.report.n_kept == 1500  # three warm-up chunks
+
+
+def test_independence_moves_keep_the_banana_exact_and_cut_tau(mapped_banana):
+    mixed = _banana_run(3, independence_fraction=0.3)
+    assert mixed.report.converged, mixed.report.worst()
+    assert mixed.report.tau.max() < 0.7 * mapped_banana.report.tau.max(), (mapped_banana.report.worst(),
+                                                                            mixed.report.worst())
+    _assert_banana_draws(mixed)
+
+
+def test_independence_proposal_ratio_is_exact():
+    rng = np.random.default_rng(7)
+    draws = rng.standard_normal((5000, 4)) @ np.array([[2, 0, 0, 0], [1, 1, 0, 0], [0, 0, 3, 0], [0, 1, 0, .5]]).T + 3
+    for dof in (np.inf, 5.0):
+        g = IndependenceProposal.fit(draws, dof=dof, inflate=1.3)
+        x = draws[:50]
+        new, log_ratio = g(x, np.random.RandomState(1))
+        assert new.shape == x.shape and np.all(np.isfinite(log_ratio))
+        # with the target equal to g the Metropolis–Hastings ratio is exactly 1: every proposal is accepted
+        assert np.allclose(g.log_density(new) - g.log_density(x) + log_ratio, 0.0, atol=1e-10)
+        w = g.whiten(new)
+        assert np.allclose(g.log_density(new), student_t_log_density(w, dof))
+    big = IndependenceProposal.fit(draws, dof=np.inf).whiten(IndependenceProposal.fit(draws, dof=np.inf)(
+        np.zeros((20000, 4)), np.random.RandomState(2))[0])
+    assert np.allclose(np.cov(big.T), np.eye(4), atol=0.05)
+    with pytest.raises(ValueError, match="independence_fraction"):
+        SamplerSettings(independence_fraction=1.0)
 
 
 def test_linear_map_whitens_a_correlated_gaussian_in_many_dimensions():

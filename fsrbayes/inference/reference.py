@@ -30,11 +30,9 @@ import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.special import gammaln
-
 from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence
 from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles
-from .transport import TriangularMap
+from .transport import TriangularMap, student_t_draws, student_t_log_density
 
 __all__ = ["ReferenceDensity", "ReferencedTarget", "PILOT_SETTINGS", "REFERENCED_LADDER", "pilot_draws",
            "referenced_log_evidence"]
@@ -80,21 +78,11 @@ class ReferenceDensity:
 
     def log_prob_w(self, w):
         """Normalised log density of w."""
-        w = np.asarray(w, dtype=float)
-        d = self.ndim
-        r2 = np.sum(w * w, axis=-1)
-        if np.isinf(self.dof):
-            return -0.5 * r2 - 0.5 * d * np.log(2.0 * np.pi)
-        nu = self.dof
-        return (gammaln(0.5 * (nu + d)) - gammaln(0.5 * nu) - 0.5 * d * np.log(nu * np.pi)
-                - 0.5 * (nu + d) * np.log1p(r2 / nu))
+        return student_t_log_density(w, self.dof)
 
     def sample_w(self, rng, n):
         """n i.i.d. draws of w."""
-        z = rng.standard_normal((n, self.ndim))
-        if np.isinf(self.dof):
-            return z
-        return z / np.sqrt(rng.chisquare(self.dof, size=(n, 1)) / self.dof)
+        return student_t_draws(rng, n, self.ndim, self.dof)
 
 
 @dataclass(frozen=True)

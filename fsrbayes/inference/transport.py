@@ -23,8 +23,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.special import gammaln
 
-__all__ = ["TriangularMap", "MappedLogProb"]
+__all__ = ["TriangularMap", "MappedLogProb", "IndependenceProposal", "student_t_log_density", "student_t_draws"]
 
 
 QUADRATIC_MAX_DIM = 14
@@ -192,3 +193,60 @@ class MappedLogProb:
 
     def __call__(self, v):
         return self.log_prob(self.transport.forward(v)) + self.transport.log_det_jacobian
+
+
+def student_t_log_density(w, dof):
+    """Normalised log density of a standard multivariate Student-t (``dof = inf``: Gaussian) at w (…, d)."""
+    w = np.asarray(w, dtype=float)
+    d = w.shape[-1]
+    r2 = np.sum(w * w, axis=-1)
+    if np.isinf(dof):
+        return -0.5 * r2 - 0.5 * d * np.log(2.0 * np.pi)
+    return (gammaln(0.5 * (dof + d)) - gammaln(0.5 * dof) - 0.5 * d * np.log(dof * np.pi)
+            - 0.5 * (dof + d) * np.log1p(r2 / dof))
+
+
+def student_t_draws(random, n, d, dof):
+    """n draws (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
+    z = random.standard_normal((n, d))
+    if np.isinf(dof):
+        return z
+    return z / np.sqrt(random.chisquare(dof, size=(n, 1)) / dof)
+
+
+@dataclass(frozen=True)
+class IndependenceProposal:
+    """Independence Metropolis–Hastings proposal for emcee's ``MHMove``: x' ~ g, a multivariate
+    Student-t with the mean and covariance of warm-up draws, whatever the current x.
+
+    The acceptance ratio is p(x')·g(x) / (p(x)·g(x')), so the move is exact for any fixed g;
+    where the warm-up draws describe the posterior well (in the transport map's straightened
+    coordinates they nearly do) a walker jumps across the whole posterior in one accepted step,
+    which the ensemble moves need τ ≈ 40+ steps for even on a Gaussian. Mixed with them it
+    shortens the autocorrelation time; it must stay fixed while the kept chain is drawn.
+    (Tierney, Ann. Statist. 22, 1701, 1994, section 2.3.3.)
+    """
+
+    mean: np.ndarray
+    chol: np.ndarray
+    dof: float = 10.0
+
+    @classmethod
+    def fit(cls, draws, dof=10.0, inflate=1.0):
+        """Fit to draws (n, d): their mean and covariance (scaled by ``inflate``²)."""
+        draws = np.asarray(draws, dtype=float)
+        cov = np.atleast_2d(np.cov(draws, rowvar=False)) * inflate**2
+        return cls(draws.mean(axis=0), np.linalg.cholesky(cov), float(dof))
+
+    def whiten(self, x):
+        return np.linalg.solve(self.chol, (np.asarray(x, dtype=float) - self.mean).T).T
+
+    def log_density(self, x):
+        """log g(x) up to a constant."""
+        return student_t_log_density(self.whiten(x), self.dof)
+
+    def __call__(self, coords, random):
+        """emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
+        coords = np.asarray(coords, dtype=float)
+        new = self.mean + student_t_draws(random, coords.shape[0], coords.shape[1], self.dof) @ self.chol.T
+        return new, self.log_density(coords) - self.log_density(new)
