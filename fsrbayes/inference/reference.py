@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence
 from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles
-from .transport import TriangularMap, student_t_draws, student_t_log_density
+from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
 
 __all__ = ["ReferenceDensity", "ReferencedTarget", "PILOT_SETTINGS", "REFERENCED_LADDER", "pilot_draws",
            "referenced_log_evidence"]
@@ -55,8 +55,8 @@ class ReferenceDensity:
         """Fit T, then the mean and covariance of T⁻¹(draws); draws (n, ndim) of the posterior in u."""
         draws = np.asarray(draws, dtype=float)
         transport = TriangularMap.fit(draws)
-        v = transport.inverse(draws)
-        return cls(transport, v.mean(axis=0), np.linalg.cholesky(np.cov(v, rowvar=False)), float(dof))
+        whitening = IndependenceProposal.fit(transport.inverse(draws), dof)
+        return cls(transport, whitening.mean, whitening.chol, float(dof))
 
     @property
     def ndim(self):

@@ -284,15 +284,14 @@ def _advance(log_prob, position, log_prob_start, random_state, steps, de_fractio
     """Run one ensemble for ``steps`` from a position and random state; return its new pieces.
 
     With a ``transport`` map the walkers move in v = T⁻¹(u); positions and log-densities come
-    in and go out in u. A ``proposal`` (in v) adds independence moves.
+    in and go out in u. A ``proposal`` (in v; only with a map) adds independence moves.
     """
     n_walk, ndim = position.shape
     target = log_prob
     if transport is not None:
         target, position, log_prob_start = MappedLogProb(log_prob, transport), transport.inverse(position), None
     sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True,
-                                    moves=_moves(de_fraction, proposal if transport is not None else None,
-                                                 independence_fraction))
+                                    moves=_moves(de_fraction, proposal, independence_fraction))
     sampler.random_state = random_state
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
     with single_threaded_blas():
