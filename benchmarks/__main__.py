@@ -1,6 +1,6 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
 
-Without names all run but ``dynesty`` (an optional cross-check, about an hour on 2 cores; needs
+Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs
 ``pip install dynesty``); ``fit`` (a full converged Burgers fit), ``evidence``, ``hierarchical``,
 ``diagnose`` and ``demo`` take minutes.
 """
