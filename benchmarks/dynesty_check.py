@@ -31,6 +31,7 @@ from scipy import special
 from benchmarks.evidence import specimen_posterior
 from fsrbayes.inference.evidence import _evaluate
 from fsrbayes.inference.reference import ReferenceDensity, pilot_draws
+from fsrbayes.inference.transport import student_t_log_density
 
 
 class _UnitCube:
@@ -58,9 +59,8 @@ class _Repartitioned:
         return special.stdtrit(self.dof, cube)
 
     def log_base(self, w):
-        nu = self.dof
-        return float(np.sum(special.gammaln(0.5 * (nu + 1)) - special.gammaln(0.5 * nu) - 0.5 * np.log(nu * np.pi)
-                            - 0.5 * (nu + 1) * np.log1p(w * w / nu)))
+        """log h(w): a sum of univariate t log-densities."""
+        return float(np.sum(student_t_log_density(np.asarray(w, dtype=float)[..., None], self.dof)))
 
     def loglike(self, w):
         with np.errstate(all="ignore"):
