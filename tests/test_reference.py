@@ -8,7 +8,7 @@ from scipy import stats
 
 from fsrbayes.inference.closed_form import LinearGaussian, TwoModes
 from fsrbayes.inference.evidence import LadderSettings
-from fsrbayes.inference.reference import ReferenceDensity, ReferencedTarget, referenced_log_evidence
+from fsrbayes.inference.reference import MixtureReference, ReferenceDensity, ReferencedTarget, referenced_log_evidence
 
 LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=40)
 
@@ -97,3 +97,48 @@ def test_referenced_error_bars_cover_the_exact_log_z_at_their_nominal_rates():
     for k in NOMINAL:
         low, high = study["range_99"][k]
         assert low <= study["coverage"][k] <= high, format_evidence_coverage(study, "referenced")
+
+
+def _mode_draws(target, mode, rng, n=3000):
+    return target.centres[mode] + target.s * rng.standard_normal((n, target.ndim))
+
+
+def test_a_reference_fitted_to_one_region_misses_the_other_and_a_mixture_does_not():
+    # The failure the mixture exists for: g fitted to the major mode only (80 % of Z) gives
+    # log Z ≈ truth + log 0.8 with an error bar far too small to show it.
+    target = TwoModes()
+    rng = np.random.default_rng(8)
+    truth = target.exact_log_z()
+    one = referenced_log_evidence(target, LADDER, seed=9, draws=_mode_draws(target, 0, rng))
+    assert one.log_z - truth == pytest.approx(np.log(target.weights[0]), abs=0.05), str(one)
+    assert abs(one.log_z - truth) > 5 * one.error
+    both = referenced_log_evidence(target, LADDER, seed=9, draws=[_mode_draws(target, 0, rng),
+                                                                   _mode_draws(target, 1, rng, 1000)])
+    assert both.error < 0.1, str(both)
+    assert abs(both.log_z - truth) < 3 * both.error + 0.005, f"{both} vs exact {truth:.4f}"
+    assert [c["weight"] for c in both.settings["reference_components"][0]] == [0.5, 0.5]
+    # The β = 1 draws hold both modes in their proportions (labels sum out).
+    u = both.posterior_draws.reshape(-1, target.ndim)
+    assert np.mean(u[:, 0] > 0) == pytest.approx(target.weights[0], abs=0.08)
+
+
+def test_relabelling_keeps_u_and_draws_labels_from_their_conditional():
+    target = TwoModes(ndim=2)
+    rng = np.random.default_rng(10)
+    components = [ReferenceDensity.fit(_mode_draws(target, 0, rng)), ReferenceDensity.fit(_mode_draws(target, 1, rng))]
+    referenced = ReferencedTarget(target, MixtureReference.of(components, [3.0, 1.0]))
+    states = referenced.sample_prior(rng, 20000)
+    assert np.mean(states[:, -1] == 0) == pytest.approx(0.75, abs=0.02)
+    log_prior = referenced.log_prior(states)
+    new, new_log_prior = referenced.relabel(states, log_prior, np.random.RandomState(0))
+    assert np.allclose(referenced.to_target(new), referenced.to_target(states), atol=1e-9)
+    assert np.allclose(new_log_prior, referenced.log_prior(new))
+    # At u midway between the regions the label's conditional is a_j·g_j(u)/g(u).
+    midway = np.column_stack([np.zeros((4000, 2)), np.zeros(4000)])
+    midway[:, :2] = components[0].from_target(np.zeros((4000, 2)))
+    relabelled, _ = referenced.relabel(midway, referenced.log_prior(midway), np.random.RandomState(1))
+    log_p = referenced.reference.component_log_densities(np.zeros(2))
+    expected = np.exp(log_p[0] - np.logaddexp(*log_p))
+    assert np.mean(relabelled[:, -1] == 0) == pytest.approx(expected, abs=0.03)
+    # log_ratio does not depend on the label: it is log L·π − log g at u.
+    assert np.allclose(referenced.log_likelihood(new), referenced.log_likelihood(states), equal_nan=True)

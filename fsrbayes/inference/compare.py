@@ -115,6 +115,8 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
                 "log_evidence": result.log_z, "log_evidence_err": result.error, "bridge": result.bridge,
                 "ti_corrected": result.ti_corrected, "sigma_batch": result.sigma_batch,
                 "sigma_replicates": result.sigma_replicates, "sigma_disc": result.sigma_disc,
+                "sigma_pilot": result.sigma_pilot,
+                "reference_regions": [len(group) for group in result.settings.get("reference_components", [])],
                 "min_swap_acceptance": float(result.swap_acceptance.min()), "seconds": result.seconds}
             if with_loo:
                 entry["loo"][specimen] = _loo(posterior, result.posterior_draws.reshape(

@@ -19,7 +19,9 @@ Estimators, from the pooled log-likelihoods ll_{k,t,j} (rung, iteration, walker)
 Error bar: σ² = σ_MC² + σ_disc². σ_MC is the larger of the batch-means error (per-iteration,
 walker-averaged series, 25 batches, propagated through log by the delta method with the
 covariance across stones — swaps correlate the rungs) and the spread of ``replicates``
-independent ladders (SD/√R). Walkers of one ensemble are never treated as independent.
+independent ladders (SD/√R) — and, on the referenced path, the spread of ladder groups with
+independent reference densities (``sigma_pilot``). Walkers of one ensemble are never treated
+as independent.
 σ_disc is |SS − bridge|: both are consistent, and they part only when the ladder is too coarse.
 
 References: ../shared/EVIDENCE.md; Xie et al., Syst. Biol. 60, 150 (2011); Friel, Hurn & Wyse,
@@ -38,7 +40,7 @@ from scipy.special import logsumexp
 from .sampling import single_threaded_blas, walkers_for
 
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
-           "combine_ladder"]
+           "combine_ladder", "summarise_ladders"]
 
 
 @dataclass(frozen=True)
@@ -148,16 +150,23 @@ class _Rungs:
     z ~ g(z) ∝ 1/sqrt(z) on [1/a, a], y = c + z·(x − c), accept with z^(d−1)·p(y)/p(x); Goodman &
     Weare 2010) applied to every rung at once, so the proposals of all rungs go to the
     likelihood in *one* vectorised call; acceptance is per rung at its own β.
+
+    A state may carry columns beyond the target's ``ndim`` continuous ones (a chart label, see
+    :class:`~fsrbayes.inference.reference.ReferencedTarget`): the stretch move keeps them, and a
+    target with ``relabel(states, log_prior, random)`` gets a Gibbs update of them after each
+    step — one that leaves log L unchanged and returns the new states and log priors.
     """
 
     def __init__(self, target, betas, coords, random, a=2.0):
         self.target, self.betas, self.random, self.a = target, np.asarray(betas), random, a
-        n_rungs, n_walk, ndim = coords.shape
-        lp, ll = _evaluate(target, coords.reshape(-1, ndim))
+        n_rungs, n_walk, width = coords.shape
+        self.n_move = target.ndim
+        lp, ll = _evaluate(target, coords.reshape(-1, width))
         self.coords, self.lp, self.ll = coords.copy(), lp.reshape(n_rungs, n_walk), ll.reshape(n_rungs, n_walk)
 
     def step(self):
-        n_rungs, n_walk, ndim = self.coords.shape
+        n_rungs, n_walk, width = self.coords.shape
+        ndim = self.n_move
         half_size = n_walk // 2
         order = np.argsort(self.random.rand(n_rungs, n_walk), axis=1)  # a random split per rung
         rows = np.arange(n_rungs)[:, None]
@@ -166,7 +175,8 @@ class _Rungs:
             z = ((self.a - 1.0) * self.random.rand(n_rungs, half_size) + 1.0) ** 2 / self.a
             partners = self.coords[rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]]
             proposal = partners - (partners - x) * z[..., None]
-            lp, ll = _evaluate(self.target, proposal.reshape(-1, ndim))
+            proposal[..., ndim:] = x[..., ndim:]
+            lp, ll = _evaluate(self.target, proposal.reshape(-1, width))
             lp, ll = lp.reshape(n_rungs, half_size), ll.reshape(n_rungs, half_size)
             beta = self.betas[:, None]
             with np.errstate(invalid="ignore"):
@@ -176,6 +186,9 @@ class _Rungs:
             r, w = np.nonzero(accept)
             self.coords[r, moving[r, w]] = proposal[r, w]
             self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
+        if hasattr(self.target, "relabel"):
+            coords, lp = self.target.relabel(self.coords.reshape(-1, width), self.lp.reshape(-1), self.random)
+            self.coords, self.lp = coords.reshape(self.coords.shape), lp.reshape(self.lp.shape)
 
 
 def _replace_dead_walkers(rung, rng):
@@ -201,8 +214,8 @@ def _run_ladder(target, betas, settings, seed, n_top=100):
     n_temps = len(betas)
     prior_draws = lambda: target.sample_prior(rng, n_walk)  # noqa: E731
     # Annealed burn-in: rung k starts from rung k−1's final ensemble.
-    coords = np.empty((n_temps - 1, n_walk, target.ndim))
     previous = prior_draws()
+    coords = np.empty((n_temps - 1, n_walk, previous.shape[-1]))
     for k in range(1, n_temps):
         rung = _Rungs(target, betas[k:k + 1], previous[None], random)
         _replace_dead_walkers(rung, rng)
@@ -315,6 +328,9 @@ class EvidenceResult:
         Stepping-stone estimate (mean over replicates) and total σ = sqrt(σ_MC² + σ_disc²).
     sigma_batch, sigma_replicates, sigma_disc : float
         Batch-means error of the mean, replicate spread SD/√R, and |SS − bridge|.
+    sigma_pilot : float
+        Spread of the means of ladder groups with independent reference densities, SD/√G
+        (referenced path only; 0 otherwise). σ_MC is the largest of batch, replicates and pilot.
     bridge, ti, ti_corrected, ss_half : float
         The other estimators (means over replicates); TI is a diagnostic.
     replicates : list of dict
@@ -344,6 +360,7 @@ class EvidenceResult:
     seconds: float
     settings: dict = field(default_factory=dict)
     posterior_draws: np.ndarray = None
+    sigma_pilot: float = 0.0
 
     def as_dict(self):
         out = asdict(self)
@@ -353,8 +370,9 @@ class EvidenceResult:
         return out
 
     def __str__(self):
+        pilot = f", pilots {self.sigma_pilot:.3f}" if self.sigma_pilot else ""
         return (f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
-                f"{self.sigma_replicates:.3f}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}, "
+                f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}, "
                 f"TI+corr {self.ti_corrected:.3f})")
 
 
@@ -389,17 +407,30 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
             results = list(pool.map(_ladder_job, *zip(*jobs)))
     else:
         results = [_ladder_job(*job) for job in jobs]
-    parts = [r[0] for r in results]
+    n_walk = settings.walkers_for(target.ndim)
+    n_evals = len(seeds) * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
+    return summarise_ladders([r[0] for r in results], betas, np.array([r[1] for r in results]), int(n_evals),
+                             time.perf_counter() - start, asdict(settings), np.array([r[2] for r in results]))
+
+
+def summarise_ladders(parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None):
+    """The :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder` dicts).
+
+    ``groups`` (one label per ladder) marks ladders that share a reference density; the spread
+    of the group means, SD/√G, is then a further Monte-Carlo term (``sigma_pilot``): ladders of
+    one group cannot see what their shared reference missed.
+    """
     n_rep = len(parts)
     ss = np.array([p["ss"] for p in parts])
     mean = lambda key: float(np.mean([p[key] for p in parts]))  # noqa: E731
     sigma_batch = float(np.sqrt(np.sum([p["var_ss"] for p in parts])) / n_rep)
     sigma_replicates = float(ss.std(ddof=1) / np.sqrt(n_rep))
+    sigma_pilot = 0.0
+    if groups is not None and len(set(groups)) > 1:
+        group_means = np.array([ss[np.asarray(groups) == g].mean() for g in sorted(set(groups))])
+        sigma_pilot = float(group_means.std(ddof=1) / np.sqrt(len(group_means)))
     sigma_disc = abs(mean("ss") - mean("bridge"))
-    error = float(np.hypot(max(sigma_batch, sigma_replicates), sigma_disc))
-    n_walk = settings.walkers_for(target.ndim)
-    n_evals = n_rep * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
+    error = float(np.hypot(max(sigma_batch, sigma_replicates, sigma_pilot), sigma_disc))
     return EvidenceResult(mean("ss"), error, sigma_batch, sigma_replicates, sigma_disc, mean("bridge"), mean("ti"),
-                          mean("ti_corrected"), mean("ss_half"), parts, betas, np.array([r[1] for r in results]),
-                          int(n_evals), time.perf_counter() - start, asdict(settings),
-                          np.array([r[2] for r in results]))
+                          mean("ti_corrected"), mean("ss_half"), list(parts), betas, swap_acceptance, int(n_evals),
+                          seconds, settings, posterior_draws, sigma_pilot)

@@ -23,19 +23,33 @@ samples in w, where the stretch move sees a nearly round target at every β.
 
 Implemented as a target for :func:`~fsrbayes.inference.evidence.log_evidence`: its "prior" is
 the t density in w and its "log-likelihood" is log[L·π/g] — the ladder code is unchanged.
+
+Separate regions. "Exact for any g" holds only if the ladder's walkers reach every region of
+the posterior, and they start from g. The creep posterior's s0–Va ridge has several local
+maxima (on the benchmark Burgers specimen at Va ≈ −0.10, −0.68, −0.75 and −1.05 in prior-scaled
+units, the first holding ~93 % of the mass); a pilot that started in a minor one gave log Z
+3.2 nats low with an error bar of ±0.03. So the pilot first looks for separate optima
+(:func:`distinct_optima`, several optimiser starts), runs one pilot per region and makes g a
+mixture Σ a_j·g_j (:class:`MixtureReference`); the ladder's state carries the component label
+j, each walker moves in the chart w_j of its own component, and a Gibbs step re-draws j given u
+(:class:`ReferencedTarget`). Two independent searches (``pilot_groups``) each feed half of the
+replicate ladders; the spread of their means enters the error bar as ``sigma_pilot``, so a
+region one search missed shows as error rather than hiding as bias.
 """
 
 import time
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
-from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence
+from scipy.special import logsumexp
+
+from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence, summarise_ladders
 from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles
 from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
 
-__all__ = ["ReferenceDensity", "ReferencedTarget", "PILOT_SETTINGS", "REFERENCED_LADDER", "pilot_draws",
-           "referenced_log_evidence"]
+__all__ = ["ReferenceDensity", "MixtureReference", "ReferencedTarget", "ModeSearch", "MODE_SEARCH", "PILOT_SETTINGS",
+           "REFERENCED_LADDER", "distinct_optima", "pilot_draws", "pilot_reference", "referenced_log_evidence"]
 
 
 @dataclass(frozen=True)
@@ -86,37 +100,120 @@ class ReferenceDensity:
 
 
 @dataclass(frozen=True)
-class ReferencedTarget:
-    """The target :func:`log_evidence` needs for the referenced path, in coordinates w.
+class MixtureReference:
+    """g(u) = Σ_j a_j·g_j(u): one :class:`ReferenceDensity` per posterior region a pilot found.
 
-    ``log_prior`` is g's density of w (normalised; the β = 0 rung draws it i.i.d.) and
-    ``log_likelihood`` is log L + log π + log|du/dw| − log g: the ladder's Z(1) is then ∫ L·π du.
+    A single reference fitted to a pilot that sat in one region of a multimodal posterior puts
+    almost no mass on the others, and a ladder started from it does not find them either: on a
+    Burgers specimen with a minor region (4 % of the mass) the pilot that started there gave
+    log Z 3.2 nats low with an error bar of ±0.03. With one component per region the path
+    starts with walkers in every region, and any weights a_j keep the identity exact.
+    """
+
+    components: tuple
+    log_weights: np.ndarray
+
+    @classmethod
+    def of(cls, components, weights=None):
+        components = tuple(components)
+        weights = np.ones(len(components)) if weights is None else np.asarray(weights, dtype=float)
+        if len(weights) != len(components) or np.any(weights <= 0):
+            raise ValueError(f"need one positive weight per component ({len(components)}), got {weights}")
+        return cls(components, np.log(weights / weights.sum()))
+
+    @property
+    def ndim(self):
+        return self.components[0].ndim
+
+    def component_log_densities(self, u):
+        """log a_j + log g_j(u), shape (…, J)."""
+        return np.stack([log_a + c.log_prob_w(c.from_target(u)) - c.log_det_jacobian
+                         for log_a, c in zip(self.log_weights, self.components)], axis=-1)
+
+    def log_density(self, u):
+        """log g(u)."""
+        return logsumexp(self.component_log_densities(u), axis=-1)
+
+
+@dataclass(frozen=True)
+class ReferencedTarget:
+    """The target :func:`log_evidence` needs for the referenced path.
+
+    A state is (w, j): chart coordinates w (``ndim`` columns) and a component label j (the last
+    column), with u = T_j(w) — each walker moves in the chart in which its own region is round.
+    On the extended space the path is q_β(j, w) = a_j·t(w)·[L·π(u)/g(u)]^β, so ``log_prior``
+    is log a_j + log t(w) (normalised over j and w; the β = 0 rung draws it i.i.d.) and
+    ``log_likelihood`` is log L + log π − log g at u, whatever the label. At β = 1 the labels
+    sum out to L·π(u) du, so the ladder's Z(1) is ∫ L·π du. :meth:`relabel` is the exact Gibbs
+    update of j given u (P(j | u) = a_j·g_j(u)/g(u)), which costs no likelihood call.
     """
 
     target: object
-    reference: ReferenceDensity
+    reference: object
+
+    def __post_init__(self):
+        if isinstance(self.reference, ReferenceDensity):
+            object.__setattr__(self, "reference", MixtureReference.of([self.reference]))
 
     @property
     def ndim(self):
         return self.reference.ndim
 
+    def _split(self, state):
+        state = np.asarray(state, dtype=float)
+        if state.shape[-1] == self.ndim:  # a bare w: component 0
+            return state, np.zeros(state.shape[:-1], dtype=int)
+        return state[..., :-1], np.nan_to_num(state[..., -1]).astype(int)
+
+    def to_target(self, state):
+        """u of states (…, ndim + 1)."""
+        w, labels = self._split(state)
+        u = np.empty_like(w)
+        for j, component in enumerate(self.reference.components):
+            mine = labels == j
+            u[mine] = component.to_target(w[mine])
+        return u
+
     def sample_prior(self, rng, n):
-        return self.reference.sample_w(rng, n)
+        log_a = self.reference.log_weights
+        labels = rng.choice(len(log_a), size=n, p=np.exp(log_a))
+        w = self.reference.components[0].sample_w(rng, n)
+        return np.column_stack([w, labels])
 
-    def log_prior(self, w):
-        return self.reference.log_prob_w(w)
+    def log_prior(self, state):
+        w, labels = self._split(state)
+        return self.reference.log_weights[labels] + student_t_log_density(w, self.reference.components[0].dof)
 
-    def log_likelihood(self, w):
-        return self.log_prior_and_likelihood(w)[1]
+    def log_likelihood(self, state):
+        return self.log_prior_and_likelihood(state)[1]
 
-    def log_prior_and_likelihood(self, w):
-        w = np.asarray(w, dtype=float)
-        log_g = self.reference.log_prob_w(w)
-        lp, ll = _evaluate(self.target, self.reference.to_target(w))
-        ok = np.isfinite(lp) & np.isfinite(ll) & np.isfinite(log_g)
-        with np.errstate(invalid="ignore"):
-            log_ratio = lp + ll + self.reference.log_det_jacobian - log_g
-        return log_g, np.where(ok, log_ratio, -np.inf)
+    def log_prior_and_likelihood(self, state):
+        log_chart = self.log_prior(state)
+        u = self.to_target(state)
+        lp, ll = _evaluate(self.target, u)
+        with np.errstate(all="ignore"):
+            log_g = self.reference.log_density(u)
+            log_ratio = lp + ll - log_g
+        ok = np.isfinite(lp) & np.isfinite(ll) & np.isfinite(log_chart) & np.isfinite(log_g)
+        return log_chart, np.where(ok, log_ratio, -np.inf)
+
+    def relabel(self, states, log_prior, random):
+        """Gibbs update of the labels given u; returns (states, log_prior) — log L is unchanged."""
+        if len(self.reference.components) == 1:
+            return states, log_prior
+        u = self.to_target(states)
+        with np.errstate(all="ignore"):
+            log_p = self.reference.component_log_densities(u)
+        ok = np.all(np.isfinite(log_p), axis=-1)
+        cumulative = np.cumsum(np.exp(log_p - logsumexp(log_p, axis=-1, keepdims=True)), axis=-1)
+        labels = (random.rand(len(u), 1) > cumulative).sum(axis=-1).clip(0, len(self.reference.components) - 1)
+        states, log_prior = states.copy(), log_prior.copy()
+        for j, component in enumerate(self.reference.components):
+            mine = ok & (labels == j)
+            states[mine, :-1] = component.from_target(u[mine])
+            states[mine, -1] = j
+        log_prior[ok] = self.log_prior(states[ok])
+        return states, log_prior
 
 
 PILOT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=250, min_steps=1250, max_steps=1250, transport_rounds=3)
@@ -126,13 +223,14 @@ REFERENCED_LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600,
 """Ladder from g to the posterior: few, evenly spaced rungs suffice when g is close."""
 
 
-def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000):
-    """Posterior draws in u (n, ndim) from a short run started at the MAP (ConvergenceWarnings
-    of the pilot are silenced: its quality only affects the evidence's precision)."""
+def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000, start=None):
+    """Posterior draws in u (n, ndim) from a short run started at ``start`` (default: the MAP of
+    two optimiser starts). ConvergenceWarnings of the pilot are silenced: its quality only
+    affects the evidence's precision."""
     from .fit import ensemble_start, find_map
 
     rng = np.random.default_rng(seed)
-    optimum = find_map(posterior, rng, n_starts=2)[0]
+    optimum = find_map(posterior, rng, n_starts=2)[0] if start is None else np.asarray(start, dtype=float)
     start = ensemble_start(posterior, optimum, rng, (settings.n_ensembles, settings.walkers_for(posterior.ndim)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -142,37 +240,162 @@ def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_dra
     return flat[np.linspace(0, len(flat) - 1, min(len(flat), max_draws)).astype(int)]
 
 
+@dataclass(frozen=True)
+class ModeSearch:
+    """How the pilot looks for separate posterior regions before the evidence.
+
+    Attributes
+    ----------
+    n_starts : int
+        Optimiser starts (:func:`~fsrbayes.inference.fit.find_map`, from the best prior draws).
+    max_modes : int
+        At most this many regions get a pilot and a reference component.
+    separation : float
+        Two optima are the same region when one lies within this many Laplace standard
+        deviations (whitened distance) of the other.
+    max_log_mass_gap : float
+        Regions whose Laplace mass is more than this many nats below the best are dropped
+        (their share of Z is below e^−10 ≈ 5e−5, i.e. < 1e−4 nats).
+    importance_draws : int
+        Draws of each component for its importance-sampling estimate of its region's mass,
+        which sets the mixture weights.
+    """
+
+    n_starts: int = 12
+    max_modes: int = 3
+    separation: float = 2.0
+    max_log_mass_gap: float = 10.0
+    importance_draws: int = 2000
+
+
+MODE_SEARCH = ModeSearch()
+
+
+def distinct_optima(posterior, rng, search=MODE_SEARCH):
+    """Local maxima of the posterior in separate regions, by Laplace mass (best first).
+
+    Returns
+    -------
+    list of (ndarray (ndim,), float)
+        Each optimum with its Laplace log mass log p(u*) + log|Σ|^½.
+    """
+    from .fit import _root_covariance, find_map
+
+    optima = find_map(posterior, rng, n_starts=search.n_starts)
+    values = np.asarray(posterior(optima), dtype=float)
+    kept = []
+    for u, value in zip(optima, values):
+        if not np.isfinite(value):
+            continue
+        if any(np.linalg.norm(np.linalg.solve(root, u - other)) < search.separation for other, root, _ in kept):
+            continue
+        root = _root_covariance(posterior, u)
+        kept.append((u, root, float(value + np.linalg.slogdet(root)[1])))
+    kept.sort(key=lambda item: -item[2])
+    best = kept[0][2]
+    return [(u, mass) for u, _, mass in kept[:search.max_modes] if mass >= best - search.max_log_mass_gap]
+
+
+def _importance_log_z(posterior, component, rng, n):
+    """log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
+    w = component.sample_w(rng, n)
+    lp, ll = _evaluate(posterior, component.to_target(w))
+    with np.errstate(invalid="ignore"):
+        log_ratio = lp + ll - component.log_prob_w(w) + component.log_det_jacobian
+    log_ratio = np.where(np.isfinite(log_ratio), log_ratio, -np.inf)
+    return float(logsumexp(log_ratio) - np.log(n))
+
+
+def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof=10.0, search=MODE_SEARCH):
+    """The reference g for the evidence: one pilot run and one t component per separate region.
+
+    Separate regions come from :func:`distinct_optima`; the weights a_j are proportional to each
+    component's importance-sampling estimate of its region's mass, floored at a tenth of the
+    largest (every region keeps walkers at β = 0; any weights keep the identity exact).
+
+    Returns
+    -------
+    (MixtureReference, list of dict)
+        The reference and, per component, its optimum, Laplace log mass, importance log Z and weight.
+    """
+    seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    seeds = seed.spawn(2 + search.max_modes)
+    modes = distinct_optima(posterior, np.random.default_rng(seeds[0]), search)
+    rng = np.random.default_rng(seeds[1])
+    components, log_z = [], []
+    for (optimum, _), pilot_seed in zip(modes, seeds[2:]):
+        draws = pilot_draws(posterior, pilot_seed, settings, processes, start=optimum)
+        components.append(ReferenceDensity.fit(draws, dof))
+        log_z.append(_importance_log_z(posterior, components[-1], rng, search.importance_draws))
+    log_z = np.array(log_z)
+    weights = np.exp(np.maximum(log_z - np.max(log_z), np.log(0.1))) if np.all(np.isfinite(log_z)) else None
+    reference = MixtureReference.of(components, weights)
+    report = [{"optimum": [float(x) for x in optimum], "laplace_log_mass": mass, "importance_log_z": float(z),
+               "weight": float(np.exp(log_a))}
+              for (optimum, mass), z, log_a in zip(modes, log_z, reference.log_weights)]
+    return reference, report
+
+
 def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, dof=10.0, draws=None,
-                            pilot=PILOT_SETTINGS):
+                            pilot=PILOT_SETTINGS, search=MODE_SEARCH, pilot_groups=2):
     """log Z = log ∫ L·π along the referenced path (module docstring).
 
     Parameters
     ----------
     posterior : LogPosterior or another prior-scaled target
     settings : LadderSettings
-        The ladder from g (β = 0) to the posterior.
+        The ladder from g (β = 0) to the posterior; its replicates are shared out among the
+        pilot groups.
     seed : int
     dof : float
         Degrees of freedom of the Student-t reference (``inf``: Gaussian).
-    draws : ndarray (n, ndim), optional
-        Posterior draws in u to fit g to; default: a pilot run (``pilot``).
+    draws : ndarray (n, ndim) or sequence of them, optional
+        Posterior draws in u to fit g to (a sequence: one equally weighted component per
+        array, e.g. per region); default: :func:`pilot_reference` (``pilot``, ``search``).
+    pilot_groups : int
+        Independent mode searches and pilots, each with its own reference and its share of the
+        replicate ladders (at least 2 per group). A region one search missed and another found
+        makes the group means differ; that spread is ``sigma_pilot`` in the error bar.
 
     Returns
     -------
     EvidenceResult
-        With ``posterior_draws`` mapped back to u and ``settings`` noting the reference; its
-        ``seconds`` include the pilot.
+        With ``posterior_draws`` mapped back to u and ``settings`` noting each group's reference
+        components; its ``seconds`` include the pilots.
+
+    Notes
+    -----
+    Regions of the posterior that no group's optimiser starts reach get no component, and the
+    ladder (which starts from g) will rarely find them: their mass is then missing from Z and
+    not in the error bar. Raise ``search.n_starts`` when a posterior is suspected to have many.
     """
     if hasattr(posterior, "prior") and hasattr(posterior.prior, "dists"):
         check_priors_for_evidence(posterior.prior)
     start = time.perf_counter()
-    pilot_seed, ladder_seed = np.random.SeedSequence(seed).spawn(2)  # g independent of the ladder's draws
-    if draws is None:
-        draws = pilot_draws(posterior, pilot_seed, pilot, processes=settings.processes)
-    reference = ReferenceDensity.fit(draws, dof)
-    result = log_evidence(ReferencedTarget(posterior, reference), settings, seed=ladder_seed)
-    result.posterior_draws = reference.to_target(result.posterior_draws)
-    result.seconds = time.perf_counter() - start
-    result.settings = {**result.settings, "path": "reference", "reference_dof": float(dof),
-                       "pilot": None if pilot is None else {"steps": pilot.max_steps, "ensembles": pilot.n_ensembles}}
-    return result
+    n_groups = 1 if draws is not None else max(1, min(int(pilot_groups), settings.replicates // 2))
+    seeds = np.random.SeedSequence(seed).spawn(2 * n_groups)  # each g independent of its ladders' draws
+    group_replicates = np.diff(np.linspace(0, settings.replicates, n_groups + 1).round().astype(int))
+    results, reports, labels = [], [], []
+    for group, (pilot_seed, ladder_seed, replicates) in enumerate(zip(seeds[::2], seeds[1::2], group_replicates)):
+        if draws is None:
+            reference, report = pilot_reference(posterior, pilot_seed, pilot, settings.processes, dof, search)
+        else:
+            arrays = [draws] if np.ndim(draws[0]) == 1 else list(draws)
+            reference = MixtureReference.of([ReferenceDensity.fit(array, dof) for array in arrays])
+            report = [{"draws": len(array), "weight": float(np.exp(log_a))}
+                      for array, log_a in zip(arrays, reference.log_weights)]
+        referenced = ReferencedTarget(posterior, reference)
+        result = log_evidence(referenced, replace(settings, replicates=int(replicates)), seed=ladder_seed)
+        result.posterior_draws = referenced.to_target(result.posterior_draws)
+        results.append(result)
+        reports.append(report)
+        labels += [group] * int(replicates)
+    merged = summarise_ladders(
+        [part for r in results for part in r.replicates], results[0].betas,
+        np.concatenate([r.swap_acceptance for r in results]), sum(r.n_evals for r in results),
+        time.perf_counter() - start,
+        {**asdict(settings), "path": "reference", "reference_dof": float(dof), "reference_components": reports,
+         "pilot": None if draws is not None else {"steps": pilot.max_steps, "ensembles": pilot.n_ensembles,
+                                                  "optimiser_starts": search.n_starts, "groups": n_groups}},
+        np.concatenate([r.posterior_draws for r in results]), groups=labels if n_groups > 1 else None)
+    return merged
