@@ -37,15 +37,18 @@ replicate ladders; the spread of their means enters the error bar as ``sigma_pil
 region one search missed shows as error rather than hiding as bias.
 """
 
+import multiprocessing
+import os
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from scipy.special import logsumexp
 
 from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence, summarise_ladders
-from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles
+from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles, single_threaded_blas
 from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
 
 __all__ = ["ReferenceDensity", "MixtureReference", "ReferencedTarget", "ModeSearch", "MODE_SEARCH", "PILOT_SETTINGS",
@@ -306,12 +309,20 @@ def _importance_log_z(posterior, component, rng, n):
     return float(logsumexp(log_ratio) - np.log(n))
 
 
-def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof=10.0, search=MODE_SEARCH):
+def _search_job(posterior, seed, search):
+    with single_threaded_blas():
+        return distinct_optima(posterior, np.random.default_rng(seed), search)
+
+
+def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof=10.0, search=MODE_SEARCH,
+                    modes=None):
     """The reference g for the evidence: one pilot run and one t component per separate region.
 
     Separate regions come from :func:`distinct_optima`; the weights a_j are proportional to each
     component's importance-sampling estimate of its region's mass, floored at a tenth of the
     largest (every region keeps walkers at β = 0; any weights keep the identity exact).
+
+    ``modes``: the output of :func:`distinct_optima` if already found (default: searched here).
 
     Returns
     -------
@@ -320,7 +331,8 @@ def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof
     """
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     seeds = seed.spawn(2 + search.max_modes)
-    modes = distinct_optima(posterior, np.random.default_rng(seeds[0]), search)
+    if modes is None:
+        modes = distinct_optima(posterior, np.random.default_rng(seeds[0]), search)
     rng = np.random.default_rng(seeds[1])
     components, log_z = [], []
     for (optimum, _), pilot_seed in zip(modes, seeds[2:]):
@@ -373,12 +385,23 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
         check_priors_for_evidence(posterior.prior)
     start = time.perf_counter()
     n_groups = 1 if draws is not None else max(1, min(int(pilot_groups), settings.replicates // 2))
-    seeds = np.random.SeedSequence(seed).spawn(2 * n_groups)  # each g independent of its ladders' draws
+    seeds = np.random.SeedSequence(seed).spawn(3 * n_groups)  # each g independent of its ladders' draws
     group_replicates = np.diff(np.linspace(0, settings.replicates, n_groups + 1).round().astype(int))
+    if draws is None:  # the groups' searches side by side (the optimiser runs on one core)
+        jobs = [(posterior, s, search) for s in seeds[2::3]]
+        if settings.processes > 1 and n_groups > 1:
+            from .sampling import _exit_with_parent
+
+            with ProcessPoolExecutor(min(settings.processes, n_groups), mp_context=multiprocessing.get_context("fork"),
+                                     initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
+                group_modes = list(pool.map(_search_job, *zip(*jobs)))
+        else:
+            group_modes = [_search_job(*job) for job in jobs]
     results, reports, labels = [], [], []
-    for group, (pilot_seed, ladder_seed, replicates) in enumerate(zip(seeds[::2], seeds[1::2], group_replicates)):
+    for group, (pilot_seed, ladder_seed, replicates) in enumerate(zip(seeds[::3], seeds[1::3], group_replicates)):
         if draws is None:
-            reference, report = pilot_reference(posterior, pilot_seed, pilot, settings.processes, dof, search)
+            reference, report = pilot_reference(posterior, pilot_seed, pilot, settings.processes, dof, search,
+                                                modes=group_modes[group])
         else:
             arrays = [draws] if np.ndim(draws[0]) == 1 else list(draws)
             reference = MixtureReference.of([ReferenceDensity.fit(array, dof) for array in arrays])
