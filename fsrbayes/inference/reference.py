@@ -304,11 +304,7 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
 
 def _importance_log_z(posterior, component, rng, n):
     """log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
-    w = component.sample_w(rng, n)
-    lp, ll = _evaluate(posterior, component.to_target(w))
-    with np.errstate(invalid="ignore"):
-        log_ratio = lp + ll - component.log_prob_w(w) + component.log_det_jacobian
-    log_ratio = np.where(np.isfinite(log_ratio), log_ratio, -np.inf)
+    log_ratio = ReferencedTarget(posterior, component).log_likelihood(component.sample_w(rng, n))
     return float(logsumexp(log_ratio) - np.log(n))
 
 
