@@ -2,9 +2,18 @@
 
 ``fit(data, specimen=...)`` builds the :class:`~fsrbayes.inference.posterior.LogPosterior` of
 one specimen from all its creep tests, finds maximum-a-posteriori points with scipy from the
-best of many prior draws (one optimisation per ensemble), starts every ensemble around the
-best one, overdispersed by twice the Laplace covariance, and samples until convergence
-(:mod:`fsrbayes.inference.sampling`). The other local optima are kept in the result.
+best of many prior draws (:data:`MAP_STARTS` optimisations), sorts the optima into separate
+regions (:func:`separate_regions`) and starts the ensembles around them in turn — the best
+region first, each overdispersed by twice its Laplace covariance — then samples until
+convergence (:mod:`fsrbayes.inference.sampling`), where the independence moves propose from a
+mixture of the ensembles' warm-up fits so that walkers cross between regions. The log-posterior
+of every optimum is kept in the result.
+
+Why several regions: the creep posterior's s0–Va ridge can hold separate regions of similar
+mass joined by a low-density neck. In SBC replication 2 (VALIDATION.md) a fit started at the best
+of 4 optima sat at s0 = −0.93 ± 0.63 (prior-scaled), one started at the best of 2 at +0.55 ± 0.65,
+each with R-hat 1.00 over 4,000–12,000 steps: ensembles started in one region can neither
+leave it nor notice the other.
 """
 
 from dataclasses import dataclass
@@ -18,7 +27,10 @@ from .likelihood import SpecimenData
 from .posterior import LogPosterior
 from .sampling import EnsembleRun, SamplerSettings, even_index, run_ensembles
 
-__all__ = ["FitResult", "fit", "find_map"]
+__all__ = ["FitResult", "fit", "find_map", "separate_regions", "MAP_STARTS"]
+
+MAP_STARTS = 8
+"""Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
 
 
 @dataclass
@@ -155,6 +167,41 @@ def ensemble_start(posterior, u_map, rng, shape):
     return start
 
 
+def separate_regions(posterior, optima, *, separation=2.0, max_regions=None, max_log_mass_gap=10.0):
+    """Optima in separate posterior regions, by Laplace mass (best first).
+
+    Two optima are one region when one lies within ``separation`` Laplace standard deviations
+    (whitened distance) of the other; regions more than ``max_log_mass_gap`` nats of Laplace mass
+    log p(u*) + log|Σ|^½ below the best are dropped.
+
+    Parameters
+    ----------
+    posterior : callable
+        Vectorised log-density of u.
+    optima : ndarray, shape (n, ndim)
+        Local optima (e.g. from :func:`find_map`).
+
+    Returns
+    -------
+    list of (ndarray (ndim,), float)
+        Each region's optimum and its Laplace log mass.
+    """
+    values = np.asarray(posterior(np.atleast_2d(optima)), dtype=float)
+    kept = []
+    for u, value in zip(np.atleast_2d(optima), values):
+        if not np.isfinite(value):
+            continue
+        if any(np.linalg.norm(np.linalg.solve(root, u - other)) < separation for other, root, _ in kept):
+            continue
+        root = _root_covariance(posterior, u)
+        kept.append((u, root, float(value + np.linalg.slogdet(root)[1])))
+    if not kept:
+        raise RuntimeError("no optimum has a finite posterior")
+    kept.sort(key=lambda item: -item[2])
+    best = kept[0][2]
+    return [(u, mass) for u, _, mass in kept[:max_regions] if mass >= best - max_log_mass_gap]
+
+
 def _polish(posterior, u, value, rounds=4, tol=1e-3):
     """Re-optimise in coordinates whitened by the local Laplace covariance, until the gain is < tol.
 
@@ -221,12 +268,14 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     settings = settings or SamplerSettings()
     seed = int(rng) if isinstance(rng, (int, np.integer)) else int(np.random.default_rng(rng).integers(2**31))
     generator = np.random.default_rng(seed)
-    optima = find_map(posterior, generator, n_starts=settings.n_ensembles)
+    optima = find_map(posterior, generator, n_starts=max(MAP_STARTS, settings.n_ensembles))
     n_walk = settings.walkers_for(posterior.ndim)
-    # All ensembles start around the best optimum, overdispersed by the Laplace covariance:
-    # ensembles started in lower local optima (7+ nats below) stayed there (R-hat 1.94 after
-    # 3,000 steps against 1.04 after 2,000 this way, on 9 tests x 61 samples).
-    start = ensemble_start(posterior, optima[0], generator, (settings.n_ensembles, n_walk))
+    # Ensembles start in the separate regions in turn (module docstring). Started in a lower
+    # region, an ensemble used to stay there (R-hat 1.94 after 3,000 steps, 9 tests x 61
+    # samples); the mixture independence proposal now carries its walkers across.
+    regions = separate_regions(posterior, optima, max_regions=settings.n_ensembles)
+    start = np.concatenate([ensemble_start(posterior, regions[e % len(regions)][0], generator, (1, n_walk))
+                            for e in range(settings.n_ensembles)])
     run = run_ensembles(posterior, start, seed, settings, names=posterior.names, checkpoint=checkpoint,
                         fingerprint=posterior.fingerprint(), resume=resume, progress=progress)
     return FitResult(posterior, run, optima[0], seed, posterior(optima))

@@ -285,21 +285,11 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
     list of (ndarray (ndim,), float)
         Each optimum with its Laplace log mass log p(u*) + log|Σ|^½.
     """
-    from .fit import _root_covariance, find_map
+    from .fit import find_map, separate_regions
 
     optima = find_map(posterior, rng, n_starts=search.n_starts)
-    values = np.asarray(posterior(optima), dtype=float)
-    kept = []
-    for u, value in zip(optima, values):
-        if not np.isfinite(value):
-            continue
-        if any(np.linalg.norm(np.linalg.solve(root, u - other)) < search.separation for other, root, _ in kept):
-            continue
-        root = _root_covariance(posterior, u)
-        kept.append((u, root, float(value + np.linalg.slogdet(root)[1])))
-    kept.sort(key=lambda item: -item[2])
-    best = kept[0][2]
-    return [(u, mass) for u, _, mass in kept[:search.max_modes] if mass >= best - search.max_log_mass_gap]
+    return separate_regions(posterior, optima, separation=search.separation, max_regions=search.max_modes,
+                            max_log_mass_gap=search.max_log_mass_gap)
 
 
 def _importance_log_z(posterior, component, rng, n):

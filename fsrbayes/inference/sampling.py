@@ -37,7 +37,7 @@ import emcee
 import numpy as np
 
 from ..utils import atomic_path
-from .transport import IndependenceProposal, MappedLogProb, TriangularMap
+from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
            "run_ensembles", "convergence_report"]
@@ -313,7 +313,7 @@ def _transport_maps(chains, settings, max_draws=50000):
 
     Returns
     -------
-    list of (TriangularMap or None, IndependenceProposal or None), one per ensemble
+    list of (TriangularMap or None, MixtureProposal or None), one per ensemble
     """
     n_ens, n_steps = chains.shape[:2]
     rounds = min(n_steps // settings.chunk, settings.rounds)
@@ -328,8 +328,11 @@ def _transport_maps(chains, settings, max_draws=50000):
         return [(None, None)] * n_ens  # too few or degenerate draws: sample the target's own coordinates
     proposal = None
     if settings.independence_fraction > 0:
+        per_ensemble = chains[:, end // 2:end].reshape(n_ens, -1, chains.shape[-1])
+        per_ensemble = per_ensemble[:, np.linspace(0, per_ensemble.shape[1] - 1,
+                                                   min(per_ensemble.shape[1], max_draws // n_ens)).astype(int)]
         try:
-            proposal = IndependenceProposal.fit(transport.inverse(draws))
+            proposal = MixtureProposal.fit([transport.inverse(group) for group in per_ensemble])
         except np.linalg.LinAlgError:
             proposal = None
     return [(transport, proposal)] * n_ens
