@@ -28,15 +28,13 @@ References: ../shared/EVIDENCE.md; Xie et al., Syst. Biol. 60, 150 (2011); Friel
 Stat. Comput. 24, 709 (2014); Meng & Wong, Stat. Sinica 6, 831 (1996).
 """
 
-import multiprocessing
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.special import logsumexp
 
+from .parallel import fork_pool
 from .sampling import single_threaded_blas, walkers_for
 
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
@@ -400,10 +398,7 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
     start = time.perf_counter()
     jobs = [(target, betas, settings, s) for s in seeds]
     if settings.processes > 1:
-        from .sampling import _exit_with_parent
-
-        with ProcessPoolExecutor(min(settings.processes, len(jobs)), mp_context=multiprocessing.get_context("fork"),
-                                 initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
+        with fork_pool(min(settings.processes, len(jobs))) as pool:
             results = list(pool.map(_ladder_job, *zip(*jobs)))
     else:
         results = [_ladder_job(*job) for job in jobs]

@@ -6,12 +6,15 @@ failed job's place as a :class:`JobFailure`.
 """
 
 import concurrent.futures
+import multiprocessing
 import os
 import signal
+import threading
+import time
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 
-__all__ = ["map_jobs", "JobFailure", "JobError"]
+__all__ = ["map_jobs", "JobFailure", "JobError", "fork_pool"]
 
 
 @dataclass(frozen=True)
@@ -31,6 +34,27 @@ class JobError(RuntimeError):
     def __init__(self, failures):
         self.failures = list(failures)
         super().__init__(f"{len(self.failures)} job(s) failed: " + "; ".join(str(f) for f in self.failures))
+
+
+def _exit_with_parent(parent_pid):
+    """Worker initializer: leave when the parent dies (a killed fit must not leave orphans).
+
+    Forked workers hold their own ends of the pool's pipes and would otherwise wait forever.
+    """
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def fork_pool(workers):
+    """A process pool of forked workers (they inherit the targets without pickling them) that
+    exit when this process dies — the pool behind ensembles, ladders and region searches run
+    side by side."""
+    return concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                                  initializer=_exit_with_parent, initargs=(os.getpid(),))
 
 
 def _describe(exc):

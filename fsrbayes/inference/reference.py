@@ -37,17 +37,15 @@ replicate ladders; the spread of their means enters the error bar as ``sigma_pil
 region one search missed shows as error rather than hiding as bias.
 """
 
-import multiprocessing
-import os
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from scipy.special import logsumexp
 
 from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence, summarise_ladders
+from .parallel import fork_pool
 from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles, single_threaded_blas
 from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
 
@@ -379,10 +377,7 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
     if draws is None:  # the groups' searches side by side (the optimiser runs on one core)
         jobs = [(posterior, s, search) for s in seeds[2::3]]
         if settings.processes > 1 and n_groups > 1:
-            from .sampling import _exit_with_parent
-
-            with ProcessPoolExecutor(min(settings.processes, n_groups), mp_context=multiprocessing.get_context("fork"),
-                                     initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
+            with fork_pool(min(settings.processes, n_groups)) as pool:
                 group_modes = list(pool.map(_search_job, *zip(*jobs)))
         else:
             group_modes = [_search_job(*job) for job in jobs]

@@ -25,18 +25,14 @@ seed gives the same chains, and a checkpoint (written atomically after every chu
 run exactly where it stopped.
 """
 
-import multiprocessing
-import os
-import threading
-import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 
 import emcee
 import numpy as np
 
 from ..utils import atomic_path
+from .parallel import fork_pool
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
@@ -266,19 +262,6 @@ def single_threaded_blas():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def _exit_with_parent(parent_pid):
-    """Worker initializer: leave when the parent dies (a killed fit must not leave orphans).
-
-    Forked workers hold their own ends of the pool's pipes and would otherwise wait forever.
-    """
-    def watch():
-        while os.getppid() == parent_pid:
-            time.sleep(0.5)
-        os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
 def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, transport=None, proposal=None,
              independence_fraction=0.0):
     """Run one ensemble for ``steps`` from a position and random state; return its new pieces.
@@ -420,8 +403,7 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
             pass
     pool = None
     if settings.processes > 1:
-        pool = ProcessPoolExecutor(min(settings.processes, n_ens), mp_context=multiprocessing.get_context("fork"),
-                                   initializer=_exit_with_parent, initargs=(os.getpid(),))
+        pool = fork_pool(min(settings.processes, n_ens))
     report = None
     bar = _progress_bar(settings, chains.shape[1]) if progress else None
     try:
