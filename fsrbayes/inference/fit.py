@@ -9,11 +9,12 @@ convergence (:mod:`fsrbayes.inference.sampling`), where the independence moves p
 mixture of the ensembles' warm-up fits so that walkers cross between regions. The log-posterior
 of every optimum is kept in the result.
 
-Why several regions: the creep posterior's s0–Va ridge can hold separate regions of similar
-mass joined by a low-density neck. In SBC replication 2 (VALIDATION.md) a fit started at the best
-of 4 optima sat at s0 = −0.93 ± 0.63 (prior-scaled), one started at the best of 2 at +0.55 ± 0.65,
-each with R-hat 1.00 over 4,000–12,000 steps: ensembles started in one region can neither
-leave it nor notice the other.
+Why several regions: the creep posterior's s0–Va ridge can bend into two arms (where V_bulk
+crosses Va/e Simmons' law has a slope kink; VALIDATION.md §1) or hold separate local maxima. In
+SBC replication 2 a fit started at the best of 4 optima sat in one arm, s0 = −0.93 ± 0.63
+(prior-scaled), one started at the best of 2 in the other, +0.55 ± 0.65, each with R-hat 1.00
+over 4,000–12,000 steps: ensembles started in one region neither leave it nor notice the other.
+With the region starts and the mixture both arms are visited, but not yet their far ends.
 """
 
 from dataclasses import dataclass

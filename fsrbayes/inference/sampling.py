@@ -15,8 +15,10 @@ each, a :class:`~fsrbayes.inference.transport.TriangularMap` is fitted to the la
 warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from
 then on; the map is frozen after the k-th chunk and only the later steps are kept. On the 9-test creep posterior this cut
 τ from ≈ 210 to ≈ 130 steps (a 12-D Gaussian gives ≈ 40). A share of independence
-Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from a Student-t
-fitted to the same warm-up draws in the straightened coordinates, frozen with the map: a walker
+Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an equal
+mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
+straightened coordinates (ensembles started in separate regions each describe their own),
+frozen with the map: a walker
 can cross the whole posterior in one accepted step, and τ fell to ≈ 50. The stored chains are always in the
 target's own coordinates. With k = 0 the first half of the chain is the warm-up, at every check.
 Sampling goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
@@ -81,8 +83,9 @@ class SamplerSettings:
         docstring), at most half of ``max_steps``; 0 samples the target's coordinates directly and
         discards the first half of the chain.
     independence_fraction : float
-        Share of independence Metropolis–Hastings moves (proposals from a Student-t fitted to the
-        warm-up draws in the map's coordinates, :class:`~fsrbayes.inference.transport.IndependenceProposal`);
+        Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
+        fitted to each ensemble's warm-up draws in the map's coordinates,
+        :class:`~fsrbayes.inference.transport.MixtureProposal`);
         needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. On the
         9-test creep posterior 0.3 halved the steps to convergence (τ 132 → 49–57); 0.2 gave
         τ 67, 0.6 τ 155: walkers that reach a region the proposal under-covers wait there for
