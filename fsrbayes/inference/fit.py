@@ -148,21 +148,22 @@ def _root_covariance(posterior, u_map, step=1e-3):
     return vectors / np.sqrt(precision)
 
 
-def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3):
-    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance.
+def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3, root_cov=None):
+    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance
+    (``root_cov``, its square root, if already computed).
 
     Returns
     -------
     ndarray, shape ``shape + (ndim,)``
     """
-    root_cov = _root_covariance(posterior, u_map, step)
+    root_cov = _root_covariance(posterior, u_map, step) if root_cov is None else root_cov
     return u_map + overdispersion * rng.standard_normal(shape + (posterior.ndim,)) @ root_cov.T
 
 
-def ensemble_start(posterior, u_map, rng, shape):
+def ensemble_start(posterior, u_map, rng, shape, root_cov=None):
     """:func:`laplace_start`, with walkers that landed outside the posterior's support moved to
     a tight ball around ``u_map``; shape (E, W) → (E, W, ndim)."""
-    start = laplace_start(posterior, u_map, rng, shape)
+    start = laplace_start(posterior, u_map, rng, shape, root_cov=root_cov)
     bad = ~np.isfinite(posterior(start.reshape(-1, posterior.ndim))).reshape(start.shape[:-1])
     start[bad] = u_map + 1e-3 * rng.standard_normal((int(bad.sum()), posterior.ndim))
     return start
@@ -187,6 +188,11 @@ def separate_regions(posterior, optima, *, separation=2.0, max_regions=None, max
     list of (ndarray (ndim,), float)
         Each region's optimum and its Laplace log mass.
     """
+    return [(u, mass) for u, _, mass in _regions(posterior, optima, separation, max_regions, max_log_mass_gap)]
+
+
+def _regions(posterior, optima, separation=2.0, max_regions=None, max_log_mass_gap=10.0):
+    """:func:`separate_regions` with each region's Laplace root covariance: (u, root, mass)."""
     values = np.asarray(posterior(np.atleast_2d(optima)), dtype=float)
     kept = []
     for u, value in zip(np.atleast_2d(optima), values):
@@ -200,7 +206,7 @@ def separate_regions(posterior, optima, *, separation=2.0, max_regions=None, max
         raise RuntimeError("no optimum has a finite posterior")
     kept.sort(key=lambda item: -item[2])
     best = kept[0][2]
-    return [(u, mass) for u, _, mass in kept[:max_regions] if mass >= best - max_log_mass_gap]
+    return [item for item in kept[:max_regions] if item[2] >= best - max_log_mass_gap]
 
 
 def _polish(posterior, u, value, rounds=4, tol=1e-3):
@@ -274,9 +280,9 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     # Ensembles start in the separate regions in turn (module docstring). Started in a lower
     # region, an ensemble used to stay there (R-hat 1.94 after 3,000 steps, 9 tests x 61
     # samples); the mixture independence proposal now carries its walkers across.
-    regions = separate_regions(posterior, optima, max_regions=settings.n_ensembles)
-    start = np.concatenate([ensemble_start(posterior, regions[e % len(regions)][0], generator, (1, n_walk))
-                            for e in range(settings.n_ensembles)])
+    regions = _regions(posterior, optima, max_regions=settings.n_ensembles)
+    start = np.concatenate([ensemble_start(posterior, u, generator, (1, n_walk), root_cov=root)
+                            for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))])
     run = run_ensembles(posterior, start, seed, settings, names=posterior.names, checkpoint=checkpoint,
                         fingerprint=posterior.fingerprint(), resume=resume, progress=progress)
     return FitResult(posterior, run, optima[0], seed, posterior(optima))

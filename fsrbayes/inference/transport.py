@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import gammaln
+from scipy.special import gammaln, logsumexp
 
 __all__ = ["TriangularMap", "MappedLogProb", "IndependenceProposal", "MixtureProposal", "student_t_log_density",
            "student_t_draws"]
@@ -294,8 +294,6 @@ class MixtureProposal:
 
     def log_density(self, x):
         """log g(x), normalised."""
-        from scipy.special import logsumexp
-
         parts = np.stack([c.log_density(x) for c in self.components])
         return logsumexp(parts, axis=0) - np.log(len(self.components))
 
