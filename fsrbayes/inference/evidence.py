@@ -63,6 +63,9 @@ class LadderSettings:
         Batches for the batch-means Monte-Carlo error.
     processes : int
         Ladders run side by side in worker processes.
+    top_draws : int
+        Ensembles of the β = 1 rung kept per ladder, evenly thinned over the production steps
+        (``posterior_draws``); at most ``steps``.
     """
 
     n_temps: int = 32
@@ -74,6 +77,7 @@ class LadderSettings:
     replicates: int = 4
     n_batches: int = 25
     processes: int = 1
+    top_draws: int = 100
 
     def __post_init__(self):
         if self.n_temps < 3:
@@ -82,6 +86,8 @@ class LadderSettings:
             raise ValueError(f"replicates must be >= 2 (their spread is part of the error bar), got {self.replicates}")
         if self.steps < 10 * self.n_batches:
             raise ValueError(f"steps must be >= 10 per batch ({10 * self.n_batches}), got {self.steps}")
+        if self.top_draws < 1:
+            raise ValueError(f"top_draws must be >= 1, got {self.top_draws}")
 
     def walkers_for(self, ndim):
         return walkers_for(self.n_walkers, ndim)
@@ -202,9 +208,9 @@ def _replace_dead_walkers(rung, rng):
                                                                     rung.ll[0, donors])
 
 
-def _run_ladder(target, betas, settings, seed, n_top=100):
-    """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and ``n_top``
-    evenly thinned ensembles of the β = 1 rung (posterior draws, (n_top, W, ndim))."""
+def _run_ladder(target, betas, settings, seed):
+    """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and
+    ``settings.top_draws`` evenly thinned ensembles of the β = 1 rung (posterior draws, (top_draws, W, ndim))."""
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     rng = np.random.default_rng(seed)
     random = np.random.RandomState(seed.generate_state(4))
@@ -222,7 +228,7 @@ def _run_ladder(target, betas, settings, seed, n_top=100):
         coords[k - 1] = previous = rung.coords[0]
     rungs = _Rungs(target, betas[1:], coords, random)
     ll = np.empty((n_temps, settings.steps, n_walk))
-    keep = set(np.linspace(0, settings.steps - 1, min(n_top, settings.steps)).round().astype(int).tolist())
+    keep = set(np.linspace(0, settings.steps - 1, min(settings.top_draws, settings.steps)).round().astype(int).tolist())
     top = []
     tried = np.zeros(n_temps - 1)
     accepted = np.zeros(n_temps - 1)
