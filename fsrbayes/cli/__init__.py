@@ -87,6 +87,10 @@ def build_parser():
     fit_.add_argument("--chunk", type=int, default=500, help="steps between convergence checks and checkpoints")
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
+    fit_.add_argument("--sampler", choices=("ensemble", "tempered"), default="ensemble",
+                      help="emcee ensembles until convergence (default), or the top rung of tempered ladders started "
+                      "from a fitted reference: mixes between the arms of a bent ridge and gives log Z too")
+    fit_.add_argument("--ladder-steps", type=int, help="--sampler tempered: production steps per ladder (default 600)")
     fit_.add_argument("--processes", type=int, help="processes running ensembles side by side "
                       "(default: one per core, at most one per ensemble; same chains either way)")
     fit_.add_argument("--progress", action="store_true", help="show a progress bar on stderr")
@@ -152,7 +156,12 @@ def build_parser():
     cal.add_argument("--reps", type=int, default=100, help="replications (default 100)")
     cal.add_argument("--draws", type=int, default=99, help="posterior draws per replication, L (default 99)")
     cal.add_argument("--bins", type=int, default=10, help="rank histogram bins; must divide L + 1 (default 10)")
-    cal.add_argument("--steps", type=int, default=3000, help="sampler steps per ensemble and fit (default 3000)")
+    cal.add_argument("--sampler", choices=("ensemble", "tempered"), default="ensemble",
+                     help="fit with emcee ensembles or the tempered ladders (default ensemble)")
+    cal.add_argument("--map", choices=("auto", "affine"), default="auto",
+                     help="--sampler ensemble: the transport map's form (auto: quadratic up to 14 parameters)")
+    cal.add_argument("--steps", type=int, help="steps per ensemble and fit (default 3000), or per ladder rung with "
+                     "--sampler tempered (default 300)")
     cal.add_argument("--voltages", default="0.2,3", help="V_FSR of the simulated tests (default 0.2,3)")
     cal.add_argument("--forces", default="1.96,9.8", help="forces in N of the simulated tests (default 1.96,9.8)")
     cal.add_argument("--samples", type=int, default=12, help="log-spaced samples per test over 1 h (default 12)")

@@ -49,8 +49,9 @@ def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_gr
     the step budget; ``posterior.nc`` holds ``max_draws`` draws of the parameters, the pointwise
     log-likelihood and predictive current per sample, and drift(t) on ``n_grid`` times per test.
     """
-    walkers = settings.walkers_for(ndim)
-    checkpoint = settings.n_ensembles * settings.max_steps * walkers * (ndim + 1) * 8
+    checkpoint = 0  # the tempered sampler writes none
+    if hasattr(settings, "max_steps"):
+        checkpoint = settings.n_ensembles * settings.max_steps * settings.walkers_for(ndim) * (ndim + 1) * 8
     tree = max_draws * (ndim + 2 * n_samples + n_tests * (n_grid + 1)) * 8
     return checkpoint + tree
 

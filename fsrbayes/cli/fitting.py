@@ -32,6 +32,8 @@ def cmd_fit(args):
     settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
                                max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
                                processes=processes)
+    if args.sampler == "tempered":
+        settings = _tempered_settings(args)
     specimens = [args.specimen] if args.specimen else data.specimens
     _check_space(args, data, specimens, settings, out)
     if args.hierarchical:
@@ -43,8 +45,9 @@ def cmd_fit(args):
         folder.mkdir(parents=True, exist_ok=True)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ConvergenceWarning)
+            checkpoint = folder / CHECKPOINT if args.sampler == "ensemble" else None
             result = fit(data, specimen, model=args.model, tunneling=args.tunneling, likelihood=args.likelihood,
-                         rng=args.seed, settings=settings, checkpoint=folder / CHECKPOINT, resume=args.resume,
+                         rng=args.seed, settings=settings, checkpoint=checkpoint, resume=args.resume,
                          progress=args.progress)
         for w in caught:
             if issubclass(w.category, ConvergenceWarning):
@@ -58,6 +61,25 @@ def cmd_fit(args):
         write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
                                                  "specimens": summaries})
     return 0
+
+
+def _tempered_settings(args):
+    """TemperedSettings from the fit command's options (ladders run side by side in processes)."""
+    from dataclasses import replace
+
+    from ..inference.tempered import TEMPERED_SETTINGS
+
+    for flag, bad in (("--hierarchical", args.hierarchical), ("--resume", args.resume)):
+        if bad:
+            raise UsageError(f"{flag} works with --sampler ensemble only; the tempered sampler runs fixed-length "
+                             "ladders without checkpoints")
+    ladder = TEMPERED_SETTINGS.ladder
+    steps = args.ladder_steps if args.ladder_steps is not None else ladder.steps
+    if steps < 10 * ladder.n_batches:
+        raise UsageError(f"--ladder-steps must be >= {10 * ladder.n_batches}, got {steps}")
+    processes = args.processes or min(ladder.replicates, os.cpu_count() or 1)
+    return replace(TEMPERED_SETTINGS, ladder=replace(ladder, steps=steps, top_draws=steps, n_walkers=args.walkers),
+                   processes=processes)
 
 
 def _check_space(args, data, specimens, settings, out):

@@ -28,7 +28,7 @@ from .likelihood import SpecimenData
 from .posterior import LogPosterior
 from .sampling import EnsembleRun, SamplerSettings, even_index, run_ensembles
 
-__all__ = ["FitResult", "fit", "find_map", "separate_regions", "MAP_STARTS"]
+__all__ = ["FitResult", "fit", "find_map", "separate_regions", "MAP_STARTS", "SAMPLERS"]
 
 MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
@@ -50,6 +50,10 @@ class FitResult:
     optima_log_post : ndarray
         log-posterior of every local optimum found (best first); a second optimum close to the
         first hints at several modes.
+    sampler : str
+        ``"ensemble"`` or ``"tempered"``.
+    evidence : EvidenceResult or None
+        The tempered sampler's log-evidence (its ladders give it for free); None for ensembles.
     """
 
     posterior: LogPosterior
@@ -57,6 +61,8 @@ class FitResult:
     map_u: np.ndarray
     seed: int
     optima_log_post: np.ndarray = None
+    sampler: str = "ensemble"
+    evidence: object = None
 
     @property
     def converged(self):
@@ -229,6 +235,26 @@ def _polish(posterior, u, value, rounds=4, tol=1e-3):
     return u, value
 
 
+def _sampler_and_settings(sampler, settings):
+    from .tempered import TemperedSettings
+
+    if sampler is None:
+        sampler = "tempered" if isinstance(settings, TemperedSettings) else "ensemble"
+    if sampler not in SAMPLERS:
+        raise ValueError(f"sampler must be one of {SAMPLERS}, got {sampler!r}")
+    expected = TemperedSettings if sampler == "tempered" else SamplerSettings
+    settings = expected() if settings is None else settings
+    if not isinstance(settings, expected):
+        raise TypeError(f"sampler={sampler!r} needs settings of type {expected.__name__}, "
+                        f"got {type(settings).__name__}")
+    return sampler, settings
+
+
+def _best_draw(run):
+    e, t, w = np.unravel_index(np.argmax(run.log_prob), run.log_prob.shape)
+    return run.chain[e, t, w]
+
+
 def _select(data, specimen):
     if isinstance(data, SpecimenData):
         return data
@@ -242,8 +268,11 @@ def _select(data, specimen):
     return SpecimenData.from_tests(data.select(specimen=specimen).tests)
 
 
+SAMPLERS = ("ensemble", "tempered")
+
+
 def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood="gaussian", sensor=None,
-        rng=None, settings=None, checkpoint=None, resume=False, progress=False):
+        rng=None, settings=None, checkpoint=None, resume=False, progress=False, sampler=None):
     """Fit one specimen's creep tests.
 
     Parameters
@@ -259,11 +288,19 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
         Priors and fixed values; by default the sensor named in the data.
     rng : int or numpy.random.Generator, optional
         Seed; the same seed gives the same chains.
-    settings : SamplerSettings, optional
+    settings : SamplerSettings or TemperedSettings, optional
+        Of the chosen sampler (default: its defaults).
     checkpoint : path-like, optional
         Checkpoint file (written after every chunk); with ``resume=True`` the fit continues it.
+        Ensemble sampler only.
     progress : bool
-        Show a progress bar.
+        Show a progress bar (ensemble sampler).
+    sampler : {"ensemble", "tempered"}, optional
+        ``"ensemble"``: emcee ensembles until convergence (module docstring). ``"tempered"``:
+        the β = 1 rung of referenced tempered ladders (:mod:`~fsrbayes.inference.tempered`),
+        which mixes between the arms of a bent ridge and returns the log-evidence too; a fixed
+        length run, about 3 min for a small specimen. Default: from the type of ``settings``,
+        else ``"ensemble"``.
 
     Returns
     -------
@@ -272,8 +309,21 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     packed = _select(data, specimen)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood)
-    settings = settings or SamplerSettings()
+    sampler, settings = _sampler_and_settings(sampler, settings)
     seed = int(rng) if isinstance(rng, (int, np.integer)) else int(np.random.default_rng(rng).integers(2**31))
+    if sampler == "tempered":
+        if checkpoint is not None or resume:
+            raise ValueError("checkpoint/resume work with sampler='ensemble' only; the tempered sampler runs "
+                             "fixed-length ladders")
+        from .tempered import reference_optima, tempered_run
+
+        run, evidence = tempered_run(posterior, settings, seed, names=posterior.names)
+        optima = np.array(reference_optima(evidence))
+        if not len(optima):  # references fitted to given draws: no search ran
+            return FitResult(posterior, run, _best_draw(run), seed, None, "tempered", evidence)
+        values = posterior(optima)
+        return FitResult(posterior, run, optima[int(np.argmax(values))], seed, np.sort(values)[::-1], "tempered",
+                         evidence)
     generator = np.random.default_rng(seed)
     optima = find_map(posterior, generator, n_starts=max(MAP_STARTS, settings.n_ensembles))
     n_walk = settings.walkers_for(posterior.ndim)

@@ -75,7 +75,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
              "likelihood": posterior.likelihood, "specimen": data.specimen, "sensor": data.sensor,
              "converged": int(report.converged) if report else 0, "seed": result.seed,
              "convergence": json.dumps(report.as_dict() if report else {"method": result.method}, allow_nan=True),
-             "fixed_parameters": json.dumps(posterior.fixed)}
+             "fixed_parameters": json.dumps(posterior.fixed), "sampler": getattr(result, "sampler", "ensemble")}
     tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(attrs)
     return tree
@@ -114,7 +114,18 @@ def summary(result, tree):
                             "max_tau": _finite(np.max(report.tau)), "n_ensembles": int(result.run.chain.shape[0]),
                             "n_walkers": int(result.run.chain.shape[2])},
             "fixed_parameters": posterior.fixed,
-            "map_log_posterior": [float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])]}
+            "map_log_posterior": [float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])],
+            "sampler": getattr(result, "sampler", "ensemble"), "log_evidence": _evidence(result)}
+
+
+def _evidence(result):
+    """The tempered sampler's log Z with its error budget (None for other samplers)."""
+    evidence = getattr(result, "evidence", None)
+    if evidence is None:
+        return None
+    return {"log_z": float(evidence.log_z), "error": float(evidence.error), "bridge": float(evidence.bridge),
+            "sigma_replicates": float(evidence.sigma_replicates), "sigma_pilot": float(evidence.sigma_pilot),
+            "sigma_disc": float(evidence.sigma_disc), "method": "referenced stepping-stone ladders"}
 
 
 def save_fit(result, folder, *, stem="posterior"):
