@@ -98,6 +98,20 @@ def test_cli_calibrate_writes_json_and_figure_and_refuses_bad_bins(tmp_path, cap
     assert len(err) == 1 and "--bins must divide --draws + 1 = 100, got 7" in err[0]
 
 
+def test_cli_calibrate_with_the_tempered_sampler(tmp_path, capsys):
+    out = tmp_path / "sbc"
+    code = main(["calibrate", "--out", str(out), "--sampler", "tempered", "--reps", "1", "--steps", "250",
+                 "--draws", "19", "--bins", "5", "--voltages", "3", "--forces", "9.8", "--samples", "6",
+                 "--processes", "1"])
+    assert code in (0, 1)
+    record = json.loads((out / "sbc.json").read_text())
+    assert record["info"]["settings"]["ladder"]["steps"] == 250
+    assert np.isfinite(record["info"]["replications"][0]["log_z"])
+    capsys.readouterr()
+    assert main(["calibrate", "--out", str(out), "--sampler", "tempered", "--steps", "100"]) == 2
+    assert "--steps must be >= 250 with --sampler tempered, got 100" in capsys.readouterr().err
+
+
 @pytest.mark.slow
 def test_sbc_of_the_burgers_fit_is_uniform_with_100_replications():
     # The reduced design of VALIDATION.md: A201, Burgers, 2 voltages x 2 forces x 12 log-spaced

@@ -92,12 +92,15 @@ def cmd_calibrate(args):
     from dataclasses import replace
 
     from ..data.sensors import load_sensor
-    from ..inference.calibration import SBC_SETTINGS, SBCDesign, calibrate_specimen, format_sbc
+    from ..inference.calibration import SBC_SETTINGS, SBC_TEMPERED_SETTINGS, SBCDesign, calibrate_specimen, format_sbc
     from ..plots import sbc_rank_plot, save_figure
     from .common import floats
 
     load_sensor(args.sensor)
     parse_model(args.model)
+    tempered = args.sampler == "tempered"
+    if args.steps is None:
+        args.steps = SBC_TEMPERED_SETTINGS.ladder.steps if tempered else SBC_SETTINGS.max_steps
     for name in ("reps", "draws", "steps", "samples"):
         if getattr(args, name) < 1:
             raise UsageError(f"--{name} must be >= 1, got {getattr(args, name)}")
@@ -107,8 +110,15 @@ def cmd_calibrate(args):
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     design = SBCDesign(args.sensor, args.model, tuple(floats(args.voltages, "voltages")),
                        tuple(floats(args.forces, "forces")), args.samples)
-    settings = replace(SBC_SETTINGS, min_steps=args.steps, max_steps=args.steps,
-                       chunk=min(SBC_SETTINGS.chunk, max(1, args.steps // 4)))
+    if tempered:
+        ladder = SBC_TEMPERED_SETTINGS.ladder
+        if args.steps < 10 * ladder.n_batches:
+            raise UsageError(f"--steps must be >= {10 * ladder.n_batches} with --sampler tempered, got {args.steps}")
+        settings = replace(SBC_TEMPERED_SETTINGS, ladder=replace(ladder, steps=args.steps, top_draws=args.steps))
+    else:
+        settings = replace(SBC_SETTINGS, min_steps=args.steps, max_steps=args.steps,
+                           chunk=min(SBC_SETTINGS.chunk, max(1, args.steps // 4)),
+                           quadratic_map=False if args.map == "affine" else None)
     out = Path(args.out)
     writable(out)
     done = []

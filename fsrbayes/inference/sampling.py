@@ -90,6 +90,13 @@ class SamplerSettings:
         9-test creep posterior 0.3 halved the steps to convergence (τ 132 → 49–57); 0.2 gave
         τ 67, 0.6 τ 155: walkers that reach a region the proposal under-covers wait there for
         an accepted jump, and only the ensemble moves carry them on.
+    quadratic_map : bool or None
+        The transport map's form: quadratic (None: up to
+        :data:`~fsrbayes.inference.transport.QUADRATIC_MAX_DIM` dimensions) or affine (False).
+        A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
+        coordinates: on the bent-ridge test of ``tests/test_tempered.py`` (x ~ N(0, 1)) the
+        quadratic map with independence moves gave sd(x) 0.966 and a 99.9 % quantile of
+        2.56–2.69 (exact 3.09) while reporting convergence; the affine map 1.007 and 3.01–3.07.
     """
 
     n_ensembles: int = 4
@@ -104,6 +111,7 @@ class SamplerSettings:
     processes: int = 1
     transport_rounds: int = 3
     independence_fraction: float = 0.3
+    quadratic_map: bool | None = None
 
     def __post_init__(self):
         if self.transport_rounds < 0:
@@ -309,7 +317,7 @@ def _transport_maps(chains, settings, max_draws=50000):
     draws = chains[:, end // 2:end].reshape(-1, chains.shape[-1])
     draws = draws[np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int)]
     try:
-        transport = TriangularMap.fit(draws)
+        transport = TriangularMap.fit(draws, quadratic=settings.quadratic_map)
     except (ValueError, np.linalg.LinAlgError):
         return [(None, None)] * n_ens  # too few or degenerate draws: sample the target's own coordinates
     proposal = None
