@@ -13,57 +13,12 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.closed_form import BentRidge
 from fsrbayes.inference.evidence import LadderSettings
 from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.reference import PILOT_SETTINGS, ModeSearch
 from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.tempered import TemperedSettings, tempered_run
-
-
-class _IdentityPrior:
-    """x ~ N(0, 1), y ~ N(0, τ²): the prior of :class:`BentRidge` (sampling space = parameter space)."""
-
-    def __init__(self, tau):
-        self.tau, self.ndim = tau, 2
-
-    def sample(self, rng, n):
-        return rng.standard_normal((n, 2)) * [1.0, self.tau]
-
-    def to_unconstrained(self, x):
-        return np.asarray(x, dtype=float)
-
-    def log_density(self, u):
-        u = np.atleast_2d(u)
-        return stats.norm.logpdf(u[:, 0]) + stats.norm.logpdf(u[:, 1], scale=self.tau)
-
-
-class BentRidge:
-    """Posterior x ~ N(0, 1), y | x ~ N(a·|x|, s²): two straight arms meeting at a corner, the
-    shape of the creep posterior's s0–Va ridge where Simmons' law has its slope kink.
-
-    Prior N(0, 1) × N(0, τ²) and likelihood N(y; a|x|, s²)/N(y; 0, τ²), so Z = 1 exactly
-    (log Z = 0) and E[y] = a·sqrt(2/π).
-    """
-
-    names = ("x", "y")
-
-    def __init__(self, a=3.0, s=0.1, tau=10.0):
-        self.a, self.s, self.prior, self.ndim = a, s, _IdentityPrior(tau), 2
-
-    def log_prior(self, u):
-        return self.prior.log_density(u)
-
-    def log_likelihood(self, u):
-        u = np.atleast_2d(u)
-        return (stats.norm.logpdf(u[:, 1], loc=self.a * np.abs(u[:, 0]), scale=self.s)
-                - stats.norm.logpdf(u[:, 1], scale=self.prior.tau))
-
-    def sample_prior(self, rng, n):
-        return self.prior.sample(rng, n)
-
-    def __call__(self, u):
-        value = self.log_prior(u) + self.log_likelihood(u)
-        return value if np.ndim(u) > 1 else float(value[0])
 
 
 SMALL = TemperedSettings(ladder=LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4,

@@ -4,7 +4,9 @@ coverage of the reported log-evidence error bars on them.
 :class:`LinearGaussian` (problem A: y = Xw + e, conjugate Gaussian prior) and
 :class:`TwoModes` (problem B: an unequal two-component Gaussian mixture in a uniform box) offer
 what :func:`~fsrbayes.inference.evidence.log_evidence` needs — ``ndim``, ``log_prior``,
-``log_likelihood``, ``sample_prior`` — and ``exact_log_z()``.
+``log_likelihood``, ``sample_prior`` — and ``exact_log_z()``. :class:`BentRidge` (a ridge with a
+kink, like the creep posterior's s0–Va ridge) is also a posterior for the samplers (callable,
+with a ``prior`` the MAP search can draw from).
 
 :func:`evidence_coverage` runs the evidence estimator on many independent instances (new data
 and a new seed each) and counts how often the exact log Z lies within 1σ and 2σ of the estimate:
@@ -18,7 +20,7 @@ from scipy import stats
 
 from .evidence import log_evidence
 
-__all__ = ["LinearGaussian", "TwoModes", "evidence_coverage", "format_evidence_coverage"]
+__all__ = ["LinearGaussian", "TwoModes", "BentRidge", "evidence_coverage", "format_evidence_coverage"]
 
 NOMINAL = {1.0: 0.6827, 2.0: 0.9545}
 
@@ -86,6 +88,55 @@ class TwoModes:
         mass = sum(w * np.prod(stats.norm(c, self.s).cdf(self.half_width) - stats.norm(c, self.s).cdf(-self.half_width))
                    for w, c in zip(self.weights, self.centres))
         return np.log(mass) - self.ndim * np.log(2 * self.half_width)
+
+
+class _BentRidgePrior:
+    """x ~ N(0, 1), y ~ N(0, τ²); the sampling space is the parameter space."""
+
+    def __init__(self, tau):
+        self.tau, self.ndim = tau, 2
+
+    def sample(self, rng, n):
+        return rng.standard_normal((n, 2)) * [1.0, self.tau]
+
+    def to_unconstrained(self, x):
+        return np.asarray(x, dtype=float)
+
+    def log_density(self, u):
+        u = np.atleast_2d(u)
+        return stats.norm.logpdf(u[:, 0]) + stats.norm.logpdf(u[:, 1], scale=self.tau)
+
+
+class BentRidge:
+    """Posterior x ~ N(0, 1), y | x ~ N(a·|x|, s²): two straight arms meeting at a corner — the
+    shape of the creep posterior's s0–Va ridge where Simmons' law has its slope kink.
+
+    Prior N(0, 1) × N(0, τ²) and likelihood N(y; a|x|, s²)/N(y; 0, τ²), so Z = 1 exactly
+    (log Z = 0), E[y] = a·sqrt(2/π) and P(|x| > c) = 2Φ(−c). Defaults a = 3, s = 0.1, τ = 10.
+    """
+
+    names = ("x", "y")
+
+    def __init__(self, a=3.0, s=0.1, tau=10.0):
+        self.a, self.s, self.prior, self.ndim = a, s, _BentRidgePrior(tau), 2
+
+    def log_prior(self, u):
+        return self.prior.log_density(u)
+
+    def log_likelihood(self, u):
+        u = np.atleast_2d(u)
+        return (stats.norm.logpdf(u[:, 1], loc=self.a * np.abs(u[:, 0]), scale=self.s)
+                - stats.norm.logpdf(u[:, 1], scale=self.prior.tau))
+
+    def sample_prior(self, rng, n):
+        return self.prior.sample(rng, n)
+
+    def exact_log_z(self):
+        return 0.0
+
+    def __call__(self, u):
+        value = self.log_prior(u) + self.log_likelihood(u)
+        return value if np.ndim(u) > 1 else float(value[0])
 
 
 def evidence_coverage(make_problem, n_runs, settings, *, seed=0, estimator=log_evidence):
