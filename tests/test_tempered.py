@@ -2,8 +2,6 @@
 ``fit(..., sampler="tempered")`` end to end."""
 
 import json
-import subprocess
-import sys
 import warnings
 from dataclasses import replace
 
@@ -97,23 +95,23 @@ def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
     assert info["convergence"]["n_ensembles"] == 2
 
 
-def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=600)
+def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypatch):
+    from fsrbayes.cli import main
+    from fsrbayes.inference import tempered
 
-
-def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path):
+    monkeypatch.setattr(tempered, "TEMPERED_SETTINGS", TINY)  # the CLI's ladder, pilots and search, but tiny
     csv = tmp_path / "data.csv"
     syn.write_simulation(specimen, csv)
-    bad = _cli("fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered", "--resume")
-    assert bad.returncode == 2 and "--resume works with --sampler ensemble only" in bad.stderr
-    assert len(bad.stderr.strip().splitlines()) == 1
-    bad = _cli("fit", str(csv), "--out", str(tmp_path / "b"), "--sampler", "tempered", "--ladder-steps", "20")
-    assert bad.returncode == 2 and "--ladder-steps must be >= 250, got 20" in bad.stderr
-    done = _cli("fit", str(csv), "--out", str(tmp_path / "c"), "--sampler", "tempered", "--ladder-steps", "250",
-                "--seed", "2", "--no-plots")
-    assert done.returncode == 0, done.stderr[-2000:]
+    assert main(["fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered", "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--resume works with --sampler ensemble only" in err[0]
+    assert main(["fit", str(csv), "--out", str(tmp_path / "b"), "--sampler", "tempered", "--ladder-steps", "20"]) == 2
+    assert "--ladder-steps must be >= 100, got 20" in capsys.readouterr().err
+    assert main(["fit", str(csv), "--out", str(tmp_path / "c"), "--sampler", "tempered", "--ladder-steps", "120",
+                 "--seed", "2", "--no-plots", "--processes", "1"]) == 0
     summary = json.loads((tmp_path / "c" / "summary.json").read_text())
-    assert summary["sampler"] == "tempered" and summary["convergence"]["n_kept"] == 250
+    assert summary["sampler"] == "tempered" and summary["convergence"]["n_kept"] == 120
+    assert summary["convergence"]["n_ensembles"] == 2
     assert np.isfinite(summary["log_evidence"]["log_z"])
     assert not (tmp_path / "c" / "checkpoint.npz").exists()
 

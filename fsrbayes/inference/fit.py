@@ -299,8 +299,9 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
         ``"ensemble"``: emcee ensembles until convergence (module docstring). ``"tempered"``:
         the β = 1 rung of referenced tempered ladders (:mod:`~fsrbayes.inference.tempered`),
         which mixes between the arms of a bent ridge and returns the log-evidence too; a fixed
-        length run, about 3 min for a small specimen. Default: from the type of ``settings``,
-        else ``"ensemble"``.
+        length run (~3 min on 2 cores for 4 tests × 12 samples with the defaults, which are
+        too short to converge on creep posteriors: see that module). Default: from the type of
+        ``settings``, else ``"ensemble"``.
 
     Returns
     -------
