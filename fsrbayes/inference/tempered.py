@@ -93,6 +93,10 @@ class TemperedSettings:
         return self.ladder.replicates
 
 
+EVAL_BLOCK = 4096
+"""Draws per log-posterior call when the β = 1 draws are re-evaluated (bounds the solver's memory:
+one call on 4 ladders × 600 steps × 48 walkers of a 549-sample specimen would hold GBs)."""
+
 TEMPERED_SETTINGS = TemperedSettings()
 """Default: 2 pilot groups, 4 ladders of 8 rungs × 600 steps, every β = 1 step kept."""
 
@@ -122,7 +126,9 @@ def tempered_run(posterior, settings=TEMPERED_SETTINGS, seed=0, names=()):
                                        quadratic=settings.quadratic)
     chain = np.asarray(evidence.posterior_draws, dtype=float)
     n_ladders, n_steps, n_walk, ndim = chain.shape
-    log_prob = np.asarray(posterior(chain.reshape(-1, ndim)), dtype=float).reshape(n_ladders, n_steps, n_walk)
+    flat = chain.reshape(-1, ndim)
+    log_prob = np.concatenate([np.asarray(posterior(flat[i:i + EVAL_BLOCK]), dtype=float)
+                               for i in range(0, len(flat), EVAL_BLOCK)]).reshape(n_ladders, n_steps, n_walk)
     moved = np.any(np.diff(chain, axis=1) != 0.0, axis=-1)
     acceptance = moved.mean(axis=1) if n_steps > 1 else np.zeros((n_ladders, n_walk))
     report = tempered_report(chain, settings, names)
