@@ -123,3 +123,17 @@ def test_tempered_sampler_refuses_what_it_cannot_do(specimen, tmp_path):
         fsrbayes.fit(specimen.data, sampler="tempered", settings=SamplerSettings())
     with pytest.raises(ValueError, match="sampler must be one of"):
         fsrbayes.fit(specimen.data, sampler="nuts")
+
+
+def test_tempered_report_counts_independent_draws_fully_and_shared_states_once():
+    from fsrbayes.inference.tempered import tempered_report
+
+    rng = np.random.default_rng(0)
+    independent = rng.standard_normal((4, 500, 32, 2))
+    report = tempered_report(independent)
+    assert np.all(np.abs(report.ess_bulk / independent[..., 0].size - 1) < 0.15), report.ess_bulk
+    assert np.all(report.tau < 1.2) and np.all(report.rhat < 1.01)
+    # Every slot of a step holding the same state (what swaps can do): one draw per step.
+    shared = np.repeat(rng.standard_normal((4, 500, 1, 2)), 32, axis=2)
+    report = tempered_report(shared)
+    assert np.all(np.abs(report.ess_bulk / (4 * 500) - 1) < 0.15), report.ess_bulk
