@@ -55,6 +55,34 @@ def test_mapped_density_is_the_target_times_the_jacobian(banana_map):
     assert np.allclose(mapped(v), Banana()(banana_map.forward(v)) + banana_map.log_det_jacobian)
 
 
+def test_predictability_order_from_the_gram_matrix_equals_direct_least_squares():
+    """The greedy order's scores come from sub-blocks of one Gram matrix; they must equal residual
+    sds of direct least-squares fits (SVD) of each coordinate on a quadratic in the others."""
+    from fsrbayes.inference.transport import _features, _order_by_predictability
+
+    rng = np.random.default_rng(7)
+    x = rng.standard_normal((3000, 7))
+    x[:, 1] = 0.5 * x[:, 0] ** 2 + 0.05 * x[:, 1]
+    x[:, 4] = x[:, 2] * x[:, 3] + 0.2 * x[:, 4]
+    x[:, 6] = x[:, 5] + 0.5 * x[:, 6]
+    z = (x - x.mean(axis=0)) / x.std(axis=0)
+
+    def direct_sd(i, others):
+        design = np.column_stack([np.ones(len(z)), _features(z[:, others])])
+        coef = np.linalg.lstsq(design, z[:, i], rcond=None)[0]
+        return float(np.std(z[:, i] - design @ coef))
+
+    remaining, backwards = list(range(7)), []
+    while remaining:
+        scores = [direct_sd(i, [j for j in remaining if j != i]) for i in remaining]
+        assert min(scores) < 1.0
+        backwards.append(remaining.pop(int(np.argmin(scores))))
+    expected = tuple(reversed(backwards))
+    order = _order_by_predictability(z)
+    assert order == expected
+    assert order[-1] == 1 and set(order[-3:]) >= {4}  # the parabola's output goes last, the product near it
+
+
 def test_identity_map_and_too_few_draws():
     ident = TriangularMap.identity(3)
     x = np.random.default_rng(4).standard_normal((5, 3))
