@@ -1,5 +1,6 @@
 """The command line: the demo does real work, bad input gets one line and exit code 2."""
 
+import argparse
 import json
 import subprocess
 import sys
@@ -48,3 +49,16 @@ def test_bad_input_is_one_line_exit_2(args, message):
 def test_unknown_subcommand_is_a_usage_error():
     result = run("frobnicate")
     assert result.returncode == 2 and "Traceback" not in result.stderr
+
+
+def test_help_of_every_command_prints_without_a_traceback(capsys):
+    """argparse %-formats help strings only when --help asks; a stray '%' once crashed 'fsrbayes --help'."""
+    from fsrbayes.cli import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    for argv in [["--help"]] + [[name, "--help"] for name in commands]:
+        with pytest.raises(SystemExit) as stopped:
+            parser.parse_args(argv)
+        assert stopped.value.code == 0, argv
+        assert "usage: fsrbayes" in capsys.readouterr().out

@@ -149,7 +149,7 @@ def build_parser():
     dia.set_defaults(func=cmd_diagnose)
 
     cal = sub.add_parser("calibrate", help="simulation-based calibration of the per-specimen fit: rank "
-                         "histograms, uniformity tests, coverage at 50/80/90 % (exit 1 if not calibrated)")
+                         "histograms, uniformity tests, coverage at 50/80/90 %% (exit 1 if not calibrated)")
     cal.add_argument("--out", required=True, help="folder for sbc.json and rank_histograms.png")
     cal.add_argument("--sensor", default="a201", help=f"priors of one of {available_sensors()} (default a201)")
     cal.add_argument("--model", default="burgers", help="creep law, optionally +effect terms (default burgers)")
