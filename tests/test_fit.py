@@ -15,7 +15,7 @@ import xarray as xr
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.sampling import CheckpointMismatch, ConvergenceWarning, SamplerSettings
 
 FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 
@@ -138,6 +138,19 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     assert refused.returncode == 2
     assert "was written for another model, other priors or another parameter order" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_path, monkeypatch):
+    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
+
+    path = tmp_path / "checkpoint.npz"
+    state = np.random.RandomState(0).get_state()
+    sampling._save(path, "other|data", np.zeros((2, 1, 32, 11)), np.zeros((2, 1, 32)), np.zeros((2, 32)),
+                   [state, state], FAST)
+    monkeypatch.setattr(fit_module, "find_map", lambda *a, **k: pytest.fail("the MAP search ran first"))
+    with pytest.raises(CheckpointMismatch, match="was written for"):
+        fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
 
 
 def test_cli_fit_bad_input(csv_file, tmp_path):

@@ -26,7 +26,7 @@ from ..data.csvio import CreepData
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
 from .posterior import LogPosterior
-from .sampling import EnsembleRun, SamplerSettings, even_index, run_ensembles
+from .sampling import EnsembleRun, SamplerSettings, check_checkpoint, even_index, run_ensembles
 
 __all__ = ["FitResult", "fit", "find_map", "separate_regions", "MAP_STARTS", "SAMPLERS"]
 
@@ -325,6 +325,8 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
         values = posterior(optima)
         return FitResult(posterior, run, optima[int(np.argmax(values))], seed, np.sort(values)[::-1], "tempered",
                          evidence)
+    if resume and checkpoint is not None:  # a mismatched checkpoint is refused before the MAP search
+        check_checkpoint(checkpoint, posterior.fingerprint(), settings.n_ensembles)
     generator = np.random.default_rng(seed)
     optima = find_map(posterior, generator, n_starts=max(MAP_STARTS, settings.n_ensembles))
     n_walk = settings.walkers_for(posterior.ndim)

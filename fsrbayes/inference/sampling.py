@@ -38,7 +38,7 @@ from .parallel import fork_pool
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
-           "run_ensembles", "convergence_report"]
+           "run_ensembles", "convergence_report", "check_checkpoint"]
 
 
 def even_index(length, n):
@@ -344,6 +344,15 @@ def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
             np.savez(handle, fingerprint=np.array(fingerprint), chain=chains, log_prob=log_probs,
                      accepted=acceptance, settings=np.array(repr(asdict(settings))),
                      **{f"state{e}_{k}": np.asarray(v) for e, st in enumerate(states) for k, v in enumerate(st)})
+
+
+def check_checkpoint(path, fingerprint, n_ensembles):
+    """Refuse a checkpoint written for another fit (:class:`CheckpointMismatch`) before any work
+    is done; a missing file is fine (the run starts afresh)."""
+    try:
+        _load(path, fingerprint, n_ensembles)
+    except FileNotFoundError:
+        pass
 
 
 def _load(path, fingerprint, n_ensembles):
