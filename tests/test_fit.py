@@ -153,6 +153,32 @@ def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_pat
         fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
 
 
+def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, monkeypatch):
+    from fsrbayes.data.sensors import load_sensor
+    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.posterior import LogPosterior
+
+    def posterior_of(sim):
+        return LogPosterior.for_sensor(SpecimenData.from_tests(sim.data.tests), load_sensor("a201"))
+
+    notes = fit_module.design_warnings(posterior_of(small))  # forces 4.9 and 9.8 N
+    assert len(notes) == 1 and "2 distinct stress levels" in notes[0] and "(A0, A1, A2)" in notes[0]
+    three = syn.simulate("a201", n_specimens=1, voltages=[1.0], forces=[1.96, 4.9, 9.8], samples=5, seed=1)
+    assert fit_module.design_warnings(posterior_of(three)) == []
+    assert fit_module._distinct_levels([2e5, 1e5, 1.004e5]) == 2  # measured loads scatter a little
+
+    class Stop(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Stop
+
+    monkeypatch.setattr(fit_module, "find_map", stop)
+    with pytest.warns(fit_module.DesignWarning, match="test at >= 3 stresses or fix A2"), pytest.raises(Stop):
+        fsrbayes.fit(small.data, rng=7, settings=FAST)
+
+
 def test_cli_fit_bad_input(csv_file, tmp_path):
     result = cli("fit", str(csv_file), "--out", str(tmp_path / "x"), "--specimen", "nobody")
     assert result.returncode == 2 and "--specimen 'nobody' is not in" in result.stderr

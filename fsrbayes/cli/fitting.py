@@ -17,7 +17,7 @@ CHECKPOINT = "checkpoint.npz"
 
 def cmd_fit(args):
     """Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen."""
-    from ..inference.fit import fit
+    from ..inference.fit import DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.sampling import ConvergenceWarning, SamplerSettings
 
@@ -45,12 +45,13 @@ def cmd_fit(args):
         folder.mkdir(parents=True, exist_ok=True)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ConvergenceWarning)
+            warnings.simplefilter("always", DesignWarning)
             checkpoint = folder / CHECKPOINT if args.sampler == "ensemble" else None
             result = fit(data, specimen, model=args.model, tunneling=args.tunneling, likelihood=args.likelihood,
                          rng=args.seed, settings=settings, checkpoint=checkpoint, resume=args.resume,
                          progress=args.progress)
         for w in caught:
-            if issubclass(w.category, ConvergenceWarning):
+            if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
         summaries[specimen] = save_fit(result, folder)
         if args.plots:
@@ -104,7 +105,6 @@ def _fit_hierarchical(args, data, settings, out):
     from ..inference.hierarchical import SpecimenFitWarning, fit_specimens, joint, two_stage
     from ..inference.output import save_fit, save_population
     from ..inference.predictive import ForwardTemplate
-    from ..inference.sampling import ConvergenceWarning
 
     if args.specimen is not None:
         raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
@@ -139,9 +139,10 @@ def _fit_hierarchical(args, data, settings, out):
             if args.route == "joint":
                 result = joint([f.posterior for f in fits.values()], result.population, settings=hyper_settings,
                                seed=args.seed, start_from=result, labels=list(fits))
-        for w in caught:
-            if issubclass(w.category, (ConvergenceWarning, UserWarning)) and "fsrbayes" in w.category.__module__:
-                print(f"fsrbayes fit: warning: {w.message}", file=sys.stderr)
+        notes = [str(w.message) for w in caught
+                 if issubclass(w.category, UserWarning) and "fsrbayes" in w.category.__module__]
+        for note in dict.fromkeys(notes):  # once each: every specimen of a design warns alike
+            print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
         template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
         observed = [t for s in summaries.values() for t in s["tests"]]
         noise = float(np.median([s["parameters"]["sigma_rel"]["median"] for s in summaries.values()]))

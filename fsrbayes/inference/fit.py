@@ -17,6 +17,7 @@ over 4,000–12,000 steps: ensembles started in one region neither leave it nor 
 With the region starts and the mixture both arms are visited, but not yet their far ends.
 """
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,10 +29,48 @@ from .likelihood import SpecimenData
 from .posterior import LogPosterior
 from .sampling import EnsembleRun, SamplerSettings, check_checkpoint, even_index, run_ensembles
 
-__all__ = ["FitResult", "fit", "find_map", "separate_regions", "MAP_STARTS", "SAMPLERS"]
+__all__ = ["FitResult", "fit", "find_map", "separate_regions", "design_warnings", "DesignWarning", "MAP_STARTS",
+           "SAMPLERS"]
 
 MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
+
+
+class DesignWarning(UserWarning):
+    """The specimen's tests cannot tell some sampled parameters apart (:func:`design_warnings`)."""
+
+
+AREA_COEFFICIENTS = ("A0", "A1", "A2")
+
+
+def _distinct_levels(values, rtol=0.01):
+    """How many distinct levels ``values`` hold, levels within ``rtol`` of each other counting once."""
+    ordered = np.sort(np.asarray(values, dtype=float))
+    return int(1 + np.sum(ordered[1:] > ordered[:-1] * (1 + rtol))) if ordered.size else 0
+
+
+def design_warnings(posterior):
+    """One-line notes on what a specimen's tests cannot identify, whatever the sampler does.
+
+    The tunneling area A(σ) = A0 + A1·σ^A2 (eq. 6) depends on the held stress only: tests at
+    fewer distinct stresses than it has sampled coefficients fix A at those stresses and leave
+    a curve of (A0, A1, A2) along which only the prior decides. Its posterior is then a curved
+    ridge that the ensembles explore slowly (VALIDATION.md §1: on a 2-force design τ reached
+    ~1,800 steps; with a third force ~15–40), and drift predictions at other stresses rest on
+    the prior.
+
+    Returns
+    -------
+    list of str
+    """
+    sampled = [name for name in AREA_COEFFICIENTS if name in posterior.names]
+    levels = _distinct_levels(posterior.data.stress_Pa)
+    if len(sampled) > levels:
+        return [f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law A(σ) "
+                f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A only at the "
+                f"tested stresses, the rest is prior along a curved ridge that mixes slowly; test at "
+                f">= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"]
+    return []
 
 
 @dataclass
@@ -311,6 +350,8 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood)
     sampler, settings = _sampler_and_settings(sampler, settings)
+    for note in design_warnings(posterior):
+        warnings.warn(DesignWarning(note), stacklevel=2)
     seed = int(rng) if isinstance(rng, (int, np.integer)) else int(np.random.default_rng(rng).integers(2**31))
     if sampler == "tempered":
         if checkpoint is not None or resume:
