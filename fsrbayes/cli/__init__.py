@@ -160,11 +160,12 @@ def build_parser():
                      help="fit with emcee ensembles or the tempered ladders (default ensemble)")
     cal.add_argument("--map", choices=("auto", "affine"), default="auto",
                      help="--sampler ensemble: the transport map's form (auto: quadratic up to 14 parameters)")
-    cal.add_argument("--steps", type=int, help="steps per ensemble and fit (default 3000), or per ladder rung with "
+    cal.add_argument("--steps", type=int, help="steps per ensemble and fit (default 1500), or per ladder rung with "
                      "--sampler tempered (default 300)")
-    cal.add_argument("--voltages", default="0.2,3", help="V_FSR of the simulated tests (default 0.2,3)")
-    cal.add_argument("--forces", default="1.96,9.8", help="forces in N of the simulated tests (default 1.96,9.8)")
-    cal.add_argument("--samples", type=int, default=12, help="log-spaced samples per test over 1 h (default 12)")
+    cal.add_argument("--voltages", default="0.1,1,3", help="V_FSR of the simulated tests (default 0.1,1,3)")
+    cal.add_argument("--forces", default="1.96,4.9,9.8",
+                     help="forces in N of the simulated tests (default 1.96,4.9,9.8)")
+    cal.add_argument("--samples", type=int, default=8, help="log-spaced samples per test over 1 h (default 8)")
     cal.add_argument("--processes", type=int, help="replications side by side (default: one per core)")
     cal.add_argument("--seed", type=int, default=0)
     cal.set_defaults(func=cmd_calibrate)

@@ -53,11 +53,12 @@ __all__ = ["SBCDesign", "SBCResult", "SBC_SETTINGS", "SBC_TEMPERED_SETTINGS", "s
 DRIFT_TIME_S = 3600.0
 LEVELS = (0.5, 0.8, 0.9)
 
-SBC_SETTINGS = SamplerSettings(n_ensembles=2, chunk=250, min_steps=3000, max_steps=3000, transport_rounds=3,
+SBC_SETTINGS = SamplerSettings(n_ensembles=2, chunk=250, min_steps=1500, max_steps=1500, transport_rounds=3,
                                processes=1)
 """Fixed-length runs (every replication costs the same): two ensembles of max(32, 4·ndim)
-walkers, 750 warm-up steps with transport-map refits, 2,250 kept steps. Replications run side
-by side, so each fit uses one process."""
+walkers, 750 warm-up steps with transport-map refits, 750 kept steps — on the default
+:class:`SBCDesign` the fits' largest τ is ~10–55 steps (VALIDATION.md §1). Replications run
+side by side, so each fit uses one process."""
 
 SBC_TEMPERED_SETTINGS = TemperedSettings(
     ladder=LadderSettings(n_temps=6, exponent=1.0, burn=100, steps=300, replicates=2, top_draws=300),
@@ -71,6 +72,14 @@ is further from calibrated than with the ensembles (VALIDATION.md §1)."""
 @dataclass(frozen=True)
 class SBCDesign:
     """What one replication simulates: one specimen of ``sensor`` under ``model``.
+
+    The default — 3 voltages × 3 forces × 8 log-spaced samples — is the smallest design found
+    that identifies the tunneling and contact parameters: with 2 forces the area law
+    A(σ) = A0 + A1·σ^A2 (eq. 6) is fixed at two stresses only and its coefficients lie on a
+    curved prior ridge; with 2 voltages so do s0 and Va (eq. 11). Either ridge mixes so slowly
+    (τ ≈ 1,800 steps measured) that a budget-limited fit is over-confident and the SBC fails
+    from the design, not the sampler. All three voltages keep V_bulk clear of Va/e, the join of
+    Simmons' two regimes (0.2 V would not; VALIDATION.md §1).
 
     Attributes
     ----------
@@ -86,9 +95,9 @@ class SBCDesign:
 
     sensor: str = "a201"
     model: str = "burgers"
-    voltages: tuple = (0.2, 3.0)
-    forces: tuple = (1.96, 9.8)
-    samples: int = 12
+    voltages: tuple = (0.1, 1.0, 3.0)
+    forces: tuple = (1.96, 4.9, 9.8)
+    samples: int = 8
     spacing: str = "log"
     duration: float = 3600.0
 
