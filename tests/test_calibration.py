@@ -115,8 +115,8 @@ def test_cli_calibrate_with_the_tempered_sampler(tmp_path, capsys):
 @pytest.mark.slow
 def test_sbc_of_the_burgers_fit_is_uniform_with_100_replications():
     # The reduced design of VALIDATION.md: A201, Burgers, 3 voltages x 3 forces x 8 log-spaced
-    # samples, 2 ensembles x 48 walkers x 1,500 steps per fit; ~22 min on 2 cores. Fails today
-    # on inv_b1 alone (chi2 p 1.7e-5: a slowly mixing Zener-like tail, VALIDATION.md section 1).
+    # samples, 2 ensembles x 48 walkers x 1,500 steps per fit; ~20 min on 2 cores. Without the
+    # fit's nested-model starts inv_b1 failed (chi2 p 1.7e-5, VALIDATION.md section 1).
     result = calibrate_specimen(100, seed=0, processes=2)
     print(format_sbc(result))
     calibrated, failures = result.verdict()

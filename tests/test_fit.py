@@ -238,6 +238,46 @@ def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     assert posterior(optima[:1])[0] >= posterior(posterior.prior.to_unconstrained(truth[None]))[0] - 0.5
 
 
+class _TailedGaussian:
+    """A correlated Gaussian in u over (a normal parameter, a half-normal one): the half-normal's
+    nested model (x -> 0) lies in the tail, as the Burgers fluidity's Zener limit does."""
+
+    mean = np.array([1.0, 0.0])
+    precision = np.array([[4.0, 3.0], [3.0, 4.0]])
+    ndim = 2
+
+    def __init__(self):
+        from fsrbayes.data.distributions import make_distribution
+        from fsrbayes.data.prior import JointPrior
+
+        self.prior = JointPrior(("k", "inv_b1"), (make_distribution({"dist": "normal", "mu": 0.0, "sigma": 1.0}),
+                                                  make_distribution({"dist": "halfnormal", "scale": 1.0})))
+
+    def __call__(self, u):
+        d = np.atleast_2d(u) - self.mean
+        return -0.5 * np.einsum("wi,ij,wj->w", d, self.precision, d)
+
+
+def test_nested_starts_hold_the_half_normal_and_optimise_the_rest():
+    from fsrbayes.inference.fit import NESTED_DEPTH, _start_regions, nested_starts
+
+    target = _TailedGaussian()
+    starts = nested_starts(target, target.mean)
+    # the conditional maximum of a Gaussian: k = m_k - P_kk^-1 P_kb (depth - m_b)
+    expected_k = target.mean[0] - 3.0 / 4.0 * (NESTED_DEPTH - target.mean[1])
+    np.testing.assert_allclose(starts, [[expected_k, NESTED_DEPTH]], atol=1e-4)
+    # the tail start takes the second ensemble's place when its Laplace mass is close enough ...
+    log_gap = 0.5 * 4.0 * (NESTED_DEPTH - target.mean[1]) ** 2 * (1 - 9 / 16)  # profile drop, nats
+    assert log_gap < 10
+    regions = _start_regions(target, target.mean[None], starts, n_ensembles=2)
+    assert [r[0][1] for r in regions] == [target.mean[1], NESTED_DEPTH]
+    # ... never the only one's, and not when it lies too far below the best region
+    assert len(_start_regions(target, target.mean[None], starts, n_ensembles=1)) == 1
+    assert len(_start_regions(target, target.mean[None], starts, 2, max_log_mass_gap=log_gap / 2)) == 1
+    # a parameter already at or below the depth needs no start
+    assert nested_starts(target, np.array([0.0, NESTED_DEPTH - 1])).shape == (0, 2)
+
+
 @pytest.mark.slow
 def test_parameter_recovery_on_twenty_simulated_specimens():
     from fsrbayes.inference.recovery import format_recovery, recovery_study
