@@ -4,9 +4,10 @@
   sample the hyper-posterior by reweighting their draws (:class:`~.population.TwoStageTarget`).
   Scales to thousands of specimens; its Monte-Carlo error is each specimen's effective number
   of draws, reported and warned about when small.
-* :func:`joint` — sample hyper-parameters and all specimens' parameters together with the same
-  emcee engine as a single fit (:class:`~.population.JointTarget`), started from the two-stage
-  answer when one is given.
+* :func:`joint` — sample hyper-parameters and all specimens' parameters together with emcee:
+  blocked Gibbs sweeps as emcee's move (:mod:`~.gibbs`; proposals from the specimens' own fits)
+  or plain ensemble moves (:class:`~.population.JointTarget`), started from the two-stage answer
+  when one is given.
 
 Both return a :class:`HierarchicalResult`.
 """
@@ -18,6 +19,7 @@ import numpy as np
 
 from .fit import find_map, fit, laplace_start
 from .parallel import JobFailure, map_jobs
+from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .population import JointTarget, Population, TwoStageTarget
 from .sampling import SamplerSettings, even_index, run_ensembles, single_threaded_blas
 
@@ -115,12 +117,20 @@ class HierarchicalResult:
 
 def _sample(target, seed, settings, start, progress):
     rng = np.random.default_rng(seed)
-    n_walk = settings.walkers_for(target.ndim)
+    n_walk = _walkers(target, settings)
     if start is None:
         optima = find_map(target, rng, n_starts=settings.n_ensembles)
         start = laplace_start(target, optima[0], rng, (settings.n_ensembles, n_walk))
     return run_ensembles(target, start, seed, settings, names=target.names, fingerprint=target.fingerprint(),
                          progress=progress)
+
+
+def _walkers(target, settings):
+    """Walkers per ensemble: the Gibbs route's walkers are chains of their own, not bound by the
+    ensemble moves' 2·ndim."""
+    if isinstance(target, GibbsJointTarget):
+        return settings.n_walkers or GIBBS_WALKERS
+    return settings.walkers_for(target.ndim)
 
 
 def _thin(values, n):
@@ -178,7 +188,8 @@ def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_
     return result
 
 
-def joint(specimens, population=None, *, settings=None, seed=0, start_from=None, labels=None, progress=False):
+def joint(specimens, population=None, *, settings=None, seed=0, start_from=None, labels=None, progress=False,
+          method=None, proposal_draws=None):
     """Sample the hyper-parameters and every specimen's parameters jointly.
 
     Parameters
@@ -190,8 +201,17 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
     seed : int
     start_from : HierarchicalResult, optional
         A two-stage result over the same specimens: walkers start from its hyper-posterior
-        draws and, per specimen, draws reweighted to them — no joint MAP search needed.
+        draws and, per specimen, draws reweighted to them — no joint MAP search needed. Its
+        fits' draws also feed the Gibbs route's proposals.
     labels : sequence of str, optional
+    method : {"gibbs", "ensemble"}, optional
+        ``"gibbs"`` (the default when specimen draws are at hand, from ``start_from`` or
+        ``proposal_draws``): emcee runs blocked Gibbs sweeps (:mod:`~fsrbayes.inference.gibbs`),
+        the route that works at 16 specimens. ``"ensemble"``: emcee's stretch/DE moves over all
+        parameters at once — fine for a handful of low-dimensional specimens, hopeless at 16
+        creep specimens (BENCHMARKS.md).
+    proposal_draws : sequence of ndarray (N_j, D), optional
+        Each specimen's posterior draws under its own prior, physical units (Gibbs proposals).
 
     Returns
     -------
@@ -199,18 +219,49 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
     """
     specimens = list(specimens)
     population = population or Population(specimens[0].prior)
-    target = JointTarget(population, specimens)
     settings = settings or SamplerSettings()
+    if proposal_draws is None and start_from is not None:
+        proposal_draws = start_from.specimen_draws
+    method = method or ("gibbs" if proposal_draws is not None else "ensemble")
+    if method not in ("gibbs", "ensemble"):
+        raise ValueError(f"method must be 'gibbs' or 'ensemble', got {method!r}")
+    rng = np.random.default_rng(seed)
+    if method == "gibbs":
+        if proposal_draws is None:
+            raise ValueError("the Gibbs route needs each specimen's posterior draws: pass start_from (a two-stage "
+                             "result from fits) or proposal_draws")
+        target = GibbsJointTarget(population, specimens, proposal_draws)
+        settings = replace(settings, transport_rounds=0, independence_fraction=0.0,
+                           n_walkers=settings.n_walkers or GIBBS_WALKERS)
+    else:
+        target = JointTarget(population, specimens)
     start = None
     if start_from is not None:
-        start = _start_from_two_stage(target, start_from, settings, np.random.default_rng(seed))
+        start = _start_from_two_stage(target, start_from, settings, rng)
+    elif method == "gibbs":
+        start = _start_from_draws(target, proposal_draws, settings, rng)
     run = _sample(target, seed, settings, start, progress)
     return HierarchicalResult(population, target, run, seed, "joint", list(labels or range(len(specimens))))
 
 
+def _start_from_draws(target, draws, settings, rng):
+    """Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at
+    those draws' mean and spread (the warm-up half of the chain is discarded anyway)."""
+    n_walk = _walkers(target, settings)
+    n = settings.n_ensembles * n_walk
+    population = target.population
+    picks = [np.asarray(d, dtype=float)[rng.integers(0, len(d), n)] for d in draws]
+    z = np.stack([population.to_z(p[:, population.index])[0] for p in picks], axis=1)  # (n, J, P)
+    mu = z.mean(axis=1)
+    omega = np.maximum(z.std(axis=1), 1e-3 * population.scale)
+    u = [population.hyper_prior.to_unconstrained(np.concatenate([mu, omega], axis=1))]
+    u += [spec.prior.to_unconstrained(p) for spec, p in zip(target.specimens, picks)]
+    return np.concatenate(u, axis=1).reshape(settings.n_ensembles, n_walk, -1)
+
+
 def _start_from_two_stage(target, two, settings, rng):
     """Walkers from a two-stage result: hyper draws, and per specimen a reweighted draw of its fit."""
-    n_walk = settings.walkers_for(target.ndim)
+    n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk
     if two.specimen_draws is None or len(two.specimen_draws) != len(target.specimens):
         raise ValueError("start_from needs a two-stage result built from fits of the same specimens")

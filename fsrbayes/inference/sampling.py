@@ -282,10 +282,13 @@ def _advance(log_prob, position, log_prob_start, random_state, steps, de_fractio
     """
     n_walk, ndim = position.shape
     target = log_prob
+    own_moves = getattr(log_prob, "emcee_moves", None)
+    if own_moves is not None and transport is not None:
+        raise ValueError("a target with its own emcee moves samples its own coordinates: set transport_rounds=0")
     if transport is not None:
         target, position, log_prob_start = MappedLogProb(log_prob, transport), transport.inverse(position), None
-    sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True,
-                                    moves=_moves(de_fraction, proposal, independence_fraction))
+    moves = own_moves() if own_moves is not None else _moves(de_fraction, proposal, independence_fraction)
+    sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
     sampler.random_state = random_state
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
     with single_threaded_blas():

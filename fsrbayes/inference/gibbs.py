@@ -1,0 +1,309 @@
+"""The joint hierarchical posterior by blocked Gibbs sweeps inside emcee.
+
+Plain ensemble moves over all 214 parameters of 16 specimens barely move (0.86 s per step,
+τ not estimable in 200 steps; BENCHMARKS.md): a stretch or differential-evolution proposal in
+214 dimensions is almost always rejected by one of the 16 likelihoods. The joint posterior has
+a structure they ignore — given the hyper-parameters Λ the specimens are independent 12-d
+problems, and given the specimens Λ splits into P independent (μ_p, ω_p) pairs of a normal
+model. :class:`GibbsJointTarget` hands emcee one move, :class:`BlockGibbsMove`, that sweeps
+those blocks for every walker:
+
+1. each specimen j in turn, conditional on the walker's Λ:
+   p(u_j | Λ, y_j) ∝ π(u_j) L_j(u_j) p(θ_j | Λ) / π(θ_j) (u_j in the specimen's prior-scaled
+   coordinates, :class:`~fsrbayes.inference.population.JointTarget`), updated by
+   * an independence Metropolis–Hastings step from :class:`KernelProposal`, a Gaussian kernel
+     mixture over the specimen's own per-specimen posterior draws (the two-stage route's fits)
+     with a defensive Student-t, exact for any proposal — the draws already follow the curved
+     s0–Va ridge that defeats Gaussian proposals, and
+   * a differential-evolution step within the block, red–blue split over the ensemble's walkers
+     (each walker's target depends on its own Λ; the proposal uses only the other half's
+     current positions, so it is symmetric given them, as in emcee's own moves);
+2. the hyper-parameters: for each p, μ_p | ω_p, z drawn exactly (normal prior, normal
+   likelihood) and log ω_p | μ_p, z by random-walk Metropolis (half-normal prior), a few rounds.
+
+Each sweep costs two likelihood evaluations per specimen and walker (the same as two steps of a
+single-specimen fit of every specimen); the joint log-density emcee stores is assembled from the
+cached blocks, so it equals :meth:`JointTarget.__call__` exactly (tested).
+"""
+
+import emcee
+import numpy as np
+from scipy.special import gammaln
+
+from .population import JointTarget, _logsumexp
+
+__all__ = ["KernelProposal", "GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
+
+GIBBS_WALKERS = 32
+"""Walkers per ensemble for the Gibbs route: each walker is its own Gibbs chain (the ensemble
+only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply."""
+
+
+class KernelProposal:
+    """Independence proposal for one block: a Gaussian kernel mixture over draws, plus a
+    defensive multivariate Student-t.
+
+    Parameters
+    ----------
+    draws : ndarray (N, d)
+        Draws of the block (e.g. a per-specimen posterior in its u coordinates).
+    n_centres : int
+        Kernel centres, evenly thinned from ``draws``.
+    defensive : float
+        Weight of the Student-t (``dof`` degrees of freedom, twice the draws' covariance): it
+        keeps the proposal's tails heavier than any conditional of the block.
+    """
+
+    def __init__(self, draws, n_centres=256, defensive=0.1, dof=5.0):
+        draws = np.asarray(draws, dtype=float)
+        if draws.ndim != 2 or len(draws) < draws.shape[1] + 2 or not np.all(np.isfinite(draws)):
+            raise ValueError(f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}")
+        n, d = draws.shape
+        self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
+        self.mean = draws.mean(axis=0)
+        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
+        m = len(self.centres)
+        bandwidth = (4.0 / ((d + 2.0) * m)) ** (1.0 / (d + 4.0))  # Silverman's rule
+        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * cov)
+        self.t_chol = np.linalg.cholesky(2.0 * cov)
+        self.white_centres = np.linalg.solve(self.kernel_chol, self.centres.T).T
+        self.defensive, self.dof, self.d = float(defensive), float(dof), d
+
+    def sample(self, random, n):
+        """n draws, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        pick = random.randint(len(self.centres), size=n)
+        kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
+        chi = random.chisquare(self.dof, size=n) / self.dof
+        heavy = self.mean + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
+        return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
+
+    def log_density(self, u):
+        """log q(u) for u (n, d)."""
+        u = np.atleast_2d(u)
+        white = np.linalg.solve(self.kernel_chol, u.T).T
+        dist2 = (np.sum(white**2, axis=1)[:, None] + np.sum(self.white_centres**2, axis=1)[None, :]
+                 - 2.0 * white @ self.white_centres.T)
+        log_kernel = (_logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1) - np.log(len(self.centres))
+                      - np.sum(np.log(np.diag(self.kernel_chol))) - 0.5 * self.d * np.log(2 * np.pi))
+        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
+        nu, d = self.dof, self.d
+        log_t = (gammaln((nu + d) / 2) - gammaln(nu / 2) - 0.5 * d * np.log(nu * np.pi)
+                 - np.sum(np.log(np.diag(self.t_chol))) - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu))
+        return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
+
+
+class GibbsJointTarget(JointTarget):
+    """:class:`JointTarget` with the blocked Gibbs move (module docstring).
+
+    Parameters
+    ----------
+    population : Population
+    specimens : sequence
+        Per-specimen targets over the population's prior.
+    proposal_draws : sequence of ndarray, each (N_j, D)
+        Each specimen's posterior draws of all its parameters in physical units (e.g. its fit,
+        or ``HierarchicalResult.specimen_draws`` of a two-stage result).
+    hyper_rounds : int
+        Rounds of (exact μ draw, Metropolis log ω step) per sweep.
+    weak_ratio : float
+        Population parameters whose per-specimen posterior sd (median over specimens, in z)
+        exceeds this share of the spread of the specimens' posterior medians also get a
+        shift-and-scale move of (μ_p, ω_p, all z_jp) per sweep (one likelihood evaluation of every
+        specimen each): on the 16-specimen bench A0 and inv_b1 (ratios 0.85, 0.66; the others
+        ≤ 0.42), whose ω mixed with τ ≈ 250 sweeps without it.
+    """
+
+    def __init__(self, population, specimens, proposal_draws, *, hyper_rounds=5, n_centres=256, weak_ratio=0.5, shift_scale=1.0):
+        super().__init__(population, specimens)
+        if len(proposal_draws) != len(self.specimens):
+            raise ValueError(f"proposal_draws: need one array per specimen ({len(self.specimens)}), "
+                             f"got {len(proposal_draws)}")
+        self.proposals = [KernelProposal(spec.prior.to_unconstrained(np.asarray(d, dtype=float)), n_centres=n_centres)
+                          for spec, d in zip(self.specimens, proposal_draws)]
+        self.hyper_rounds = int(hyper_rounds)
+        z = [population.to_z(np.asarray(d, dtype=float)[:, population.index])[0] for d in proposal_draws]
+        within = np.median([np.std(v, axis=0) for v in z], axis=0)
+        between = np.std([np.median(v, axis=0) for v in z], axis=0) + 1e-12
+        self.weak = tuple(int(p) for p in np.flatnonzero(within > weak_ratio * between))
+        """Population parameters the specimens' own data barely identify (posterior sd of z above
+        ``weak_ratio`` × the spread of the specimens' medians): they get the shift-and-scale move."""
+        self.shift_steps = shift_scale * 2.4 * between / np.sqrt(len(z))
+        self.scale_step = shift_scale * 2.4 / np.sqrt(2.0 * len(z))
+
+    def emcee_moves(self):
+        """The moves :func:`~fsrbayes.inference.sampling.run_ensembles` gives emcee for this target."""
+        return [(BlockGibbsMove(self), 1.0)]
+
+    def fingerprint(self):
+        return "gibbs-" + super().fingerprint()
+
+
+class BlockGibbsMove(emcee.moves.Move):
+    """One blocked Gibbs sweep of every walker (module docstring) as an emcee move.
+
+    The per-block pieces of the log-density (each specimen's prior-and-likelihood in u, its
+    population parameters) are cached between steps and rebuilt whenever the state emcee passes
+    in is not the one the move left.
+    """
+
+    def __init__(self, target):
+        self.target = target
+        self.population = target.population
+        self._coords = None
+        self.acceptance = np.zeros(2)  # running means of (independence, DE) acceptance
+        self._sweeps = 0
+
+    # -- the cache ---------------------------------------------------------------------------
+    def _evaluate_block(self, j, u_block):
+        """(log π(u) + log L, log L, population parameters) of specimen j at u_block (n, D)."""
+        spec = self.target.specimens[j]
+        prior_u, like = spec.log_prior_and_likelihood(u_block)
+        x = spec.prior.from_unconstrained(u_block)[0][:, self.population.index]
+        total = np.where(np.isnan(prior_u + like), -np.inf, prior_u + like)
+        return total, np.where(np.isfinite(total), like, -np.inf), x
+
+    def _rebuild(self, coords):
+        t, pop = self.target, self.population
+        n_hyper = 2 * pop.size
+        hyper, _ = pop.hyper_prior.from_unconstrained(coords[:, :n_hyper])
+        self.mu, self.omega = (a.copy() for a in pop.split(hyper))
+        blocks = [self._evaluate_block(j, t.specimen_block(coords, j)) for j in range(len(t.specimens))]
+        self.block_lp = np.stack([b[0] for b in blocks], axis=1)  # (W, J)
+        self.like = np.stack([b[1] for b in blocks], axis=1)  # (W, J)
+        self.x = np.stack([b[2] for b in blocks], axis=1)  # (W, J, P)
+        self.u = [t.specimen_block(coords, j).copy() for j in range(len(t.specimens))]
+
+    def _log_prob(self):
+        """Joint log-density in u from the cache, and the coordinates."""
+        pop = self.population
+        hyper = np.concatenate([self.mu, self.omega], axis=1)
+        hyper_u = pop.hyper_prior.to_unconstrained(hyper)
+        _, log_jac = pop.hyper_prior.from_unconstrained(hyper_u)
+        value = pop.hyper_prior.log_prob(hyper) + log_jac + self.block_lp.sum(axis=1)
+        with np.errstate(invalid="ignore"):
+            value = value + np.sum(pop.log_ratio(self.x, self.mu[:, None, :], self.omega[:, None, :]), axis=1)
+        coords = np.concatenate([hyper_u] + self.u, axis=1)
+        return np.where(np.isnan(value), -np.inf, value), coords
+
+    # -- the blocks --------------------------------------------------------------------------
+    def _conditional(self, j, block_lp, x, rows):
+        pop = self.population
+        with np.errstate(invalid="ignore"):
+            value = block_lp + pop.log_ratio(x, self.mu[rows], self.omega[rows])
+        return np.where(np.isnan(value), -np.inf, value)
+
+    def _accept(self, j, rows, u_new, log_extra, random):
+        """Metropolis–Hastings for walkers ``rows`` of block j; log_extra = log q(old) − log q(new)."""
+        lp_new, like_new, x_new = self._evaluate_block(j, u_new)
+        old = self._conditional(j, self.block_lp[rows, j], self.x[rows, j], rows)
+        new = self._conditional(j, lp_new, x_new, rows)
+        with np.errstate(invalid="ignore"):
+            log_alpha = new - old + log_extra
+        take = np.isfinite(new) & (np.log(random.uniform(size=len(rows))) < np.nan_to_num(log_alpha, nan=-np.inf))
+        where = rows[take]
+        self.u[j][where] = u_new[take]
+        self.block_lp[where, j] = lp_new[take]
+        self.like[where, j] = like_new[take]
+        self.x[where, j] = x_new[take]
+        return take
+
+    def _specimen(self, j, random):
+        n = len(self.u[j])
+        proposal = self.target.proposals[j]
+        rows = np.arange(n)
+        u_new = proposal.sample(random, n)
+        log_extra = proposal.log_density(self.u[j]) - proposal.log_density(u_new)
+        independence = self._accept(j, rows, u_new, log_extra, random)
+        d = self.u[j].shape[1]
+        gamma = 2.38 / np.sqrt(2.0 * d)
+        half = random.permutation(n)
+        moved = [independence]
+        for active, other in ((half[: n // 2], half[n // 2:]), (half[n // 2:], half[: n // 2])):
+            first = random.randint(len(other), size=len(active))
+            second = random.randint(len(other) - 1, size=len(active))
+            second += second >= first  # two distinct walkers of the other half
+            step = gamma * (1.0 + 1e-5 * random.standard_normal(len(active)))[:, None]
+            u_new = self.u[j][active] + step * (self.u[j][other[first]] - self.u[j][other[second]])
+            moved.append(self._accept(j, active, u_new, 0.0, random))
+        return independence, np.concatenate(moved[1:]).mean()
+
+    def _hyper(self, random):
+        pop = self.population
+        z, _ = pop.to_z(self.x)  # (W, J, P)
+        n_spec = z.shape[1]
+        m, s2 = pop.centre, pop.scale**2
+        step = 2.4 / np.sqrt(2.0 * n_spec)
+        sum_z = z.sum(axis=1)
+        for _ in range(self.target.hyper_rounds):
+            precision = 1.0 / s2 + n_spec / self.omega**2
+            mean = (m / s2 + sum_z / self.omega**2) / precision
+            self.mu = mean + random.standard_normal(mean.shape) / np.sqrt(precision)
+            spread = np.sum((z - self.mu[:, None, :]) ** 2, axis=1)
+
+            def log_target(eta):
+                return -n_spec * eta - 0.5 * spread * np.exp(-2 * eta) - 0.5 * np.exp(2 * eta) / pop.scale**2 + eta
+
+            eta = np.log(self.omega)
+            proposal = eta + step * random.standard_normal(eta.shape)
+            take = np.log(random.uniform(size=eta.shape)) < log_target(proposal) - log_target(eta)
+            self.omega = np.exp(np.where(take, proposal, eta))
+
+    def _shift_and_scale(self, p, random):
+        """Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε,
+        z'_j = μ' + e^ε (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take
+        when the data barely identify p per specimen (ω_p then mixes over hundreds of sweeps).
+
+        In (μ, log ω, z) coordinates the map has Jacobian e^{Jε} and leaves every population
+        density term N(z_j; μ, ω) but its −J·log ω unchanged, so the Metropolis ratio is
+        ΔΣ_j log L_j + Δ log p(μ) + Δ log p(ω) + ε (support of π enforced by the blocks).
+        """
+        pop, t = self.population, self.target
+        n = len(self.mu)
+        delta = t.shift_steps[p] * random.standard_normal(n)
+        eps = t.scale_step * random.standard_normal(n)
+        z = pop.to_z(self.x)[0][..., p]  # (W, J)
+        mu_new, omega_new = self.mu[:, p] + delta, self.omega[:, p] * np.exp(eps)
+        z_new = mu_new[:, None] + np.exp(eps)[:, None] * (z - self.mu[:, p][:, None])
+        value_new = np.where(pop.log_scale[p], np.exp(np.where(pop.log_scale[p], z_new, 0.0)), z_new)
+        column = pop.index[p]
+        news = []
+        for j, spec in enumerate(t.specimens):
+            physical = spec.prior.from_unconstrained(self.u[j])[0]
+            physical[:, column] = value_new[:, j]
+            with np.errstate(all="ignore"):
+                u_new = spec.prior.to_unconstrained(physical)
+            bad = ~np.all(np.isfinite(u_new), axis=1)
+            u_new[bad] = self.u[j][bad]
+            lp, like, x = self._evaluate_block(j, u_new)
+            news.append((u_new, np.where(bad, -np.inf, lp), np.where(bad, -np.inf, like), x))
+        like_new = np.stack([v[2] for v in news], axis=1)
+        m, s = pop.centre[p], pop.scale[p]
+        with np.errstate(invalid="ignore", over="ignore"):
+            log_alpha = (np.sum(like_new - self.like, axis=1)
+                         - 0.5 * ((mu_new - m) ** 2 - (self.mu[:, p] - m) ** 2) / s**2
+                         - 0.5 * (omega_new**2 - self.omega[:, p] ** 2) / s**2 + eps)
+        take = np.all(np.isfinite(like_new), axis=1) & (np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf))
+        for j, (u_new, lp, like, x) in enumerate(news):
+            self.u[j][take], self.block_lp[take, j], self.like[take, j], self.x[take, j] = u_new[take], lp[take], like[take], x[take]
+        self.mu[take, p], self.omega[take, p] = mu_new[take], omega_new[take]
+        return take.mean()
+
+    # -- emcee's interface -------------------------------------------------------------------
+    def propose(self, model, state):
+        coords = np.asarray(state.coords, dtype=float)
+        if self._coords is None or not np.array_equal(coords, self._coords):
+            self._rebuild(coords)
+        random = model.random
+        rates = np.zeros((len(self.u), 2))
+        for j in range(len(self.u)):
+            independence, de = self._specimen(j, random)
+            rates[j] = independence.mean(), de
+        self._hyper(random)
+        for p in self.target.weak:
+            self._shift_and_scale(p, random)
+        log_prob, new_coords = self._log_prob()
+        self._coords = new_coords
+        self._sweeps += 1
+        self.acceptance += (rates.mean(axis=0) - self.acceptance) / self._sweeps
+        accepted = np.any(new_coords != coords, axis=1)
+        return emcee.State(new_coords, log_prob=log_prob, blobs=state.blobs, random_state=state.random_state), accepted
