@@ -65,9 +65,10 @@ def run():
 
 def route_agreement(first, second):
     """Per hyper-parameter: the difference of the two routes' posterior means over their combined
-    Monte-Carlo error (z), and over the posterior sd."""
+    Monte-Carlo error (z; the two-stage one includes the error of its finite per-specimen draws),
+    and over the posterior sd."""
     a, b = first.summary(), second.summary()
-    return {name: {"z": (b[name]["mean"] - a[name]["mean"]) / np.hypot(a[name]["mcse_mean"], b[name]["mcse_mean"]),
+    return {name: {"z": (b[name]["mean"] - a[name]["mean"]) / np.hypot(a[name]["error_mean"], b[name]["error_mean"]),
                    "in_sd": (b[name]["mean"] - a[name]["mean"]) / a[name]["sd"]} for name in a}
 
 
@@ -82,4 +83,4 @@ def report(r):
             f"{r['fits_4_specimens_2_processes_s']:.0f} s, speed-up {speedup:.2f}x. "
             f"Joint (214 parameters, blocked Gibbs in emcee, 4 x 32 walkers, from the two-stage start): "
             f"{r['joint_s']:.0f} s, {r['joint_report']}; routes' means differ by |z| <= {np.abs(z).max():.1f} combined "
-            f"MCSE ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= {np.abs(in_sd).max():.2f} posterior sd")
+            f"Monte-Carlo error ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= {np.abs(in_sd).max():.2f} posterior sd")
