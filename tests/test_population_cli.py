@@ -37,6 +37,20 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
     assert all(v["q05"] <= v["median"] <= v["q95"] for v in hyper.values())
     assert set(summary["hierarchical"]["effective_draws"]) == set(summary["specimens"])
     assert "population posterior (two-stage)" in run.stdout
+    assert all(v["draw_error_mean"] > 0 and v["error_mean"] >= v["mcse_mean"] for v in hyper.values())
+
+
+def test_hierarchical_fit_by_the_joint_route(tmp_path):
+    sim = synthetic.simulate("a201", n_specimens=3, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=4)
+    write_csv(sim.data, tmp_path / "data.csv")
+    out = tmp_path / "fit"
+    run = fsrbayes("fit", str(tmp_path / "data.csv"), "--hierarchical", "--route", "joint", "--out", str(out),
+                   "--ensembles", "2", "--chunk", "100", "--max-steps", "200", "--no-plots", "--processes", "2")
+    assert run.returncode == 0, run.stderr
+    assert "population posterior (joint)" in run.stdout
+    info = json.loads((out / "summary.json").read_text())["hierarchical"]
+    assert info["route"] == "joint" and "effective_draws" not in info
+    assert all(v["q05"] <= v["median"] <= v["q95"] and v["ess_bulk"] > 0 for v in info["hyper_parameters"].values())
 
 
 def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit, tmp_path):

@@ -9,18 +9,20 @@ specimens (the share of observed drifts inside the predictive 5–95 % range of 
 measured*, i.e. with the fitted measurement noise on both readings; 90 % expected), and whether
 the noise-free predictive covers each specimen's noiseless true drift.
 
-Run ``python -m fsrbayes.inference.population_study`` for the table; the slow test runs it.
+Run ``python -m fsrbayes.inference.population_study [16] [--joint]`` for the table; the slow test
+runs it with the joint route, which must agree with the two-stage one.
 """
 
 import sys
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
 from ..data import synthetic
 from ..data.sensors import load_sensor
-from .hierarchical import fit_specimens, two_stage
+from .hierarchical import fit_specimens, joint, two_stage
 from .output import DRIFT_TIME_S
 from .predictive import ForwardTemplate, drift_groups, new_specimens
 from .sampling import ConvergenceWarning, SamplerSettings
@@ -32,10 +34,20 @@ STUDY_FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, m
 needs a few hundred draws per specimen)."""
 
 
+JOINT_SETTINGS = SamplerSettings(n_ensembles=4, chunk=250, max_steps=8000, min_steps=500)
+"""The joint (blocked Gibbs) route of the study: 4 ensembles × 32 walkers."""
+
+
 def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5, 1.0, 3.0),
                      forces=synthetic.PAPER_FORCES_N, processes=2, fit_settings=STUDY_FIT_SETTINGS,
-                     hyper_settings=None):
-    """Simulate, fit hierarchically (two-stage) and score; returns a JSON-ready dict."""
+                     hyper_settings=None, joint_route=False):
+    """Simulate, fit hierarchically (two-stage) and score; returns a JSON-ready dict.
+
+    With ``joint_route`` the joint route (blocked Gibbs, from the two-stage start) runs too, and
+    ``routes`` compares the two: per hyper-parameter the difference of the posterior means over
+    their combined Monte-Carlo errors (z) and over the posterior sd, plus whether the joint
+    route's 90 % interval holds the simulation's value.
+    """
     sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
                              samples=samples, seed=seed)
     sensor = load_sensor("a201")
@@ -53,6 +65,20 @@ def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5,
             entry = summary[f"{kind}_{name}"]
             rows.append({"name": f"{kind}_{name}", "truth": truth[kind], "q05": entry["q05"], "median": entry["median"],
                          "q95": entry["q95"], "inside": entry["q05"] <= truth[kind] <= entry["q95"]})
+    routes = None
+    if joint_route:
+        begin = time.perf_counter()
+        both = joint([f.posterior for f in fits.values()], result.population,
+                     settings=replace(JOINT_SETTINGS, processes=processes), seed=seed, start_from=result)
+        routes = {"seconds": time.perf_counter() - begin, "converged": bool(both.converged),
+                  "report": both.run.report.worst(), "rows": []}
+        other = both.summary()
+        for row in rows:
+            a, b = summary[row["name"]], other[row["name"]]
+            routes["rows"].append({"name": row["name"], "two_stage": a["mean"], "joint": b["mean"],
+                                   "z": (b["mean"] - a["mean"]) / float(np.hypot(a["error_mean"], b["error_mean"])),
+                                   "in_sd": (b["mean"] - a["mean"]) / a["sd"],
+                                   "joint_inside": b["q05"] <= row["truth"] <= b["q95"]})
     template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
     specimens = new_specimens(result.population, result.hyper_draws(), template, seed=seed)
     stresses = np.unique([t.stress_Pa for t in sim.data.tests])
@@ -82,7 +108,7 @@ def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5,
             "fits_converged": int(sum(f.converged for f in fits.values())), "n_specimens": n_specimens,
             "fit_seconds": fit_seconds, "seconds": time.perf_counter() - start,
             "min_effective_draws": float(result.effective_draws.min()),
-            "log_likelihood_mc_sd": result.log_likelihood_mc_sd}
+            "log_likelihood_mc_sd": result.log_likelihood_mc_sd, "routes": routes}
 
 
 def format_population_study(study):
@@ -101,8 +127,16 @@ def format_population_study(study):
                  f"log L MC sd {study['log_likelihood_mc_sd']:.2f}")
     lines.append(f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; fits "
                  f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s")
+    routes = study.get("routes")
+    if routes:
+        lines.append(f"joint route (blocked Gibbs): {routes['seconds']:.0f} s, {routes['report']}")
+        lines.append(f"{'hyper-parameter':18s} {'two-stage':>10s} {'joint':>10s} {'z':>6s} {'in sd':>6s}  joint inside")
+        for row in routes["rows"]:
+            lines.append(f"{row['name']:18s} {row['two_stage']:10.4f} {row['joint']:10.4f} {row['z']:6.2f} "
+                         f"{row['in_sd']:6.3f}  {'yes' if row['joint_inside'] else 'NO'}")
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
-    print(format_population_study(population_study(int(sys.argv[1]) if len(sys.argv) > 1 else 16)))
+    counts = [int(a) for a in sys.argv[1:] if a.isdigit()]
+    print(format_population_study(population_study(counts[0] if counts else 16, joint_route="--joint" in sys.argv)))
