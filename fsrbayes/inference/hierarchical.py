@@ -230,7 +230,7 @@ def draw_error(result, n_boot=100, max_draws=2000, seed=0):
 
 
 def joint(specimens, population=None, *, settings=None, seed=0, start_from=None, labels=None, progress=False,
-          method=None, proposal_draws=None):
+          method=None, proposal_draws=None, gibbs=None):
     """Sample the hyper-parameters and every specimen's parameters jointly.
 
     Parameters
@@ -253,6 +253,9 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
         creep specimens (BENCHMARKS.md).
     proposal_draws : sequence of ndarray (N_j, D), optional
         Each specimen's posterior draws under its own prior, physical units (Gibbs proposals).
+    gibbs : dict, optional
+        Options of :class:`~fsrbayes.inference.gibbs.GibbsJointTarget` (``hyper_rounds``,
+        ``n_centres``, ``weak_ratio``, ``shift_scale``).
 
     Returns
     -------
@@ -271,7 +274,7 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
         if proposal_draws is None:
             raise ValueError("the Gibbs route needs each specimen's posterior draws: pass start_from (a two-stage "
                              "result from fits) or proposal_draws")
-        target = GibbsJointTarget(population, specimens, proposal_draws)
+        target = GibbsJointTarget(population, specimens, proposal_draws, **(gibbs or {}))
         settings = replace(settings, transport_rounds=0, independence_fraction=0.0,
                            n_walkers=settings.n_walkers or GIBBS_WALKERS)
     else:
