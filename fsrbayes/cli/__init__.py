@@ -82,7 +82,7 @@ def build_parser():
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fit_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
-    fit_.add_argument("--ensembles", type=int, default=4, help="independent ensembles (default 4)")
+    fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
     fit_.add_argument("--chunk", type=int, default=500, help="steps between convergence checks and checkpoints")
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
@@ -123,7 +123,9 @@ def build_parser():
     cmp_.add_argument("--pilot-steps", type=int, default=1250,
                       help="steps of the pilot run the reference is fitted to (default 1250; 3 transport rounds "
                            "take the first 60 %%)")
-    cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders (default 4)")
+    cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders, each from its own region search, "
+                      "pilot and reference (default 4)")
+    cmp_.add_argument("--starts", type=int, default=12, help="optimiser starts of each region search (default 12)")
     cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument("--no-loo", action="store_true", help="skip PSIS-LOO")

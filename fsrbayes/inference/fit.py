@@ -34,10 +34,17 @@ from .posterior import LogPosterior
 from .sampling import EnsembleRun, SamplerSettings, check_checkpoint, even_index, run_ensembles
 
 __all__ = ["FitResult", "fit", "find_map", "separate_regions", "design_warnings", "DesignWarning", "MAP_STARTS",
-           "SAMPLERS"]
+           "SAMPLERS", "FIT_SETTINGS"]
 
 MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
+
+FIT_SETTINGS = SamplerSettings(n_ensembles=2)
+"""The per-specimen fit's default: two ensembles (one per core on a 2-core machine), the default
+criteria and budget. On the benchmark specimen (9 tests × 61 samples, a bent s0–Va ridge) two
+ensembles converged for 8 of 8 seeds in 5,000–11,500 steps (τ 62–198), while four — at twice the
+cost per step on 2 cores — converged for 1 of 3 (τ 390–690 after 20,000 steps for the others;
+BENCHMARKS.md). Every validation (SBC, recovery, the population study) runs two ensembles too."""
 
 
 class DesignWarning(UserWarning):
@@ -349,7 +356,8 @@ def _sampler_and_settings(sampler, settings):
     if sampler not in SAMPLERS:
         raise ValueError(f"sampler must be one of {SAMPLERS}, got {sampler!r}")
     expected = TemperedSettings if sampler == "tempered" else SamplerSettings
-    settings = expected() if settings is None else settings
+    if settings is None:
+        settings = TemperedSettings() if sampler == "tempered" else FIT_SETTINGS
     if not isinstance(settings, expected):
         raise TypeError(f"sampler={sampler!r} needs settings of type {expected.__name__}, "
                         f"got {type(settings).__name__}")
@@ -395,7 +403,7 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     rng : int or numpy.random.Generator, optional
         Seed; the same seed gives the same chains.
     settings : SamplerSettings or TemperedSettings, optional
-        Of the chosen sampler (default: its defaults).
+        Of the chosen sampler (default: :data:`FIT_SETTINGS`, or the tempered sampler's defaults).
     checkpoint : path-like, optional
         Checkpoint file (written after every chunk); with ``resume=True`` the fit continues it.
         Ensemble sampler only.

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .fit import find_map, fit, laplace_start
+from .fit import FIT_SETTINGS, find_map, fit, laplace_start
 from .parallel import JobFailure, map_jobs
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .population import JointTarget, Population, TwoStageTarget, _logsumexp
@@ -360,7 +360,7 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
         Passed to :func:`~fsrbayes.inference.fit.fit` (model, tunneling, likelihood, sensor, rng).
     """
     specimens = list(specimens or data.specimens)
-    kwargs["settings"] = replace(settings or SamplerSettings(), processes=1)
+    kwargs["settings"] = replace(settings or FIT_SETTINGS, processes=1)
     base_seed = kwargs.pop("rng", 0)
     jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k)) for k, s in enumerate(specimens)]
     if errors not in ("warn", "raise"):
