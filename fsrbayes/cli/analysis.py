@@ -14,7 +14,7 @@ def cmd_compare(args):
     """Log-evidence per model and specimen, Bayes factors, PSIS-LOO; JSON with DESIGN §4 keys."""
     from ..inference.compare import compare
     from ..inference.evidence import LadderSettings
-    from ..inference.reference import REFERENCED_LADDER
+    from ..inference.reference import MODE_SEARCH, REFERENCED_LADDER
     from ..inference.sampling import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
@@ -34,13 +34,15 @@ def cmd_compare(args):
         raise UsageError(f"compare settings: {exc}") from None
     if args.pilot_steps < 100:
         raise UsageError(f"--pilot-steps must be >= 100, got {args.pilot_steps}")
+    if args.starts < 1:
+        raise UsageError(f"--starts must be >= 1, got {args.starts}")
     chunk = args.pilot_steps // 5
     pilot = SamplerSettings(n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3)
     if args.json:
         writable(Path(args.json).parent)
     result = compare(data, models, [args.specimen] if args.specimen else None, tunneling=args.tunneling,
                      likelihood=args.likelihood, settings=settings, seed=args.seed, with_loo=not args.no_loo,
-                     path=args.path, pilot=pilot)
+                     path=args.path, pilot=pilot, search=replace(MODE_SEARCH, n_starts=args.starts))
     for name, entry in result["models"].items():
         print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
     for name, bf in result["bayes_factors"].items():

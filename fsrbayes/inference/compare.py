@@ -18,7 +18,7 @@ from ..utils import json_ready
 from .evidence import LadderSettings, log_evidence
 from .fit import _select
 from .posterior import LogPosterior
-from .reference import PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
+from .reference import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
 from .savage_dickey import savage_dickey_posterior
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
@@ -61,7 +61,7 @@ cross) or the prior (thousands of nats on creep data; kept for the closed-form v
 
 
 def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, tunneling="smooth",
-            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None):
+            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None, search=None):
     """Compare creep models on every (or the chosen) specimen by log-evidence.
 
     Parameters
@@ -81,6 +81,9 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
         pilot run (:mod:`~fsrbayes.inference.reference`), or the prior.
     pilot : SamplerSettings, optional
         The reference path's pilot run (default :data:`~fsrbayes.inference.reference.PILOT_SETTINGS`).
+    search : ModeSearch, optional
+        The reference path's search for separate posterior regions, run once per replicate
+        ladder (default :data:`~fsrbayes.inference.reference.MODE_SEARCH`, 12 optimiser starts).
 
     Returns
     -------
@@ -108,7 +111,8 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
             posterior = LogPosterior.for_sensor(packed, chosen, model=model, tunneling=tunneling,
                                                 likelihood=likelihood)
             job_seed = [seed, m_index, s_index]
-            result = (referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS)
+            result = (referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS,
+                                              search=search or MODE_SEARCH)
                       if path == "reference"
                       else log_evidence(posterior, settings, seed=job_seed))
             entry["per_specimen"][specimen] = {

@@ -38,7 +38,7 @@ from .parallel import fork_pool
 from .sampling import single_threaded_blas, walkers_for
 
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
-           "combine_ladder", "summarise_ladders"]
+           "combine_ladder", "summarise_ladders", "run_ladders", "ladder_evaluations"]
 
 
 @dataclass(frozen=True)
@@ -402,16 +402,25 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     seeds = seed.spawn(settings.replicates)
     start = time.perf_counter()
-    jobs = [(target, betas, settings, s) for s in seeds]
-    if settings.processes > 1:
-        with fork_pool(min(settings.processes, len(jobs))) as pool:
-            results = list(pool.map(_ladder_job, *zip(*jobs)))
-    else:
-        results = [_ladder_job(*job) for job in jobs]
-    n_walk = settings.walkers_for(target.ndim)
-    n_evals = len(seeds) * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
-    return summarise_ladders([r[0] for r in results], betas, np.array([r[1] for r in results]), int(n_evals),
-                             time.perf_counter() - start, asdict(settings), np.array([r[2] for r in results]))
+    results = run_ladders([(target, betas, settings, s) for s in seeds], settings.processes)
+    return summarise_ladders([r[0] for r in results], betas, np.array([r[1] for r in results]),
+                             ladder_evaluations(settings, target.ndim, len(seeds)), time.perf_counter() - start,
+                             asdict(settings), np.array([r[2] for r in results]))
+
+
+def run_ladders(jobs, processes=1):
+    """Run ladder jobs ``(target, betas, settings, seed)`` side by side on ``processes`` worker
+    processes; returns, per job, (:func:`combine_ladder` dict, swap acceptance, β = 1 draws)."""
+    if processes > 1 and len(jobs) > 1:
+        with fork_pool(min(processes, len(jobs))) as pool:
+            return list(pool.map(_ladder_job, *zip(*jobs)))
+    return [_ladder_job(*job) for job in jobs]
+
+
+def ladder_evaluations(settings, ndim, n_ladders):
+    """Likelihood evaluations of ``n_ladders`` ladders run with ``settings``."""
+    n_walk = settings.walkers_for(ndim)
+    return int(n_ladders * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1))
 
 
 def summarise_ladders(parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None):

@@ -32,9 +32,15 @@ prior-scaled units, the first holding ~90–95 % of the mass); a pilot that star
 (:func:`distinct_optima`, several optimiser starts), runs one pilot per region and makes g a
 mixture Σ a_j·g_j (:class:`MixtureReference`); the ladder's state carries the component label
 j, each walker moves in the chart w_j of its own component, and a Gibbs step re-draws j given u
-(:class:`ReferencedTarget`). Two independent searches (``pilot_groups``) each feed half of the
-replicate ladders; the spread of their means enters the error bar as ``sigma_pilot``, so a
-region one search missed shows as error rather than hiding as bias.
+(:class:`ReferencedTarget`). Independent searches (``pilot_groups``, by default one per
+replicate ladder) each build their own reference and feed their own ladder; the spread of the
+group means enters the error bar as ``sigma_pilot``, so a region one search missed shows as
+error rather than hiding as bias. One ladder per group makes that spread the whole story: the
+ladders' share of a minor region differs between references *and* between ladders on one
+reference (on the benchmark Burgers specimen two ladders on one reference gave 3748.209 and
+3748.278 while batch means said ±0.006), and with two groups of two ladders the spread of two
+group means — one degree of freedom — was often small by chance: over six seeds the error bar
+was up to ~3× smaller than the scatter (BENCHMARKS.md). Four groups give it three.
 """
 
 import time
@@ -44,7 +50,8 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from scipy.special import logsumexp
 
-from .evidence import LadderSettings, _evaluate, check_priors_for_evidence, log_evidence, summarise_ladders
+from .evidence import (LadderSettings, _evaluate, beta_ladder, check_priors_for_evidence, ladder_evaluations, run_ladders,
+                       summarise_ladders)
 from .parallel import fork_pool
 from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles, single_threaded_blas
 from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
@@ -340,7 +347,7 @@ def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof
 
 
 def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, dof=10.0, draws=None,
-                            pilot=PILOT_SETTINGS, search=MODE_SEARCH, pilot_groups=2, quadratic=None):
+                            pilot=PILOT_SETTINGS, search=MODE_SEARCH, pilot_groups=4, quadratic=None):
     """log Z = log ∫ L·π along the referenced path (module docstring).
 
     Parameters
@@ -357,8 +364,9 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
         array, e.g. per region); default: :func:`pilot_reference` (``pilot``, ``search``).
     pilot_groups : int
         Independent mode searches and pilots, each with its own reference and its share of the
-        replicate ladders (at least 2 per group). A region one search missed and another found
-        makes the group means differ; that spread is ``sigma_pilot`` in the error bar.
+        replicate ladders (at most one group per ladder; default: one each). A region one search
+        missed and another found makes the group means differ; that spread is ``sigma_pilot``
+        in the error bar. All ladders run side by side on ``settings.processes``.
     quadratic : bool, optional
         The reference's map T: quadratic (default up to :data:`~fsrbayes.inference.transport.QUADRATIC_MAX_DIM`
         dimensions) or affine (``False``). The quadratic map makes a curved ridge round, but a
@@ -381,7 +389,7 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
     if hasattr(posterior, "prior") and hasattr(posterior.prior, "dists"):
         check_priors_for_evidence(posterior.prior)
     start = time.perf_counter()
-    n_groups = 1 if draws is not None else max(1, min(int(pilot_groups), settings.replicates // 2))
+    n_groups = 1 if draws is not None else max(1, min(int(pilot_groups), settings.replicates))
     seeds = np.random.SeedSequence(seed).spawn(3 * n_groups)  # each g independent of its ladders' draws
     group_replicates = np.diff(np.linspace(0, settings.replicates, n_groups + 1).round().astype(int))
     if draws is None:  # the groups' searches side by side (the optimiser runs on one core)
@@ -391,8 +399,8 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
                 group_modes = list(pool.map(_search_job, *zip(*jobs)))
         else:
             group_modes = [_search_job(*job) for job in jobs]
-    results, reports, labels = [], [], []
-    for group, (pilot_seed, ladder_seed, replicates) in enumerate(zip(seeds[::3], seeds[1::3], group_replicates)):
+    targets, reports = [], []
+    for group, pilot_seed in enumerate(seeds[::3]):
         if draws is None:
             reference, report = pilot_reference(posterior, pilot_seed, pilot, settings.processes, dof, search,
                                                 modes=group_modes[group], quadratic=quadratic)
@@ -401,18 +409,19 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
             reference = MixtureReference.of([ReferenceDensity.fit(array, dof, quadratic) for array in arrays])
             report = [{"draws": len(array), "weight": float(np.exp(log_a))}
                       for array, log_a in zip(arrays, reference.log_weights)]
-        referenced = ReferencedTarget(posterior, reference)
-        result = log_evidence(referenced, replace(settings, replicates=int(replicates)), seed=ladder_seed)
-        result.posterior_draws = referenced.to_target(result.posterior_draws)
-        results.append(result)
+        targets.append(ReferencedTarget(posterior, reference))
         reports.append(report)
-        labels += [group] * int(replicates)
+    # Every group's ladders side by side: one ladder per group is the default.
+    betas = beta_ladder(settings.n_temps, settings.exponent)
+    labels = [group for group, count in enumerate(group_replicates) for _ in range(int(count))]
+    ladder_seeds = [s for group_seed, count in zip(seeds[1::3], group_replicates) for s in group_seed.spawn(int(count))]
+    results = run_ladders([(targets[g], betas, settings, s) for g, s in zip(labels, ladder_seeds)], settings.processes)
     merged = summarise_ladders(
-        [part for r in results for part in r.replicates], results[0].betas,
-        np.concatenate([r.swap_acceptance for r in results]), sum(r.n_evals for r in results),
-        time.perf_counter() - start,
+        [r[0] for r in results], betas, np.array([r[1] for r in results]),
+        ladder_evaluations(settings, posterior.ndim, len(results)), time.perf_counter() - start,
         {**asdict(settings), "path": "reference", "reference_dof": float(dof), "reference_components": reports,
          "pilot": None if draws is not None else {"steps": pilot.max_steps, "ensembles": pilot.n_ensembles,
                                                   "optimiser_starts": search.n_starts, "groups": n_groups}},
-        np.concatenate([r.posterior_draws for r in results]), groups=labels if n_groups > 1 else None)
+        np.array([targets[g].to_target(r[2]) for g, r in zip(labels, results)]),
+        groups=labels if n_groups > 1 else None)
     return merged
