@@ -124,6 +124,8 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     assert not _children_of(proc.pid)
     saved = np.load(checkpoint)["chain"].copy()
     assert 0 < saved.shape[1] < 400
+    if stop == signal.SIGTERM:
+        return  # resuming is the same path after either signal: the SIGKILL case runs it to the end
     result = cli("fit", str(csv_file), "--out", str(out), "--ensembles", "2", "--chunk", "50", "--max-steps", "400",
                  "--seed", "3", "--resume")
     assert result.returncode == 0, result.stderr

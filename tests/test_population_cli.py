@@ -41,7 +41,7 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
 
 
 def test_hierarchical_fit_by_the_joint_route(tmp_path):
-    sim = synthetic.simulate("a201", n_specimens=3, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=4)
+    sim = synthetic.simulate("a201", n_specimens=2, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=6, seed=4)
     write_csv(sim.data, tmp_path / "data.csv")
     out = tmp_path / "fit"
     run = fsrbayes("fit", str(tmp_path / "data.csv"), "--hierarchical", "--route", "joint", "--out", str(out),
