@@ -125,7 +125,7 @@ def build_parser():
                            "take the first 60 %%)")
     cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders, each from its own region search, "
                       "pilot and reference (default 4)")
-    cmp_.add_argument("--starts", type=int, default=8, help="optimiser starts of each region search (default 8)")
+    cmp_.add_argument("--starts", type=int, default=12, help="optimiser starts of each region search (default 12)")
     cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument("--no-loo", action="store_true", help="skip PSIS-LOO")

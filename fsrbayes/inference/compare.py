@@ -83,7 +83,7 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
         The reference path's pilot run (default :data:`~fsrbayes.inference.reference.PILOT_SETTINGS`).
     search : ModeSearch, optional
         The reference path's search for separate posterior regions, run once per replicate
-        ladder (default :data:`~fsrbayes.inference.reference.MODE_SEARCH`, 8 optimiser starts).
+        ladder (default :data:`~fsrbayes.inference.reference.MODE_SEARCH`, 12 optimiser starts).
 
     Returns
     -------
