@@ -24,6 +24,9 @@ def small():
     return syn.simulate("a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=5, seed=3)
 
 
+# slow (~80 s, 2 processes): a model-choice validation on simulated specimens; the default run
+# keeps the CLI compare test (contract keys, sums, Bayes factors).
+@pytest.mark.slow
 def test_compare_sums_specimens_and_states_a_preference(small):
     out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1, pilot=TINY_PILOT,
                            search=FEW_STARTS)
@@ -81,6 +84,8 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1
 
 
+# slow (~60 s): a model-choice validation on simulated data.
+@pytest.mark.slow
 def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
     """Eq. 14 is ohmic (I ∝ V): on its own data across 0.2–3 V the paper's tunneling law cannot follow, and
     on the paper's model's data the ohmic law cannot follow the voltage dependence."""

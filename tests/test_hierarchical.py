@@ -125,6 +125,8 @@ def test_joint_matches_the_analytic_hyper_posterior():
     assert_matches(result, analytic_moments(y, sigma))
 
 
+# slow (~40 s): a calibration study of the reported draw error over 8 independent draw sets.
+@pytest.mark.slow
 def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
     """With 40 draws per specimen the finite draws, not the chain, dominate the two-stage error:
     the sd of the posterior means over 8 independent draw sets must match the reported error

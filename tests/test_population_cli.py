@@ -40,6 +40,9 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
     assert all(v["draw_error_mean"] > 0 and v["error_mean"] >= v["mcse_mean"] for v in hyper.values())
 
 
+# slow (~80 s, 2 processes): the joint route's sampler is checked against the closed form in the
+# default run (test_hierarchical.py::test_gibbs_joint_matches_the_analytic_hyper_posterior).
+@pytest.mark.slow
 def test_hierarchical_fit_by_the_joint_route(tmp_path):
     sim = synthetic.simulate("a201", n_specimens=2, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=6, seed=4)
     write_csv(sim.data, tmp_path / "data.csv")

@@ -103,6 +103,8 @@ def _mode_draws(target, mode, rng, n=3000):
     return target.centres[mode] + target.s * rng.standard_normal((n, target.ndim))
 
 
+# slow (~55 s): a validation of the failure mode the region search exists for.
+@pytest.mark.slow
 def test_a_reference_fitted_to_one_region_misses_the_other_and_a_mixture_does_not():
     # The failure the mixture exists for: g fitted to the major mode only (80 % of Z) gives
     # log Z ≈ truth + log 0.8 with an error bar far too small to show it.
