@@ -24,9 +24,6 @@ def small():
     return syn.simulate("a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=5, seed=3)
 
 
-# slow (~80 s, 2 processes): a model-choice validation on simulated specimens; the default run
-# keeps the CLI compare test (contract keys, sums, Bayes factors).
-@pytest.mark.slow
 def test_compare_sums_specimens_and_states_a_preference(small):
     out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1, pilot=TINY_PILOT,
                            search=FEW_STARTS)

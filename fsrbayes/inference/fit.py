@@ -199,7 +199,7 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000):
     return np.array([optima[i % len(optima)] for i in range(n_starts)])
 
 
-def _optimise_start(posterior, u0, maxiter=2000):
+def _optimise_start(posterior, u0, maxiter):
     """One start of :func:`find_map`: L-BFGS-B, then the whitened polish; returns (value, u)."""
     result = optimize.minimize(_NegativeLogPosterior(posterior), u0, jac=True, method="L-BFGS-B",
                                options={"maxiter": maxiter, "maxfun": 2 * maxiter})

@@ -43,7 +43,8 @@ instead of 20,000. At seed 31 the 22 hyper-parameters mix in τ ≈ 420 steps on
 specimens barely identify A0 on their A0–A1–A2 ridge (eq. 6), and specimen a201-13 keeps 7 of
 its 500 draws — so 20,000 steps kept 43.8 τ (R-hat 1.0004, ESS ≥ 12,500) and the run ended
 with a ConvergenceWarning. (That was with the fits of a 2,000-iteration MAP search; with
-today's fits the same seed converged in 3,500 steps, τ = 36: the hyper-posterior's mixing
+the fits after :data:`~fsrbayes.inference.fit.MAP_ITERATIONS` the same seed converged in 3,500
+steps, τ = 36: the hyper-posterior's mixing
 depends on how the 16 fits' draws happen to fall.)"""
 
 
