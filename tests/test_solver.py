@@ -201,3 +201,57 @@ def test_hypothesis_solutions_satisfy_the_implicit_equation(v, sigma, t, s0, va,
         assert _residual(solution, v, series) < 1e-10
     else:
         assert np.isnan(solution.current)
+
+
+def _hostile_inputs(rng, n):
+    """Voltages of both signs and zero, series resistances down to zero, gaps and barriers
+    across the opacity limit, NaN/inf/negative entries: every branch of the solver."""
+    v = rng.choice([0.0, -1.0, 1e-4, 0.05, 0.2, 0.5, 1.0, 3.0, 10.0, np.nan], n) * np.exp(rng.normal(0, 0.3, n))
+    rs = np.exp(rng.normal(np.log(3e3), 3, n))
+    rs[rng.random(n) < 0.03] = 0.0
+    rs[rng.random(n) < 0.01] = -1.0
+    s = np.exp(rng.normal(np.log(2e-9), 0.6, n))
+    s[rng.random(n) < 0.01] = 0.0
+    va = np.exp(rng.normal(np.log(0.3), 0.8, n))
+    va[rng.random(n) < 0.01] = np.inf
+    area = np.exp(rng.normal(np.log(1e-11), 2, n))
+    return v, rs, s, va, area
+
+
+def _assert_same_solution(got, expected, rtol=1e-12):
+    np.testing.assert_array_equal(got.regime, expected.regime)
+    np.testing.assert_array_equal(got.valid, expected.valid)
+    np.testing.assert_allclose(got.current, expected.current, rtol=rtol, atol=0)
+    np.testing.assert_allclose(got.v_bulk, expected.v_bulk, rtol=rtol, atol=0)
+
+
+def test_compiled_engine_matches_the_numpy_reference_point_by_point(rng):
+    inputs = _hostile_inputs(rng, 20000)
+    compiled = solve_bulk(*inputs)
+    reference = solve_bulk(*inputs, engine="numpy")
+    assert set(np.unique(reference.regime)) == {0, 1, 2, 4}  # invalid, V = 0, eq. 10, above Va
+    _assert_same_solution(compiled, reference)
+    assert compiled.iterations == reference.iterations
+
+
+def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng):
+    """Walkers × tests × times, as the likelihood calls it: along a row only the gap creeps and
+    Newton starts from the previous sample's root; the answer must not depend on that start."""
+    walkers = {k: v * np.exp(0.2 * rng.standard_normal((6, 1, 1))) for k, v in a201.items()}
+    voltage = np.array([0.05, 0.2, 1.0, 3.0, 6.0])[:, None]
+    sigma = np.array([2e4, 8e4, 2e5, 3e5, 1e5])[:, None]
+    t = np.concatenate([[0.0], np.geomspace(1, 3600, 40)])
+    s, area, series = sensor_state(walkers, sigma, creep_strain(sigma, t, walkers))
+    args = (voltage, series, s, walkers["Va"], area)
+    compiled = solve_bulk(*args)
+    assert compiled.valid.mean() > 0.9 and (compiled.regime == 4).any() and (compiled.regime == 2).any()
+    _assert_same_solution(compiled, solve_bulk(*args, engine="numpy"))
+    # Time reversed: the warm starts come from the other side.
+    backwards = solve_bulk(*(np.broadcast_to(x, s.shape)[..., ::-1] for x in args))
+    _assert_same_solution(backwards, compiled.__class__(**{
+        k: (v[..., ::-1] if isinstance(v, np.ndarray) else v) for k, v in vars(compiled).items()}))
+
+
+def test_an_unknown_engine_is_refused():
+    with pytest.raises(ValueError, match="solver engine must be one of"):
+        solve_bulk(1.0, 1e3, 4.4e-9, 0.229, 1e-16, engine="fortran")

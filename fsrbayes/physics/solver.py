@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import compiled
 from . import tunneling as tl
 
 __all__ = ["BulkSolution", "solve_bulk", "REGIMES"]
@@ -35,6 +36,7 @@ REGIMES = {0: "invalid", 1: "ohmic (eq. 9)", 2: "intermediate (eq. 10)", 3: "hig
            4: "shortened barrier (smooth)", 5: "jump point"}
 INVALID, OHMIC, INTERMEDIATE, HIGH, FORWARD, JUMP = range(6)
 _BRANCH_NAME = {INTERMEDIATE: "intermediate", HIGH: "high", FORWARD: "forward"}
+ENGINES = ("compiled", "numpy")
 CHUNK = 16384
 """Points solved together: the working arrays (~30 × 128 kB) stay in cache; chains of
 numpy operations on 64k-point arrays run at half the speed."""
@@ -176,7 +178,7 @@ def _newton(branch, v, log_rs, s, phi, a, lo, hi, start, finish, max_iter):
 
 
 def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", threshold=None,
-               finish=FINISH, max_iter=100):
+               finish=FINISH, max_iter=100, engine="compiled"):
     """Solve V = V_bulk + R_s·I(V_bulk) for the sensor current, over any broadcast shape.
 
     Parameters
@@ -199,6 +201,11 @@ def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", 
         of the root.
     max_iter : int
         Hard cap on the iterations (bisection guarantees progress).
+    engine : {"compiled", "numpy"}
+        For the smooth law, ``"compiled"`` solves point by point in numba
+        (:mod:`fsrbayes.physics.compiled`, several times faster); ``"numpy"`` runs this module's
+        array version, the reference the compiled one is tested against. The paper law is
+        always solved in numpy.
 
     Returns
     -------
@@ -208,6 +215,8 @@ def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", 
         raise ValueError(f"tunneling law must be one of {tl.TUNNELING_LAWS}, got {law!r}")
     if law == "paper" and threshold is None:
         raise ValueError("law='paper' needs the millivolt threshold Vth (threshold=...)")
+    if engine not in ENGINES:
+        raise ValueError(f"solver engine must be one of {ENGINES}, got {engine!r}")
     arrays = [voltage, series_resistance, gap, barrier, area]
     if law == "paper":
         arrays.append(threshold)
@@ -216,6 +225,23 @@ def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", 
     flat = [np.ascontiguousarray(x).ravel() for x in arrays]
     if law != "paper":
         flat.append(None)
+    if law == "smooth" and engine == "compiled":
+        current, v_bulk, regime, iterations = compiled.solve_smooth(*flat[:5], finish, max_iter)
+    else:
+        current, v_bulk, regime, iterations = _solve_blocks(flat, law, finish, max_iter)
+    valid = regime != INVALID
+    return BulkSolution(
+        current=current.reshape(shape),
+        v_bulk=v_bulk.reshape(shape),
+        valid=valid.reshape(shape),
+        at_jump=(regime == JUMP).reshape(shape),
+        regime=regime.reshape(shape),
+        iterations=iterations,
+    )
+
+
+def _solve_blocks(flat, law, finish, max_iter):
+    """The numpy solver over flat arrays, CHUNK points at a time: (current, v_bulk, regime, its)."""
     n = flat[0].size
     current = np.empty(n)
     v_bulk = np.empty(n)
@@ -229,15 +255,7 @@ def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", 
             parts = [None if x is None else x[block] for x in flat]
             current[block], v_bulk[block], regime[block], its = _solve_block(*parts, law, finish, max_iter)
             iterations = max(iterations, its)
-    valid = regime != INVALID
-    return BulkSolution(
-        current=current.reshape(shape),
-        v_bulk=v_bulk.reshape(shape),
-        valid=valid.reshape(shape),
-        at_jump=(regime == JUMP).reshape(shape),
-        regime=regime.reshape(shape),
-        iterations=iterations,
-    )
+    return current, v_bulk, regime, iterations
 
 
 def _classify_paper(rest, v, vth, peak, log_rs, s, phi, a, regime, x):

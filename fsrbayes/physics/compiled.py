@@ -1,0 +1,264 @@
+"""The smooth law's bulk-voltage solver compiled point by point with numba.
+
+The same algorithm as :mod:`fsrbayes.physics.solver` (bracketed Newton in the logit
+ℓ = log(V_bulk/(V − V_bulk)) of eqs. 19–21, eq. 10 below Va, the shortened-barrier forward
+law above it, bisection when a step leaves the bracket, the last step below ``finish`` taken
+without another evaluation), written as one loop over points instead of chains of numpy
+operations on masked arrays. Each point stops at its own convergence, nothing is allocated
+per iteration, and the transcendental functions run back to back: on the benchmark workload
+(48 walkers × 549 points) the solve is several times faster than the numpy version, which
+stays the reference (``solve_bulk(..., engine="numpy")``) and the paper law's solver.
+
+The results agree with the numpy solver to rounding (the tests compare both on random and
+edge-case inputs); regimes and validity are decided by the same comparisons, so they agree
+exactly. Compiled functions are cached on disk (``cache=True``): the first call in a fresh
+installation compiles for a few seconds, later processes load the cache.
+
+References
+----------
+Paredes-Madrid et al. 2017, eqs. (10), (19)–(21); Simmons 1963, eqs. (20), (27)–(28).
+"""
+
+import math
+
+import numba
+import numpy as np
+
+from .constants import CURRENT_SCALE, KAPPA
+
+__all__ = ["solve_smooth"]
+
+_SQRT_HALF = math.sqrt(0.5)
+_SQRT_THREE_HALVES = math.sqrt(1.5)
+_OPACITY_LIMIT = 2.0 * math.sqrt(2.0)
+_LOG_CURRENT_SCALE = math.log(CURRENT_SCALE)
+_LOG_TWO = math.log(2.0)
+_INVALID, _OHMIC, _INTERMEDIATE, _FORWARD = 0, 1, 2, 4
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+"""numpy's error model: x/0 gives ±inf or NaN, as in the numpy solver, instead of raising."""
+
+
+@numba.njit(**_JIT)
+def _log(x):
+    """np.log's values: −inf at 0, NaN below."""
+    if x > 0:
+        return math.log(x)
+    return -math.inf if x == 0 else math.nan
+
+
+@numba.njit(**_JIT)
+def _intermediate(x, log_prefactor, ks, barrier):
+    """Eq. 10: (log I, d log I/dV) at V_bulk = x (``tunneling.evaluate_intermediate``)."""
+    half = 0.5 * x
+    r_minus = math.sqrt(barrier - half)
+    r_plus = math.sqrt(barrier + half)
+    em1 = math.expm1(-ks * x / (r_plus + r_minus))
+    e_d = 1.0 + em1
+    bracket = -(barrier - half) * em1 - x * e_d
+    log_current = log_prefactor - ks * r_minus + _log(bracket)
+    slope = 0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
+    return log_current, slope
+
+
+@numba.njit(**_JIT)
+def _forward(x, log_x, log_prefactor, g, log_w_offset, rho):
+    """The smooth law above Va: (log I, d log I/dV) (``tunneling.evaluate_forward``)."""
+    log_x2 = 2.0 * log_x
+    g_over_x = g / x
+    fade = rho * math.exp(2.0 * (g_over_x - log_x2 - log_w_offset))
+    one_minus = 1.0 - fade
+    log_current = log_prefactor + log_x2 - g_over_x + _log(one_minus)
+    slope = (2.0 + g_over_x) / x * (1.0 + 2.0 * fade / one_minus)
+    return log_current, slope
+
+
+@numba.njit(**_JIT)
+def _evaluate(forward, x, log_x, c0, c1, c2, c3):
+    if forward:
+        return _forward(x, log_x, c0, c1, c2, c3)
+    return _intermediate(x, c0, c1, c2)
+
+
+@numba.njit(**_JIT)
+def _logit(x, v):
+    if x <= 0.0:
+        return -math.inf
+    if x >= v:
+        return math.inf
+    return math.log(x / (v - x))
+
+
+@numba.njit(**_JIT)
+def _fallback(lo, hi):
+    """Bisection in ℓ, or a step of 4 towards an infinite end of the bracket."""
+    finite_lo, finite_hi = math.isfinite(lo), math.isfinite(hi)
+    if finite_lo and finite_hi:
+        return 0.5 * (lo + hi)
+    if finite_lo:
+        return lo + 4.0
+    return hi - 4.0
+
+
+@numba.njit(**_JIT)
+def _newton(forward, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_iter):
+    """Bracketed Newton in ℓ on one branch for one point: (x, log I, ℓ at the root, iterations).
+
+    ``c0`` already holds log(R_s), so h = log I − log(V − x) (``solver._newton_block``).
+    """
+    lo, hi = _logit(lo_x, v), _logit(hi_x, v)
+    ell = start if (start > lo and start < hi) else _fallback(lo, hi)
+    for iteration in range(1, max_iter + 1):
+        odds_inv = math.exp(-ell)
+        log_odds = math.log(1.0 + odds_inv)
+        share = 1.0 / (1.0 + odds_inv)
+        rest = odds_inv * share
+        x = v * share
+        log_i, slope = _evaluate(forward, x, log_v - log_odds, c0, c1, c2, c3)
+        h = log_i - log_v + ell + log_odds
+        if h > 0:
+            hi = ell
+        else:
+            lo = ell
+        step = -h / (x * rest * slope + share)
+        ell_new = ell + step
+        done = ((abs(step) <= finish and ell_new >= lo and ell_new <= hi) or h == 0
+                or not hi > lo or iteration == max_iter)
+        if done:
+            ell_root = ell if h == 0 else ell_new
+            x_done = v / (1.0 + math.exp(-ell_root))
+            return x_done, log_i + slope * (x_done - x), ell_root, iteration
+        if not (ell_new > lo and ell_new < hi):
+            ell_new = _fallback(lo, hi)
+        ell = ell_new
+    return math.nan, math.nan, math.nan, max_iter
+
+
+@numba.njit(**_JIT)
+def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, log_a, warm_ell, warm_regime,
+                     finish, max_iter):
+    """One valid point with V > 0 and R_s > 0 of a row: (log I, V_bulk, regime, ℓ, iterations).
+
+    The constants of :func:`~fsrbayes.physics.tunneling.prepare_intermediate`,
+    :func:`~fsrbayes.physics.tunneling.prepare_forward` and the ohmic conductance are
+    assembled from logs: only log s changes along a row. ``warm_ell`` (the previous point's
+    root on the same row, NaN for none) starts Newton if the point's root is on the same branch
+    (``warm_regime``); otherwise the numpy solver's starts are used.
+    """
+    log_s = math.log(s)
+    opacity = KAPPA * s * sqrt_va
+    ks = KAPPA * s
+    # log(A e²/(2πh s²)): eq. 10's prefactor (tunneling.prepare_intermediate).
+    log_pre10 = _LOG_CURRENT_SCALE + log_a - 2.0 * log_s
+    regime = _INTERMEDIATE
+    start = warm_ell
+    if v > va:
+        # Which side of Va holds the root: the sign of h at Va (solver._branch_h). At x = Va,
+        # sqrt(Va ∓ Va/2) = sqrt(Va)·sqrt(1/2), sqrt(Va)·sqrt(3/2).
+        r_minus, r_plus = sqrt_va * _SQRT_HALF, sqrt_va * _SQRT_THREE_HALVES
+        em1 = math.expm1(-ks * va / (r_plus + r_minus))
+        e_d = 1.0 + em1
+        bracket = -0.5 * va * em1 - va * e_d
+        h_va = log_pre10 - ks * r_minus + _log(bracket) + log_rs - log_v_minus_va
+        if h_va < 0:
+            regime = _FORWARD
+            if warm_regime != _FORWARD:
+                slope_va = 0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
+                share, rest = va / v, (v - va) / v
+                start = math.log(share / rest) - h_va / (va * rest * slope_va + share)
+        elif not h_va >= 0:
+            return math.nan, math.nan, _INVALID, math.nan, 0
+    if regime == _INTERMEDIATE:
+        if warm_regime != _INTERMEDIATE:
+            # The ohmic root ℓ = −log(R_s·G0), G0 eq. 10's conductance at V → 0 (eq. 9's
+            # log conductance: log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)).
+            log_g9 = math.log(0.75 * opacity) + log_pre10 - opacity
+            start = -(log_rs + log_g9 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
+        x, log_i, ell, its = _newton(False, v, log_v, 0.0, min(v, va), start, log_pre10 + log_rs, ks, va, 0.0,
+                                     finish, max_iter)
+    else:
+        # tunneling.prepare_forward: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2, log-w offset, ρ.
+        g = ks * va * sqrt_va * _SQRT_HALF
+        rho = 3.0 * math.exp(-opacity * (_SQRT_THREE_HALVES - _SQRT_HALF))
+        log_pre = log_pre10 - _LOG_TWO - log_va
+        x, log_i, ell, its = _newton(True, v, log_v, va, v, start, log_pre + log_rs, g, g / va - 2.0 * log_va, rho,
+                                     finish, max_iter)
+    return log_i - log_rs, x, regime, ell, its
+
+
+@numba.njit(**_JIT)
+def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_bulk, regime):
+    """Fill ``current``, ``v_bulk``, ``regime`` point by point; returns the most iterations.
+
+    A *row* is a run of consecutive points sharing V, R_s, Va and A (one creep test of one
+    walker: only the gap s creeps along it). Row constants are computed once, and each point
+    starts Newton from the previous point's root when both lie on the same branch: the gap moves
+    little between samples, so Newton needs about two evaluations instead of four. The warm
+    start changes the result only at rounding level (Newton's last step leaves ~finish²).
+    """
+    iterations = 0
+    n = voltage.size
+    v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = math.nan
+    row_ok = False
+    warm_ell, warm_regime = math.nan, -1
+    for i in range(n):
+        rs, va, a = rs_in[i], va_in[i], a_in[i]
+        if i == 0 or not (voltage[i] == voltage[i - 1] and rs == rs_in[i - 1] and va == va_in[i - 1]
+                          and a == a_in[i - 1]):
+            v = abs(voltage[i])
+            sign = 1.0 if voltage[i] > 0 else (-1.0 if voltage[i] < 0 else 0.0)
+            row_ok = (math.isfinite(v) and math.isfinite(rs) and rs >= 0 and a > 0 and math.isfinite(a)
+                      and va > 0 and math.isfinite(va))
+            if row_ok:
+                sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
+                log_v, log_rs = _log(v), _log(rs)
+                log_v_minus_va = _log(v - va)
+            warm_ell, warm_regime = math.nan, -1
+        s = s_in[i]
+        # tunneling.smooth_law_is_valid: an opaque barrier, s > 0.
+        if not (row_ok and s > 0 and KAPPA * s * sqrt_va > _OPACITY_LIMIT):
+            current[i], v_bulk[i], regime[i] = math.nan, math.nan, _INVALID
+            continue
+        if v == 0:
+            opacity = KAPPA * s * sqrt_va
+            log_g9 = math.log(0.75 * opacity) + _LOG_CURRENT_SCALE + log_a - 2.0 * math.log(s) - opacity
+            current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, _OHMIC
+            continue
+        if rs == 0:
+            # No series resistance: the whole voltage is across the bulk.
+            i0, i1 = math.log(a * CURRENT_SCALE / s**2), KAPPA * s
+            if v <= va:
+                log_i = _intermediate(v, i0, i1, va)[0]
+                regime[i] = _INTERMEDIATE
+            else:
+                g = i1 * va * sqrt_va * _SQRT_HALF
+                rho = 3.0 * math.exp(-i1 * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))
+                log_i = _forward(v, log_v, i0 - _LOG_TWO - log_va, g, g / va - 2.0 * log_va, rho)[0]
+                regime[i] = _FORWARD
+            current[i], v_bulk[i] = sign * math.exp(log_i), sign * v
+            continue
+        log_i, x, point_regime, ell, its = _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va,
+                                                            log_va, log_a, warm_ell, warm_regime, finish, max_iter)
+        regime[i] = point_regime
+        if point_regime == _INVALID:
+            current[i], v_bulk[i] = math.nan, math.nan
+            warm_ell, warm_regime = math.nan, -1
+            continue
+        current[i], v_bulk[i] = sign * math.exp(log_i), sign * x
+        warm_ell, warm_regime = ell, point_regime
+        iterations = max(iterations, its)
+    return iterations
+
+
+def solve_smooth(voltage, series_resistance, gap, barrier, area, finish, max_iter):
+    """Solve the smooth law's circuit equation on flat float64 arrays of equal length.
+
+    Returns (current, v_bulk, regime, iterations) as :func:`~fsrbayes.physics.solver.solve_bulk`
+    fills them: NaN current and V_bulk where the regime is invalid (0).
+    """
+    n = voltage.size
+    current = np.empty(n)
+    v_bulk = np.empty(n)
+    regime = np.empty(n, dtype=np.int8)
+    iterations = _solve_all(voltage, series_resistance, gap, barrier, area, float(finish), int(max_iter),
+                            current, v_bulk, regime)
+    return current, v_bulk, regime, int(iterations)
