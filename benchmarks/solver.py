@@ -1,5 +1,7 @@
 """Vectorised current solver versus a per-point ``scipy.optimize.brentq`` loop.
 
+The smooth law is timed with both engines (compiled, numpy) in the same run.
+
 The per-point loop is how a Matlab ``fzero`` script solves the implicit equation
 V = V_bulk + 2·Rc·I(V_bulk): one scalar root-find per (voltage, stress, time) point, calling
 the same tunneling law. Both are timed in the same run on the same points (a random subset
@@ -53,10 +55,11 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
     v, rs, s, phi, a, vth = _workload(params, n_walkers, rng)
     n = v.size
     rows = []
-    for law in ("smooth", "paper"):
+    for law, engine in (("smooth", "compiled"), ("smooth", "numpy"), ("paper", "numpy")):
         threshold = vth if law == "paper" else None
-        solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold)
-        seconds = _time(lambda: solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold), repeats)
+        solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine)
+        seconds = _time(lambda: solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine),
+                        repeats)
         pick = rng.choice(np.flatnonzero(solution.valid.ravel() & ~solution.at_jump.ravel()), n_loop, replace=False)
         flat = [x.ravel()[pick] for x in (v, rs, s, phi, a, vth)]
         loop_seconds = _time(lambda: [_brentq_point(*pt, law) for pt in zip(*flat)], 1)
@@ -64,7 +67,7 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
         agree = np.max(np.abs(loop_current / solution.current.ravel()[pick] - 1.0))
         rate = n / seconds
         loop_rate = n_loop / loop_seconds
-        rows.append({"law": law, "points": n, "vectorised_per_s": rate, "loop_per_s": loop_rate,
+        rows.append({"law": f"{law}/{engine}", "points": n, "vectorised_per_s": rate, "loop_per_s": loop_rate,
                      "speedup": rate / loop_rate, "max_rel_diff": agree,
                      "iterations": solution.iterations})
     return rows
@@ -72,9 +75,9 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
 
 def report(rows):
     lines = [f"solver benchmark (single thread, OMP/MKL threads = {os.environ.get('OMP_NUM_THREADS', 'unset')})",
-             f"{'law':7s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} {'speed-up':>9s} "
+             f"{'law/engine':15s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} {'speed-up':>9s} "
              f"{'max |rel diff|':>15s} {'max iter':>8s}"]
     for r in rows:
-        lines.append(f"{r['law']:7s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} {r['loop_per_s']:14,.0f} "
+        lines.append(f"{r['law']:15s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} {r['loop_per_s']:14,.0f} "
                      f"{r['speedup']:9.0f} {r['max_rel_diff']:15.1e} {r['iterations']:8d}")
     return "\n".join(lines)
