@@ -1,10 +1,12 @@
 """Pure, vectorised physics of FSR creep (Paredes-Madrid et al. 2017).
 
 No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything here is
-numpy/scipy functions of arrays in SI units (barrier height in eV).
+numpy/scipy functions of arrays in SI units (barrier height in eV). The smooth law's circuit
+solver also has a numba-compiled point-by-point engine (:mod:`.compiled`, the default of
+:func:`~.solver.solve_bulk`), tested against the numpy one.
 """
 
-from . import constants, contact, effects, loading, peers, rheology, solver, tunneling
+from . import compiled, constants, contact, effects, loading, peers, rheology, solver, tunneling
 from .contact import contact_resistance, effective_area, gap, stress_from_force
 from .loading import StressHistory
 from .rheology import creep_compliance, creep_strain, strain_history
@@ -27,7 +29,7 @@ from .solver import BulkSolution, solve_bulk
 from .tunneling import paper_peak_voltage, tunneling_current
 
 __all__ = [
-    "constants", "contact", "effects", "loading", "peers", "rheology", "solver", "tunneling",
+    "compiled", "constants", "contact", "effects", "loading", "peers", "rheology", "solver", "tunneling",
     "contact_resistance", "effective_area", "gap", "stress_from_force", "StressHistory",
     "creep_compliance", "creep_strain", "strain_history", "DividerResult", "DomainError",
     "DomainWarning", "amplifier_output", "current", "current_from_amplifier", "current_history",
