@@ -104,7 +104,17 @@ class _BentRidgePrior:
 
     def log_density(self, u):
         u = np.atleast_2d(u)
-        return stats.norm.logpdf(u[:, 0]) + stats.norm.logpdf(u[:, 1], scale=self.tau)
+        return _normal_log_pdf(u[:, 0], 0.0, 1.0) + _normal_log_pdf(u[:, 1], 0.0, self.tau)
+
+
+def _normal_log_pdf(x, loc, scale):
+    """log N(x; loc, scale²) — scipy.stats.norm.logpdf's value at a tenth of its call overhead
+    (these targets run inside samplers' inner loops)."""
+    z = (x - loc) / scale
+    return -0.5 * z * z - np.log(scale) - _HALF_LOG_TWO_PI
+
+
+_HALF_LOG_TWO_PI = 0.5 * np.log(2.0 * np.pi)
 
 
 class BentRidge:
@@ -125,8 +135,8 @@ class BentRidge:
 
     def log_likelihood(self, u):
         u = np.atleast_2d(u)
-        return (stats.norm.logpdf(u[:, 1], loc=self.a * np.abs(u[:, 0]), scale=self.s)
-                - stats.norm.logpdf(u[:, 1], scale=self.prior.tau))
+        return (_normal_log_pdf(u[:, 1], self.a * np.abs(u[:, 0]), self.s)
+                - _normal_log_pdf(u[:, 1], 0.0, self.prior.tau))
 
     def sample_prior(self, rng, n):
         return self.prior.sample(rng, n)

@@ -24,6 +24,7 @@ import math
 import numba
 import numpy as np
 
+from . import tunneling as tl
 from .constants import CURRENT_SCALE, KAPPA
 
 __all__ = ["solve_smooth"]
@@ -46,37 +47,17 @@ def _log(x):
     return -math.inf if x == 0 else math.nan
 
 
-@numba.njit(**_JIT)
-def _intermediate(x, log_prefactor, ks, barrier):
-    """Eq. 10: (log I, d log I/dV) at V_bulk = x (``tunneling.evaluate_intermediate``)."""
-    half = 0.5 * x
-    r_minus = math.sqrt(barrier - half)
-    r_plus = math.sqrt(barrier + half)
-    em1 = math.expm1(-ks * x / (r_plus + r_minus))
-    e_d = 1.0 + em1
-    bracket = -(barrier - half) * em1 - x * e_d
-    log_current = log_prefactor - ks * r_minus + _log(bracket)
-    slope = 0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
-    return log_current, slope
-
-
-@numba.njit(**_JIT)
-def _forward(x, log_x, log_prefactor, g, log_w_offset, rho):
-    """The smooth law above Va: (log I, d log I/dV) (``tunneling.evaluate_forward``)."""
-    log_x2 = 2.0 * log_x
-    g_over_x = g / x
-    fade = rho * math.exp(2.0 * (g_over_x - log_x2 - log_w_offset))
-    one_minus = 1.0 - fade
-    log_current = log_prefactor + log_x2 - g_over_x + _log(one_minus)
-    slope = (2.0 + g_over_x) / x * (1.0 + 2.0 * fade / one_minus)
-    return log_current, slope
+_intermediate = numba.njit(**_JIT)(tl.evaluate_intermediate)
+"""Eq. 10: (log I, d log I/dV) at V_bulk — :func:`~fsrbayes.physics.tunneling.evaluate_intermediate` compiled."""
+_forward = numba.njit(**_JIT)(tl.evaluate_forward)
+"""The smooth law above Va — :func:`~fsrbayes.physics.tunneling.evaluate_forward` compiled."""
 
 
 @numba.njit(**_JIT)
 def _evaluate(forward, x, log_x, c0, c1, c2, c3):
     if forward:
         return _forward(x, log_x, c0, c1, c2, c3)
-    return _intermediate(x, c0, c1, c2)
+    return _intermediate(x, log_x, c0, c1, c2)
 
 
 @numba.njit(**_JIT)
@@ -227,7 +208,7 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
             # No series resistance: the whole voltage is across the bulk.
             i0, i1 = math.log(a * CURRENT_SCALE / s**2), KAPPA * s
             if v <= va:
-                log_i = _intermediate(v, i0, i1, va)[0]
+                log_i = _intermediate(v, log_v, i0, i1, va)[0]
                 regime[i] = _INTERMEDIATE
             else:
                 g = i1 * va * sqrt_va * _SQRT_HALF
