@@ -130,3 +130,17 @@ def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
     _replace_dead_walkers(rung, rng)
     assert np.isfinite(rung.ll).all() and np.all(rung.coords[0, :, 0] <= 0)
     assert np.allclose(HalfDomain.log_likelihood(rung.coords[0]), rung.ll[0])
+
+
+@pytest.mark.parametrize("path, shows_ti", [("prior", True), ("reference", False)])
+def test_the_printed_result_leaves_out_ti_on_the_referenced_path(path, shows_ti):
+    """TI integrates log(L·π/g) on the referenced path, whose β = 0 variance is huge in the
+    reference's tails (nan on creep posteriors): the one-line summary must not show it there."""
+    from fsrbayes.inference.evidence import EvidenceResult
+
+    result = EvidenceResult(log_z=-3.0, error=0.05, sigma_batch=0.01, sigma_replicates=0.02, sigma_disc=0.01,
+                            bridge=-3.01, ti=float("nan"), ti_corrected=float("nan"), ss_half=-3.0, replicates=[],
+                            betas=np.linspace(0, 1, 4), swap_acceptance=np.ones((1, 3)), n_evals=10, seconds=1.0,
+                            settings={"path": path})
+    assert str(result).startswith("log Z = -3.000 ± 0.050 (SS;")
+    assert ("TI+corr" in str(result)) == shows_ti

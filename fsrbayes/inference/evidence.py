@@ -375,9 +375,12 @@ class EvidenceResult:
 
     def __str__(self):
         pilot = f", pilots {self.sigma_pilot:.3f}" if self.sigma_pilot else ""
+        # On the referenced path TI integrates log(L·π/g), whose variance at β = 0 is huge in
+        # the reference's tails (nan or 1e14 on the creep posteriors): not worth printing.
+        ti = "" if self.settings.get("path") == "reference" else f", TI+corr {self.ti_corrected:.3f}"
         return (f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
-                f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}, "
-                f"TI+corr {self.ti_corrected:.3f})")
+                f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}"
+                f"{ti})")
 
 
 def _ladder_job(target, betas, settings, seed):
