@@ -45,8 +45,9 @@ MAP_ITERATIONS = 200
 """L-BFGS-B iterations per start in :func:`fit` before the whitened polish. The 2,000 of before
 found the same optima (to 1e-3 nats) in 40.1 s against 26.3 s on the benchmark specimen (9 tests
 × 61 samples, 8 starts) and 12.0 s against 10.0 s on a 4-test one: in prior-scaled coordinates
-L-BFGS-B crawls along the ridges; the polish walks them. (Starts in two forked processes were
-slower, 38 s: not done.)"""
+L-BFGS-B crawls along the ridges; the polish walks them. :func:`fit` runs the starts in its
+worker processes with BLAS on one thread (a first try with BLAS's own threads in each was
+slower, 38 s; single-threaded: 8.7–9.7 s against 15.9–18.4 s in one process)."""
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2)
 """The per-specimen fit's default: two ensembles (one per core on a 2-core machine), the default
