@@ -111,10 +111,10 @@ def _normal_log_pdf(x, loc, scale):
     """log N(x; loc, scale²) — scipy.stats.norm.logpdf's value at a tenth of its call overhead
     (these targets run inside samplers' inner loops)."""
     z = (x - loc) / scale
-    return -0.5 * z * z - np.log(scale) - _HALF_LOG_TWO_PI
+    return -0.5 * z * z - np.log(scale) - _HALF_LOG_2PI
 
 
-_HALF_LOG_TWO_PI = 0.5 * np.log(2.0 * np.pi)
+_HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
 class BentRidge:

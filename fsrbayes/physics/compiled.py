@@ -29,9 +29,7 @@ from .constants import CURRENT_SCALE, KAPPA
 
 __all__ = ["solve_smooth"]
 
-_SQRT_HALF = math.sqrt(0.5)
-_SQRT_THREE_HALVES = math.sqrt(1.5)
-_OPACITY_LIMIT = 2.0 * math.sqrt(2.0)
+_SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = float(tl.SQRT_HALF), float(tl.SQRT_THREE_HALVES), float(tl.OPACITY_LIMIT)
 _LOG_CURRENT_SCALE = math.log(CURRENT_SCALE)
 _LOG_TWO = math.log(2.0)
 _INVALID, _OHMIC, _INTERMEDIATE, _FORWARD = 0, 1, 2, 4
@@ -51,6 +49,28 @@ _intermediate = numba.njit(**_JIT)(tl.evaluate_intermediate)
 """Eq. 10: (log I, d log I/dV) at V_bulk — :func:`~fsrbayes.physics.tunneling.evaluate_intermediate` compiled."""
 _forward = numba.njit(**_JIT)(tl.evaluate_forward)
 """The smooth law above Va — :func:`~fsrbayes.physics.tunneling.evaluate_forward` compiled."""
+
+
+@numba.njit(**_JIT)
+def _log_prefactor_10(log_a, s):
+    """log(A e²/(2πh s²)): eq. 10's prefactor (``tunneling.prepare_intermediate``) from log A."""
+    return _LOG_CURRENT_SCALE + log_a - 2.0 * math.log(s)
+
+
+@numba.njit(**_JIT)
+def _log_ohmic_conductance(opacity, log_pre10):
+    """Eq. 9's log conductance, log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)
+    (``tunneling.log_ohmic_conductance``)."""
+    return math.log(0.75 * opacity) + log_pre10 - opacity
+
+
+@numba.njit(**_JIT)
+def _forward_constants(ks, va, sqrt_va, log_va, log_pre10):
+    """``tunneling.prepare_forward`` from row constants: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2,
+    the log-w offset and ρ."""
+    g = ks * va * sqrt_va * _SQRT_HALF
+    rho = 3.0 * math.exp(-ks * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))
+    return log_pre10 - _LOG_TWO - log_va, g, g / va - 2.0 * log_va, rho
 
 
 @numba.njit(**_JIT)
@@ -125,11 +145,9 @@ def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, l
     root on the same row, NaN for none) starts Newton if the point's root is on the same branch
     (``warm_regime``); otherwise the numpy solver's starts are used.
     """
-    log_s = math.log(s)
     opacity = KAPPA * s * sqrt_va
     ks = KAPPA * s
-    # log(A e²/(2πh s²)): eq. 10's prefactor (tunneling.prepare_intermediate).
-    log_pre10 = _LOG_CURRENT_SCALE + log_a - 2.0 * log_s
+    log_pre10 = _log_prefactor_10(log_a, s)
     regime = _INTERMEDIATE
     start = warm_ell
     if v > va:
@@ -150,18 +168,14 @@ def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, l
             return math.nan, math.nan, _INVALID, math.nan, 0
     if regime == _INTERMEDIATE:
         if warm_regime != _INTERMEDIATE:
-            # The ohmic root ℓ = −log(R_s·G0), G0 eq. 10's conductance at V → 0 (eq. 9's
-            # log conductance: log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)).
-            log_g9 = math.log(0.75 * opacity) + log_pre10 - opacity
-            start = -(log_rs + log_g9 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
+            # The ohmic root ℓ = −log(R_s·G0), G0 eq. 10's conductance at V → 0.
+            start = -(log_rs + _log_ohmic_conductance(opacity, log_pre10)
+                      + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
         x, log_i, ell, its = _newton(False, v, log_v, 0.0, min(v, va), start, log_pre10 + log_rs, ks, va, 0.0,
                                      finish, max_iter)
     else:
-        # tunneling.prepare_forward: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2, log-w offset, ρ.
-        g = ks * va * sqrt_va * _SQRT_HALF
-        rho = 3.0 * math.exp(-opacity * (_SQRT_THREE_HALVES - _SQRT_HALF))
-        log_pre = log_pre10 - _LOG_TWO - log_va
-        x, log_i, ell, its = _newton(True, v, log_v, va, v, start, log_pre + log_rs, g, g / va - 2.0 * log_va, rho,
+        log_pre, g, log_w_offset, rho = _forward_constants(ks, va, sqrt_va, log_va, log_pre10)
+        x, log_i, ell, its = _newton(True, v, log_v, va, v, start, log_pre + log_rs, g, log_w_offset, rho,
                                      finish, max_iter)
     return log_i - log_rs, x, regime, ell, its
 
@@ -200,20 +214,17 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
             current[i], v_bulk[i], regime[i] = math.nan, math.nan, _INVALID
             continue
         if v == 0:
-            opacity = KAPPA * s * sqrt_va
-            log_g9 = math.log(0.75 * opacity) + _LOG_CURRENT_SCALE + log_a - 2.0 * math.log(s) - opacity
+            log_g9 = _log_ohmic_conductance(KAPPA * s * sqrt_va, _log_prefactor_10(log_a, s))
             current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, _OHMIC
             continue
         if rs == 0:
             # No series resistance: the whole voltage is across the bulk.
-            i0, i1 = math.log(a * CURRENT_SCALE / s**2), KAPPA * s
+            log_pre10 = _log_prefactor_10(log_a, s)
             if v <= va:
-                log_i = _intermediate(v, log_v, i0, i1, va)[0]
+                log_i = _intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]
                 regime[i] = _INTERMEDIATE
             else:
-                g = i1 * va * sqrt_va * _SQRT_HALF
-                rho = 3.0 * math.exp(-i1 * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))
-                log_i = _forward(v, log_v, i0 - _LOG_TWO - log_va, g, g / va - 2.0 * log_va, rho)[0]
+                log_i = _forward(v, log_v, *_forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10))[0]
                 regime[i] = _FORWARD
             current[i], v_bulk[i] = sign * math.exp(log_i), sign * v
             continue
