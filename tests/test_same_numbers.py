@@ -1,0 +1,60 @@
+"""The same seed gives the same chains, and the forward model the same currents, bit for bit.
+
+``data/regroup_pins.npz`` was recorded before the package was regrouped into subpackages and
+its string dispatch replaced by registries; a refactoring that changes any number fails here.
+"""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.sampling import SamplerSettings
+from fsrbayes.physics import loading
+from fsrbayes.physics.sensor import current_history
+
+PINS = np.load(Path(__file__).parent / "data" / "regroup_pins.npz")
+SHORT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+EFFECTS = ("area-creep", "contact-creep", "power-law-creep", "voltage-degradation", "offset-stress")
+
+
+@pytest.fixture(scope="module")
+def params():
+    p = dict(fsrbayes.load_sensor("a201").params)
+    p.update(area_creep=-30.0, contact_creep=20.0, plc_psi=2e-9, plc_n=0.3, deg_amp=0.2, deg_onset=2.5,
+             deg_tau=600.0, deg_width=0.5, sigma0=5e3, psi=3e-8, n=0.25, R0=2e5)
+    return p
+
+
+@pytest.mark.parametrize("model, seed", [("burgers", 7), ("zener+area-creep", 8)])
+def test_a_short_fit_gives_the_recorded_chain(model, seed):
+    data = syn.simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2).data
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fsrbayes.fit(data, rng=seed, settings=SHORT, model=model)
+    key = model.replace("+", "_").replace("-", "_")
+    np.testing.assert_array_equal(result.map_u, PINS[f"fit_{key}_map_u"])
+    np.testing.assert_array_equal(result.run.chain[:, ::10, :8], PINS[f"fit_{key}_chain"])
+    np.testing.assert_array_equal(result.run.log_prob[:, ::10, :8], PINS[f"fit_{key}_log_prob"])
+
+
+def test_every_model_family_and_effect_gives_the_recorded_currents(params):
+    v = np.array([0.2, 1.0, 3.0])[:, None, None]
+    s = np.array([50e3, 150e3])[None, :, None]
+    t = np.array([0.0, 1.0, 60.0, 3600.0])
+    for family in ("burgers", "zener", "nutting", "kalantari"):
+        np.testing.assert_array_equal(fsrbayes.current(params, v, s, t, rheology=family), PINS[f"current_{family}"])
+    for effect in EFFECTS:
+        np.testing.assert_array_equal(fsrbayes.current(params, v, s, t, effects=(effect,)),
+                                      PINS[f"current_burgers_{effect}"])
+
+
+def test_stress_histories_give_the_recorded_currents(params):
+    history = loading.ramp(150e3, 2.0)
+    t = np.array([2.0, 10.0, 100.0, 1000.0])
+    for family in ("burgers", "zener", "nutting"):
+        got = current_history(params, 1.0, history, t, rheology=family, effects=("power-law-creep", "area-creep"))
+        np.testing.assert_array_equal(got, PINS[f"history_{family}"])
