@@ -10,7 +10,7 @@ import time
 
 from fsrbayes.data import synthetic
 from fsrbayes.discrepancy import diagnose
-from fsrbayes.discrepancy.study import STUDY_VOLTAGES
+from validation.diagnose_study import STUDY_VOLTAGES
 
 
 def run(processes=2):

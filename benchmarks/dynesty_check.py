@@ -29,9 +29,9 @@ import numpy as np
 from scipy import special
 
 from benchmarks.evidence import specimen_posterior
-from fsrbayes.inference.evidence import _evaluate
-from fsrbayes.inference.reference import ReferenceDensity, pilot_draws
-from fsrbayes.inference.transport import student_t_log_density
+from fsrbayes.inference.evidence.ladder import evaluate_target
+from fsrbayes.inference.evidence.referenced import ReferenceDensity, pilot_draws
+from fsrbayes.inference.samplers.transport import student_t_log_density
 
 
 class _UnitCube:
@@ -64,7 +64,7 @@ class _Repartitioned:
 
     def loglike(self, w):
         with np.errstate(all="ignore"):
-            lp, ll = _evaluate(self.posterior, self.reference.to_target(w[None]))
+            lp, ll = evaluate_target(self.posterior, self.reference.to_target(w[None]))
             value = float(lp[0] + ll[0]) + self.reference.log_det_jacobian - self.log_base(w)
         return value if np.isfinite(value) else -1e300
 

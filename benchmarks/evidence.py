@@ -1,7 +1,7 @@
 """Wall time and accuracy of log Z for one specimen's Burgers and Zener models (target ±0.3 in ≤ 5 min).
 
 Default: the referenced path (pilot run, Student-t reference in transport-map coordinates, 8
-evenly spaced rungs; :mod:`fsrbayes.inference.reference`). ``path="prior"`` runs the old
+evenly spaced rungs; :mod:`fsrbayes.inference.evidence.referenced`). ``path="prior"`` runs the old
 prior-to-posterior ladder for comparison.
 """
 
@@ -10,17 +10,17 @@ from dataclasses import replace
 
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.evidence import LadderSettings, log_evidence
-from fsrbayes.inference.fit import _select
+from fsrbayes.inference.evidence.ladder import LadderSettings, log_evidence
+from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.reference import REFERENCED_LADDER, referenced_log_evidence
+from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER, referenced_log_evidence
 
 
 def specimen_posterior(model, samples=21):
     """The benchmark specimen: a simulated A201 (seed 5), 9 creep tests × ``samples``."""
     sim = synthetic.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8],
                              samples=samples, seed=5)
-    return LogPosterior.for_sensor(_select(sim.data, None), load_sensor("a201"), model=model)
+    return LogPosterior.for_sensor(SpecimenData.select(sim.data), load_sensor("a201"), model=model)
 
 
 def run(path="reference", samples=21, seed=1):

@@ -6,7 +6,7 @@ log-spaced samples per test. The two-stage route fits the specimens independentl
 specimen, not a converged-to-the-last-digit chain), then samples the 22 hyper-parameters. The
 speed-up from 1 to 2 worker processes is measured side by side on the first 4 specimens. The
 joint route (16 x 12 + 22 = 214 parameters) runs blocked Gibbs sweeps inside emcee
-(``fsrbayes.inference.gibbs``) from the two-stage start, with proposals from the same fits, to
+(``fsrbayes.inference.population.gibbs``) from the two-stage start, with proposals from the same fits, to
 convergence; the two routes' hyper-parameter means are compared in units of their combined
 Monte-Carlo error.
 """
@@ -17,8 +17,8 @@ import warnings
 import numpy as np
 
 from fsrbayes.data import synthetic
-from fsrbayes.inference.hierarchical import fit_specimens, joint, two_stage
-from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
 HYPER_SETTINGS = SamplerSettings(processes=2)

@@ -7,11 +7,11 @@ sourcing voltages per sensor, one hour per creep test. The demo:
 1. fits every chosen specimen with the Burgers model (eqs. 12–13 through the tunneling law,
    eqs. 9–11, and the contact resistance, eq. 5) and with the Zener model — a Laplace
    approximation at the maximum a posteriori point for the evidence and a short ensemble run
-   there for the posterior draws (:mod:`fsrbayes.inference.laplace`);
+   there for the posterior draws (:mod:`fsrbayes.inference.evidence.laplace`);
 2. compares Zener and Burgers by the Laplace log Bayes factor per specimen and summed, in
    Kass–Raftery's words;
 3. combines each sensor's specimens into a population posterior (two-stage reweighting,
-   :func:`fsrbayes.inference.hierarchical.two_stage`) and draws new specimens from it: the
+   :func:`fsrbayes.inference.population.routes.two_stage`) and draws new specimens from it: the
    drift(3600 s) distributions by voltage and by stress that stand in for the paper's box plots
    (Figures 10, 11, 13, 14), and the sourcing voltage that minimises |drift(3600 s)| at each
    stress;
@@ -39,15 +39,16 @@ from .data.sensors import load_sensor
 from .data.synthetic import PAPER_VOLTAGES, default_data
 from .discrepancy import diagnose
 from .inference.compare import strength
-from .inference.fit import _select
-from .inference.hierarchical import two_stage
-from .inference.laplace import LocalDraws, laplace_fit
+from .inference.population.routes import two_stage
+from .inference.evidence.laplace import LocalDraws, laplace_fit
 from .inference.output import save_population, to_datatree
 from .inference.parallel import map_jobs
-from .inference.population import Population
+from .inference.population.model import Population
 from .inference.posterior import LogPosterior
-from .inference.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
-from .inference.sampling import SamplerSettings, single_threaded_blas
+from .inference.likelihood import SpecimenData
+from .inference.population.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+from .inference.samplers.ensemble import SamplerSettings
+from .inference.parallel import single_threaded_blas
 from .report import embed_figure, markdown_to_html, write_diagnosis_report
 from .utils import atomic_path, json_ready, write_json_atomic
 
@@ -120,7 +121,7 @@ def _fit_specimen(job):
     """Burgers (Laplace + local draws) and Zener (Laplace) fits of one specimen."""
     data, specimen, plan, seed = job
     rng = np.random.default_rng(seed)
-    packed = _select(data, specimen)
+    packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(packed.sensor)
     started = time.perf_counter()
     with single_threaded_blas():

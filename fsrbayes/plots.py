@@ -12,10 +12,11 @@ matplotlib.use("Agg", force=False)
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .physics.parameters import physical_parameters  # noqa: E402
+
 __all__ = ["corner_plot", "band_plot", "drift_3600_plot", "population_drift_plot", "diagnosis_drift_plot",
            "diagnosis_misfit_plot", "diagnosis_residual_plot", "sbc_rank_plot", "save_figure"]
 
-PHYSICAL = ("s0", "Va", "A0", "A1", "A2", "alpha", "Rc0", "Rpar", "R0", "k1", "k2", "b2", "inv_b1", "psi", "n")
 
 
 def corner_plot(tree, names=None):
@@ -23,7 +24,7 @@ def corner_plot(tree, names=None):
     import corner
 
     post = tree.posterior
-    names = [n for n in (names or PHYSICAL) if n in post.data_vars]
+    names = [n for n in (names or physical_parameters()) if n in post.data_vars]
     columns, labels = [], []
     for name in names:
         values = post[name].values.ravel()
@@ -112,7 +113,7 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     Parameters
     ----------
     groups : list of dict
-        From :func:`fsrbayes.inference.predictive.drift_groups`.
+        From :func:`fsrbayes.inference.population.predictive.drift_groups`.
     observed : dict of arrays, optional
         ``voltage_V``, ``stress_Pa``, ``observed_drift_3600`` per observed test.
     by : {"voltage", "stress"}
@@ -216,7 +217,7 @@ def diagnosis_drift_plot(diagnosis):
 
 def diagnosis_misfit_plot(diagnosis):
     """Mean standardised drift(3600 s) misfit z per voltage and per stress, before and after."""
-    from .discrepancy.diagnose import _misfit_by
+    from .discrepancy.diagnose import misfit_by
 
     panels = _diagnosis_panels(diagnosis)
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), squeeze=False)
@@ -224,7 +225,7 @@ def diagnosis_misfit_plot(diagnosis):
                                                        ("stress_Pa", "stress (kPa)", 1e-3))):
         width = 0.8 / len(panels)
         for k, (title, checks) in enumerate(panels):
-            rows = _misfit_by(checks, attribute)
+            rows = misfit_by(checks, attribute)
             x = np.arange(len(rows)) + (k - (len(panels) - 1) / 2) * width
             ax.bar(x, [r["mean_z"] for r in rows], width, label=title, color=f"C{k}")
             ax.set_xticks(np.arange(len(rows)), [f"{r[attribute] * scale:g}" for r in rows])

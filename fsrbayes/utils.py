@@ -6,7 +6,24 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "json_ready", "write_json_atomic"]
+import numpy as np
+
+__all__ = ["HALF_LOG_2PI", "atomic_path", "json_ready", "logsumexp", "write_json_atomic"]
+
+HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
+"""½·log(2π), the normal density's constant."""
+
+
+def logsumexp(values, axis=0):
+    """log Σ exp(values) along ``axis`` (−inf where every term is −inf).
+
+    Written out rather than :func:`scipy.special.logsumexp`, whose argument checks cost more than
+    the sum on the small arrays of the samplers' inner loops (BENCHMARKS.md, "logsumexp").
+    """
+    top = np.max(values, axis=axis, keepdims=True)
+    top = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        return np.log(np.sum(np.exp(values - top), axis=axis)) + np.squeeze(top, axis=axis)
 
 
 @contextmanager

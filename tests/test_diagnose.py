@@ -9,7 +9,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import simulate
 from fsrbayes.discrepancy import diagnose, predictive_checks
 from fsrbayes.discrepancy.checks import drift_gap, gap, two_sided_p
-from fsrbayes.inference.fit import _select
+from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 
 A201_VOLTAGES = (0.5, 2.0, 4.5)
@@ -33,7 +33,7 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
     sensor = load_sensor("a201")
     checks = []
     for specimen, entry in sim.truth["specimens"].items():
-        posterior = LogPosterior.for_sensor(_select(sim.data, specimen), sensor, model="burgers")
+        posterior = LogPosterior.for_sensor(SpecimenData.select(sim.data, specimen), sensor, model="burgers")
         truth = np.array([entry["params"][name] for name in posterior.names])
         checks.append(predictive_checks(posterior, np.tile(truth, (400, 1)), np.random.default_rng(1)))
     n = sum(len(c.z) for c in checks)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from fsrbayes.inference.closed_form import LinearGaussian, TwoModes
-from fsrbayes.inference.evidence import LadderSettings, _Rungs, beta_ladder, combine_ladder, log_evidence
+from validation.closed_form import LinearGaussian, TwoModes
+from fsrbayes.inference.evidence.ladder import LadderSettings, _Rungs, beta_ladder, combine_ladder, log_evidence
 
 
 CHEAP = LadderSettings(n_temps=16, burn=300, steps=1000, replicates=4, n_walkers=40, processes=2)
@@ -48,7 +48,7 @@ def test_bad_settings_and_wide_priors_are_refused():
     import fsrbayes
     from fsrbayes.data.distributions import Distribution
     from fsrbayes.data.prior import JointPrior
-    from fsrbayes.inference.evidence import check_priors_for_evidence
+    from fsrbayes.inference.evidence.ladder import check_priors_for_evidence
 
     sensor = fsrbayes.load_sensor("a201")
     prior = sensor.prior_for("burgers")
@@ -101,7 +101,7 @@ def test_reported_error_matches_the_seed_to_seed_scatter():
 def test_error_bars_cover_the_exact_log_z_at_their_nominal_rates(label, make_problem, n_runs):
     # Independent instances (new data, new seed): |estimate − exact| <= kσ in 68.3 % (k = 1) and
     # 95.4 % (k = 2) of the runs, within the 99 % binomial range of an honest error bar.
-    from fsrbayes.inference.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
+    from validation.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
 
     study = evidence_coverage(make_problem, n_runs, CHEAP, seed=7)
     print(format_evidence_coverage(study, label))
@@ -111,7 +111,7 @@ def test_error_bars_cover_the_exact_log_z_at_their_nominal_rates(label, make_pro
 
 
 def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
-    from fsrbayes.inference.evidence import _replace_dead_walkers
+    from fsrbayes.inference.evidence.ladder import _replace_dead_walkers
 
     target = LinearGaussian(3)
 
@@ -136,7 +136,7 @@ def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
 def test_the_printed_result_leaves_out_ti_on_the_referenced_path(path, shows_ti):
     """TI integrates log(L·π/g) on the referenced path, whose β = 0 variance is huge in the
     reference's tails (nan on creep posteriors): the one-line summary must not show it there."""
-    from fsrbayes.inference.evidence import EvidenceResult
+    from fsrbayes.inference.evidence.ladder import EvidenceResult
 
     result = EvidenceResult(log_z=-3.0, error=0.05, sigma_batch=0.01, sigma_replicates=0.02, sigma_disc=0.01,
                             bridge=-3.01, ti=float("nan"), ti_corrected=float("nan"), ss_half=-3.0, replicates=[],

@@ -7,10 +7,10 @@ import warnings
 import pytest
 
 from fsrbayes.data import synthetic
-from fsrbayes.inference import hierarchical
-from fsrbayes.inference.hierarchical import SpecimenFitWarning, fit_specimens
+from fsrbayes.inference.population import routes as hierarchical
+from fsrbayes.inference.population.routes import SpecimenFitWarning, fit_specimens
 from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
-from fsrbayes.inference.sampling import SamplerSettings
+from fsrbayes.inference.samplers.ensemble import SamplerSettings
 
 
 def square_or_fail(job):

@@ -15,7 +15,7 @@ import xarray as xr
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.sampling import CheckpointMismatch, ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.ensemble import CheckpointMismatch, ConvergenceWarning, SamplerSettings
 
 FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 
@@ -144,7 +144,7 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
 
 def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_path, monkeypatch):
     from fsrbayes.inference import fit as fit_module
-    from fsrbayes.inference import sampling
+    from fsrbayes.inference.samplers import ensemble as sampling
 
     path = tmp_path / "checkpoint.npz"
     state = np.random.RandomState(0).get_state()
@@ -220,7 +220,7 @@ class _Gaussian2D:
 
 
 def test_laplace_start_is_twice_the_posterior_spread():
-    from fsrbayes.inference.fit import laplace_start
+    from fsrbayes.inference.optimize import laplace_start
 
     start = laplace_start(_Gaussian2D(), np.zeros(2), np.random.default_rng(0), (4000,))
     np.testing.assert_allclose(np.cov(start.T), 4 * _Gaussian2D.cov, rtol=0.08)
@@ -230,12 +230,13 @@ def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     # 9 tests x 31 samples: plain L-BFGS-B stopped 19 nats below the true parameters here;
     # the whitened polish must end at or above them — also after the short first phase the fit
     # uses (MAP_ITERATIONS).
-    from fsrbayes.inference import LogPosterior
-    from fsrbayes.inference.fit import MAP_ITERATIONS, _select, find_map
+    from fsrbayes.inference import LogPosterior, SpecimenData
+    from fsrbayes.inference.fit import MAP_ITERATIONS
+    from fsrbayes.inference.optimize import find_map
 
     sim = syn.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=31,
                        seed=2024)
-    posterior = LogPosterior.for_sensor(_select(sim.data, None), fsrbayes.load_sensor("a201"))
+    posterior = LogPosterior.for_sensor(SpecimenData.select(sim.data), fsrbayes.load_sensor("a201"))
     truth = np.array([sim.truth["specimens"]["a201-01"]["params"][n] for n in posterior.names])
     optima = find_map(posterior, np.random.default_rng(2024), n_starts=2, maxiter=MAP_ITERATIONS)
     assert posterior(optima[:1])[0] >= posterior(posterior.prior.to_unconstrained(truth[None]))[0] - 0.5
@@ -265,7 +266,7 @@ class _TailedGaussian:
 
 
 def test_nested_starts_hold_the_half_normal_and_optimise_the_rest():
-    from fsrbayes.inference.fit import NESTED_DEPTH, _start_regions, nested_starts
+    from fsrbayes.inference.optimize import NESTED_DEPTH, nested_starts, start_regions
 
     target = _TailedGaussian()
     starts = nested_starts(target, target.mean)
@@ -275,18 +276,18 @@ def test_nested_starts_hold_the_half_normal_and_optimise_the_rest():
     # the tail start takes the second ensemble's place when its Laplace mass is close enough ...
     log_gap = 0.5 * 4.0 * (NESTED_DEPTH - target.mean[1]) ** 2 * (1 - 9 / 16)  # profile drop, nats
     assert log_gap < 10
-    regions = _start_regions(target, target.mean[None], starts, n_ensembles=2)
+    regions = start_regions(target, target.mean[None], starts, n_ensembles=2)
     assert [r[0][1] for r in regions] == [target.mean[1], NESTED_DEPTH]
     # ... never the only one's, and not when it lies too far below the best region
-    assert len(_start_regions(target, target.mean[None], starts, n_ensembles=1)) == 1
-    assert len(_start_regions(target, target.mean[None], starts, 2, max_log_mass_gap=log_gap / 2)) == 1
+    assert len(start_regions(target, target.mean[None], starts, n_ensembles=1)) == 1
+    assert len(start_regions(target, target.mean[None], starts, 2, max_log_mass_gap=log_gap / 2)) == 1
     # a parameter already at or below the depth needs no start
     assert nested_starts(target, np.array([0.0, NESTED_DEPTH - 1])).shape == (0, 2)
 
 
 @pytest.mark.slow
 def test_parameter_recovery_on_twenty_simulated_specimens():
-    from fsrbayes.inference.recovery import format_recovery, recovery_study
+    from validation.recovery import format_recovery, recovery_study
 
     study = recovery_study(20)
     print(format_recovery(study))

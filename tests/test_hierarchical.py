@@ -10,10 +10,10 @@ from scipy import integrate, stats
 
 from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
-from fsrbayes.inference.gibbs import GIBBS_WALKERS, GibbsJointTarget, KernelProposal
-from fsrbayes.inference.hierarchical import ReweightingWarning, joint, two_stage
-from fsrbayes.inference.population import Population, TwoStageTarget
-from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget, KernelProposal
+from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
+from fsrbayes.inference.population.model import Population, TwoStageTarget
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
 SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])
@@ -245,7 +245,7 @@ SHORT_FIT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=2
 
 
 def _fits(**kwargs):
-    from fsrbayes.inference.hierarchical import fit_specimens
+    from fsrbayes.inference.population.routes import fit_specimens
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -286,7 +286,7 @@ def test_two_stage_recovers_the_simulated_population(tmp_path):
     calibrated), and the new-specimen 5-95 % range (as measured) holds >= 80 % of the 192 observed
     drifts, the noise-free one >= 80 % of the specimens' noiseless true drifts."""
     from fsrbayes import plots
-    from fsrbayes.inference.population_study import format_population_study, population_study
+    from validation.population_study import format_population_study, population_study
 
     study = population_study(joint_route=True)
     print(format_population_study(study))
@@ -305,7 +305,7 @@ def test_two_stage_recovers_the_simulated_population(tmp_path):
 def _identical_new_specimens(n_per_hyper=4000):
     """New specimens from a population with (almost) no spread, at the sensor's defaults."""
     from fsrbayes.data.sensors import load_sensor
-    from fsrbayes.inference.predictive import ForwardTemplate, new_specimens
+    from fsrbayes.inference.population.predictive import ForwardTemplate, new_specimens
 
     sensor = load_sensor("a201")
     template = ForwardTemplate.from_sensor(sensor)
@@ -328,7 +328,7 @@ def test_new_specimen_drift_equals_the_forward_model_and_measurement_noise_sprea
 
 
 def test_optimal_voltage_finds_the_minimum_of_a_known_drift_curve():
-    from fsrbayes.inference.predictive import optimal_voltage
+    from fsrbayes.inference.population.predictive import optimal_voltage
 
     specimens, sensor = _identical_new_specimens(50)
     best = optimal_voltage(specimens, 117e3, (0.1, 9.0))

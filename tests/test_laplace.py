@@ -5,7 +5,7 @@ from scipy import stats
 
 from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
-from fsrbayes.inference.laplace import laplace_fit
+from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.posterior import PriorScaledTarget
 
 

@@ -9,7 +9,7 @@ import pytest
 
 import fsrbayes
 from fsrbayes.data import synthetic
-from fsrbayes.inference.reference import REFERENCED_LADDER
+from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER
 
 FORCES = [1.96, 4.9, 9.8]
 LADDER = replace(REFERENCED_LADDER, processes=min(2, os.cpu_count() or 1))

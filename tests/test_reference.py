@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fsrbayes.inference.closed_form import LinearGaussian, TwoModes
-from fsrbayes.inference.evidence import LadderSettings
-from fsrbayes.inference.reference import MixtureReference, ReferenceDensity, ReferencedTarget, referenced_log_evidence
+from validation.closed_form import LinearGaussian, TwoModes
+from fsrbayes.inference.evidence.ladder import LadderSettings
+from fsrbayes.inference.evidence.referenced import MixtureReference, ReferenceDensity, ReferencedTarget, referenced_log_evidence
 
 LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=40)
 
@@ -89,7 +89,7 @@ def _referenced_from_a_poor_reference(problem, settings, seed):
 
 @pytest.mark.slow
 def test_referenced_error_bars_cover_the_exact_log_z_at_their_nominal_rates():
-    from fsrbayes.inference.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
+    from validation.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
 
     study = evidence_coverage(lambda k: LinearGaussian(10, seed=3000 + k), 40, replace(LADDER, processes=2), seed=11,
                               estimator=_referenced_from_a_poor_reference)

@@ -9,8 +9,8 @@ from scipy import stats
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import LogPosterior, SpecimenData
-from fsrbayes.inference.closed_form import BentRidge
-from fsrbayes.inference.sampling import (CheckpointMismatch, ConvergenceWarning, SamplerSettings, run_ensembles)
+from validation.closed_form import BentRidge
+from fsrbayes.inference.samplers.ensemble import (CheckpointMismatch, ConvergenceWarning, SamplerSettings, run_ensembles)
 
 MU = np.array([1.0, -2.0, 0.5])
 SD = np.array([0.5, 2.0, 0.1])

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fsrbayes.inference.savage_dickey import savage_dickey
+from fsrbayes.inference.evidence.savage_dickey import savage_dickey
 
 TAU, S = 2.0, 1.0
 

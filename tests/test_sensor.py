@@ -5,7 +5,7 @@ import pytest
 
 import fsrbayes
 from fsrbayes.physics import loading, peers, sensor as fsr
-from fsrbayes.physics.effects import model_parameters, parse_model
+from fsrbayes.physics.models import model_parameters, parse_model
 from fsrbayes.physics.sensor import resistances, voltage_divider
 from fsrbayes.physics.constants import KAPPA
 

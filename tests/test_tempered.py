@@ -11,12 +11,12 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference.closed_form import BentRidge
-from fsrbayes.inference.evidence import LadderSettings
+from validation.closed_form import BentRidge
+from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.reference import PILOT_SETTINGS, ModeSearch
-from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings
-from fsrbayes.inference.tempered import TemperedSettings, tempered_run
+from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
 
 
 SMALL = TemperedSettings(ladder=LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4,
@@ -97,7 +97,7 @@ def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
 
 def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypatch):
     from fsrbayes.cli import main
-    from fsrbayes.inference import tempered
+    from fsrbayes.inference.evidence import tempered
 
     monkeypatch.setattr(tempered, "TEMPERED_SETTINGS", TINY)  # the CLI's ladder, pilots and search, but tiny
     csv = tmp_path / "data.csv"
@@ -126,7 +126,7 @@ def test_tempered_sampler_refuses_what_it_cannot_do(specimen, tmp_path):
 
 
 def test_tempered_report_counts_independent_draws_fully_and_shared_states_once():
-    from fsrbayes.inference.tempered import tempered_report
+    from fsrbayes.inference.evidence.tempered import tempered_report
 
     rng = np.random.default_rng(0)
     independent = rng.standard_normal((4, 500, 32, 2))

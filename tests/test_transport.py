@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fsrbayes.inference.sampling import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.transport import (IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap,
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.transport import (IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap,
                                          student_t_log_density)
 
 BEND, WIDTH = 1.0, 0.05
@@ -58,7 +58,7 @@ def test_mapped_density_is_the_target_times_the_jacobian(banana_map):
 def test_predictability_order_from_the_gram_matrix_equals_direct_least_squares():
     """The greedy order's scores come from sub-blocks of one Gram matrix; they must equal residual
     sds of direct least-squares fits (SVD) of each coordinate on a quadratic in the others."""
-    from fsrbayes.inference.transport import _features, _order_by_predictability
+    from fsrbayes.inference.samplers.transport import _features, _order_by_predictability
 
     rng = np.random.default_rng(7)
     x = rng.standard_normal((3000, 7))

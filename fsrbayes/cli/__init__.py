@@ -9,7 +9,8 @@ import sys
 from .._version import __version__
 from ..data.sensors import available_sensors
 from ..inference.parallel import JobError
-from ..physics.effects import EFFECTS, MODEL_FAMILIES
+from ..physics.effects import EFFECTS
+from ..physics.models import model_families
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
@@ -63,7 +64,7 @@ def build_parser():
     sim.add_argument("--amp-offset", type=float, default=0.0, help="sd of a constant amplifier offset per test, V")
     sim.add_argument("--readout", choices=("current", "amplifier"), default="current",
                      help="write current_A, or vo_V and rf_ohm (eq. 23)")
-    sim.add_argument("--rheology", choices=MODEL_FAMILIES, default="burgers",
+    sim.add_argument("--rheology", choices=model_families(), default="burgers",
                      help="creep law of the paper's model, or kalantari (the peer model of eq. 14; no --effect)")
     sim.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     sim.add_argument("--effect", action="append", metavar="NAME[=params]",

@@ -5,7 +5,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..data import csvio
-from ..physics.effects import EFFECTS, parse_model
+from ..physics.effects import EFFECTS
+from ..physics.models import parse_model
 from ..utils import json_ready, write_json_atomic
 from .common import UsageError, writable
 
@@ -13,9 +14,9 @@ from .common import UsageError, writable
 def cmd_compare(args):
     """Log-evidence per model and specimen, Bayes factors, PSIS-LOO; JSON with DESIGN §4 keys."""
     from ..inference.compare import compare
-    from ..inference.evidence import LadderSettings
-    from ..inference.reference import MODE_SEARCH, REFERENCED_LADDER
-    from ..inference.sampling import SamplerSettings
+    from ..inference.evidence.ladder import LadderSettings
+    from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
+    from ..inference.samplers.ensemble import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     models = [m.strip() for m in args.models.split(",") if m.strip()]

@@ -19,7 +19,7 @@ def cmd_fit(args):
     """Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen."""
     from ..inference.fit import DesignWarning, fit
     from ..inference.output import save_fit
-    from ..inference.sampling import ConvergenceWarning, SamplerSettings
+    from ..inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     if args.specimen is not None and args.specimen not in data.specimens:
@@ -68,7 +68,7 @@ def _tempered_settings(args):
     """TemperedSettings from the fit command's options (ladders run side by side in processes)."""
     from dataclasses import replace
 
-    from ..inference.tempered import TEMPERED_SETTINGS
+    from ..inference.evidence.tempered import TEMPERED_SETTINGS
 
     for flag, bad in (("--hierarchical", args.hierarchical), ("--resume", args.resume)):
         if bad:
@@ -102,9 +102,9 @@ def _fit_hierarchical(args, data, settings, out):
     """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
     from dataclasses import replace
 
-    from ..inference.hierarchical import SpecimenFitWarning, fit_specimens, joint, two_stage
+    from ..inference.population.routes import SpecimenFitWarning, fit_specimens, joint, two_stage
     from ..inference.output import save_fit, save_population
-    from ..inference.predictive import ForwardTemplate
+    from ..inference.population.predictive import ForwardTemplate
 
     if args.specimen is not None:
         raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
@@ -177,8 +177,8 @@ def cmd_drift(args):
     import xarray as xr
 
     from ..data.sensors import load_sensor
-    from ..inference.population import Population
-    from ..inference.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+    from ..inference.population.model import Population
+    from ..inference.population.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
 
     if args.time <= 0:
         raise UsageError(f"--time must be > 0 s, got {args.time:g}")

@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special, stats
 
+from ..utils import HALF_LOG_2PI
+
 __all__ = ["Distribution", "VOCABULARY", "make_distribution"]
 
-_HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
 
 VOCABULARY = {
     "fixed": ("value",),
@@ -102,15 +103,15 @@ class Distribution:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if self.kind == "normal":
                 z = (x - a["mu"]) / a["sigma"]
-                return -0.5 * z * z - math.log(a["sigma"]) - _HALF_LOG_2PI
+                return -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI
             if self.kind == "lognormal":
                 log_x = np.log(x)
                 z = (log_x - math.log(a["median"])) / a["sigma"]
-                value = -0.5 * z * z - log_x - math.log(a["sigma"]) - _HALF_LOG_2PI
+                value = -0.5 * z * z - log_x - math.log(a["sigma"]) - HALF_LOG_2PI
                 return np.where(x > 0, value, -np.inf)
             if self.kind == "halfnormal":
                 z = x / a["scale"]
-                return np.where(x >= 0, math.log(2.0) - 0.5 * z * z - math.log(a["scale"]) - _HALF_LOG_2PI, -np.inf)
+                return np.where(x >= 0, math.log(2.0) - 0.5 * z * z - math.log(a["scale"]) - HALF_LOG_2PI, -np.inf)
             if self.kind == "gamma":
                 k, r = a["shape"], a["rate"]
                 value = k * math.log(r) + (k - 1.0) * np.log(x) - r * x - special.gammaln(k)
@@ -123,7 +124,7 @@ class Distribution:
             # truncnormal
             z = (x - a["mu"]) / a["sigma"]
             mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr((a["lower"] - a["mu"]) / a["sigma"])
-            return np.where(inside, -0.5 * z * z - math.log(a["sigma"]) - _HALF_LOG_2PI - math.log(mass), -np.inf)
+            return np.where(inside, -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI - math.log(mass), -np.inf)
 
     def sample(self, rng, size=None):
         """Draw from the distribution with the given ``numpy.random.Generator``."""

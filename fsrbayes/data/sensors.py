@@ -11,20 +11,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
-from ..physics.effects import model_parameters
+from ..physics.models import model_parameters
+from ..physics.parameters import PARAMETERS
 from .distributions import make_distribution
 from .prior import JointPrior
 
-__all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory", "CANONICAL_PARAMETERS"]
+__all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory"]
 
-CANONICAL_PARAMETERS = {
-    "A0": "m²", "A1": "m²·Pa^-A2", "A2": "–", "Va": "eV", "Vth": "V", "s0": "m", "Rpar": "Ω",
-    "alpha": "–", "Rc0": "Ω·Pa^alpha", "sigma0": "Pa", "k1": "Pa", "k2": "Pa", "b2": "Pa·s",
-    "inv_b1": "1/(Pa·s)", "psi": "1/(Pa·s^n)", "n": "–", "sigma_rel": "–", "nu": "–",
-    "area_creep": "–", "contact_creep": "–", "plc_psi": "1/(Pa·s^n)", "plc_n": "–", "deg_amp": "–",
-    "deg_onset": "V", "deg_tau": "s", "deg_width": "V", "R0": "Ω",
-}
-"""Every parameter a model file defines, with its unit (DESIGN.md §1)."""
 
 REQUIRED_SENSOR_KEYS = ("name", "description", "area_m2")
 
@@ -142,9 +135,9 @@ def _parse(path, raw):
     params = raw.get("params", {})
     priors_raw = raw.get("priors", {})
     for table, values in (("params", params), ("priors", priors_raw)):
-        unknown = sorted(set(values) - set(CANONICAL_PARAMETERS))
+        unknown = sorted(set(values) - set(PARAMETERS))
         if unknown:
-            raise ValueError(f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(CANONICAL_PARAMETERS)}")
+            raise ValueError(f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(PARAMETERS)}")
     for name, value in params.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"{where}: params.{name} must be a finite number, got {value!r}")

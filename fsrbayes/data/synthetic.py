@@ -28,6 +28,7 @@ import numpy as np
 
 from .._version import __version__
 from ..physics import effects as fx
+from ..physics.parameters import population_scatter
 from ..physics.sensor import current as model_current
 from ..utils import atomic_path
 from .csvio import CreepData, CreepTest, read_csv, write_csv
@@ -39,13 +40,10 @@ __all__ = [
     "noiseless_current", "default_data", "default_truth",
 ]
 
-POPULATION_SCATTER = {
-    "s0": 0.02, "Va": 0.03, "A0": 0.3, "A1": 0.3, "A2": 0.03, "alpha": 0.03, "Rc0": 0.3,
-    "k1": 0.15, "k2": 0.3, "b2": 0.3, "inv_b1": 0.3, "psi": 0.3, "n": 0.1,
-}
-"""Log-scale (sd of log) of the specimen-to-specimen variation of each parameter. The gap
-s0 and barrier Va sit in an exponential: 2-3 % there already spreads the current by ~1.5×,
-as the paper's 16-specimen box plots spread."""
+POPULATION_SCATTER = population_scatter()
+"""Log-scale (sd of log) of the specimen-to-specimen variation of each built-in parameter, from
+the parameter table (:mod:`fsrbayes.physics.parameters`); :func:`draw_specimens` reads the
+table itself, so parameters registered later vary too."""
 
 PAPER_FORCES_N = (1.96, 4.9, 9.8)
 """Section 4.2: the three creep forces."""
@@ -95,7 +93,7 @@ def parse_effect(spec):
     name, _, rest = str(spec).partition("=")
     name = name.strip()
     fx.check_effects([name])
-    values = dict(EFFECT_DEFAULTS[name])
+    values = dict(EFFECT_DEFAULTS.get(name, dict.fromkeys(fx.EFFECTS[name].parameters)))
     if rest:
         parameters = fx.EFFECTS[name].parameters
         items = [rest] if "=" not in rest else rest.split(",")
@@ -128,7 +126,9 @@ def draw_specimens(sensor, n, rng, scatter=1.0):
     out = []
     for _ in range(n):
         params = dict(sensor.params)
-        for name, log_sd in POPULATION_SCATTER.items():
+        for name, log_sd in population_scatter().items():
+            if name not in params:
+                continue
             params[name] = float(params[name] * np.exp(scatter * log_sd * rng.standard_normal()))
         out.append(params)
     return out
@@ -255,7 +255,7 @@ def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, fo
         "fsrbayes_version": __version__, "seed": seed, "sensors": [load_sensor(n).name for n in names],
         "rheology": rheology, "tunneling": tunneling, "effects": list(effect_names), "effect_params": effect_params,
         "noise": {"relative": noise_rel, "amplifier_offset_V": amp_offset_V}, "readout": readout,
-        "population": {"scatter": scatter, "log_sd": POPULATION_SCATTER},
+        "population": {"scatter": scatter, "log_sd": population_scatter()},
         "protocol": {"sensors": protocol, "times_s": times.tolist()},
         "specimens": specimens,
     }

@@ -3,8 +3,8 @@
 ``diagnose(data)`` automates the reasoning of the paper's section 4:
 
 1. fit the base model (default Burgers) to every specimen — a Laplace approximation around the
-   maximum a posteriori point (:mod:`fsrbayes.inference.laplace`), and posterior draws from a
-   short ensemble run started there (:meth:`~fsrbayes.inference.laplace.LaplaceFit.local_draws`);
+   maximum a posteriori point (:mod:`fsrbayes.inference.evidence.laplace`), and posterior draws from a
+   short ensemble run started there (:meth:`~fsrbayes.inference.evidence.laplace.LaplaceFit.local_draws`);
 2. posterior predictive checks per creep test and per specimen
    (:mod:`fsrbayes.discrepancy.checks`): drift(3600 s), early- vs late-time residuals, trends
    over ln t, over stress and over voltage;
@@ -29,12 +29,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..data.sensors import load_sensor
-from ..inference.fit import _select
-from ..inference.laplace import laplace_fit
+from ..inference.evidence.laplace import laplace_fit
 from ..inference.parallel import map_jobs
 from ..inference.posterior import LogPosterior
-from ..inference.sampling import single_threaded_blas
-from ..physics.effects import EFFECTS, check_effects, parse_model
+from ..inference.likelihood import SpecimenData
+from ..inference.parallel import single_threaded_blas
+from ..physics.effects import EFFECTS, check_effects
+from ..physics.models import model_components, parse_model, register_components
 from .checks import (
     DRIFT_TIME_S,
     SPECIMEN_STATISTICS,
@@ -71,8 +72,11 @@ class SpecimenDiagnosis:
 
 def _diagnose_one(job):
     data, specimen, options = job
+    for effect in options["effects"]:  # a user's own effects, in a fresh worker
+        register_components(options["components"][effect])
+    register_components(options["components"][options["base"]])
     rng = np.random.default_rng(options["seed"])
-    packed = _select(data, specimen)
+    packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(options["sensor"] or packed.sensor)
     kwargs = {"tunneling": options["tunneling"], "likelihood": options["likelihood"]}
     with single_threaded_blas():
@@ -134,7 +138,7 @@ def _findings(checks, alpha=0.01):
             "loo_pit_max_pareto_k": float(max(c.max_pareto_k for c in checks))}
 
 
-def _misfit_by(checks, attribute):
+def misfit_by(checks, attribute):
     """Mean observed − predicted drift(3600 s) and mean z per level of voltage or stress."""
     values = np.concatenate([getattr(c, attribute) for c in checks])
     misfit = np.concatenate([c.observed_drift - np.median(c.replicated_drift, axis=0) for c in checks])
@@ -200,14 +204,14 @@ class Diagnosis:
             "drift_time_s": DRIFT_TIME_S, "specimens": [d.specimen for d in self.specimens],
             "n_tests": int(sum(len(c.test_keys) for c in before)),
             "candidates": self.candidates, "findings_before": self.findings,
-            "misfit_by_voltage_before": _misfit_by(before, "voltage_V"),
-            "misfit_by_stress_before": _misfit_by(before, "stress_Pa"), "seconds": self.seconds,
+            "misfit_by_voltage_before": misfit_by(before, "voltage_V"),
+            "misfit_by_stress_before": misfit_by(before, "stress_Pa"), "seconds": self.seconds,
         }
         if self.effect is not None:
             after = self.checks(self.effect)
             out["findings_after"] = self.findings_after
-            out["misfit_by_voltage_after"] = _misfit_by(after, "voltage_V")
-            out["misfit_by_stress_after"] = _misfit_by(after, "stress_Pa")
+            out["misfit_by_voltage_after"] = misfit_by(after, "voltage_V")
+            out["misfit_by_stress_after"] = misfit_by(after, "stress_Pa")
         return out
 
 
@@ -258,7 +262,9 @@ def diagnose(data, base="burgers", *, effects=None, specimens=None, sensor=None,
         raise ValueError(f"threshold must be > 0 (a ln Bayes factor), got {threshold}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     options = {"base": base, "effects": effects, "sensor": sensor, "tunneling": tunneling, "likelihood": likelihood,
-               "n_draws": int(n_draws), "n_starts": int(n_starts)}
+               "n_draws": int(n_draws), "n_starts": int(n_starts),
+               "components": {name: model_components(name if name == base else f"{base}+{name}")
+                              for name in (base, *effects)}}
     jobs = [(data.select(specimen=s), s, dict(options, seed=[seed, k])) for k, s in enumerate(specimens)]
     per_specimen = map_jobs(_diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes)
     gap_before = gap([d.base_checks for d in per_specimen])

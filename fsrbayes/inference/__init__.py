@@ -1,6 +1,44 @@
-"""Inference layer: likelihood, posterior, emcee sampling, diagnostics."""
+"""Inference: from creep data to posteriors, evidences and population predictions.
 
+What a fit of one specimen is made of sits at this level — the data packed for the likelihood
+(:mod:`.likelihood`), the target (:mod:`.posterior`), the optimisers that find its modes
+(:mod:`.optimize`), the fit that orchestrates them (:mod:`.fit`), model comparison
+(:mod:`.compare`), ArviZ output (:mod:`.output`), parallel jobs (:mod:`.parallel`) and the
+user-facing simulation-based calibration (:mod:`.calibration`). Three rooms hold the rest:
+
+- :mod:`.samplers` — emcee ensembles run to shown convergence, moves, transport maps;
+- :mod:`.evidence` — log Z estimators, each returning an :class:`EvidenceEstimate`;
+- :mod:`.population` — hierarchical models and new-specimen predictions.
+
+The entry points themselves are :func:`fsrbayes.fit` and :func:`fsrbayes.compare` (the
+modules :mod:`.fit` and :mod:`.compare` keep their names here, so they are not re-exported).
+
+Inside this layer imports flow one way: parallel, likelihood, posterior → samplers →
+optimize → evidence → fit → population, compare, output, calibration.
+"""
+
+from .compare import KASS_RAFTERY, strength
+from .evidence import EvidenceEstimate
+from .fit import FIT_SETTINGS, DesignWarning, FitResult
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
+from .output import save_fit, save_population, to_datatree
 from .posterior import LogPosterior
+from .samplers import ConvergenceWarning, SamplerSettings
 
-__all__ = ["LIKELIHOODS", "SpecimenData", "log_likelihood_pointwise", "LogPosterior"]
+__all__ = [
+    "FIT_SETTINGS",
+    "KASS_RAFTERY",
+    "LIKELIHOODS",
+    "ConvergenceWarning",
+    "DesignWarning",
+    "EvidenceEstimate",
+    "FitResult",
+    "LogPosterior",
+    "SamplerSettings",
+    "SpecimenData",
+    "log_likelihood_pointwise",
+    "save_fit",
+    "save_population",
+    "strength",
+    "to_datatree",
+]

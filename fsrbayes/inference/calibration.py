@@ -43,12 +43,13 @@ from .fit import fit
 from .likelihood import SpecimenData
 from .parallel import map_jobs
 from .posterior import LogPosterior
-from .evidence import LadderSettings
-from .reference import PILOT_SETTINGS, ModeSearch
-from .sampling import ConvergenceWarning, SamplerSettings, single_threaded_blas
-from .tempered import TemperedSettings
+from .evidence.ladder import LadderSettings
+from .evidence.referenced import PILOT_SETTINGS, ModeSearch
+from .samplers.ensemble import ConvergenceWarning, SamplerSettings
+from .parallel import single_threaded_blas
+from .evidence.tempered import TemperedSettings
 
-__all__ = ["SBCDesign", "SBCResult", "SBC_SETTINGS", "SBC_TEMPERED_SETTINGS", "sbc_ranks", "calibrate_specimen", "format_sbc", "sbc_markdown", "load_sbc"]
+__all__ = ["SBCDesign", "SBCResult", "SBC_SETTINGS", "SBC_TEMPERED_SETTINGS", "sbc_ranks", "calibrate_specimen", "format_sbc", "load_sbc"]
 
 DRIFT_TIME_S = 3600.0
 LEVELS = (0.5, 0.8, 0.9)
@@ -273,7 +274,7 @@ def calibrate_specimen(n_reps=100, *, design=SBCDesign(), settings=SBC_SETTINGS,
     design : SBCDesign
     settings : SamplerSettings or TemperedSettings
         Sampler settings of every fit (fixed length recommended: ``min_steps = max_steps``);
-        :class:`~fsrbayes.inference.tempered.TemperedSettings` (e.g. :data:`SBC_TEMPERED_SETTINGS`)
+        :class:`~fsrbayes.inference.evidence.tempered.TemperedSettings` (e.g. :data:`SBC_TEMPERED_SETTINGS`)
         fit with the tempered sampler.
     n_draws : int
         L, draws per replication, thinned evenly over the kept chains of all ensembles (keep it
@@ -323,33 +324,6 @@ def format_sbc(result, bins=10, alpha=0.01):
                      f"{sum(r['redrawn'] for r in reps)} prior draws redrawn (no valid current)")
     lines.append("calibrated: no uniformity test below alpha/(2Q) and coverage within binomial error"
                  if calibrated else "NOT calibrated: " + "; ".join(failures))
-    return "\n".join(lines)
-
-
-def sbc_markdown(result, bins=10, alpha=0.01):
-    """The rank histograms as a Markdown table (for VALIDATION.md): counts per bin drawn as a bar
-    of block characters (▁ empty … █ at the 99 % band's top), the counts, p-values, coverage."""
-    counts = result.histogram(bins)
-    low, high = result.band(bins)
-    p = result.uniformity(bins)
-    coverage = result.coverage()
-    blocks = "▁▂▃▄▅▆▇█"
-    lines = [f"Ranks of {result.n_reps} replications in {bins} bins of {(result.n_draws + 1) // bins} ranks; a "
-             f"calibrated bin holds {result.n_reps / bins:g} on average and stays within [{low}, {high}] with 99 % "
-             "probability (Binomial(N, 1/B)). Bins outside that band are marked *.", "",
-             "| quantity | rank histogram | counts per bin | p χ² | p KS | cover 50 % | 80 % | 90 % |",
-             "|---|---|---|---|---|---|---|---|"]
-    for q, name in enumerate(result.names):
-        bar = "".join(blocks[min(len(blocks) - 1, int(c * (len(blocks) - 1) / high))] for c in counts[:, q])
-        cells = " ".join(f"{c}{'*' if not low <= c <= high else ''}" for c in counts[:, q])
-        cover = " | ".join(f"{coverage[lv]['share'][q]:.2f}" for lv in LEVELS)
-        lines.append(f"| {name} | `{bar}` | {cells} | {p['chi2'][q]:.3f} | {p['ks'][q]:.3f} | {cover} |")
-    expected = " | ".join(f"{coverage[lv]['expected']:.2f}" for lv in LEVELS)
-    lines.append(f"| *expected* | | {result.n_reps / bins:g} each | | | {expected} |")
-    calibrated, failures = result.verdict(alpha, bins)
-    lines += ["", "Verdict: " + ("calibrated (no p-value below α/(2Q) = "
-                                  f"{alpha / (2 * len(result.names)):.2g}, every coverage within its binomial range)"
-                                  if calibrated else "NOT calibrated: " + "; ".join(failures))]
     return "\n".join(lines)
 
 

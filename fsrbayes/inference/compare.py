@@ -15,11 +15,11 @@ import numpy as np
 
 from ..data.sensors import load_sensor
 from ..utils import json_ready
-from .evidence import LadderSettings, log_evidence
-from .fit import _select
+from .evidence.ladder import LadderSettings, log_evidence
 from .posterior import LogPosterior
-from .reference import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
-from .savage_dickey import savage_dickey_posterior
+from .likelihood import SpecimenData
+from .evidence.referenced import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
+from .evidence.savage_dickey import savage_dickey_posterior
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
 
@@ -61,7 +61,8 @@ cross) or the prior (thousands of nats on creep data; kept for the closed-form v
 
 
 def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, tunneling="smooth",
-            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None, search=None):
+            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None, search=None,
+            estimator=None):
     """Compare creep models on every (or the chosen) specimen by log-evidence.
 
     Parameters
@@ -73,17 +74,21 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
     specimens : sequence of str, optional
         Default: all specimens in the data.
     settings : LadderSettings, optional
-        Default: :data:`~fsrbayes.inference.reference.REFERENCED_LADDER` on the reference path,
+        Default: :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER` on the reference path,
         ``LadderSettings()`` on the prior path.
     seed : int
     path : {"reference", "prior"}
         The ladder's β = 0 end: a Student-t reference in transport-map coordinates fitted to a
-        pilot run (:mod:`~fsrbayes.inference.reference`), or the prior.
+        pilot run (:mod:`~fsrbayes.inference.evidence.referenced`), or the prior.
     pilot : SamplerSettings, optional
-        The reference path's pilot run (default :data:`~fsrbayes.inference.reference.PILOT_SETTINGS`).
+        The reference path's pilot run (default :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
     search : ModeSearch, optional
         The reference path's search for separate posterior regions, run once per replicate
-        ladder (default :data:`~fsrbayes.inference.reference.MODE_SEARCH`, 12 optimiser starts).
+        ladder (default :data:`~fsrbayes.inference.evidence.referenced.MODE_SEARCH`, 12 optimiser starts).
+    estimator : callable, optional
+        ``estimator(posterior, seed)`` → :class:`~fsrbayes.inference.evidence.EvidenceEstimate`,
+        any evidence estimator; replaces the ladder chosen by ``path``/``settings``. LOO and the
+        Savage–Dickey check need the estimate's ``posterior_draws`` and are left out without them.
 
     Returns
     -------
@@ -106,25 +111,24 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
     for m_index, model in enumerate(models):
         entry = {"per_specimen": {}, "loo": {}}
         for s_index, specimen in enumerate(specimens):
-            packed = _select(data, specimen)
+            packed = SpecimenData.select(data, specimen)
             chosen = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
             posterior = LogPosterior.for_sensor(packed, chosen, model=model, tunneling=tunneling,
                                                 likelihood=likelihood)
             job_seed = [seed, m_index, s_index]
-            result = (referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS,
-                                              search=search or MODE_SEARCH)
-                      if path == "reference"
-                      else log_evidence(posterior, settings, seed=job_seed))
-            entry["per_specimen"][specimen] = {
-                "log_evidence": result.log_z, "log_evidence_err": result.error, "bridge": result.bridge,
-                "ti_corrected": result.ti_corrected, "sigma_batch": result.sigma_batch,
-                "sigma_replicates": result.sigma_replicates, "sigma_disc": result.sigma_disc,
-                "sigma_pilot": result.sigma_pilot,
-                "reference_regions": [len(group) for group in result.settings.get("reference_components", [])],
-                "min_swap_acceptance": float(result.swap_acceptance.min()), "seconds": result.seconds}
+            if estimator is not None:
+                result = estimator(posterior, job_seed)
+            elif path == "reference":
+                result = referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS,
+                                                 search=search or MODE_SEARCH).estimate()
+            else:
+                result = log_evidence(posterior, settings, seed=job_seed).estimate()
+            entry["per_specimen"][specimen] = {"log_evidence": result.log_z, "log_evidence_err": result.error,
+                                               **result.details}
+            if result.posterior_draws is None:
+                continue
             if with_loo:
-                entry["loo"][specimen] = _loo(posterior, result.posterior_draws.reshape(
-                    settings.replicates, -1, posterior.ndim))
+                entry["loo"][specimen] = _loo(posterior, result.posterior_draws)
             if model == "burgers" and "zener" in models:
                 burgers_draws[specimen] = (posterior, result.posterior_draws)
         values = [v["log_evidence"] for v in entry["per_specimen"].values()]

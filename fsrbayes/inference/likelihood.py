@@ -16,10 +16,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special
 
+from ..data.csvio import CreepData
+from ..utils import HALF_LOG_2PI
+
 __all__ = ["LIKELIHOODS", "SpecimenData", "log_likelihood_pointwise"]
 
 LIKELIHOODS = ("gaussian", "student")
-_HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,32 @@ class SpecimenData:
         return cls(tests[0].specimen, tests[0].sensor, np.array([t.voltage_V for t in tests]),
                    np.array([t.stress_Pa for t in tests]), time, logc, mask, tuple(t.key for t in tests))
 
+    @classmethod
+    def select(cls, data, specimen=None):
+        """One specimen's tests of ``data`` packed; ``data`` may already be a SpecimenData.
+
+        Parameters
+        ----------
+        data : CreepData or SpecimenData
+        specimen : str, optional
+            Needed when the data hold several specimens.
+
+        Returns
+        -------
+        SpecimenData
+        """
+        if isinstance(data, SpecimenData):
+            return data
+        if not isinstance(data, CreepData):
+            raise TypeError(f"data must be CreepData (from read_csv or simulate) or SpecimenData, "
+                            f"got {type(data).__name__}")
+        if specimen is None:
+            if len(data.specimens) != 1:
+                raise ValueError(f"the data hold {len(data.specimens)} specimens; choose one with specimen=... "
+                                 f"(e.g. {data.specimens[0]!r})")
+            specimen = data.specimens[0]
+        return cls.from_tests(data.select(specimen=specimen).tests)
+
     @property
     def n_tests(self):
         return self.voltage_V.size
@@ -114,7 +142,7 @@ def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian
     y = data.log_current[data.mask]
     resid = (y[None, :] - log_model[:, data.mask]) / sigma
     if likelihood == "gaussian":
-        value = -0.5 * resid**2 - np.log(sigma) - _HALF_LOG_2PI - y
+        value = -0.5 * resid**2 - np.log(sigma) - HALF_LOG_2PI - y
     else:
         nu = np.asarray(nu, dtype=float)[:, None]
         value = (special.gammaln(0.5 * (nu + 1)) - special.gammaln(0.5 * nu) - 0.5 * np.log(nu * np.pi)

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..data.csvio import observed_drift
 from ..utils import atomic_path, write_json_atomic
-from .sampling import even_index
+from .samplers.ensemble import even_index
 
 __all__ = ["to_datatree", "summary", "save_fit", "population_datatree", "save_population", "DRIFT_TIME_S"]
 
@@ -139,7 +139,7 @@ def save_fit(result, folder, *, stem="posterior"):
 
 
 def population_datatree(result, template, observed, *, noise_rel=None, max_draws=4000):
-    """ArviZ DataTree of a :class:`~fsrbayes.inference.hierarchical.HierarchicalResult`.
+    """ArviZ DataTree of a :class:`~fsrbayes.inference.population.routes.HierarchicalResult`.
 
     Groups: ``posterior`` (hyper-parameters mu_<p>, omega_<p>; chain = ensemble),
     ``constant_data`` (every specimen's observed drift(3600 s) per test with its voltage and

@@ -14,7 +14,7 @@ import time
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 
-__all__ = ["map_jobs", "JobFailure", "JobError", "fork_pool"]
+__all__ = ["map_jobs", "JobFailure", "JobError", "fork_pool", "single_threaded_blas"]
 
 
 @dataclass(frozen=True)
@@ -191,3 +191,15 @@ def map_jobs(function, jobs, *, executor=None, scheduler=None, processes=None, o
     if failures and errors == "raise":
         raise JobError(failures) from causes[0]
     return results
+
+
+def single_threaded_blas():
+    """Context in which BLAS runs on one thread.
+
+    Walker batches make small matrices (e.g. 24 × 22 by 22 × 2000 in the two-stage target):
+    OpenBLAS's threads cost 12× the product itself there (0.92 ms against 0.078 ms per call on
+    this machine), and worse when two sampling processes share two cores.
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")

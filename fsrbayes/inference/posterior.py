@@ -8,7 +8,8 @@ parameters of shape (W, 1, 1) against tests × times of shape (C, T).
 import numpy as np
 
 from ..data.prior import JointPrior
-from ..physics.effects import model_parameters, parse_model
+from ..physics.effects import resolve_effects
+from ..physics.models import model_family, model_parameters, parse_model
 from ..physics.sensor import solve_current
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 
@@ -83,6 +84,10 @@ class LogPosterior(PriorScaledTarget):
         if not isinstance(prior, JointPrior):
             raise TypeError(f"prior must be a JointPrior, got {type(prior).__name__}")
         self.rheology, self.effects = parse_model(model)
+        # The law and effect objects themselves, not their names: they travel with the posterior
+        # to worker processes and dask workers, whose registries may not hold them.
+        self.family = model_family(self.rheology)
+        self.effect_objects = resolve_effects(self.effects)
         self.model = model
         self.tunneling = tunneling
         self.likelihood = likelihood
@@ -126,7 +131,7 @@ class LogPosterior(PriorScaledTarget):
         params = {k: v[:, None, None] for k, v in self.parameters(x).items()}
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
         solution = solve_current(params, self.data.voltage_V[:, None], self.data.stress_Pa[:, None], time,
-                                 rheology=self.rheology, tunneling=self.tunneling, effects=self.effects)
+                                 rheology=self.family, tunneling=self.tunneling, effects=self.effect_objects)
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)
         return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)

@@ -1,5 +1,14 @@
 """The catalogue of missing effects the paper names (section 4), as model extensions.
 
+Every effect is an :class:`Effect` object in the :data:`EFFECTS` registry. The sensor model
+loops over a model's effects and calls their hooks — extra creep strain (after a step or under
+any stress history), the tunneling area and series resistance at the momentary creep strain,
+and a factor on the bulk conduction at the momentary V_FSR and time — so a new effect is one
+subclass and one :func:`register_effect` call, with its parameters in the parameter table
+(:mod:`fsrbayes.physics.parameters`) and its priors in the sensor files. Effects are plain
+picklable objects: a model's effects travel with its posterior to worker processes and dask
+workers.
+
 Each effect adds parameters to the canonical set and is off at its null value, so the base
 model is nested inside every extension (needed for evidence and Savage–Dickey). The creep
 strain beyond the elastic step, Δε(t) = ε(t) − σ/k1, drives the two creep effects, so they
@@ -27,23 +36,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .rheology import RHEOLOGIES
+from .parameters import PARAMETERS, Parameter, register_parameter
+from .rheology import NUTTING
 
-__all__ = ["Effect", "EFFECTS", "MODEL_FAMILIES", "CREEP_LAW", "parse_model", "check_effects", "model_parameters"]
+__all__ = ["EFFECTS", "Effect", "check_effects", "register_effect", "resolve_effects"]
 
 
 @dataclass(frozen=True)
 class Effect:
-    """One catalogue effect.
+    """A model extension that is off at its null parameter values.
+
+    Subclasses override the hooks they need; the defaults do nothing (None: no contribution).
 
     Attributes
     ----------
     name : str
-        Stable name (``"area-creep"``, …).
+        Stable name (``"area-creep"``, …), used in model names (``burgers+area-creep``).
     parameters : tuple of str
-        The canonical parameters it adds.
+        The canonical parameters it adds (each in the parameter table).
     null : dict
-        Parameter values at which it is switched off.
+        Parameter values at which it is switched off (the base model is nested there).
     summary : str
         One line for reports.
     """
@@ -53,119 +65,146 @@ class Effect:
     null: dict
     summary: str
 
+    def extra_strain(self, params, stress, time):
+        """Creep strain added after a stress step of ``stress`` at t = 0 (None: none)."""
+        return None
 
-EFFECTS = {
-    "area-creep": Effect("area-creep", ("area_creep",), {"area_creep": 0.0},
-                         "the effective tunneling area creeps with the polymer"),
-    "contact-creep": Effect("contact-creep", ("contact_creep",), {"contact_creep": 0.0},
-                            "the contact resistance creeps as contact paths form"),
-    "power-law-creep": Effect("power-law-creep", ("plc_psi", "plc_n"), {"plc_psi": 0.0},
-                              "creep kinetics with a power-law (Nutting) term"),
-    "voltage-degradation": Effect("voltage-degradation", ("deg_amp", "deg_onset", "deg_tau", "deg_width"),
-                                  {"deg_amp": 0.0}, "conduction paths are lost above an onset voltage"),
-    "offset-stress": Effect("offset-stress", ("sigma0",), {"sigma0": 0.0},
-                            "a preload stress in the contact resistance"),
-}
-"""Name → :class:`Effect`, the catalogue of DESIGN.md §1."""
+    def extra_strain_history(self, params, history, time):
+        """Creep strain added under a :class:`~fsrbayes.physics.loading.StressHistory` (None: none)."""
+        return None
+
+    def adjust_state(self, params, area, series, creep_strain):
+        """Tunneling area and series resistance given the creep strain Δε = ε − σ/k1."""
+        return area, series
+
+    def current_factor(self, params, voltage, time):
+        """Factor on the bulk conduction at sourcing voltage V_FSR and time t (None: none)."""
+        return None
+
+
+class AreaCreep(Effect):
+    """A(t) = A(σ)·exp(area_creep·Δε(t)); sign free, the paper expects < 0 (section 4.3)."""
+
+    def adjust_state(self, params, area, series, creep_strain):
+        return area * np.exp(params["area_creep"] * creep_strain), series
+
+
+class ContactCreep(Effect):
+    """Rc(t) = Rc(σ)·exp(−contact_creep·Δε(t)); > 0: more contact paths form under load."""
+
+    def adjust_state(self, params, area, series, creep_strain):
+        return area, series * np.exp(-params["contact_creep"] * creep_strain)
+
+
+class PowerLawCreep(Effect):
+    """ε(t) gains ψ·σ·tⁿ (Nutting/Findley kinetics, eq. 13) beside the base creep law."""
+
+    def extra_strain(self, params, stress, time):
+        t = np.maximum(np.asarray(time, dtype=float), 0.0)
+        return params["plc_psi"] * np.asarray(stress, dtype=float) * t ** params["plc_n"]
+
+    def extra_strain_history(self, params, history, time):
+        power_law = {"k1": np.inf, "psi": params["plc_psi"], "n": params["plc_n"]}
+        return NUTTING.strain_history(history, time, power_law)
+
+
+class VoltageDegradation(Effect):
+    """I(t)·exp(−deg_amp·S(V)·(1 − e^(−t/τ))), S = clip((V − deg_onset)/deg_width, 0, 1).
+
+    Exactly 0 below the onset. A loss of a fraction of the parallel conduction paths: for a
+    bundle of identical paths at a fixed V_FSR the current scales with the number of paths.
+    """
+
+    def current_factor(self, params, voltage, time):
+        v = np.abs(np.asarray(voltage, dtype=float))
+        switch = np.clip((v - params["deg_onset"]) / params["deg_width"], 0.0, 1.0)
+        growth = -np.expm1(-np.maximum(np.asarray(time, dtype=float), 0.0) / params["deg_tau"])
+        return np.exp(-params["deg_amp"] * switch * growth)
+
+
+class OffsetStress(Effect):
+    """Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
+
+    The contact law reads ``sigma0`` itself (0 without the effect), so no hook is needed: the
+    effect only makes σ0 a model parameter."""
+
+
+EFFECTS = {}
+"""Name → :class:`Effect`, every effect known (the catalogue and registered ones)."""
+
+
+def register_effect(effect, *, replace=False):
+    """Add an :class:`Effect` to :data:`EFFECTS`; returns it.
+
+    Its parameters must be in the parameter table, and its null values must name its own
+    parameters.
+    """
+    if not isinstance(effect, Effect):
+        raise TypeError(f"register_effect takes an Effect, got {type(effect).__name__}")
+    if effect.name in EFFECTS and not replace:
+        raise ValueError(f"an effect named {effect.name!r} is already registered (replace=True to replace it)")
+    if "+" in effect.name or not effect.name:
+        raise ValueError(f"an effect's name must be non-empty and hold no '+', got {effect.name!r}")
+    unknown = [p for p in effect.parameters if p not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"effect {effect.name!r}: parameter(s) {unknown} are not in the parameter table; "
+                         "register them first with fsrbayes.physics.parameters.register_parameter")
+    stray = sorted(set(effect.null) - set(effect.parameters))
+    if stray:
+        raise ValueError(f"effect {effect.name!r}: null values for {stray}, which are not its parameters")
+    EFFECTS[effect.name] = effect
+    return effect
+
+
+for _parameter in (
+    Parameter("area_creep", "–", "effect", None, "area creep per unit creep strain"),
+    Parameter("contact_creep", "–", "effect", None, "contact-resistance creep per unit creep strain"),
+    Parameter("plc_psi", "1/(Pa·s^n)", "effect", None, "power-law creep coefficient"),
+    Parameter("plc_n", "–", "effect", None, "power-law creep exponent"),
+    Parameter("deg_amp", "–", "effect", None, "log-current lost to degradation at full switch-on"),
+    Parameter("deg_onset", "V", "effect", None, "degradation onset voltage"),
+    Parameter("deg_tau", "s", "effect", None, "degradation time constant"),
+    Parameter("deg_width", "V", "effect", None, "voltage over which degradation switches on"),
+    Parameter("sigma0", "Pa", "effect", None, "preload stress in the contact resistance"),
+):
+    register_parameter(_parameter)
+
+for _effect in (
+    AreaCreep("area-creep", ("area_creep",), {"area_creep": 0.0}, "the effective tunneling area creeps with the polymer"),
+    ContactCreep("contact-creep", ("contact_creep",), {"contact_creep": 0.0},
+                 "the contact resistance creeps as contact paths form"),
+    PowerLawCreep("power-law-creep", ("plc_psi", "plc_n"), {"plc_psi": 0.0},
+                  "creep kinetics with a power-law (Nutting) term"),
+    VoltageDegradation("voltage-degradation", ("deg_amp", "deg_onset", "deg_tau", "deg_width"), {"deg_amp": 0.0},
+                       "conduction paths are lost above an onset voltage"),
+    OffsetStress("offset-stress", ("sigma0",), {"sigma0": 0.0}, "a preload stress in the contact resistance"),
+):
+    register_effect(_effect)
+
+
+def resolve_effects(effects):
+    """Effects given by name or as :class:`Effect` objects, as a tuple of objects.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name or an effect listed twice.
+    """
+    resolved = []
+    for effect in effects:
+        if isinstance(effect, Effect):
+            resolved.append(effect)
+        elif effect in EFFECTS:
+            resolved.append(EFFECTS[effect])
+        else:
+            raise ValueError(f"unknown effect(s) {[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
+                             f" expected names from {sorted(EFFECTS)}")
+    names = [e.name for e in resolved]
+    if len(set(names)) != len(names):
+        raise ValueError(f"effect listed twice in {names}")
+    return tuple(resolved)
 
 
 def check_effects(effects):
-    """Validate a sequence of effect names; return them as a tuple."""
-    effects = tuple(effects)
-    unknown = [e for e in effects if e not in EFFECTS]
-    if unknown:
-        raise ValueError(f"unknown effect(s) {unknown}: expected names from {sorted(EFFECTS)}")
-    if len(set(effects)) != len(effects):
-        raise ValueError(f"effect listed twice in {list(effects)}")
-    return effects
-
-
-MODEL_FAMILIES = RHEOLOGIES + ("kalantari",)
-"""First terms of a model name: the paper's circuit with a creep law of the gap, or the peer
-model of Kalantari et al. (eq. 14: ohmic bulk, Zener creep, Hertzian contact)."""
-CREEP_LAW = {"burgers": "burgers", "zener": "zener", "nutting": "nutting", "kalantari": "zener"}
-"""The creep law each model family uses for the strain ε(t)."""
-
-
-def parse_model(model):
-    """Split a model name such as ``"burgers+area-creep"`` into (family, effects).
-
-    Parameters
-    ----------
-    model : str
-        A rheology of the paper's model (``burgers``, ``zener``, ``nutting``) optionally followed
-        by ``+effect`` terms, or ``kalantari`` (the peer model of eq. 14, which takes no effects:
-        the catalogue extends the paper's circuit).
-
-    Returns
-    -------
-    tuple
-        ``(rheology, effects)`` with effects a tuple of catalogue names.
-    """
-    parts = [p.strip() for p in str(model).split("+")]
-    rheology, effects = parts[0].lower(), parts[1:]
-    if rheology not in MODEL_FAMILIES:
-        raise ValueError(f"model {model!r}: the first term must be one of {MODEL_FAMILIES}, got {rheology!r}")
-    if rheology == "kalantari" and effects:
-        raise ValueError(f"model {model!r}: the Kalantari et al. model (eq. 14) takes no +effect terms; "
-                         f"the effect catalogue extends the paper's model ({', '.join(RHEOLOGIES)})")
-    return rheology, check_effects(effects)
-
-
-def extra_strain(params, effects, stress, time):
-    """The power-law creep term ψ·σ·tⁿ for a stress step (0 without the effect)."""
-    if "power-law-creep" not in effects:
-        return 0.0
-    t = np.maximum(np.asarray(time, dtype=float), 0.0)
-    return params["plc_psi"] * np.asarray(stress, dtype=float) * t ** params["plc_n"]
-
-
-def adjust_state(params, effects, area, series, creep_strain):
-    """Area and series resistance with the creep effects applied (Δε = ``creep_strain``)."""
-    if "area-creep" in effects:
-        area = area * np.exp(params["area_creep"] * creep_strain)
-    if "contact-creep" in effects:
-        series = series * np.exp(-params["contact_creep"] * creep_strain)
-    return area, series
-
-
-def degradation_factor(params, effects, voltage, time):
-    """Multiplier of the current for ``voltage-degradation`` (1 without the effect)."""
-    if "voltage-degradation" not in effects:
-        return 1.0
-    v = np.abs(np.asarray(voltage, dtype=float))
-    switch = np.clip((v - params["deg_onset"]) / params["deg_width"], 0.0, 1.0)
-    growth = -np.expm1(-np.maximum(np.asarray(time, dtype=float), 0.0) / params["deg_tau"])
-    return np.exp(-params["deg_amp"] * switch * growth)
-
-
-BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0")
-"""Parameters of the tunneling and contact laws every model uses (Vth: paper law only)."""
-RHEOLOGY_PARAMETERS = {"burgers": ("k1", "k2", "b2", "inv_b1"), "zener": ("k1", "k2", "b2"), "nutting": ("k1", "psi", "n")}
-"""Parameters of each creep law."""
-KALANTARI_PARAMETERS = ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2")
-"""Kalantari et al.'s eq. 14 in the canonical names: bulk resistance at rest R0, rest gap s0
-(their D·[(π/6θ)^(1/3) − 1]) and barrier Va, the Hertzian contact 2·Rc0·σ^(−1/2) (their
-(ρ1 + ρ2)/2·sqrt(πH/F)) and the Zener element E0, E1, μ1 = k1, k2, b2."""
-
-
-def model_parameters(model="burgers"):
-    """Canonical parameters a model uses, in a stable order (base, rheology, effects).
-
-    Parameters
-    ----------
-    model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally with ``+effect`` terms, or
-        ``"kalantari"``.
-
-    Returns
-    -------
-    tuple of str
-    """
-    rheology, effects = parse_model(model)
-    if rheology == "kalantari":
-        return KALANTARI_PARAMETERS
-    names = list(BASE_PARAMETERS) + list(RHEOLOGY_PARAMETERS[rheology])
-    for effect in effects:
-        names += [p for p in EFFECTS[effect].parameters if p not in names]
-    return tuple(names)
+    """Validate a sequence of effect names (or objects); return their names as a tuple."""
+    return tuple(e.name for e in resolve_effects(effects))

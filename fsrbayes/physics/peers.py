@@ -15,9 +15,12 @@ Kalantari et al. (ref. 22 of the paper).
 import numpy as np
 
 from .constants import KAPPA
+from .contact import contact_resistance
 from .rheology import burgers_compliance
+from .solver import INVALID, OHMIC, BulkSolution
 
-__all__ = ["rest_gap", "zhang_resistance_ratio", "kalantari_bulk_resistance", "kalantari_resistance", "kalantari_current"]
+__all__ = ["rest_gap", "zhang_resistance_ratio", "kalantari_bulk_resistance", "kalantari_resistance", "kalantari_current",
+           "kalantari_solution"]
 
 
 def rest_gap(diameter, volume_fraction):
@@ -129,3 +132,28 @@ def kalantari_current(voltage, t, force, sensor_area, **kwargs):
     return np.asarray(voltage, dtype=float) / kalantari_resistance(t, force, sensor_area, **kwargs)
 
 
+def kalantari_solution(params, voltage, stress, strain, extra_series=0.0):
+    """Kalantari et al.'s circuit (eq. 14) in the canonical names, as a :class:`BulkSolution`.
+
+    R_total = 2·Rc0·σ^(−1/2) + R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε) and I = V/R_total: the contact
+    term is eq. 5 with alpha = ½ (their (ρ1 + ρ2)/2·sqrt(πH/F) = 2·Rc0·σ^(−1/2) with
+    Rc0 = (ρ1 + ρ2)/4·sqrt(πH/A_FSR)), the bulk term Simmons' voltage-independent law with the
+    rest gap s0 (their D·[(π/6θ)^(1/3) − 1]); ε is the Zener strain (k1, k2, b2 = E0, E1, μ1).
+    Ohmic, so the drift does not depend on the voltage — what the paper argues against
+    (section 3.3). Invalid where the gap closes (ε ≥ 1).
+
+    References
+    ----------
+    Paper eq. (14); Kalantari et al. (ref. 22 of the paper).
+    """
+    voltage, stress, strain = (np.asarray(a, dtype=float) for a in (voltage, stress, strain))
+    series = 2.0 * contact_resistance(stress, params["Rc0"], 0.5) + extra_series
+    with np.errstate(invalid="ignore", over="ignore"):
+        bulk = kalantari_bulk_resistance(strain, params["R0"], params["s0"], params["Va"])
+        total = series + bulk
+        valid = (strain < 1.0) & np.isfinite(total) & (total > 0) & np.isfinite(voltage)
+        current = np.where(valid, voltage / np.where(valid, total, 1.0), np.nan)
+    shape = current.shape
+    return BulkSolution(current=current, v_bulk=np.broadcast_to(current * bulk, shape).copy(),
+                        valid=np.broadcast_to(valid, shape).copy(), at_jump=np.zeros(shape, dtype=bool),
+                        regime=np.where(valid, OHMIC, INVALID).astype(np.int8), iterations=0)

@@ -22,10 +22,18 @@ Paredes-Madrid et al. 2017, eqs. (13), (15)–(17); Findley, Lai & Onaran, *Cree
 Relaxation of Nonlinear Viscoelastic Materials* (1976), ch. 5 (Burgers model, superposition).
 """
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
+from .parameters import PARAMETERS
+
 __all__ = [
-    "RHEOLOGIES",
+    "CREEP_LAWS",
+    "CreepLaw",
+    "creep_law",
+    "register_creep_law",
     "burgers_compliance",
     "burgers_ramp_compliance",
     "nutting_compliance",
@@ -36,9 +44,6 @@ __all__ = [
     "strain_history",
     "fluidity",
 ]
-
-RHEOLOGIES = ("burgers", "zener", "nutting")
-
 
 def fluidity(params):
     """The Burgers fluidity 1/b1 from a parameter mapping (``inv_b1`` or ``b1``).
@@ -110,27 +115,125 @@ def nutting_ramp_compliance(t, k1, psi, n):
     return tp / k1 + psi * tp ** (n + 1.0) / (n + 1.0)
 
 
-def _law_arguments(params, rheology):
-    if rheology not in RHEOLOGIES:
-        raise ValueError(f"rheology must be one of {RHEOLOGIES}, got {rheology!r}")
-    if rheology == "nutting":
-        return (params["k1"], params["psi"], params["n"])
-    inv_b1 = 0.0 if rheology == "zener" else fluidity(params)
-    return (params["k1"], params["k2"], params["b2"], inv_b1)
+@dataclass(frozen=True)
+class CreepLaw:
+    """A creep law of the polymer matrix: its compliance, ramp compliance and parameters.
+
+    A law is registered by name (:func:`register_creep_law`) and is then a model family of its
+    own: ``fsrbayes.current(..., rheology=name)``, ``fit(model=name)``, ``simulate(rheology=name)``.
+    Any stress history follows from the two compliances by Boltzmann superposition
+    (:meth:`strain_history`).
+
+    Attributes
+    ----------
+    name : str
+        Stable name (the model name's first term).
+    parameters : tuple of str
+        The canonical parameters it reads from ``params`` (each in the parameter table,
+        :mod:`fsrbayes.physics.parameters`).
+    compliance : callable
+        ``compliance(t, params)`` → J(t) in 1/Pa, 0 for t < 0.
+    ramp_compliance : callable
+        ``ramp_compliance(t, params)`` → Ĵ(t) = ∫₀ᵗ J in s/Pa, 0 for t ≤ 0.
+    summary : str
+        One line for reports.
+    """
+
+    name: str
+    parameters: tuple
+    compliance: Callable
+    ramp_compliance: Callable
+    summary: str = ""
+
+    def creep_strain(self, stress, t, params):
+        """Strain after a stress step of ``stress`` Pa at t = 0."""
+        return np.asarray(stress, dtype=float) * self.compliance(t, params)
+
+    def strain_history(self, history, t, params, *, chunk=2_000_000):
+        """Strain under a piecewise-linear stress history (:func:`strain_history`)."""
+        return strain_history(history, t, params, self, chunk=chunk)
+
+
+def _burgers(t, params):
+    return burgers_compliance(t, params["k1"], params["k2"], params["b2"], fluidity(params))
+
+
+def _burgers_ramp(t, params):
+    return burgers_ramp_compliance(t, params["k1"], params["k2"], params["b2"], fluidity(params))
+
+
+def _zener(t, params):
+    return burgers_compliance(t, params["k1"], params["k2"], params["b2"], 0.0)
+
+
+def _zener_ramp(t, params):
+    return burgers_ramp_compliance(t, params["k1"], params["k2"], params["b2"], 0.0)
+
+
+def _nutting(t, params):
+    return nutting_compliance(t, params["k1"], params["psi"], params["n"])
+
+
+def _nutting_ramp(t, params):
+    return nutting_ramp_compliance(t, params["k1"], params["psi"], params["n"])
+
+
+CREEP_LAWS = {}
+"""Name → :class:`CreepLaw`, every creep law known (built-in and registered)."""
+
+
+def register_creep_law(law, *, replace=False):
+    """Add a :class:`CreepLaw` to :data:`CREEP_LAWS` (and its parameters must be in the table).
+
+    Parameters
+    ----------
+    law : CreepLaw
+    replace : bool
+        Allow replacing a law of the same name.
+
+    Returns
+    -------
+    CreepLaw
+        ``law``, so that the call can decorate an assignment.
+    """
+    if not isinstance(law, CreepLaw):
+        raise TypeError(f"register_creep_law takes a CreepLaw, got {type(law).__name__}")
+    if law.name in CREEP_LAWS and not replace:
+        raise ValueError(f"a creep law named {law.name!r} is already registered (replace=True to replace it)")
+    unknown = [p for p in law.parameters if p not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"creep law {law.name!r}: parameter(s) {unknown} are not in the parameter table; "
+                         "register them first with fsrbayes.physics.parameters.register_parameter")
+    CREEP_LAWS[law.name] = law
+    return law
+
+
+BURGERS = register_creep_law(CreepLaw("burgers", ("k1", "k2", "b2", "inv_b1"), _burgers, _burgers_ramp,
+                                      "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)"))
+ZENER = register_creep_law(CreepLaw("zener", ("k1", "k2", "b2"), _zener, _zener_ramp,
+                                    "Zener: Burgers without linear flow, its b1 -> inf limit"))
+NUTTING = register_creep_law(CreepLaw("nutting", ("k1", "psi", "n"), _nutting, _nutting_ramp,
+                                      "Nutting power-law creep (eq. 13, Zhang et al.)"))
+
+
+def creep_law(rheology):
+    """The :class:`CreepLaw` named ``rheology`` (or ``rheology`` itself if it is one)."""
+    if isinstance(rheology, CreepLaw):
+        return rheology
+    law = CREEP_LAWS.get(rheology)
+    if law is None:
+        raise ValueError(f"rheology must be one of {tuple(CREEP_LAWS)}, got {rheology!r}")
+    return law
 
 
 def creep_compliance(t, params, rheology="burgers"):
-    """Creep compliance J(t) in 1/Pa of the named rheology ("burgers", "zener", "nutting")."""
-    args = _law_arguments(params, rheology)
-    fn = nutting_compliance if rheology == "nutting" else burgers_compliance
-    return fn(t, *args)
+    """Creep compliance J(t) in 1/Pa of the named rheology ("burgers", "zener", "nutting", …)."""
+    return creep_law(rheology).compliance(t, params)
 
 
 def ramp_compliance(t, params, rheology="burgers"):
     """Integrated compliance Ĵ(t) = ∫₀ᵗ J in s/Pa of the named rheology."""
-    args = _law_arguments(params, rheology)
-    fn = nutting_ramp_compliance if rheology == "nutting" else burgers_ramp_compliance
-    return fn(t, *args)
+    return creep_law(rheology).ramp_compliance(t, params)
 
 
 def creep_strain(stress, t, params, rheology="burgers"):
@@ -140,7 +243,7 @@ def creep_strain(stress, t, params, rheology="burgers"):
     ----------
     Paper eqs. (16)–(17); eq. (13) for Nutting.
     """
-    return np.asarray(stress, dtype=float) * creep_compliance(t, params, rheology)
+    return creep_law(rheology).creep_strain(stress, t, params)
 
 
 def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
@@ -155,7 +258,8 @@ def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
         Evaluation times in s (any shape). Times exactly at a jump see the stress after it.
     params : mapping
         Rheology parameters; scalars (the history axis is internal).
-    rheology : {"burgers", "zener", "nutting"}
+    rheology : str or CreepLaw
+        A registered creep law (``"burgers"``, ``"zener"``, ``"nutting"``, …).
 
     Returns
     -------
@@ -166,6 +270,7 @@ def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
     ----------
     Paper eq. (15) (the linear Burgers constitutive law whose solution this is).
     """
+    law = creep_law(rheology)
     t = np.asarray(t, dtype=float)
     flat = t.ravel()
     jump_times, jump_sizes, ramp_starts, ramp_ends, ramp_slopes = history.pieces()
@@ -173,10 +278,10 @@ def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
     step = max(1, chunk // max(1, jump_times.size + 2 * ramp_starts.size))
     for start in range(0, flat.size, step):
         tt = flat[start:start + step, None]
-        part = (jump_sizes * creep_compliance(tt - jump_times, params, rheology)).sum(axis=1)
+        part = (jump_sizes * law.compliance(tt - jump_times, params)).sum(axis=1)
         if ramp_slopes.size:
-            rise = ramp_compliance(tt - ramp_starts, params, rheology)
-            rise -= ramp_compliance(tt - ramp_ends, params, rheology)
+            rise = law.ramp_compliance(tt - ramp_starts, params)
+            rise -= law.ramp_compliance(tt - ramp_ends, params)
             part += (ramp_slopes * rise).sum(axis=1)
         out[start:start + step] = part
     return out.reshape(t.shape)

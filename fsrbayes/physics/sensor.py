@@ -12,17 +12,14 @@ Paredes-Madrid et al. 2017, eqs. (1), (4)–(11), (17)–(24) and Figure 17.
 """
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dataclasses import replace
-
-from . import effects as fx
-from . import rheology as rh
 from .contact import contact_resistance, effective_area, gap
-from .peers import kalantari_bulk_resistance
-from .solver import INVALID, OHMIC, BulkSolution, solve_bulk
+from .effects import resolve_effects
+from .models import PeerModel, model_family
+from .solver import solve_bulk
 from .tunneling import TUNNELING_LAWS
 
 __all__ = [
@@ -39,7 +36,6 @@ __all__ = [
     "resistance_from_amplifier",
     "voltage_divider",
     "DividerResult",
-    "kalantari_solution",
 ]
 
 ON_INVALID = ("raise", "nan", "mask")
@@ -86,80 +82,69 @@ def sensor_state(params, stress, strain):
 
 
 def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
+    """The paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect` objects)."""
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     s, area, series = sensor_state(params, stress, strain)
     if effects:
         creep = strain - np.asarray(stress, dtype=float) / params["k1"]
-        area, series = fx.adjust_state(params, effects, area, series, creep)
+        for effect in effects:
+            area, series = effect.adjust_state(params, area, series, creep)
     threshold = params["Vth"] if tunneling == "paper" else None
     solution = solve_bulk(voltage, series + extra_series, s, params["Va"], area, law=tunneling,
                           threshold=threshold)
-    if "voltage-degradation" in effects:
-        solution = replace(solution, current=solution.current * fx.degradation_factor(params, effects, voltage, time))
+    factor = None
+    for effect in effects:
+        own = effect.current_factor(params, voltage, time)
+        if own is not None:
+            factor = own if factor is None else factor * own
+    if factor is not None:
+        solution = replace(solution, current=solution.current * factor)
     return solution
 
 
-def kalantari_solution(params, voltage, stress, strain, extra_series=0.0):
-    """Kalantari et al.'s circuit (eq. 14) in the canonical names, as a :class:`BulkSolution`.
-
-    R_total = 2·Rc0·σ^(−1/2) + R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε) and I = V/R_total: the contact
-    term is eq. 5 with alpha = ½ (their (ρ1 + ρ2)/2·sqrt(πH/F) = 2·Rc0·σ^(−1/2) with
-    Rc0 = (ρ1 + ρ2)/4·sqrt(πH/A_FSR)), the bulk term Simmons' voltage-independent law with the
-    rest gap s0 (their D·[(π/6θ)^(1/3) − 1]); ε is the Zener strain (k1, k2, b2 = E0, E1, μ1).
-    Ohmic, so the drift does not depend on the voltage — what the paper argues against
-    (section 3.3). Invalid where the gap closes (ε ≥ 1).
-
-    References
-    ----------
-    Paper eq. (14); Kalantari et al. (ref. 22 of the paper).
-    """
-    voltage, stress, strain = (np.asarray(a, dtype=float) for a in (voltage, stress, strain))
-    series = 2.0 * contact_resistance(stress, params["Rc0"], 0.5) + extra_series
-    with np.errstate(invalid="ignore", over="ignore"):
-        bulk = kalantari_bulk_resistance(strain, params["R0"], params["s0"], params["Va"])
-        total = series + bulk
-        valid = (strain < 1.0) & np.isfinite(total) & (total > 0) & np.isfinite(voltage)
-        current = np.where(valid, voltage / np.where(valid, total, 1.0), np.nan)
-    shape = current.shape
-    return BulkSolution(current=current, v_bulk=np.broadcast_to(current * bulk, shape).copy(),
-                        valid=np.broadcast_to(valid, shape).copy(), at_jump=np.zeros(shape, dtype=bool),
-                        regime=np.where(valid, OHMIC, INVALID).astype(np.int8), iterations=0)
-
-
-def _solve_model(params, voltage, stress, strain, rheology, tunneling, effects=(), time=0.0, extra_series=0.0):
-    """The circuit of the model family: Kalantari's ohmic one, or the paper's implicit one."""
-    if rheology == "kalantari":
-        _check_choice("tunneling", tunneling, TUNNELING_LAWS)  # accepted, unused: eq. 14 is ohmic
+def _solve_model(params, voltage, stress, strain, family, tunneling, effects=(), time=0.0, extra_series=0.0):
+    """The circuit of the model family: a peer model's own, or the paper's implicit one."""
+    if isinstance(family, PeerModel):
+        _check_choice("tunneling", tunneling, TUNNELING_LAWS)  # accepted, unused: its circuit is its own
         if effects:
-            raise ValueError(f"the Kalantari et al. model (eq. 14) takes no effects, got {list(effects)}")
-        return kalantari_solution(params, voltage, stress, strain, extra_series)
+            raise ValueError(f"the peer model {family.name!r} takes no effects, got {[e.name for e in effects]}")
+        return family.solve(params, voltage, stress, strain, extra_series)
     return _solve(params, voltage, stress, strain, tunneling, extra_series, effects, time)
 
 
 def _check_effect_params(params, effects):
-    effects = fx.check_effects(effects)
-    for name in effects:
-        missing = [p for p in fx.EFFECTS[name].parameters if p not in params]
+    effects = resolve_effects(effects)
+    for effect in effects:
+        missing = [p for p in effect.parameters if p not in params]
         if missing:
-            raise KeyError(f"effect {name!r} needs parameter(s) {missing}")
+            raise KeyError(f"effect {effect.name!r} needs parameter(s) {missing}")
     return effects
 
 
-def _strain_step(params, stress, time, rheology, effects=()):
-    _check_choice("rheology", rheology, fx.MODEL_FAMILIES)
+def _creep_law(family):
+    return family.law if isinstance(family, PeerModel) else family
+
+
+def _strain_step(params, stress, time, family, effects=()):
     time = np.asarray(time, dtype=float)
     if np.any(time < 0):
         raise ValueError(f"time must be >= 0 s after the stress step, got min {time.min():g} s")
     stress = np.asarray(stress, dtype=float)
     if np.any(stress <= 0) and not np.any(np.asarray(params.get("sigma0", 0.0)) > 0):
         raise ValueError(f"stress must be > 0 Pa, got min {stress.min():g} Pa")
-    return rh.creep_strain(stress, time, params, fx.CREEP_LAW[rheology]) + fx.extra_strain(params, effects, stress, time)
+    strain = _creep_law(family).creep_strain(stress, time, params)
+    for effect in effects:
+        extra = effect.extra_strain(params, stress, time)
+        if extra is not None:
+            strain = strain + extra
+    return strain
 
 
 def solve_current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", effects=()):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
-    ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`).
+    ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`), or gives them as
+    :class:`~fsrbayes.physics.effects.Effect` objects.
 
     Returns
     -------
@@ -169,9 +154,10 @@ def solve_current(params, voltage, stress, time, *, rheology="burgers", tunnelin
     ----------
     Paper eqs. (17)–(21).
     """
+    family = model_family(rheology)
     effects = _check_effect_params(params, effects)
-    strain = _strain_step(params, stress, time, rheology, effects)
-    return _solve_model(params, voltage, stress, strain, rheology, tunneling, effects, time)
+    strain = _strain_step(params, stress, time, family, effects)
+    return _solve_model(params, voltage, stress, strain, family, tunneling, effects, time)
 
 
 def _apply_policy(solution, on_invalid, voltage, stress, time):
@@ -211,9 +197,10 @@ def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smo
         Applied stress σ in Pa (> 0).
     time : array_like
         Time since the stress step in s (≥ 0).
-    rheology : {"burgers", "zener", "nutting", "kalantari"}
-        Creep law of the gap (eq. 17, its b1 → ∞ limit, eq. 13), or the peer model of Kalantari
-        et al. (eq. 14; :func:`kalantari_solution`, needs ``R0``; ``tunneling`` is then unused).
+    rheology : str, CreepLaw or PeerModel
+        Model family: a creep law of the gap (``"burgers"``, eq. 17; ``"zener"``, its b1 → ∞
+        limit; ``"nutting"``, eq. 13; or a registered one), or a peer model with its own circuit
+        (``"kalantari"``, eq. 14, needs ``R0``; ``tunneling`` is then unused).
     tunneling : {"smooth", "paper"}
         Bulk tunneling law (:mod:`fsrbayes.physics.tunneling`).
     on_invalid : {"raise", "nan", "mask"}
@@ -275,17 +262,18 @@ def current_history(params, voltage, history, time, *, rheology="burgers", tunne
     ----------
     Paper eq. (15) (superposition) with eqs. (5), (6), (19)–(21) at the momentary σ(t).
     """
-    _check_choice("rheology", rheology, fx.MODEL_FAMILIES)
+    family = model_family(rheology)
     effects = _check_effect_params(params, effects)
     time = np.asarray(time, dtype=float)
     stress = history.at(time)
     if np.any(stress <= 0):
         raise ValueError(f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} Pa")
-    strain = rh.strain_history(history, time, params, fx.CREEP_LAW[rheology])
-    if "power-law-creep" in effects:
-        power_law = {"k1": np.inf, "psi": params["plc_psi"], "n": params["plc_n"]}
-        strain = strain + rh.strain_history(history, time, power_law, "nutting")
-    solution = _solve_model(params, voltage, stress, strain, rheology, tunneling, effects, time)
+    strain = _creep_law(family).strain_history(history, time, params)
+    for effect in effects:
+        extra = effect.extra_strain_history(params, history, time)
+        if extra is not None:
+            strain = strain + extra
+    solution = _solve_model(params, voltage, stress, strain, family, tunneling, effects, time)
     return _apply_policy(solution, on_invalid, voltage, stress, time)
 
 
@@ -302,8 +290,9 @@ def resistances(params, voltage, stress, time=0.0, *, rheology="burgers", tunnel
     Paper eqs. (1), (5), (9)–(11).
     """
     solution = solve_current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling)
-    if rheology == "kalantari":
-        rc = contact_resistance(stress, params["Rc0"], 0.5)
+    family = model_family(rheology)
+    if isinstance(family, PeerModel):
+        rc = contact_resistance(stress, params["Rc0"], family.contact_alpha)
     else:
         rc = contact_resistance(stress, params["Rc0"], params["alpha"], params.get("Rpar", 0.0),
                                 params.get("sigma0", 0.0))
@@ -377,11 +366,12 @@ def voltage_divider(params, supply, load_resistance, stress, time=0.0, *, rheolo
     ----------
     Paper section 4.5 and Figure 17.
     """
-    strain = _strain_step(params, stress, time, rheology)
+    family = model_family(rheology)
+    strain = _strain_step(params, stress, time, family)
     load = np.asarray(load_resistance, dtype=float)
     if np.any(load < 0):
         raise ValueError(f"load_resistance must be >= 0 ohm, got min {load.min():g}")
-    solution = _solve_model(params, supply, stress, strain, rheology, tunneling, extra_series=load)
+    solution = _solve_model(params, supply, stress, strain, family, tunneling, extra_series=load)
     v_out = solution.current * load
     return DividerResult(v_fsr=np.asarray(supply, dtype=float) - v_out, current=solution.current,
                          v_out=v_out, valid=solution.valid)

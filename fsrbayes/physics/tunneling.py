@@ -164,11 +164,6 @@ def log_intermediate(v_bulk, gap, barrier, area):
     return _log_branch("intermediate", v_bulk, gap, barrier, area)
 
 
-def log_high_voltage(v_bulk, gap, barrier, area):
-    """Log-current and its V-slope of the corrected eq. 11."""
-    return _log_branch("high", v_bulk, gap, barrier, area)
-
-
 def log_forward_faded(v_bulk, gap, barrier, area):
     """Log-current and its V-slope of the smooth law above Va."""
     return _log_branch("forward", v_bulk, gap, barrier, area)

@@ -11,7 +11,7 @@ judged *across* ensembles started apart:
   smaller of Σ_ensembles steps·walkers/τ and ArviZ's rank-normalised bulk ESS.
 
 Warm-up. With ``transport_rounds`` = k > 0 (the default) the first k chunks are warm-up: after
-each, a :class:`~fsrbayes.inference.transport.TriangularMap` is fitted to the later half of the
+each, a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the later half of the
 warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from
 then on; the map is frozen after the k-th chunk and only the later steps are kept. On the 9-test creep posterior this cut
 τ from ≈ 210 to ≈ 130 steps (a 12-D Gaussian gives ≈ 40). A share of independence
@@ -33,8 +33,8 @@ from dataclasses import asdict, dataclass, field
 import emcee
 import numpy as np
 
-from ..utils import atomic_path
-from .parallel import fork_pool
+from ...utils import atomic_path
+from ..parallel import fork_pool, single_threaded_blas
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
@@ -85,14 +85,14 @@ class SamplerSettings:
     independence_fraction : float
         Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
         fitted to each ensemble's warm-up draws in the map's coordinates,
-        :class:`~fsrbayes.inference.transport.MixtureProposal`);
+        :class:`~fsrbayes.inference.samplers.transport.MixtureProposal`);
         needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. On the
         9-test creep posterior 0.3 halved the steps to convergence (τ 132 → 49–57); 0.2 gave
         τ 67, 0.6 τ 155: walkers that reach a region the proposal under-covers wait there for
         an accepted jump, and only the ensemble moves carry them on.
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
-        :data:`~fsrbayes.inference.transport.QUADRATIC_MAX_DIM` dimensions) or affine (False).
+        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine (False).
         A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
         coordinates: on the bent-ridge test of ``tests/test_tempered.py`` (x ~ N(0, 1)) the
         quadratic map with independence moves gave sd(x) 0.966 and a 99.9 % quantile of
@@ -253,24 +253,12 @@ def convergence_report(chain, settings, names=(), final=True):
     return ConvergenceReport(converged, n_steps, n_kept, tau, rhat, ess, tuple(names))
 
 
-def _moves(de_fraction, proposal=None, independence_fraction=0.0):
+def ensemble_moves(de_fraction, proposal=None, independence_fraction=0.0):
     if proposal is None or independence_fraction == 0.0:
         return [(emcee.moves.DEMove(), de_fraction), (emcee.moves.StretchMove(), 1.0 - de_fraction)]
     rest = 1.0 - independence_fraction
     return [(emcee.moves.DEMove(), rest * de_fraction), (emcee.moves.StretchMove(), rest * (1.0 - de_fraction)),
             (emcee.moves.MHMove(proposal), independence_fraction)]
-
-
-def single_threaded_blas():
-    """Context in which BLAS runs on one thread.
-
-    Walker batches make small matrices (e.g. 24 × 22 by 22 × 2000 in the two-stage target):
-    OpenBLAS's threads cost 12× the product itself there (0.92 ms against 0.078 ms per call on
-    this machine), and worse when two sampling processes share two cores.
-    """
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
 
 
 def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, transport=None, proposal=None,
@@ -287,7 +275,7 @@ def _advance(log_prob, position, log_prob_start, random_state, steps, de_fractio
         raise ValueError("a target with its own emcee moves samples its own coordinates: set transport_rounds=0")
     if transport is not None:
         target, position, log_prob_start = MappedLogProb(log_prob, transport), transport.inverse(position), None
-    moves = own_moves() if own_moves is not None else _moves(de_fraction, proposal, independence_fraction)
+    moves = own_moves() if own_moves is not None else ensemble_moves(de_fraction, proposal, independence_fraction)
     sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
     sampler.random_state = random_state
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)

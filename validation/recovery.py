@@ -8,7 +8,7 @@ when its posterior sd is below half its prior sd (in the sampler's prior-scaled 
 one whose posterior sd is above 0.8 of the prior's is reported as not identified (posterior ≈
 prior).
 
-Run ``python -m fsrbayes.inference.recovery [N]`` for the table; the slow test runs 20.
+Run ``python -m validation.recovery [N]`` for the table; the slow test runs 20.
 """
 
 import sys
@@ -17,10 +17,10 @@ import warnings
 
 import numpy as np
 
-from ..data import synthetic
-from ..data.sensors import load_sensor
-from .fit import fit
-from .sampling import ConvergenceWarning, SamplerSettings
+from fsrbayes.data import synthetic
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.fit import fit
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
 __all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
 

@@ -24,7 +24,7 @@ import numpy as np
 from scipy import stats
 from scipy.special import logsumexp
 
-__all__ = ["SavageDickey", "savage_dickey", "savage_dickey_fit", "savage_dickey_posterior"]
+__all__ = ["SavageDickey", "savage_dickey", "savage_dickey_posterior"]
 
 
 @dataclass(frozen=True)
@@ -98,15 +98,6 @@ def savage_dickey(log_likelihood, draws, index, log_prior_density, null=0.0, low
     ess = float(weights.sum() ** 2 / np.sum(weights**2))
     error = max(error, float(np.sqrt(max(1.0 / ess - 1.0 / terms.size, 0.0))))  # i.i.d. floor of a mean of weights
     return SavageDickey(log_b01, error, int(terms.size), ess)
-
-
-def savage_dickey_fit(result, parameter="inv_b1", max_draws=4000):
-    """Savage–Dickey log B01 (φ = 0 nested model against the fitted one) from a :class:`FitResult`.
-
-    For a Burgers fit and ``inv_b1`` this is log Z_zener − log Z_burgers.
-    """
-    draws = result.draws(max_draws)  # (E, D, ndim), each ensemble in time order
-    return savage_dickey_posterior(result.posterior, draws.reshape(-1, draws.shape[-1]), parameter)
 
 
 def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):

@@ -34,8 +34,10 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.special import logsumexp
 
-from .parallel import fork_pool
-from .sampling import single_threaded_blas, walkers_for
+from .estimate import EvidenceEstimate
+from ..parallel import fork_pool
+from ..samplers.ensemble import walkers_for
+from ..parallel import single_threaded_blas
 
 __all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
            "combine_ladder", "summarise_ladders", "run_ladders", "ladder_evaluations"]
@@ -126,7 +128,7 @@ def check_priors_for_evidence(prior):
                                  "proper prior")
 
 
-def _evaluate(target, u):
+def evaluate_target(target, u):
     """log π and log L at u (N, ndim); log L is −inf wherever log π is."""
     if hasattr(target, "log_prior_and_likelihood"):  # one parameter transform for both
         lp, ll = target.log_prior_and_likelihood(u)
@@ -156,7 +158,7 @@ class _Rungs:
     likelihood in *one* vectorised call; acceptance is per rung at its own β.
 
     A state may carry columns beyond the target's ``ndim`` continuous ones (a chart label, see
-    :class:`~fsrbayes.inference.reference.ReferencedTarget`): the stretch move keeps them, and a
+    :class:`~fsrbayes.inference.evidence.referenced.ReferencedTarget`): the stretch move keeps them, and a
     target with ``relabel(states, log_prior, random)`` gets a Gibbs update of them after each
     step — one that leaves log L unchanged and returns the new states and log priors.
     """
@@ -165,7 +167,7 @@ class _Rungs:
         self.target, self.betas, self.random, self.a = target, np.asarray(betas), random, a
         n_rungs, n_walk, width = coords.shape
         self.n_move = target.ndim
-        lp, ll = _evaluate(target, coords.reshape(-1, width))
+        lp, ll = evaluate_target(target, coords.reshape(-1, width))
         self.coords, self.lp, self.ll = coords.copy(), lp.reshape(n_rungs, n_walk), ll.reshape(n_rungs, n_walk)
 
     def step(self):
@@ -180,7 +182,7 @@ class _Rungs:
             partners = self.coords[rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]]
             proposal = partners - (partners - x) * z[..., None]
             proposal[..., ndim:] = x[..., ndim:]
-            lp, ll = _evaluate(self.target, proposal.reshape(-1, width))
+            lp, ll = evaluate_target(self.target, proposal.reshape(-1, width))
             lp, ll = lp.reshape(n_rungs, half_size), ll.reshape(n_rungs, half_size)
             beta = self.betas[:, None]
             with np.errstate(invalid="ignore"):
@@ -235,7 +237,7 @@ def _run_ladder(target, betas, settings, seed):
     for t in range(settings.steps):
         rungs.step()
         u0 = prior_draws()
-        lp0, ll0 = _evaluate(target, u0)
+        lp0, ll0 = evaluate_target(target, u0)
         coords = np.concatenate([u0[None], rungs.coords])
         lps = np.concatenate([lp0[None], rungs.lp])
         lls = np.concatenate([ll0[None], rungs.ll])
@@ -365,6 +367,28 @@ class EvidenceResult:
     settings: dict = field(default_factory=dict)
     posterior_draws: np.ndarray = None
     sigma_pilot: float = 0.0
+
+    @property
+    def method(self):
+        """``"referenced stepping-stone"`` or ``"stepping-stone"`` (from the prior)."""
+        return "referenced stepping-stone" if self.settings.get("path") == "reference" else "stepping-stone"
+
+    def estimate(self):
+        """This result as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`.
+
+        ``details`` holds the error budget, the other estimators, the separate reference
+        regions, the lowest swap acceptance and the wall time; the draws are each ladder's
+        β = 1 rung, flattened to (ladders, draws, ndim).
+        """
+        details = {"bridge": self.bridge, "ti_corrected": self.ti_corrected, "sigma_batch": self.sigma_batch,
+                   "sigma_replicates": self.sigma_replicates, "sigma_disc": self.sigma_disc,
+                   "sigma_pilot": self.sigma_pilot,
+                   "reference_regions": [len(group) for group in self.settings.get("reference_components", [])],
+                   "min_swap_acceptance": float(np.min(self.swap_acceptance)), "seconds": self.seconds}
+        draws = None
+        if self.posterior_draws is not None:
+            draws = self.posterior_draws.reshape(len(self.posterior_draws), -1, self.posterior_draws.shape[-1])
+        return EvidenceEstimate(self.log_z, self.error, self.method, details, draws)
 
     def as_dict(self):
         out = asdict(self)

@@ -10,7 +10,7 @@ those blocks for every walker:
 
 1. each specimen j in turn, conditional on the walker's Λ:
    p(u_j | Λ, y_j) ∝ π(u_j) L_j(u_j) p(θ_j | Λ) / π(θ_j) (u_j in the specimen's prior-scaled
-   coordinates, :class:`~fsrbayes.inference.population.JointTarget`), updated by
+   coordinates, :class:`~fsrbayes.inference.population.model.JointTarget`), updated by
    * an independence Metropolis–Hastings step from :class:`KernelProposal`, a Gaussian kernel
      mixture over the specimen's own per-specimen posterior draws (the two-stage route's fits)
      with a defensive Student-t, exact for any proposal — the draws already follow the curved
@@ -36,7 +36,8 @@ import emcee
 import numpy as np
 from scipy.special import gammaln
 
-from .population import JointTarget, _logsumexp
+from ...utils import logsumexp
+from .model import JointTarget
 
 __all__ = ["KernelProposal", "GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
@@ -89,7 +90,7 @@ class KernelProposal:
         white = np.linalg.solve(self.kernel_chol, u.T).T
         dist2 = (np.sum(white**2, axis=1)[:, None] + np.sum(self.white_centres**2, axis=1)[None, :]
                  - 2.0 * white @ self.white_centres.T)
-        log_kernel = (_logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1) - np.log(len(self.centres))
+        log_kernel = (logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1) - np.log(len(self.centres))
                       - np.sum(np.log(np.diag(self.kernel_chol))) - 0.5 * self.d * np.log(2 * np.pi))
         y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
         nu, d = self.dof, self.d
@@ -140,7 +141,7 @@ class GibbsJointTarget(JointTarget):
         self.scale_step = shift_scale * 2.4 / np.sqrt(2.0 * len(z))
 
     def emcee_moves(self):
-        """The moves :func:`~fsrbayes.inference.sampling.run_ensembles` gives emcee for this target."""
+        """The moves :func:`~fsrbayes.inference.samplers.ensemble.run_ensembles` gives emcee for this target."""
         return [(BlockGibbsMove(self), 1.0)]
 
     def fingerprint(self):

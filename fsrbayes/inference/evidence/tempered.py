@@ -1,13 +1,13 @@
 """Posterior draws from the β = 1 rung of tempered ladders that start at a fitted reference.
 
-The ensemble sampler (:mod:`~fsrbayes.inference.sampling`) moves walkers along the posterior; a
+The ensemble sampler (:mod:`~fsrbayes.inference.samplers.ensemble`) moves walkers along the posterior; a
 walker must *walk* to every part of it. The creep posterior's s0–Va ridge can bend into two arms
 (Simmons' law has a slope kink where V_bulk crosses Va/e; VALIDATION.md §1), and an ensemble in
 one arm rarely reaches the other arm's far end: in the simulation-based calibration (SBC) s0's
 truth ranked at an extreme in 19 of 100 replications, every ensemble fit reporting R-hat ≤ 1.01.
 
 Here the draws come instead from the referenced ladders of
-:func:`~fsrbayes.inference.reference.referenced_log_evidence`: a mixture reference g with one
+:func:`~fsrbayes.inference.evidence.referenced.referenced_log_evidence`: a mixture reference g with one
 Student-t per posterior region the optimiser starts found (fitted to a short pilot run in each),
 K power posteriors q_β ∝ (L·π)^β·g^(1−β) sampled side by side, fresh i.i.d. draws of g at β = 0
 in every step, and swaps between neighbouring rungs. A draw of g that lands in a part of the
@@ -26,7 +26,7 @@ series keeps every correlation between slots: ESS = ESS(means)·Var(draws)/Var(m
 has a fixed length: when the criteria fail the fit warns with the numbers (raise
 ``ladder.steps``).
 
-Measured: on the closed-form bent ridge (:class:`~fsrbayes.inference.closed_form.BentRidge`)
+Measured: on the closed-form bent ridge (:class:`~validation.closed_form.BentRidge`)
 the draws match the exact marginals within their error bars where the ensemble sampler with
 quadratic maps does not. On the creep posteriors of the SBC design the rungs themselves mix
 slowly — τ ≈ 180–200 steps of the top rung's ensemble mean — so the default 600-step ladders
@@ -40,9 +40,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import stats
 
-from .evidence import LadderSettings
-from .reference import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
-from .sampling import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
+from .ladder import LadderSettings
+from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
+from ..samplers.ensemble import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
 
 __all__ = ["TemperedSettings", "TEMPERED_SETTINGS", "tempered_run", "tempered_report", "reference_optima"]
 
@@ -70,7 +70,7 @@ class TemperedSettings:
         the arms' far ends and the ladders under-sample them (x's 99.9 % quantile 2.8 instead of
         3.09; affine charts: 3.06–3.11).
     rhat_target, tau_factor, ess_target : float
-        Convergence criteria (as :class:`~fsrbayes.inference.sampling.SamplerSettings`).
+        Convergence criteria (as :class:`~fsrbayes.inference.samplers.ensemble.SamplerSettings`).
     processes : int
         Worker processes for the ladders (and the groups' searches).
     """

@@ -3,7 +3,7 @@ coverage of the reported log-evidence error bars on them.
 
 :class:`LinearGaussian` (problem A: y = Xw + e, conjugate Gaussian prior) and
 :class:`TwoModes` (problem B: an unequal two-component Gaussian mixture in a uniform box) offer
-what :func:`~fsrbayes.inference.evidence.log_evidence` needs — ``ndim``, ``log_prior``,
+what :func:`~fsrbayes.inference.evidence.ladder.log_evidence` needs — ``ndim``, ``log_prior``,
 ``log_likelihood``, ``sample_prior`` — and ``exact_log_z()``. :class:`BentRidge` (a ridge with a
 kink, like the creep posterior's s0–Va ridge) is also a posterior for the samplers (callable,
 with a ``prior`` the MAP search can draw from).
@@ -18,7 +18,8 @@ import time
 import numpy as np
 from scipy import stats
 
-from .evidence import log_evidence
+from fsrbayes.utils import HALF_LOG_2PI
+from fsrbayes.inference.evidence.ladder import log_evidence
 
 __all__ = ["LinearGaussian", "TwoModes", "BentRidge", "evidence_coverage", "format_evidence_coverage"]
 
@@ -111,10 +112,9 @@ def _normal_log_pdf(x, loc, scale):
     """log N(x; loc, scale²) — scipy.stats.norm.logpdf's value at a tenth of its call overhead
     (these targets run inside samplers' inner loops)."""
     z = (x - loc) / scale
-    return -0.5 * z * z - np.log(scale) - _HALF_LOG_2PI
+    return -0.5 * z * z - np.log(scale) - HALF_LOG_2PI
 
 
-_HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
 class BentRidge:

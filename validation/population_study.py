@@ -12,7 +12,7 @@ specimens (the share of observed drifts inside the predictive 5–95 % range of 
 measured*, i.e. with the fitted measurement noise on both readings; 90 % expected), and whether
 the noise-free predictive covers each specimen's noiseless true drift.
 
-Run ``python -m fsrbayes.inference.population_study [16] [--joint]`` for the table; the slow test
+Run ``python -m validation.population_study [16] [--joint]`` for the table; the slow test
 runs it with the joint route, which must agree with the two-stage one.
 """
 
@@ -23,12 +23,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..data import synthetic
-from ..data.sensors import load_sensor
-from .hierarchical import fit_specimens, joint, two_stage
-from .output import DRIFT_TIME_S
-from .predictive import ForwardTemplate, drift_groups, new_specimens
-from .sampling import ConvergenceWarning, SamplerSettings
+from fsrbayes.data import synthetic
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
+from fsrbayes.inference.output import DRIFT_TIME_S
+from fsrbayes.inference.population.predictive import ForwardTemplate, drift_groups, new_specimens
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
 __all__ = ["population_study", "format_population_study", "STUDY_FIT_SETTINGS", "STUDY_HYPER_SETTINGS"]
 

@@ -7,7 +7,7 @@ candidates and records the verdict, the named effect, the gaps and the evidence.
 paper's own mismatch (:data:`PAPER_MISMATCH`: a negative area creep that makes drift(3600 s)
 nearly independent of stress at low voltage, as the paper measured on A201 sensors).
 
-Run ``python -m fsrbayes.discrepancy.study`` for the table (``--scan`` for the detection limits);
+Run ``python -m validation.diagnose_study`` for the table (``--scan`` for the detection limits);
 the slow test ``tests/test_diagnose_matrix.py`` runs the matrix.
 """
 
@@ -17,11 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data import synthetic
-from ..data.sensors import load_sensor
-from ..inference.parallel import map_jobs
-from ..physics.sensor import drift as model_drift
-from .diagnose import diagnose
+from fsrbayes.data import synthetic
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.parallel import map_jobs
+from fsrbayes.physics.sensor import drift as model_drift
+from fsrbayes.discrepancy.diagnose import diagnose
 
 __all__ = ["Case", "MATRIX", "PAPER_MISMATCH", "SCAN", "STUDY_VOLTAGES", "run_case", "diagnose_study",
            "format_study", "stress_flatness"]

@@ -10,7 +10,7 @@ finite-difference Hessian — seconds instead of the minutes of an ensemble run 
 thermodynamic ladder — which is what makes scoring a catalogue of model extensions on every
 specimen affordable (:mod:`fsrbayes.discrepancy`). Its error is a few nats on the creep
 posteriors (their ridges are not exactly Gaussian); differences between nested models on the
-same data share most of it. Use :func:`fsrbayes.inference.evidence.log_evidence` where
+same data share most of it. Use :func:`fsrbayes.inference.evidence.ladder.log_evidence` where
 accuracy matters more than time.
 
 A nested extension is also started from the base model's optimum with the extension's
@@ -23,11 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fit import _polish, _root_covariance, find_map
+from ...utils import HALF_LOG_2PI
+from .estimate import EvidenceEstimate
+from ..optimize import find_map, polish, root_covariance
 
 __all__ = ["LocalDraws", "LaplaceFit", "laplace_fit"]
 
-_HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
 @dataclass
@@ -57,7 +58,13 @@ class LaplaceFit:
         # The columns of root_cov are orthogonal (eigenvectors scaled by 1/sqrt(precision)),
         # so log|Σ| is twice the sum of the logs of their norms.
         log_det = 2.0 * np.sum(np.log(np.linalg.norm(self.root_cov, axis=0)))
-        return float(self.log_post_map + self.posterior.ndim * _HALF_LOG_2PI + 0.5 * log_det)
+        return float(self.log_post_map + self.posterior.ndim * HALF_LOG_2PI + 0.5 * log_det)
+
+    def estimate(self):
+        """The Laplace log Z as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`
+        (no error bar: the approximation's error is not a Monte-Carlo one and is not estimated)."""
+        return EvidenceEstimate(self.log_evidence, float("nan"), "laplace",
+                                {"log_post_map": float(self.log_post_map)})
 
     @property
     def x_map(self):
@@ -86,14 +93,14 @@ class LaplaceFit:
         """
         import emcee
 
-        from .sampling import _moves
+        from ..samplers.ensemble import ensemble_moves
 
         d = self.posterior.ndim
         n_walkers = n_walkers or max(32, 2 * d + 2)
         start = self.u_map + 0.1 * rng.standard_normal((n_walkers, d)) @ self.root_cov.T
         bad = ~np.isfinite(self.posterior(start))
         start[bad] = self.u_map + 1e-4 * rng.standard_normal((int(bad.sum()), d))
-        sampler = emcee.EnsembleSampler(n_walkers, d, self.posterior, vectorize=True, moves=_moves(0.2))
+        sampler = emcee.EnsembleSampler(n_walkers, d, self.posterior, vectorize=True, moves=ensemble_moves(0.2))
         sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
         sampler.run_mcmc(start, steps)
         kept = sampler.get_chain(discard=steps // 2, flat=True)
@@ -168,10 +175,10 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
         for index in np.argsort(values)[::-1][:n_starts]:
             if not np.isfinite(values[index]):
                 continue
-            u_nested, v_nested = _polish(posterior, starts[index], values[index], rounds=6)
+            u_nested, v_nested = polish(posterior, starts[index], values[index], rounds=6)
             if v_nested > value:
                 u_best, value = u_nested, v_nested
-    return LaplaceFit(posterior, u_best, float(value), _root_covariance(posterior, u_best))
+    return LaplaceFit(posterior, u_best, float(value), root_covariance(posterior, u_best))
 
 
 

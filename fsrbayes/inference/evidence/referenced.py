@@ -1,6 +1,6 @@
 """Log-evidence along a path from a fitted reference density to the posterior.
 
-The power posteriors of :mod:`~fsrbayes.inference.evidence` start at the prior. On creep data
+The power posteriors of :mod:`~fsrbayes.inference.evidence.ladder` start at the prior. On creep data
 the posterior holds thousands of nats of information beyond the prior, so the ladder must cross
 them, and 16 rungs left stepping-stone and bridge 10–27 nats apart. The *generalised*
 stepping-stone path (Fan, Wu, Chen, Kuo & Lewis, Mol. Biol. Evol. 28, 523, 2011) starts
@@ -14,14 +14,14 @@ precision, never correctness, and the error bar (replicate ladders, batch means,
 shows what it costs.
 
 The reference: the pilot draws are straightened by the quadratic
-:class:`~fsrbayes.inference.transport.TriangularMap` T (the s0–Va ridge and the area law's
+:class:`~fsrbayes.inference.samplers.transport.TriangularMap` T (the s0–Va ridge and the area law's
 curve become round), whitened by their mean and covariance, and g is a multivariate Student-t
 with ``dof`` degrees of freedom in those coordinates w — heavier-tailed than the posterior, so
 the stepping-stone ratios stay bounded. Because T is a bijection of ℝ^d with a constant
 Jacobian, g(u) = t(w(u))/|det du/dw| is exact and i.i.d. draws of it are cheap; the ladder
 samples in w, where the stretch move sees a nearly round target at every β.
 
-Implemented as a target for :func:`~fsrbayes.inference.evidence.log_evidence`: its "prior" is
+Implemented as a target for :func:`~fsrbayes.inference.evidence.ladder.log_evidence`: its "prior" is
 the t density in w and its "log-likelihood" is log[L·π/g] — the ladder code is unchanged.
 
 Separate regions. "Exact for any g" holds only if the ladder's walkers reach every region of
@@ -50,11 +50,13 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from scipy.special import logsumexp
 
-from .evidence import (LadderSettings, _evaluate, beta_ladder, check_priors_for_evidence, ladder_evaluations, run_ladders,
+from .ladder import (LadderSettings, evaluate_target, beta_ladder, check_priors_for_evidence, ladder_evaluations, run_ladders,
                        summarise_ladders)
-from .parallel import fork_pool
-from .sampling import ConvergenceWarning, SamplerSettings, run_ensembles, single_threaded_blas
-from .transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
+from ..optimize import ensemble_start, find_map, separate_regions
+from ..parallel import fork_pool
+from ..samplers.ensemble import ConvergenceWarning, SamplerSettings, run_ensembles
+from ..parallel import single_threaded_blas
+from ..samplers.transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
 
 __all__ = ["ReferenceDensity", "MixtureReference", "ReferencedTarget", "ModeSearch", "MODE_SEARCH", "PILOT_SETTINGS",
            "REFERENCED_LADDER", "distinct_optima", "pilot_draws", "pilot_reference", "minor_pilot",
@@ -202,7 +204,7 @@ class ReferencedTarget:
     def log_prior_and_likelihood(self, state):
         log_chart = self.log_prior(state)
         u = self.to_target(state)
-        lp, ll = _evaluate(self.target, u)
+        lp, ll = evaluate_target(self.target, u)
         with np.errstate(all="ignore"):
             if len(self.reference.components) == 1:  # g(u) = t(w)/|du/dw|: no map inversion needed
                 log_g = log_chart - self.reference.components[0].log_det_jacobian
@@ -242,7 +244,6 @@ def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_dra
     """Posterior draws in u (n, ndim) from a short run started at ``start`` (default: the MAP of
     two optimiser starts). ConvergenceWarnings of the pilot are silenced: its quality only
     affects the evidence's precision."""
-    from .fit import ensemble_start, find_map
 
     rng = np.random.default_rng(seed)
     optimum = find_map(posterior, rng, n_starts=2)[0] if start is None else np.asarray(start, dtype=float)
@@ -298,7 +299,6 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
     list of (ndarray (ndim,), float)
         Each optimum with its Laplace log mass log p(u*) + log|Σ|^½.
     """
-    from .fit import find_map, separate_regions
 
     optima = find_map(posterior, rng, n_starts=search.n_starts)
     return separate_regions(posterior, optima, separation=search.separation, max_regions=search.max_modes,
@@ -383,10 +383,10 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
         missed and another found makes the group means differ; that spread is ``sigma_pilot``
         in the error bar. All ladders run side by side on ``settings.processes``.
     quadratic : bool, optional
-        The reference's map T: quadratic (default up to :data:`~fsrbayes.inference.transport.QUADRATIC_MAX_DIM`
+        The reference's map T: quadratic (default up to :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM`
         dimensions) or affine (``False``). The quadratic map makes a curved ridge round, but a
         parabola fitted to a *kinked* ridge bends the arms' far ends in the chart, where the
-        ladder's walkers then rarely go: on :class:`~fsrbayes.inference.tempered` 's bent-ridge
+        ladder's walkers then rarely go: on :class:`~fsrbayes.inference.evidence.tempered` 's bent-ridge
         test the β = 1 draws' 99.9 % quantile was 2.8 instead of 3.09 with it, 3.06–3.11 without.
 
     Returns

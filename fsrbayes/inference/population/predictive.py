@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.effects import parse_model
-from ..physics.sensor import solve_current
-from .posterior import noise_parameters
-from .sampling import even_index
+from ...physics.models import parse_model
+from ...physics.sensor import solve_current
+from ..posterior import noise_parameters
+from ..samplers.ensemble import even_index
 
 __all__ = ["ForwardTemplate", "NewSpecimens", "new_specimens", "drift_groups", "optimal_voltage", "BOX_QUANTILES"]
 

@@ -17,11 +17,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .fit import FIT_SETTINGS, find_map, fit, laplace_start
-from .parallel import JobFailure, map_jobs
+from ...physics.models import model_components, register_components
+from ..fit import FIT_SETTINGS, fit
+from ..optimize import find_map, laplace_start
+from ..parallel import JobFailure, map_jobs
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
-from .population import JointTarget, Population, TwoStageTarget, _logsumexp
-from .sampling import SamplerSettings, even_index, run_ensembles, single_threaded_blas
+from ...utils import logsumexp
+from .model import JointTarget, Population, TwoStageTarget
+from ..samplers.ensemble import SamplerSettings, even_index, run_ensembles
+from ..parallel import single_threaded_blas
 
 __all__ = ["HierarchicalResult", "ReweightingWarning", "SpecimenFitWarning", "two_stage", "joint", "fit_specimens",
            "draw_error", "MIN_EFFECTIVE_DRAWS"]
@@ -218,12 +222,12 @@ def draw_error(result, n_boot=100, max_draws=2000, seed=0):
     target = result.target
     hyper = result.hyper_draws(max_draws)
     log_w = target.log_weights(hyper)  # (H, J, S)
-    base = _logsumexp(log_w, axis=2).sum(axis=1)
+    base = logsumexp(log_w, axis=2).sum(axis=1)
     rng = np.random.default_rng(seed)
     means = []
     for _ in range(n_boot):
         pick = rng.integers(0, target.n_draws, (target.n_specimens, target.n_draws))
-        log_like = _logsumexp(np.take_along_axis(log_w, pick[None], axis=2), axis=2).sum(axis=1)
+        log_like = logsumexp(np.take_along_axis(log_w, pick[None], axis=2), axis=2).sum(axis=1)
         weight = np.exp(log_like - base - np.max(log_like - base))
         means.append(weight @ hyper / weight.sum())
     return np.std(means, axis=0)
@@ -247,14 +251,14 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
     labels : sequence of str, optional
     method : {"gibbs", "ensemble"}, optional
         ``"gibbs"`` (the default when specimen draws are at hand, from ``start_from`` or
-        ``proposal_draws``): emcee runs blocked Gibbs sweeps (:mod:`~fsrbayes.inference.gibbs`),
+        ``proposal_draws``): emcee runs blocked Gibbs sweeps (:mod:`~fsrbayes.inference.population.gibbs`),
         the route that works at 16 specimens. ``"ensemble"``: emcee's stretch/DE moves over all
         parameters at once — fine for a handful of low-dimensional specimens, hopeless at 16
         creep specimens (BENCHMARKS.md).
     proposal_draws : sequence of ndarray (N_j, D), optional
         Each specimen's posterior draws under its own prior, physical units (Gibbs proposals).
     gibbs : dict, optional
-        Options of :class:`~fsrbayes.inference.gibbs.GibbsJointTarget` (``hyper_rounds``,
+        Options of :class:`~fsrbayes.inference.population.gibbs.GibbsJointTarget` (``hyper_rounds``,
         ``n_centres``, ``weak_ratio``, ``shift_scale``).
 
     Returns
@@ -328,7 +332,8 @@ def _fit_one(args):
     """One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the
     cores (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s
     with OMP_NUM_THREADS=1 — other fit seeds)."""
-    data, specimen, kwargs = args
+    data, specimen, kwargs, components = args
+    register_components(components)  # a user's own creep law or effect, in a fresh worker
     with single_threaded_blas():
         return specimen, fit(data, specimen, **kwargs)
 
@@ -362,7 +367,9 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
     specimens = list(specimens or data.specimens)
     kwargs["settings"] = replace(settings or FIT_SETTINGS, processes=1)
     base_seed = kwargs.pop("rng", 0)
-    jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k)) for k, s in enumerate(specimens)]
+    components = model_components(kwargs.get("model", "burgers"))
+    jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k), components)
+            for k, s in enumerate(specimens)]
     if errors not in ("warn", "raise"):
         raise ValueError(f"errors must be 'warn' or 'raise', got {errors!r}")
     results = map_jobs(_fit_one, jobs, executor=executor, scheduler=scheduler, processes=processes, labels=specimens,

@@ -1,0 +1,42 @@
+"""Evidence: log Z of a model with an honest error bar, and Bayes factors between nested models.
+
+- :mod:`.ladder` — stepping-stone ladders of tempered emcee ensembles from the prior, with
+  bridge-sampling and thermodynamic-integration cross-checks and a full error budget.
+- :mod:`.referenced` — the same ladders started from a reference density fitted to a pilot run
+  (few nats to cross instead of thousands): the default for creep posteriors.
+- :mod:`.tempered` — the referenced ladders' β = 1 rung used as a sampler. It lives here, not
+  among the samplers, because it *is* the referenced evidence run: its draws come with log Z.
+- :mod:`.laplace` — the Laplace approximation (a screen, labelled as such: no error bar).
+- :mod:`.savage_dickey` — Bayes factors of a nested model (Zener inside Burgers) from one
+  posterior.
+
+Every log Z reaches its callers as an :class:`EvidenceEstimate`.
+"""
+
+from .estimate import EvidenceEstimate
+from .ladder import EvidenceResult, LadderSettings, log_evidence
+from .laplace import LaplaceFit, LocalDraws, laplace_fit
+from .referenced import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, ModeSearch, referenced_log_evidence
+from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
+from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_run
+
+__all__ = [
+    "MODE_SEARCH",
+    "PILOT_SETTINGS",
+    "REFERENCED_LADDER",
+    "TEMPERED_SETTINGS",
+    "EvidenceEstimate",
+    "EvidenceResult",
+    "LadderSettings",
+    "LaplaceFit",
+    "LocalDraws",
+    "ModeSearch",
+    "SavageDickey",
+    "TemperedSettings",
+    "laplace_fit",
+    "log_evidence",
+    "referenced_log_evidence",
+    "savage_dickey",
+    "savage_dickey_posterior",
+    "tempered_run",
+]

@@ -1,0 +1,268 @@
+"""Optimisers on a vectorised log-density in unconstrained space: MAP points, regions, starts.
+
+Everything a sampler needs before it runs: maximum-a-posteriori points from the best prior
+draws (:func:`find_map`) refined in whitened coordinates (:func:`polish`), the square root of
+the Laplace covariance (:func:`root_covariance`), profile optima near nested models
+(:func:`nested_starts`), the sorting of optima into separate posterior regions
+(:func:`separate_regions`, :func:`start_regions`) and walker starts around a mode
+(:func:`laplace_start`, :func:`ensemble_start`). The functions take any callable target with
+``ndim`` (and ``prior`` where prior draws are needed), so the per-specimen fit, the referenced
+evidence, the Laplace approximation and the population routes share them.
+"""
+
+import numpy as np
+from scipy import optimize
+
+from .parallel import fork_pool
+from .parallel import single_threaded_blas
+
+__all__ = ["NESTED_DEPTH", "NegativeLogPosterior", "ensemble_start", "find_map", "laplace_start", "nested_starts",
+           "polish", "root_covariance", "separate_regions", "start_regions"]
+
+
+class NegativeLogPosterior:
+    """−log p(u) and its central-difference gradient from one vectorised call of 2·ndim + 1 points.
+
+    The posterior evaluates many walkers for the price of one, so a gradient costs about one
+    call instead of 2·ndim (single-point calls are dominated by fixed overhead).
+    """
+
+    def __init__(self, posterior, step=1e-5, basis=None, origin=None):
+        self.posterior = posterior
+        self.basis = np.eye(posterior.ndim) if basis is None else basis
+        self.origin = np.zeros(posterior.ndim) if origin is None else origin
+        self.offsets = np.vstack([np.zeros(posterior.ndim), step * np.eye(posterior.ndim),
+                                  -step * np.eye(posterior.ndim)])
+        self.step = step
+
+    def __call__(self, w):
+        values = -self.posterior(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
+        n = self.posterior.ndim
+        if not np.all(np.isfinite(values)):
+            return (values[0] if np.isfinite(values[0]) else 1e300), np.zeros(n)
+        return values[0], (values[1:n + 1] - values[n + 1:]) / (2 * self.step)
+
+
+def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, processes=1):
+    """Maximum-a-posteriori points in unconstrained space, optimised from the best prior draws.
+
+    Each start runs L-BFGS-B in the prior-scaled coordinates for at most ``maxiter`` iterations,
+    then :func:`polish` re-optimises it in coordinates whitened by the local Laplace covariance
+    until it gains less than 1e-3 nats. On the creep posterior's ridges the first phase mostly
+    crawls along the ridge and the polish does the walking: :func:`fit` stops the first phase
+    at :data:`MAP_ITERATIONS`.
+
+    Parameters
+    ----------
+    posterior : callable
+        Vectorised log-density of u, with its ``prior``.
+    rng : numpy.random.Generator
+    n_starts : int
+        Starts, from the best of ``n_candidates`` prior draws (and the prior's centre).
+    maxiter : int
+        L-BFGS-B iterations per start before the polish.
+    processes : int
+        Worker processes optimising starts side by side (forked; BLAS on one thread in each).
+        The optimisation has no randomness, so the optima are the same either way.
+
+    Returns
+    -------
+    ndarray, shape (n_starts, ndim)
+        One optimum per start, best first (repeated if fewer starts gave a finite posterior).
+    """
+    prior = posterior.prior
+    candidates = np.vstack([np.zeros(prior.ndim), prior.to_unconstrained(prior.sample(rng, n_candidates))])
+    values = posterior(candidates)
+    starts = [candidates[i] for i in np.argsort(values)[::-1][:n_starts] if np.isfinite(values[i])]
+    if not starts:
+        raise RuntimeError("no prior draw gives a finite posterior: check the data against the model's domain")
+    optima = _optimise_starts(posterior, starts, maxiter, processes)
+    optima.sort(key=lambda item: -item[0])
+    optima = [u for _, u in optima]
+    return np.array([optima[i % len(optima)] for i in range(n_starts)])
+
+
+def _optimise_starts(posterior, starts, maxiter, processes):
+    """:func:`_optimise_start` for every start, in ``processes`` forked workers; a list of (value, u)."""
+    workers = min(processes, len(starts))
+    if workers <= 1:
+        return [_optimise_start(posterior, u, maxiter) for u in starts]
+    with fork_pool(workers) as pool:
+        return list(pool.map(_optimise_start, [posterior] * len(starts), starts, [maxiter] * len(starts)))
+
+
+def _optimise_start(posterior, u0, maxiter):
+    """One start of :func:`find_map`: L-BFGS-B, then the whitened polish; returns (value, u).
+
+    BLAS runs on one thread: the finite-difference gradient's 25 × 12 products are far too
+    small for its thread pool."""
+    with single_threaded_blas():
+        result = optimize.minimize(NegativeLogPosterior(posterior), u0, jac=True, method="L-BFGS-B",
+                                   options={"maxiter": maxiter, "maxfun": 2 * maxiter})
+        return polish(posterior, result.x, -result.fun)[::-1]
+
+
+NESTED_DEPTH = -3.0
+"""Where the nested-model starts hold a half-normal parameter: prior-scaled u = log(x/scale),
+so x = e⁻³·scale ≈ 0.05·scale (inv_b1: 5e-13 /(Pa·s) on the A201)."""
+
+
+class _Slice:
+    """The log-posterior with coordinate ``index`` held at ``value``: a function of the others."""
+
+    def __init__(self, posterior, index, value):
+        self.posterior, self.index, self.value = posterior, index, value
+        self.ndim = posterior.ndim - 1
+
+    def full(self, v):
+        return np.insert(np.asarray(v, dtype=float), self.index, self.value, axis=-1)
+
+    def __call__(self, v):
+        return self.posterior(self.full(v))
+
+
+def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
+    """Profile optima near each nested model: one per half-normal parameter, held at ``depth``.
+
+    A half-normal prior (the Burgers fluidity ``inv_b1``; the catalogue effects' amplitudes)
+    marks a nested model at 0 — Zener, or no effect. A posterior that allows it has a long tail
+    toward 0, in log coordinates an exponential one, often bent through the other parameters
+    (inv_b1 → 0 with a slower Kelvin element taking over the linear creep). It holds no local
+    maximum, so no optimiser start finds it, and ensembles started at the MAP explore it slowly
+    (VALIDATION.md §1: τ ≈ 350 steps, SBC ranks of inv_b1 piled at 0). Each start here holds
+    one such parameter at ``depth`` and optimises the others from ``u_best``; :func:`fit` offers
+    them to the region sorting, which keeps those within reach of the best region's Laplace mass.
+
+    Returns
+    -------
+    ndarray, shape (k, ndim)
+    """
+    starts = []
+    for index, dist in enumerate(posterior.prior.dists):
+        if dist.kind != "halfnormal" or u_best[index] <= depth:
+            continue
+        held = _Slice(posterior, index, depth)
+        v0 = np.delete(u_best, index)
+        result = optimize.minimize(NegativeLogPosterior(held), v0, jac=True, method="L-BFGS-B",
+                                   options={"maxiter": 2000, "maxfun": 4000})
+        if np.isfinite(result.fun):
+            v, _ = polish(held, result.x, -result.fun)
+            starts.append(held.full(v))
+    return np.array(starts).reshape(-1, posterior.ndim)
+
+
+def root_covariance(posterior, u_map, step=1e-3):
+    """A square root of the Laplace covariance at ``u_map`` (columns scaled by 1/sqrt(precision)).
+
+    The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
+    vectorised call. Directions where it is not negative definite get the prior's scale
+    (u-space is prior-scaled, so 1).
+    """
+    n = posterior.ndim
+    eye = step * np.eye(n)
+    i, j = np.triu_indices(n)
+    corners = np.concatenate([u_map + eye[i] + eye[j], u_map + eye[i] - eye[j], u_map - eye[i] + eye[j],
+                              u_map - eye[i] - eye[j]])
+    f = posterior(corners).reshape(4, -1)
+    upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
+    hessian = np.zeros((n, n))
+    hessian[i, j] = upper
+    hessian[j, i] = upper
+    precision, vectors = np.linalg.eigh(-np.where(np.isfinite(hessian), hessian, 0.0))
+    precision = np.where(precision > 1e-12, precision, 1.0)
+    return vectors / np.sqrt(precision)
+
+
+def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3, root_cov=None):
+    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance
+    (``root_cov``, its square root, if already computed).
+
+    Returns
+    -------
+    ndarray, shape ``shape + (ndim,)``
+    """
+    root_cov = root_covariance(posterior, u_map, step) if root_cov is None else root_cov
+    return u_map + overdispersion * rng.standard_normal(shape + (posterior.ndim,)) @ root_cov.T
+
+
+def ensemble_start(posterior, u_map, rng, shape, root_cov=None):
+    """:func:`laplace_start`, with walkers that landed outside the posterior's support moved to
+    a tight ball around ``u_map``; shape (E, W) → (E, W, ndim)."""
+    start = laplace_start(posterior, u_map, rng, shape, root_cov=root_cov)
+    bad = ~np.isfinite(posterior(start.reshape(-1, posterior.ndim))).reshape(start.shape[:-1])
+    start[bad] = u_map + 1e-3 * rng.standard_normal((int(bad.sum()), posterior.ndim))
+    return start
+
+
+def separate_regions(posterior, optima, *, separation=2.0, max_regions=None, max_log_mass_gap=10.0):
+    """Optima in separate posterior regions, by Laplace mass (best first).
+
+    Two optima are one region when one lies within ``separation`` Laplace standard deviations
+    (whitened distance) of the other; regions more than ``max_log_mass_gap`` nats of Laplace mass
+    log p(u*) + log|Σ|^½ below the best are dropped.
+
+    Parameters
+    ----------
+    posterior : callable
+        Vectorised log-density of u.
+    optima : ndarray, shape (n, ndim)
+        Local optima (e.g. from :func:`find_map`).
+
+    Returns
+    -------
+    list of (ndarray (ndim,), float)
+        Each region's optimum and its Laplace log mass.
+    """
+    return [(u, mass) for u, _, mass in _regions(posterior, optima, separation, max_regions, max_log_mass_gap)]
+
+
+def _regions(posterior, optima, separation=2.0, max_regions=None, max_log_mass_gap=10.0):
+    """:func:`separate_regions` with each region's Laplace root covariance: (u, root, mass)."""
+    values = np.asarray(posterior(np.atleast_2d(optima)), dtype=float)
+    kept = []
+    for u, value in zip(np.atleast_2d(optima), values):
+        if not np.isfinite(value):
+            continue
+        if any(np.linalg.norm(np.linalg.solve(root, u - other)) < separation for other, root, _ in kept):
+            continue
+        root = root_covariance(posterior, u)
+        kept.append((u, root, float(value + np.linalg.slogdet(root)[1])))
+    if not kept:
+        raise RuntimeError("no optimum has a finite posterior")
+    kept.sort(key=lambda item: -item[2])
+    best = kept[0][2]
+    return [item for item in kept[:max_regions] if item[2] >= best - max_log_mass_gap]
+
+
+def start_regions(posterior, optima, tails, n_ensembles, max_log_mass_gap=10.0):
+    """Where the ensembles start: the optima's separate regions, and up to ``n_ensembles − 1``
+    nested-model starts (:func:`nested_starts`) whose Laplace mass is within
+    ``max_log_mass_gap`` of the best region's — these take the places of the weakest regions,
+    because no optimiser start reaches a tail and the sampler reaches it slowly."""
+    found = _regions(posterior, optima, max_log_mass_gap=max_log_mass_gap)
+    if len(tails):
+        best = found[0][2]
+        tails = [t for t in _regions(posterior, tails) if t[2] >= best - max_log_mass_gap][:n_ensembles - 1]
+    else:
+        tails = []
+    return found[:n_ensembles - len(tails)] + tails
+
+
+def polish(posterior, u, value, rounds=4, tol=1e-3):
+    """Re-optimise in coordinates whitened by the local Laplace covariance, until the gain is < tol.
+
+    L-BFGS-B in the prior-scaled coordinates stops early on the creep posterior's ridges
+    (condition number ~1e8): on a 9-test specimen it ended 19 nats below the true parameters.
+    Whitened, the ridge is round near the optimum and a few rounds walk along it.
+    """
+    for _ in range(rounds):
+        root = root_covariance(posterior, u)
+        objective = NegativeLogPosterior(posterior, basis=root, origin=u)
+        result = optimize.minimize(objective, np.zeros(posterior.ndim), jac=True, method="L-BFGS-B",
+                                   options={"maxiter": 2000, "maxfun": 4000})
+        if not np.isfinite(result.fun) or -result.fun <= value + tol:
+            if np.isfinite(result.fun) and -result.fun > value:
+                u, value = u + root @ result.x, -result.fun
+            break
+        u, value = u + root @ result.x, -result.fun
+    return u, value

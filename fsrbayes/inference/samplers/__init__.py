@@ -1,0 +1,40 @@
+"""Samplers: emcee ensembles run to shown convergence, their moves, transport maps.
+
+:func:`run_ensembles` runs several independent emcee ensembles in chunks until the split
+R-hat across ensembles, the kept chain's length in autocorrelation times and the bulk ESS all
+hold (:class:`SamplerSettings`), with checkpoints; :mod:`.transport` straightens the posterior
+during warm-up and supplies the independence proposals.
+"""
+
+from .ensemble import (
+    CheckpointMismatch,
+    ConvergenceReport,
+    ConvergenceWarning,
+    EnsembleRun,
+    SamplerSettings,
+    check_checkpoint,
+    convergence_report,
+    ensemble_moves,
+    even_index,
+    run_ensembles,
+    walkers_for,
+)
+from .transport import IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap
+
+__all__ = [
+    "CheckpointMismatch",
+    "ConvergenceReport",
+    "ConvergenceWarning",
+    "EnsembleRun",
+    "IndependenceProposal",
+    "MappedLogProb",
+    "MixtureProposal",
+    "SamplerSettings",
+    "TriangularMap",
+    "check_checkpoint",
+    "convergence_report",
+    "ensemble_moves",
+    "even_index",
+    "run_ensembles",
+    "walkers_for",
+]

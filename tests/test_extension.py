@@ -1,0 +1,142 @@
+"""A creep law and an effect registered from outside the package: simulated, fitted in worker
+processes and on a dask cluster whose workers never saw the registration.
+
+The classes below are defined at import but registered only by the ``registered`` fixture, so a
+dask worker that imports this module to unpickle them still has registries without them: the
+fit works there only because the model's components travel with the job.
+"""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.data import synthetic
+from fsrbayes.data.sensors import models_directory
+from fsrbayes.inference.population import fit_specimens
+from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.physics import effects, models, parameters, rheology
+
+SHORT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+LAW, EFFECT = "toy-logcreep", "toy-leak"
+
+
+def _log_creep(t, params):
+    """J(t) = (1 + c·ln(1 + t/1 s))/k1: creep linear in ln t, as real FSRs creep."""
+    t = np.asarray(t, dtype=float)
+    tp = np.maximum(t, 0.0)
+    return np.where(t >= 0, (1.0 + params["logc_rate"] * np.log1p(tp)) / params["k1"], 0.0)
+
+
+def _log_creep_ramp(t, params):
+    """Ĵ(t) = ∫₀ᵗ J = [t + c·((1 + t)·ln(1 + t) − t)]/k1."""
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)
+    return (tp + params["logc_rate"] * ((1.0 + tp) * np.log1p(tp) - tp)) / params["k1"]
+
+
+class Leak(effects.Effect):
+    """A parallel leakage path that opens slowly: I·(1 + leak·(1 − e^(−t/600 s)))."""
+
+    def current_factor(self, params, voltage, time):
+        return 1.0 + params["leak"] * -np.expm1(-np.asarray(time, dtype=float) / 600.0)
+
+
+TOY_PARAMETERS = (parameters.Parameter("logc_rate", "–", "physical", 0.1, "toy log-time creep rate"),
+                  parameters.Parameter("leak", "–", "effect", None, "toy leakage fraction"))
+TOY_LAW = rheology.CreepLaw(LAW, ("k1", "logc_rate"), _log_creep, _log_creep_ramp, "toy: creep linear in ln t")
+TOY_EFFECT = Leak(EFFECT, ("leak",), {"leak": 0.0}, "toy: a leakage path opens")
+
+
+@pytest.fixture
+def registered():
+    for parameter in TOY_PARAMETERS:
+        parameters.register_parameter(parameter)
+    rheology.register_creep_law(TOY_LAW)
+    effects.register_effect(TOY_EFFECT)
+    yield
+    del rheology.CREEP_LAWS[LAW], effects.EFFECTS[EFFECT]
+    for parameter in TOY_PARAMETERS:
+        del parameters.PARAMETERS[parameter.name]
+
+
+@pytest.fixture
+def toy_sensor(registered, tmp_path):
+    """The A201 file with the toy parameters, their values and priors added."""
+    text = (models_directory() / "a201.toml").read_text()
+    text = text.replace('name = "a201"', 'name = "toy"').replace("aliases = [", 'aliases = ["toy-a201", ')
+    text = text.replace("[params]\n", "[params]\nlogc_rate = 0.05\nleak = 0.0\n")
+    text = text.replace("[priors]\n", '[priors]\nlogc_rate = { dist = "halfnormal", scale = 0.2 }\n'
+                                      'leak = { dist = "normal", mu = 0.0, sigma = 0.2 }\n')
+    path = tmp_path / "toy.toml"
+    path.write_text(text)
+    return str(path)
+
+
+def test_a_registered_law_and_effect_join_every_list(registered):
+    assert LAW in models.model_families()
+    assert models.model_parameters(f"{LAW}+{EFFECT}")[-2:] == ("logc_rate", "leak")
+    assert "logc_rate" in parameters.population_scatter()
+    with pytest.raises(ValueError, match="already registered"):
+        rheology.register_creep_law(TOY_LAW)
+    with pytest.raises(ValueError, match="not in the parameter table"):
+        effects.register_effect(Leak("toy-other", ("nowhere",), {}, ""))
+
+
+def test_the_toy_law_follows_superposition_and_the_effect_its_hook(registered, a201):
+    params = dict(a201, logc_rate=0.05, leak=0.1)
+    t = np.array([1.0, 60.0, 3600.0])
+    step = fsrbayes.current(params, 1.0, 1e5, t, rheology=LAW)
+    from fsrbayes.physics import loading
+    from fsrbayes.physics.sensor import current_history
+
+    # a step at t = 0 as a history gives the same current as the step law
+    np.testing.assert_allclose(current_history(params, 1.0, loading.step(1e5), t, rheology=LAW), step, rtol=1e-12)
+    leaky = fsrbayes.current(params, 1.0, 1e5, t, rheology=LAW, effects=(EFFECT,))
+    np.testing.assert_allclose(leaky / step, 1.0 + 0.1 * -np.expm1(-t / 600.0), rtol=1e-12)
+
+
+def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
+    sim = synthetic.simulate(toy_sensor, n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=11,
+                             rheology=LAW, effects=[f"{EFFECT}=leak=0.05"], seed=3)
+    model = f"{LAW}+{EFFECT}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        here = fsrbayes.fit(sim.data, model=model, sensor=toy_sensor, rng=5, settings=SHORT)
+        forked = fsrbayes.fit(sim.data, model=model, sensor=toy_sensor, rng=5,
+                              settings=SamplerSettings(**{**SHORT.__dict__, "processes": 2}))
+    assert here.posterior.family is TOY_LAW and here.posterior.effect_objects == (TOY_EFFECT,)
+    assert {"logc_rate", "leak"} <= set(here.posterior.names)
+    np.testing.assert_array_equal(forked.run.chain, here.run.chain)
+    assert np.isfinite(here.run.log_prob[:, -1]).all()
+
+
+def test_fits_with_the_toy_model_on_a_dask_cluster(toy_sensor):
+    distributed = pytest.importorskip("dask.distributed")
+    sim = synthetic.simulate(toy_sensor, n_specimens=2, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=9,
+                             rheology=LAW, effects=[f"{EFFECT}=leak=0.05"], seed=4)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            # the workers' registries do not hold the toy law before the fits
+            assert not any(client.run(lambda: LAW in rheology.CREEP_LAWS).values())
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fits = fit_specimens(sim.data, scheduler=cluster.scheduler_address, model=f"{LAW}+{EFFECT}",
+                                 sensor=toy_sensor, settings=SHORT, errors="raise")
+    assert sorted(fits) == ["toy-01", "toy-02"]
+    for result in fits.values():
+        assert result.posterior.family.name == LAW and result.posterior.effects == (EFFECT,)
+        assert np.isfinite(result.run.log_prob[:, -1]).all()
+
+
+def test_a_worker_without_the_registration_gets_it_from_the_job(registered):
+    components = models.model_components(f"{LAW}+{EFFECT}")
+    assert components[:2] == (TOY_LAW, TOY_EFFECT)
+    del rheology.CREEP_LAWS[LAW], effects.EFFECTS[EFFECT]  # a fresh worker's registries
+    models.register_components(components)
+    assert rheology.CREEP_LAWS[LAW] is TOY_LAW and effects.EFFECTS[EFFECT] is TOY_EFFECT
+
+
+def test_source_is_outside_the_package():
+    assert not Path(__file__).resolve().is_relative_to(Path(fsrbayes.__file__).resolve().parent)
