@@ -14,7 +14,17 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from benchmarks import csv_read, demo, diagnose, dynesty_check, evidence, fit, hierarchical, likelihood, solver  # noqa: E402
+from benchmarks import (  # noqa: E402
+    csv_read,
+    demo,
+    diagnose,
+    dynesty_check,
+    evidence,
+    fit,
+    hierarchical,
+    likelihood,
+    solver,
+)  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 BENCHMARKS = {
@@ -35,8 +45,10 @@ def main(names):
     if unknown:
         print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
         return 2
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, {platform.processor() or 'cpu n/a'}; "
-          f"python {platform.python_version()}, numpy {np.__version__}")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, {platform.processor() or 'cpu n/a'}; "
+        f"python {platform.python_version()}, numpy {np.__version__}"
+    )
     for name in names or [n for n in BENCHMARKS if n != "dynesty"]:
         print(BENCHMARKS[name](), flush=True)
     return 0

@@ -16,9 +16,17 @@ def _timed(plan):
         start = time.perf_counter()
         results = run_demo(out, plan, processes=2, echo=lines.append)
         seconds = time.perf_counter() - start
-    stages = [line for line in lines if not line.lstrip("[ 0123456789s]").startswith(("a201-", "fsr402-"))]
-    return {"plan": plan.name, "seconds": seconds, "n_specimens": results["n_specimens"],
-            "n_tests": results["n_tests"], "stages": stages, "warnings": len(results["warnings"])}
+    stages = [
+        line for line in lines if not line.lstrip("[ 0123456789s]").startswith(("a201-", "fsr402-"))
+    ]
+    return {
+        "plan": plan.name,
+        "seconds": seconds,
+        "n_specimens": results["n_specimens"],
+        "n_tests": results["n_tests"],
+        "stages": stages,
+        "warnings": len(results["warnings"]),
+    }
 
 
 def run():
@@ -29,7 +37,9 @@ def report(runs):
     out = []
     for r in runs:
         target = 60 if r["plan"] == "quick" else 600
-        out.append(f"demo ({r['plan']}): {r['seconds']:.0f} s (target <= {target} s), {r['n_specimens']} specimens, "
-                   f"{r['n_tests']} creep tests, {r['warnings']} warnings")
+        out.append(
+            f"demo ({r['plan']}): {r['seconds']:.0f} s (target <= {target} s), {r['n_specimens']} specimens, "
+            f"{r['n_tests']} creep tests, {r['warnings']} warnings"
+        )
         out += [f"    {line}" for line in r["stages"]]
     return "\n".join(out)

@@ -14,16 +14,30 @@ from validation.diagnose_study import STUDY_VOLTAGES
 
 
 def run(processes=2):
-    sim = synthetic.simulate("a201", n_specimens=6, voltages=STUDY_VOLTAGES["a201"], samples=61,
-                             effects=["contact-creep=contact_creep=40"], seed=17)
+    sim = synthetic.simulate(
+        "a201",
+        n_specimens=6,
+        voltages=STUDY_VOLTAGES["a201"],
+        samples=61,
+        effects=["contact-creep=contact_creep=40"],
+        seed=17,
+    )
     start = time.perf_counter()
     result = diagnose(sim.data, processes=processes, seed=1)
-    return {"seconds": time.perf_counter() - start, "verdict": result.verdict, "effect": result.effect,
-            "gap_before": result.gap_before, "gap_after": result.gap_after, "processes": processes,
-            "log_bf": {c["effect"]: c["log_bf"] for c in result.candidates}}
+    return {
+        "seconds": time.perf_counter() - start,
+        "verdict": result.verdict,
+        "effect": result.effect,
+        "gap_before": result.gap_before,
+        "gap_after": result.gap_after,
+        "processes": processes,
+        "log_bf": {c["effect"]: c["log_bf"] for c in result.candidates},
+    }
 
 
 def report(r):
-    return (f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: {r['seconds']:.0f} s "
-            f"(target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap {r['gap_before']:.2f} -> "
-            f"{r['gap_after']:.2f}; ln B " + ", ".join(f"{k} {v:.0f}" for k, v in r["log_bf"].items()))
+    return (
+        f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: {r['seconds']:.0f} s "
+        f"(target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap {r['gap_before']:.2f} -> "
+        f"{r['gap_after']:.2f}; ln B " + ", ".join(f"{k} {v:.0f}" for k, v in r["log_bf"].items())
+    )

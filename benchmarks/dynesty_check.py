@@ -41,7 +41,7 @@ class _UnitCube:
         self.posterior = posterior
 
     def prior_transform(self, cube):
-        return np.array([d.ppf(q) for d, q in zip(self.posterior.prior.dists, cube)])
+        return np.array([d.ppf(q) for d, q in zip(self.posterior.prior.dists, cube, strict=False)])
 
     def loglike(self, x):
         with np.errstate(all="ignore"):
@@ -83,14 +83,28 @@ def run_dynesty(posterior, seed, nlive=250, sample="rslice", dlogz=0.1, walks=25
     if base == "prior":
         cube = _UnitCube(posterior)
     else:  # pilot from its own seed: h is independent of the ladder's reference and of dynesty's draws
-        cube = _Repartitioned(posterior, ReferenceDensity.fit(pilot_draws(posterior, seed=1000 + seed)))
+        cube = _Repartitioned(
+            posterior, ReferenceDensity.fit(pilot_draws(posterior, seed=1000 + seed))
+        )
     options = {"walks": walks} if sample == "rwalk" else {"slices": 3 + posterior.ndim}
-    sampler = dynesty.NestedSampler(cube.loglike, cube.prior_transform, posterior.ndim, nlive=nlive, bound="multi",
-                                    sample=sample, rstate=np.random.default_rng(seed), **options)
+    sampler = dynesty.NestedSampler(
+        cube.loglike,
+        cube.prior_transform,
+        posterior.ndim,
+        nlive=nlive,
+        bound="multi",
+        sample=sample,
+        rstate=np.random.default_rng(seed),
+        **options,
+    )
     sampler.run_nested(dlogz=dlogz, print_progress=False)
     result = sampler.results
-    return (float(result.logz[-1]), float(result.logzerr[-1]), int(np.sum(result.ncall)),
-            time.perf_counter() - start)
+    return (
+        float(result.logz[-1]),
+        float(result.logzerr[-1]),
+        int(np.sum(result.ncall)),
+        time.perf_counter() - start,
+    )
 
 
 def run(models=("burgers", "zener"), n_runs=1, processes=2, base="reference", nlive=250):
@@ -101,14 +115,20 @@ def run(models=("burgers", "zener"), n_runs=1, processes=2, base="reference", nl
     out = {m: {"runs": [], "base": base, "nlive": nlive} for m in models}
     start = time.perf_counter()
     with ProcessPoolExecutor(processes) as pool:
-        futures = {pool.submit(run_dynesty, specimen_posterior(m), k, nlive=nlive, base=base): m
-                   for m in models for k in range(n_runs)}
+        futures = {
+            pool.submit(run_dynesty, specimen_posterior(m), k, nlive=nlive, base=base): m
+            for m in models
+            for k in range(n_runs)
+        }
         for future in as_completed(futures):
             model = futures[future]
             out[model]["runs"].append(future.result())
             out[model]["wall"] = time.perf_counter() - start
-            print(f"dynesty {model} ({base} base, {nlive} live): log Z, logzerr, calls, seconds = "
-                  f"{out[model]['runs'][-1]}", flush=True)
+            print(
+                f"dynesty {model} ({base} base, {nlive} live): log Z, logzerr, calls, seconds = "
+                f"{out[model]['runs'][-1]}",
+                flush=True,
+            )
     return out
 
 
@@ -117,8 +137,10 @@ def report(results):
     for model, entry in results.items():
         log_z = np.array([r[0] for r in entry["runs"]])
         spread = log_z.std(ddof=1) / np.sqrt(len(log_z)) if len(log_z) > 1 else float("nan")
-        lines.append(f"dynesty ({entry['base']} base, {entry['nlive']} live) log Z {model}: {log_z.mean():.3f} ± {spread:.3f} "
-                     f"(spread of {len(log_z)} runs: {', '.join(f'{v:.3f}' for v in log_z)}; logzerr "
-                     f"{np.mean([r[1] for r in entry['runs']]):.3f}; {np.mean([r[2] for r in entry['runs']]):.0f} "
-                     f"calls and {np.mean([r[3] for r in entry['runs']]):.0f} s per run; {entry['wall']:.0f} s wall)")
+        lines.append(
+            f"dynesty ({entry['base']} base, {entry['nlive']} live) log Z {model}: {log_z.mean():.3f} ± {spread:.3f} "
+            f"(spread of {len(log_z)} runs: {', '.join(f'{v:.3f}' for v in log_z)}; logzerr "
+            f"{np.mean([r[1] for r in entry['runs']]):.3f}; {np.mean([r[2] for r in entry['runs']]):.0f} "
+            f"calls and {np.mean([r[3] for r in entry['runs']]):.0f} s per run; {entry['wall']:.0f} s wall)"
+        )
     return "\n".join(lines)

@@ -23,16 +23,26 @@ SEEDS = (1, 2, 3, 4, 5)
 
 def run(max_steps=20000, processes=None, seed=1):
     """Fit a simulated A201 specimen with the fit's defaults; return time and convergence."""
-    sim = synthetic.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=61,
-                             seed=5)
-    settings = replace(FIT_SETTINGS, max_steps=max_steps,
-                       processes=processes or min(FIT_SETTINGS.n_ensembles, os.cpu_count() or 1))
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=61, seed=5
+    )
+    settings = replace(
+        FIT_SETTINGS,
+        max_steps=max_steps,
+        processes=processes or min(FIT_SETTINGS.n_ensembles, os.cpu_count() or 1),
+    )
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         result = fit(sim.data, rng=seed, settings=settings)
-    return {"seconds": time.perf_counter() - start, "converged": result.converged, "seed": seed,
-            "steps": result.run.report.n_steps, "report": result.run.report.worst(), "processes": settings.processes}
+    return {
+        "seconds": time.perf_counter() - start,
+        "converged": result.converged,
+        "seed": seed,
+        "steps": result.run.report.n_steps,
+        "report": result.run.report.worst(),
+        "processes": settings.processes,
+    }
 
 
 def run_seeds(seeds=SEEDS, **kwargs):
@@ -42,15 +52,19 @@ def run_seeds(seeds=SEEDS, **kwargs):
 
 def report(r):
     state = "converged" if r["converged"] else "NOT converged"
-    return (f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: {r['seconds']:.0f} s, "
-            f"{r['steps']} steps, {state} "
-            f"({r['report']}); target <= {TARGET_S:.0f} s")
+    return (
+        f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: {r['seconds']:.0f} s, "
+        f"{r['steps']} steps, {state} "
+        f"({r['report']}); target <= {TARGET_S:.0f} s"
+    )
 
 
 def report_seeds(rows):
     seconds = np.array([r["seconds"] for r in rows])
     lines = [report(r) for r in rows]
-    lines.append(f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range {seconds.min():.0f}-{seconds.max():.0f} s, "
-                 f"{int(np.sum(seconds <= TARGET_S))} within {TARGET_S:.0f} s, "
-                 f"{sum(r['converged'] for r in rows)} converged")
+    lines.append(
+        f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range {seconds.min():.0f}-{seconds.max():.0f} s, "
+        f"{int(np.sum(seconds <= TARGET_S))} within {TARGET_S:.0f} s, "
+        f"{sum(r['converged'] for r in rows)} converged"
+    )
     return "\n".join(lines)

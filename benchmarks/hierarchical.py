@@ -25,8 +25,14 @@ HYPER_SETTINGS = SamplerSettings(processes=2)
 
 
 def bench(n_specimens=16, seed=31):
-    return synthetic.simulate("a201", n_specimens=n_specimens, voltages=[0.2, 0.5, 1.0, 3.0],
-                              forces=list(synthetic.PAPER_FORCES_N), samples=21, seed=seed)
+    return synthetic.simulate(
+        "a201",
+        n_specimens=n_specimens,
+        voltages=[0.2, 0.5, 1.0, 3.0],
+        forces=list(synthetic.PAPER_FORCES_N),
+        samples=21,
+        seed=seed,
+    )
 
 
 def _fits(data, processes, specimens=None):
@@ -52,10 +58,17 @@ def run():
     out["two_stage_s"] = out["fits_16_s"] + out["hyper_s"]
     out["hyper_report"] = result.run.report.worst()
     out["min_effective_draws"] = float(result.effective_draws.min())
-    joint_settings = SamplerSettings(n_ensembles=4, chunk=250, max_steps=6000, min_steps=500, processes=2)
+    joint_settings = SamplerSettings(
+        n_ensembles=4, chunk=250, max_steps=6000, min_steps=500, processes=2
+    )
     start = time.perf_counter()
-    joint_result = joint([f.posterior for f in fits.values()], result.population, settings=joint_settings, seed=3,
-                         start_from=result)
+    joint_result = joint(
+        [f.posterior for f in fits.values()],
+        result.population,
+        settings=joint_settings,
+        seed=3,
+        start_from=result,
+    )
     out["joint_s"] = time.perf_counter() - start
     out["joint_report"] = joint_result.run.report.worst()
     out["joint_steps"] = joint_result.run.report.n_steps
@@ -68,19 +81,27 @@ def route_agreement(first, second):
     Monte-Carlo error (z; the two-stage one includes the error of its finite per-specimen draws),
     and over the posterior sd."""
     a, b = first.summary(), second.summary()
-    return {name: {"z": (b[name]["mean"] - a[name]["mean"]) / np.hypot(a[name]["error_mean"], b[name]["error_mean"]),
-                   "in_sd": (b[name]["mean"] - a[name]["mean"]) / a[name]["sd"]} for name in a}
+    return {
+        name: {
+            "z": (b[name]["mean"] - a[name]["mean"])
+            / np.hypot(a[name]["error_mean"], b[name]["error_mean"]),
+            "in_sd": (b[name]["mean"] - a[name]["mean"]) / a[name]["sd"],
+        }
+        for name in a
+    }
 
 
 def report(r):
     speedup = r["fits_4_specimens_1_processes_s"] / r["fits_4_specimens_2_processes_s"]
     z = np.array([v["z"] for v in r["agreement"].values()])
     in_sd = np.array([v["in_sd"] for v in r["agreement"].values()])
-    return (f"hierarchical, 16 specimens x 12 tests x 21 samples: two-stage {r['two_stage_s']:.0f} s "
-            f"(fits {r['fits_16_s']:.0f} s on 2 processes, hyper-posterior {r['hyper_s']:.0f} s: {r['hyper_report']}; "
-            f"min effective draws {r['min_effective_draws']:.0f}); target <= 600 s. "
-            f"Fits of 4 specimens: 1 process {r['fits_4_specimens_1_processes_s']:.0f} s, 2 processes "
-            f"{r['fits_4_specimens_2_processes_s']:.0f} s, speed-up {speedup:.2f}x. "
-            f"Joint (214 parameters, blocked Gibbs in emcee, 4 x 32 walkers, from the two-stage start): "
-            f"{r['joint_s']:.0f} s, {r['joint_report']}; routes' means differ by |z| <= {np.abs(z).max():.1f} combined "
-            f"Monte-Carlo error ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= {np.abs(in_sd).max():.2f} posterior sd")
+    return (
+        f"hierarchical, 16 specimens x 12 tests x 21 samples: two-stage {r['two_stage_s']:.0f} s "
+        f"(fits {r['fits_16_s']:.0f} s on 2 processes, hyper-posterior {r['hyper_s']:.0f} s: {r['hyper_report']}; "
+        f"min effective draws {r['min_effective_draws']:.0f}); target <= 600 s. "
+        f"Fits of 4 specimens: 1 process {r['fits_4_specimens_1_processes_s']:.0f} s, 2 processes "
+        f"{r['fits_4_specimens_2_processes_s']:.0f} s, speed-up {speedup:.2f}x. "
+        f"Joint (214 parameters, blocked Gibbs in emcee, 4 x 32 walkers, from the two-stage start): "
+        f"{r['joint_s']:.0f} s, {r['joint_report']}; routes' means differ by |z| <= {np.abs(z).max():.1f} combined "
+        f"Monte-Carlo error ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= {np.abs(in_sd).max():.2f} posterior sd"
+    )

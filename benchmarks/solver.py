@@ -22,7 +22,9 @@ def _workload(params, n_walkers, rng):
     voltages = np.array([0.1, 0.2, 0.5, 0.75, 1.0, 2.0, 3.0])
     stresses = np.array([1.96, 4.9, 9.8]) / 41.85e-6
     times = np.concatenate(([0.0], np.geomspace(1.0, 3600.0, 119)))
-    scatter = {k: v * np.exp(0.05 * rng.standard_normal((n_walkers, 1, 1, 1))) for k, v in params.items()}
+    scatter = {
+        k: v * np.exp(0.05 * rng.standard_normal((n_walkers, 1, 1, 1))) for k, v in params.items()
+    }
     scatter["Vth"] = np.full((n_walkers, 1, 1, 1), params["Vth"])
     v = voltages[None, :, None, None]
     sigma = stresses[None, None, :, None]
@@ -58,26 +60,49 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
     for law, engine in (("smooth", "compiled"), ("smooth", "numpy"), ("paper", "numpy")):
         threshold = vth if law == "paper" else None
         solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine)
-        seconds = _time(lambda: solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine),
-                        repeats)
-        pick = rng.choice(np.flatnonzero(solution.valid.ravel() & ~solution.at_jump.ravel()), n_loop, replace=False)
+        seconds = _time(
+            lambda law=law, threshold=threshold, engine=engine: solver.solve_bulk(
+                v, rs, s, phi, a, law=law, threshold=threshold, engine=engine
+            ),
+            repeats,
+        )
+        pick = rng.choice(
+            np.flatnonzero(solution.valid.ravel() & ~solution.at_jump.ravel()),
+            n_loop,
+            replace=False,
+        )
         flat = [x.ravel()[pick] for x in (v, rs, s, phi, a, vth)]
-        loop_seconds = _time(lambda: [_brentq_point(*pt, law) for pt in zip(*flat)], 1)
-        loop_current = np.array([_brentq_point(*pt, law) for pt in zip(*flat)])
+        loop_seconds = _time(
+            lambda flat=flat, law=law: [_brentq_point(*pt, law) for pt in zip(*flat, strict=False)],
+            1,
+        )
+        loop_current = np.array([_brentq_point(*pt, law) for pt in zip(*flat, strict=False)])
         agree = np.max(np.abs(loop_current / solution.current.ravel()[pick] - 1.0))
         rate = n / seconds
         loop_rate = n_loop / loop_seconds
-        rows.append({"law": f"{law}/{engine}", "points": n, "vectorised_per_s": rate, "loop_per_s": loop_rate,
-                     "speedup": rate / loop_rate, "max_rel_diff": agree,
-                     "iterations": solution.iterations})
+        rows.append(
+            {
+                "law": f"{law}/{engine}",
+                "points": n,
+                "vectorised_per_s": rate,
+                "loop_per_s": loop_rate,
+                "speedup": rate / loop_rate,
+                "max_rel_diff": agree,
+                "iterations": solution.iterations,
+            }
+        )
     return rows
 
 
 def report(rows):
-    lines = [f"solver benchmark (single thread, OMP/MKL threads = {os.environ.get('OMP_NUM_THREADS', 'unset')})",
-             f"{'law/engine':15s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} {'speed-up':>9s} "
-             f"{'max |rel diff|':>15s} {'max iter':>8s}"]
+    lines = [
+        f"solver benchmark (single thread, OMP/MKL threads = {os.environ.get('OMP_NUM_THREADS', 'unset')})",
+        f"{'law/engine':15s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} {'speed-up':>9s} "
+        f"{'max |rel diff|':>15s} {'max iter':>8s}",
+    ]
     for r in rows:
-        lines.append(f"{r['law']:15s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} {r['loop_per_s']:14,.0f} "
-                     f"{r['speedup']:9.0f} {r['max_rel_diff']:15.1e} {r['iterations']:8d}")
+        lines.append(
+            f"{r['law']:15s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} {r['loop_per_s']:14,.0f} "
+            f"{r['speedup']:9.0f} {r['max_rel_diff']:15.1e} {r['iterations']:8d}"
+        )
     return "\n".join(lines)

@@ -9,7 +9,18 @@ from ._version import __version__
 from .data.sensors import Sensor, available_sensors, load_sensor
 from .physics.sensor import DomainError, current, drift
 
-__all__ = ["current", "drift", "fit", "compare", "diagnose", "load_sensor", "available_sensors", "Sensor", "DomainError", "__version__"]
+__all__ = [
+    "current",
+    "drift",
+    "fit",
+    "compare",
+    "diagnose",
+    "load_sensor",
+    "available_sensors",
+    "Sensor",
+    "DomainError",
+    "__version__",
+]
 
 
 def __getattr__(name):

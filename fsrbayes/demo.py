@@ -39,16 +39,20 @@ from .data.sensors import load_sensor
 from .data.synthetic import PAPER_VOLTAGES, default_data
 from .discrepancy import diagnose
 from .inference.compare import strength
-from .inference.population.routes import two_stage
 from .inference.evidence.laplace import LocalDraws, laplace_fit
-from .inference.output import save_population, to_datatree
-from .inference.parallel import map_jobs
-from .inference.population.model import Population
-from .inference.posterior import LogPosterior
 from .inference.likelihood import SpecimenData
-from .inference.population.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+from .inference.output import save_population, to_datatree
+from .inference.parallel import map_jobs, single_threaded_blas
+from .inference.population.model import Population
+from .inference.population.predictive import (
+    ForwardTemplate,
+    drift_groups,
+    new_specimens,
+    optimal_voltage,
+)
+from .inference.population.routes import two_stage
+from .inference.posterior import LogPosterior
 from .inference.samplers.ensemble import SamplerSettings
-from .inference.parallel import single_threaded_blas
 from .report import embed_figure, markdown_to_html, write_diagnosis_report
 from .utils import atomic_path, json_ready, write_json_atomic
 
@@ -88,8 +92,11 @@ class DemoPlan:
     n_draws: int = 400
     n_starts: int = 2
     draw_steps: int = 400
-    hyper: SamplerSettings = field(default_factory=lambda: SamplerSettings(
-        n_ensembles=2, chunk=500, max_steps=3000, min_steps=1000, transport_rounds=2))
+    hyper: SamplerSettings = field(
+        default_factory=lambda: SamplerSettings(
+            n_ensembles=2, chunk=500, max_steps=3000, min_steps=1000, transport_rounds=2
+        )
+    )
     n_hyper: int = 100
     n_per_hyper: int = 50
     diagnose_specimens: int = 2
@@ -99,10 +106,21 @@ class DemoPlan:
 FULL = DemoPlan("full", specimens_per_sensor=4, diagnose_specimens=1)
 """Four specimens per sensor at all eleven voltages (264 creep tests); diagnose (all five effects)
 on one specimen per sensor."""
-QUICK = DemoPlan("quick", specimens_per_sensor=2, voltages={"a201": (0.2, 1.0, 4.5), "fsr402": (0.2, 1.0, 5.0)},
-                 n_draws=200, n_starts=1, draw_steps=200,
-                 hyper=SamplerSettings(n_ensembles=2, chunk=200, max_steps=400, min_steps=400, transport_rounds=0),
-                 n_hyper=50, n_per_hyper=40, diagnose_specimens=1, diagnose_effects=("area-creep",))
+QUICK = DemoPlan(
+    "quick",
+    specimens_per_sensor=2,
+    voltages={"a201": (0.2, 1.0, 4.5), "fsr402": (0.2, 1.0, 5.0)},
+    n_draws=200,
+    n_starts=1,
+    draw_steps=200,
+    hyper=SamplerSettings(
+        n_ensembles=2, chunk=200, max_steps=400, min_steps=400, transport_rounds=0
+    ),
+    n_hyper=50,
+    n_per_hyper=40,
+    diagnose_specimens=1,
+    diagnose_effects=("area-creep",),
+)
 """A look in about a minute: two specimens per sensor at three voltages, one effect diagnosed."""
 
 
@@ -111,9 +129,11 @@ def _subset(data, plan):
     tests = []
     for sensor in data.sensors:
         part = data.select(sensor=sensor)
-        keep = set(part.specimens[:plan.specimens_per_sensor])
+        keep = set(part.specimens[: plan.specimens_per_sensor])
         volts = None if plan.voltages is None else {float(v) for v in plan.voltages[sensor]}
-        tests += [t for t in part.tests if t.specimen in keep and (volts is None or t.voltage_V in volts)]
+        tests += [
+            t for t in part.tests if t.specimen in keep and (volts is None or t.voltage_V in volts)
+        ]
     return type(data)(tuple(tests), data.source)
 
 
@@ -130,39 +150,71 @@ def _fit_specimen(job):
         draws = fit_burgers.local_draws(rng, plan.n_draws, steps=plan.draw_steps)
         zener = LogPosterior.for_sensor(packed, sensor, model="zener")
         fit_zener = laplace_fit(zener, rng, n_starts=plan.n_starts)
-    return {"specimen": specimen, "sensor": packed.sensor, "posterior": burgers, "draws": draws,
-            "log_z": {"burgers": fit_burgers.log_evidence, "zener": fit_zener.log_evidence},
-            "seconds": time.perf_counter() - started}
+    return {
+        "specimen": specimen,
+        "sensor": packed.sensor,
+        "posterior": burgers,
+        "draws": draws,
+        "log_z": {"burgers": fit_burgers.log_evidence, "zener": fit_zener.log_evidence},
+        "seconds": time.perf_counter() - started,
+    }
 
 
 def _evidence_summary(fits):
     """Per sensor: Laplace ln B of Burgers over Zener per specimen, summed, and in words."""
     out = {}
     for sensor in sorted({f["sensor"] for f in fits}):
-        per = {f["specimen"]: f["log_z"]["burgers"] - f["log_z"]["zener"] for f in fits if f["sensor"] == sensor}
+        per = {
+            f["specimen"]: f["log_z"]["burgers"] - f["log_z"]["zener"]
+            for f in fits
+            if f["sensor"] == sensor
+        }
         total = float(sum(per.values()))
         preferred = "burgers" if total >= 0 else "zener"
-        out[sensor] = {"log_bf_burgers_over_zener": total, "per_specimen": per, "preferred": preferred,
-                       "specimens_preferring_burgers": int(sum(v > 0 for v in per.values())),
-                       "strength": strength(abs(total), 0.0), "method": "laplace (no Monte-Carlo error)"}
+        out[sensor] = {
+            "log_bf_burgers_over_zener": total,
+            "per_specimen": per,
+            "preferred": preferred,
+            "specimens_preferring_burgers": int(sum(v > 0 for v in per.values())),
+            "strength": strength(abs(total), 0.0),
+            "method": "laplace (no Monte-Carlo error)",
+        }
     return out
 
 
 def _observed(data):
-    return [{"specimen": t.specimen, "voltage_V": t.voltage_V, "stress_Pa": t.stress_Pa,
-             "observed_drift_3600": t.observed_drift(DRIFT_TIME_S)} for t in data.tests]
+    return [
+        {
+            "specimen": t.specimen,
+            "voltage_V": t.voltage_V,
+            "stress_Pa": t.stress_Pa,
+            "observed_drift_3600": t.observed_drift(DRIFT_TIME_S),
+        }
+        for t in data.tests
+    ]
 
 
 def _population(sensor, fits, data, plan, seed, folder):
     """Two-stage population posterior of one sensor, new-specimen drift groups, optimal voltages."""
     posterior = fits[0]["posterior"]
     population = Population(posterior.prior)
-    hier = two_stage([f["draws"][:, population.index] for f in fits], population, n_draws=plan.n_draws,
-                     settings=plan.hyper, seed=seed)
+    hier = two_stage(
+        [f["draws"][:, population.index] for f in fits],
+        population,
+        n_draws=plan.n_draws,
+        settings=plan.hyper,
+        seed=seed,
+    )
     hier.specimens = [f["specimen"] for f in fits]
     template = ForwardTemplate.from_posterior(posterior)
-    specimens = new_specimens(population, hier.hyper_draws(), template, n_hyper=plan.n_hyper,
-                              n_per_hyper=plan.n_per_hyper, seed=seed)
+    specimens = new_specimens(
+        population,
+        hier.hyper_draws(),
+        template,
+        n_hyper=plan.n_hyper,
+        n_per_hyper=plan.n_per_hyper,
+        seed=seed,
+    )
     part = data.select(sensor=sensor)
     volts = np.unique([t.voltage_V for t in part.tests])
     stresses = np.unique([t.stress_Pa for t in part.tests])
@@ -172,19 +224,34 @@ def _population(sensor, fits, data, plan, seed, folder):
     observed = _observed(part)
     noise = float(np.median([posterior.parameters(f["draws"])["sigma_rel"] for f in fits]))
     info = save_population(hier, template, observed, folder, noise_rel=noise)
-    return {"groups": groups, "optimal_voltage": optimum, "population": info, "observed": observed,
-            "effective_draws_min": float(np.min(hier.effective_draws))}
+    return {
+        "groups": groups,
+        "optimal_voltage": optimum,
+        "population": info,
+        "observed": observed,
+        "effective_draws_min": float(np.min(hier.effective_draws)),
+    }
 
 
 def _figures(sensor, pop, fits, folder):
     """Box plots by voltage and by stress, and the credible bands of the sensor's first specimen."""
-    constant = {k: np.array([t[k] for t in pop["observed"]], dtype=float)
-                for k in ("voltage_V", "stress_Pa", "observed_drift_3600")}
+    constant = {
+        k: np.array([t[k] for t in pop["observed"]], dtype=float)
+        for k in ("voltage_V", "stress_Pa", "observed_drift_3600")
+    }
     made = []
-    for by, caption in (("voltage", "drift(3600 s) of a new specimen against the sourcing voltage, per stress "
-                                     "(the stand-in for the paper's Figures 10 and 11)"),
-                        ("stress", "drift(3600 s) of a new specimen against stress, per sourcing voltage "
-                                   "(Figures 13 and 14)")):
+    for by, caption in (
+        (
+            "voltage",
+            "drift(3600 s) of a new specimen against the sourcing voltage, per stress "
+            "(the stand-in for the paper's Figures 10 and 11)",
+        ),
+        (
+            "stress",
+            "drift(3600 s) of a new specimen against stress, per sourcing voltage "
+            "(Figures 13 and 14)",
+        ),
+    ):
         path = folder / f"population_drift_by_{by}.png"
         plots.save_figure(plots.population_drift_plot(pop["groups"], constant, by=by)[0], path)
         made.append((path, f"{sensor}: {caption}"))
@@ -194,41 +261,70 @@ def _figures(sensor, pop, fits, folder):
         tree.to_netcdf(tmp, engine="h5netcdf")
     path = folder / f"drift_bands_{first['specimen']}.png"
     plots.save_figure(plots.band_plot(tree, "drift", max_tests=6)[0], path)
-    made.append((path, f"{sensor}, specimen {first['specimen']}: 50 % and 90 % credible drift bands over the "
-                       "measured drift (first six tests)"))
+    made.append(
+        (
+            path,
+            f"{sensor}, specimen {first['specimen']}: 50 % and 90 % credible drift bands over the "
+            "measured drift (first six tests)",
+        )
+    )
     return made
 
 
 def _narrative(results, figures, plan):
     """The report's Markdown (figures referenced by path; embedded when converted to HTML)."""
-    lines = ["# fsrbayes demo: FSR creep, the Bayesian way", "",
-             f"Data: {results['data']}. Plan `{plan.name}`: {results['n_specimens']} specimens, "
-             f"{results['n_tests']} creep tests. Run time {results['seconds']:.0f} s.", "",
-             "## Zener or Burgers?", "",
-             "| sensor | ln B (Burgers over Zener), summed | specimens preferring Burgers | verdict |",
-             "|---|---|---|---|"]
+    lines = [
+        "# fsrbayes demo: FSR creep, the Bayesian way",
+        "",
+        f"Data: {results['data']}. Plan `{plan.name}`: {results['n_specimens']} specimens, "
+        f"{results['n_tests']} creep tests. Run time {results['seconds']:.0f} s.",
+        "",
+        "## Zener or Burgers?",
+        "",
+        "| sensor | ln B (Burgers over Zener), summed | specimens preferring Burgers | verdict |",
+        "|---|---|---|---|",
+    ]
     for sensor, e in results["evidence"].items():
-        lines.append(f"| {sensor} | {e['log_bf_burgers_over_zener']:.1f} | {e['specimens_preferring_burgers']}/"
-                     f"{len(e['per_specimen'])} | {e['preferred']}: {e['strength']} |")
-    lines += ["", "Laplace evidences (mode and Hessian); `fsrbayes compare` gives stepping-stone evidences "
-              "with error bars.", "", "## Population drift(3600 s) and the optimal sourcing voltage", ""]
+        lines.append(
+            f"| {sensor} | {e['log_bf_burgers_over_zener']:.1f} | {e['specimens_preferring_burgers']}/"
+            f"{len(e['per_specimen'])} | {e['preferred']}: {e['strength']} |"
+        )
+    lines += [
+        "",
+        "Laplace evidences (mode and Hessian); `fsrbayes compare` gives stepping-stone evidences "
+        "with error bars.",
+        "",
+        "## Population drift(3600 s) and the optimal sourcing voltage",
+        "",
+    ]
     for sensor, pop in results["population"].items():
         for opt in pop["optimal_voltage"]:
-            edge = (f"; for {100 * opt['at_boundary']:.0f} % of new specimens the optimum is an end of the "
-                    f"range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling with voltage there)"
-                    if opt["at_boundary"] > 0.05 else "")
-            lines.append(f"- {sensor} at {opt['stress_Pa'] / 1e3:.0f} kPa: |drift(3600 s)| of a new specimen is "
-                         f"smallest at **{opt['median']:.2g} V** (90 %: {opt['q05']:.2g}–{opt['q95']:.2g} V), "
-                         f"where it drifts {opt['drift_at_optimum']['q50']:+.2f} % (median){edge}")
-        lines.append(f"- {sensor}: two-stage population posterior, fewest effective draws of a specimen "
-                     f"{pop['effective_draws_min']:.0f}")
+            edge = (
+                f"; for {100 * opt['at_boundary']:.0f} % of new specimens the optimum is an end of the "
+                f"range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling with voltage there)"
+                if opt["at_boundary"] > 0.05
+                else ""
+            )
+            lines.append(
+                f"- {sensor} at {opt['stress_Pa'] / 1e3:.0f} kPa: |drift(3600 s)| of a new specimen is "
+                f"smallest at **{opt['median']:.2g} V** (90 %: {opt['q05']:.2g}–{opt['q95']:.2g} V), "
+                f"where it drifts {opt['drift_at_optimum']['q50']:+.2f} % (median){edge}"
+            )
+        lines.append(
+            f"- {sensor}: two-stage population posterior, fewest effective draws of a specimen "
+            f"{pop['effective_draws_min']:.0f}"
+        )
     d = results["diagnose"]
     best = d["candidates"][0]
-    lines += ["", "## What the model misses", "",
-              f"`diagnose` on {', '.join(d['specimens'])}: verdict **{d['verdict']}**"
-              f"{' (' + d['effect'] + ')' if d['effect'] else ''}; gap {d['gap_before']:.2f} (an adequate model "
-              f"gives about 0.75–1); best candidate {best['effect']} with ln B = {best['log_bf']:.1f} over the base "
-              f"model (an effect is named from ln B = 10). Full report: `{d['report']}`"]
+    lines += [
+        "",
+        "## What the model misses",
+        "",
+        f"`diagnose` on {', '.join(d['specimens'])}: verdict **{d['verdict']}**"
+        f"{' (' + d['effect'] + ')' if d['effect'] else ''}; gap {d['gap_before']:.2f} (an adequate model "
+        f"gives about 0.75–1); best candidate {best['effect']} with ln B = {best['log_bf']:.1f} over the base "
+        f"model (an effect is named from ln B = 10). Full report: `{d['report']}`",
+    ]
     lines += ["", "## Figures", ""]
     lines += [f"![{caption}]({path})" for path, caption in figures]
     return "\n".join(lines) + "\n"
@@ -257,7 +353,11 @@ def run_demo(out, plan=FULL, *, processes=None, seed=2017, echo=print):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         results = _run(Path(out), plan, processes, seed, echo)
-    notes = [f"{w.category.__name__}: {w.message}" for w in caught if w.category.__module__.startswith("fsrbayes")]
+    notes = [
+        f"{w.category.__name__}: {w.message}"
+        for w in caught
+        if w.category.__module__.startswith("fsrbayes")
+    ]
     results["warnings"] = list(dict.fromkeys(notes))
     write_json_atomic(Path(out) / "results.json", json_ready(results))
     return results
@@ -268,39 +368,79 @@ def _run(out, plan, processes, seed, echo):
     out.mkdir(parents=True, exist_ok=True)
     data = _subset(default_data(), plan)
     specimens = list(data.specimens)
-    echo(f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} creep tests "
-         f"({plan.name} plan): Burgers and Zener fits")
+    echo(
+        f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} creep tests "
+        f"({plan.name} plan): Burgers and Zener fits"
+    )
     jobs = [(data.select(specimen=s), s, plan, [seed, k]) for k, s in enumerate(specimens)]
-    fits = map_jobs(_fit_specimen, jobs, processes=processes, on_result=lambda k, r: echo(
-        f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): "
-        f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} ({r['seconds']:.0f} s)"))
-    results = {"data": data.source, "plan": plan.name, "n_specimens": len(specimens), "n_tests": len(data.tests),
-               "evidence": _evidence_summary(fits), "population": {}}
+    fits = map_jobs(
+        _fit_specimen,
+        jobs,
+        processes=processes,
+        on_result=lambda k, r: echo(
+            f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): "
+            f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} ({r['seconds']:.0f} s)"
+        ),
+    )
+    results = {
+        "data": data.source,
+        "plan": plan.name,
+        "n_specimens": len(specimens),
+        "n_tests": len(data.tests),
+        "evidence": _evidence_summary(fits),
+        "population": {},
+    }
     figures = []
     for sensor in data.sensors:
         folder = out / sensor
         folder.mkdir(exist_ok=True)
         sensor_fits = [f for f in fits if f["sensor"] == sensor]
-        echo(f"[{time.perf_counter() - started:5.0f} s] {sensor}: population posterior (two-stage), new specimens, "
-             "optimal voltage")
+        echo(
+            f"[{time.perf_counter() - started:5.0f} s] {sensor}: population posterior (two-stage), new specimens, "
+            "optimal voltage"
+        )
         pop = _population(sensor, sensor_fits, data, plan, seed, folder)
         figures += _figures(sensor, pop, sensor_fits, folder)
         results["population"][sensor] = {k: v for k, v in pop.items() if k != "observed"}
-    chosen = [s for sensor in data.sensors for s in data.select(sensor=sensor).specimens[:plan.diagnose_specimens]]
+    chosen = [
+        s
+        for sensor in data.sensors
+        for s in data.select(sensor=sensor).specimens[: plan.diagnose_specimens]
+    ]
     echo(f"[{time.perf_counter() - started:5.0f} s] diagnose on {', '.join(chosen)}")
-    diagnosis = diagnose(data, effects=plan.diagnose_effects, specimens=chosen, n_draws=plan.n_draws,
-                         n_starts=plan.n_starts, processes=processes, seed=seed)
+    diagnosis = diagnose(
+        data,
+        effects=plan.diagnose_effects,
+        specimens=chosen,
+        n_draws=plan.n_draws,
+        n_starts=plan.n_starts,
+        processes=processes,
+        seed=seed,
+    )
     page = write_diagnosis_report(diagnosis, out / "diagnose")
     summary = diagnosis.as_dict()
-    results["diagnose"] = {k: summary[k] for k in ("verdict", "effect", "gap_before", "gap_after", "gap_metric",
-                                                   "drift_gap_before", "candidates", "specimens")}
+    results["diagnose"] = {
+        k: summary[k]
+        for k in (
+            "verdict",
+            "effect",
+            "gap_before",
+            "gap_after",
+            "gap_metric",
+            "drift_gap_before",
+            "candidates",
+            "specimens",
+        )
+    }
     results["diagnose"]["report"] = str(page.relative_to(out))
     results["seconds"] = time.perf_counter() - started
     text = _narrative(results, [(p.relative_to(out), c) for p, c in figures], plan)
     with atomic_path(out / "report.md") as tmp:
         tmp.write_text(text)
     page = out / "report.html"
-    embedded = "\n".join(embed_figure(line, out) if line.startswith("![") else line for line in text.splitlines())
+    embedded = "\n".join(
+        embed_figure(line, out) if line.startswith("![") else line for line in text.splitlines()
+    )
     with atomic_path(page) as tmp:
         tmp.write_text(markdown_to_html(embedded, title="fsrbayes demo"))
     results["report"] = str(page)

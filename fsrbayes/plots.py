@@ -14,9 +14,17 @@ import numpy as np  # noqa: E402
 
 from .physics.parameters import physical_parameters  # noqa: E402
 
-__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "population_drift_plot", "diagnosis_drift_plot",
-           "diagnosis_misfit_plot", "diagnosis_residual_plot", "sbc_rank_plot", "save_figure"]
-
+__all__ = [
+    "corner_plot",
+    "band_plot",
+    "drift_3600_plot",
+    "population_drift_plot",
+    "diagnosis_drift_plot",
+    "diagnosis_misfit_plot",
+    "diagnosis_residual_plot",
+    "sbc_rank_plot",
+    "save_figure",
+]
 
 
 def corner_plot(tree, names=None):
@@ -34,8 +42,13 @@ def corner_plot(tree, names=None):
         else:
             columns.append(values)
             labels.append(name)
-    fig = corner.corner(np.column_stack(columns), labels=labels, quantiles=[0.05, 0.5, 0.95], show_titles=False,
-                        label_kwargs={"fontsize": 8})
+    fig = corner.corner(
+        np.column_stack(columns),
+        labels=labels,
+        quantiles=[0.05, 0.5, 0.95],
+        show_titles=False,
+        label_kwargs={"fontsize": 8},
+    )
     return fig, np.array(fig.axes).reshape(len(names), len(names))
 
 
@@ -69,7 +82,9 @@ def band_plot(tree, kind="drift", max_tests=12):
             draws = tree.posterior_predictive["current"].values[..., mask].reshape(-1, mask.sum())
             y, points, label = t, current, "current (A)"
         for (lo, hi), alpha in (((5, 95), 0.25), ((25, 75), 0.45)):
-            ax.fill_between(y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0)
+            ax.fill_between(
+                y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0
+            )
         ax.plot(y, np.median(draws, axis=0), "C0", lw=1)
         ax.plot(t, points, "k.", ms=3)
         ax.set(title=_test_label(tree, i), xlabel="time (s)", ylabel=label)
@@ -80,7 +95,9 @@ def band_plot(tree, kind="drift", max_tests=12):
 
 def drift_3600_plot(tree):
     """Posterior predictive drift(3600 s) per test (median, 50 % and 90 %) with the observed value."""
-    drift = tree.posterior_predictive["drift_3600"].values.reshape(-1, tree.constant_data["voltage_V"].size)
+    drift = tree.posterior_predictive["drift_3600"].values.reshape(
+        -1, tree.constant_data["voltage_V"].size
+    )
     observed = tree.constant_data["observed_drift_3600"].values
     x = np.arange(drift.shape[1])
     fig, ax = plt.subplots(figsize=(max(5, 0.6 * x.size + 2), 3.5))
@@ -122,16 +139,20 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     panels = sorted({g[panel_key] for g in groups})
     n_cols = min(len(panels), PANELS_PER_ROW)
     n_rows = -(-len(panels) // n_cols)
-    fig, axes = plt.subplots(n_rows, n_cols, figsize=(3.6 * n_cols, 3.6 * n_rows), sharey=True, squeeze=False)
-    for ax in axes.flat[len(panels):]:
+    fig, axes = plt.subplots(
+        n_rows, n_cols, figsize=(3.6 * n_cols, 3.6 * n_rows), sharey=True, squeeze=False
+    )
+    for ax in axes.flat[len(panels) :]:
         ax.set_visible(False)
     names = ("q05", "q25", "q50", "q75", "q95")
     shown, bars = [], []  # values that set the y-range; (axis, x, lo, hi) of the quantile intervals
-    for ax, panel in zip(axes.flat, panels):
+    for ax, panel in zip(axes.flat, panels, strict=False):
         rows = sorted((g for g in groups if g[panel_key] == panel), key=lambda g: g[x_key])
         for k, g in enumerate(rows):
             q = [g["new_specimen"][n] for n in names]
-            ax.add_patch(plt.Rectangle((k - 0.2, q[1]), 0.4, q[3] - q[1], fc="C0", alpha=0.35, ec="C0"))
+            ax.add_patch(
+                plt.Rectangle((k - 0.2, q[1]), 0.4, q[3] - q[1], fc="C0", alpha=0.35, ec="C0")
+            )
             ax.hlines(q[2], k - 0.2, k + 0.2, color="C0", lw=2)
             ax.vlines(k, q[0], q[1], color="C0")
             ax.vlines(k, q[3], q[4], color="C0")
@@ -140,12 +161,20 @@ def population_drift_plot(groups, observed=None, by="voltage"):
                 lo, hi = g["quantile_intervals"][n]
                 bars.append((ax, k + 0.24 + 0.03 * j, lo, hi))
             if observed is not None:
-                near = (np.isclose(observed[panel_key], panel, rtol=1e-6)
-                        & np.isclose(observed[x_key], g[x_key], rtol=1e-6))
+                near = np.isclose(observed[panel_key], panel, rtol=1e-6) & np.isclose(
+                    observed[x_key], g[x_key], rtol=1e-6
+                )
                 values = np.asarray(observed["observed_drift_3600"])[near]
                 shown += list(values)
-                ax.plot(k - 0.32 + 0.08 * np.linspace(-1, 1, max(len(values), 1))[:len(values)], values, "k.", ms=3)
-        labels = [f"{g[x_key]:g}" if x_key == "voltage_V" else f"{g[x_key] / 1e3:.0f}" for g in rows]
+                ax.plot(
+                    k - 0.32 + 0.08 * np.linspace(-1, 1, max(len(values), 1))[: len(values)],
+                    values,
+                    "k.",
+                    ms=3,
+                )
+        labels = [
+            f"{g[x_key]:g}" if x_key == "voltage_V" else f"{g[x_key] / 1e3:.0f}" for g in rows
+        ]
         ax.set_xticks(range(len(rows)), labels, rotation=90 if len(rows) > 6 else 0)
         title = f"{panel / 1e3:.0f} kPa" if panel_key == "stress_Pa" else f"{panel:g} V"
         ax.set(title=title, xlabel="V_FSR (V)" if x_key == "voltage_V" else "stress (kPa)")
@@ -168,7 +197,14 @@ def population_drift_plot(groups, observed=None, by="voltage"):
         row[0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
     what = "as measured" if groups[0].get("as_measured") else "noise-free"
     last = axes.flat[len(panels) - 1]
-    last.plot([], [], "s", color="C0", alpha=0.35, label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)")
+    last.plot(
+        [],
+        [],
+        "s",
+        color="C0",
+        alpha=0.35,
+        label=f"new specimen, {what} (box 25–75 %, whiskers 5–95 %)",
+    )
     last.plot([], [], "-", color="C1", label="90 % interval of each quantile (▲ cut at the axis)")
     if observed is not None:
         last.plot([], [], "k.", label="observed specimens")
@@ -181,7 +217,9 @@ def _diagnosis_panels(diagnosis):
     """(title, checks) of the base model and, when an effect is named, of base + effect."""
     panels = [(f"before: {diagnosis.base}", diagnosis.checks())]
     if diagnosis.effect is not None:
-        panels.append((f"after: {diagnosis.base}+{diagnosis.effect}", diagnosis.checks(diagnosis.effect)))
+        panels.append(
+            (f"after: {diagnosis.base}+{diagnosis.effect}", diagnosis.checks(diagnosis.effect))
+        )
     return panels
 
 
@@ -197,19 +235,38 @@ def diagnosis_drift_plot(diagnosis):
     stresses = np.concatenate([c.stress_Pa for c in panels[0][1]])
     colours = {v: plt.cm.viridis(k / max(1, len(voltages) - 1)) for k, v in enumerate(voltages)}
     gaps = [diagnosis.gap_before, diagnosis.gap_after]
-    for ax, (title, checks), value in zip(axes[0], panels, gaps):
+    for ax, (title, checks), value in zip(axes[0], panels, gaps, strict=False):
         for c in checks:
             q05, q50, q95 = c.predicted_drift()
             for i in range(len(c.voltage_V)):
                 size = 12 + 40 * (c.stress_Pa[i] - stresses.min()) / max(np.ptp(stresses), 1e-9)
-                ax.errorbar(c.observed_drift[i], q50[i], yerr=[[q50[i] - q05[i]], [q95[i] - q50[i]]], fmt="none",
-                            ecolor=colours[c.voltage_V[i]], alpha=0.5, lw=0.8)
-                ax.scatter(c.observed_drift[i], q50[i], s=size, color=colours[c.voltage_V[i]], edgecolor="k", lw=0.3)
+                ax.errorbar(
+                    c.observed_drift[i],
+                    q50[i],
+                    yerr=[[q50[i] - q05[i]], [q95[i] - q50[i]]],
+                    fmt="none",
+                    ecolor=colours[c.voltage_V[i]],
+                    alpha=0.5,
+                    lw=0.8,
+                )
+                ax.scatter(
+                    c.observed_drift[i],
+                    q50[i],
+                    s=size,
+                    color=colours[c.voltage_V[i]],
+                    edgecolor="k",
+                    lw=0.3,
+                )
         lims = np.array(ax.get_xlim() + ax.get_ylim())
         ax.plot([lims.min(), lims.max()], [lims.min(), lims.max()], "k--", lw=0.8)
-        ax.set(title=f"{title}\ngap = {value:.2f}", xlabel="observed drift(3600 s) (%)",
-               ylabel="predicted drift(3600 s) (%)")
-    handles = [plt.Line2D([], [], ls="", marker="o", color=colours[v], label=f"{v:g} V") for v in voltages]
+        ax.set(
+            title=f"{title}\ngap = {value:.2f}",
+            xlabel="observed drift(3600 s) (%)",
+            ylabel="predicted drift(3600 s) (%)",
+        )
+    handles = [
+        plt.Line2D([], [], ls="", marker="o", color=colours[v], label=f"{v:g} V") for v in voltages
+    ]
     axes[0, -1].legend(handles=handles, fontsize=7, title="V_FSR", title_fontsize=7)
     fig.tight_layout()
     return fig, axes
@@ -221,8 +278,11 @@ def diagnosis_misfit_plot(diagnosis):
 
     panels = _diagnosis_panels(diagnosis)
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), squeeze=False)
-    for ax, (attribute, label, scale) in zip(axes[0], (("voltage_V", "V_FSR (V)", 1.0),
-                                                       ("stress_Pa", "stress (kPa)", 1e-3))):
+    for ax, (attribute, label, scale) in zip(
+        axes[0],
+        (("voltage_V", "V_FSR (V)", 1.0), ("stress_Pa", "stress (kPa)", 1e-3)),
+        strict=False,
+    ):
         width = 0.8 / len(panels)
         for k, (title, checks) in enumerate(panels):
             rows = misfit_by(checks, attribute)
@@ -241,9 +301,11 @@ def diagnosis_misfit_plot(diagnosis):
 def diagnosis_residual_plot(diagnosis):
     """Standardised residuals of log-current over time (mean per voltage), before and after."""
     panels = _diagnosis_panels(diagnosis)
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(4.6 * len(panels), 3.6), sharey=True, squeeze=False
+    )
     voltages = np.unique(np.concatenate([c.voltage_V for c in panels[0][1]]))
-    for ax, (title, checks) in zip(axes[0], panels):
+    for ax, (title, checks) in zip(axes[0], panels, strict=False):
         for k, v in enumerate(voltages):
             times, residuals = [], []
             for c in checks:
@@ -253,7 +315,13 @@ def diagnosis_residual_plot(diagnosis):
             t = np.nanmedian(np.array(times), axis=0)
             r = np.nanmean(np.array(residuals), axis=0)
             keep = t > 0
-            ax.plot(t[keep], r[keep], color=plt.cm.viridis(k / max(1, len(voltages) - 1)), lw=1, label=f"{v:g} V")
+            ax.plot(
+                t[keep],
+                r[keep],
+                color=plt.cm.viridis(k / max(1, len(voltages) - 1)),
+                lw=1,
+                label=f"{v:g} V",
+            )
         ax.axhline(0, color="k", lw=0.8)
         ax.set(xscale="log", title=title, xlabel="time (s)")
     axes[0, 0].set_ylabel("mean standardised residual of log I")
@@ -279,7 +347,9 @@ def sbc_rank_plot(result, bins=10, per_row=4):
     n_q = len(result.names)
     n_cols = min(per_row, n_q)
     n_rows = -(-n_q // n_cols)
-    fig, axes = plt.subplots(n_rows, n_cols, figsize=(3.0 * n_cols, 2.3 * n_rows), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(
+        n_rows, n_cols, figsize=(3.0 * n_cols, 2.3 * n_rows), sharex=True, squeeze=False
+    )
     edges = np.arange(bins + 1)
     for q, ax in enumerate(axes.flat):
         if q >= n_q:
@@ -287,15 +357,24 @@ def sbc_rank_plot(result, bins=10, per_row=4):
             continue
         ax.axhspan(low, high, color="0.85", zorder=0)
         ax.axhline(result.n_reps / bins, color="0.5", lw=0.8, zorder=1)
-        ax.stairs(counts[:, q], edges, fill=True, color="C0" if p_values[q] >= 0.01 / n_q else "C3", alpha=0.8)
+        ax.stairs(
+            counts[:, q],
+            edges,
+            fill=True,
+            color="C0" if p_values[q] >= 0.01 / n_q else "C3",
+            alpha=0.8,
+        )
         ax.set_title(f"{result.names[q]}\np = {p_values[q]:.2f}", fontsize=8)
         ax.set_xticks([0, bins], ["0", f"{result.n_draws}"])
         ax.set_ylim(0, max(high, counts.max()) * 1.15)
         ax.tick_params(labelsize=7)
     for ax in axes[-1]:
         ax.set_xlabel("rank of the truth", fontsize=8)
-    fig.suptitle(f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; "
-                 f"grey: 99 % band of a calibrated bin", fontsize=9)
+    fig.suptitle(
+        f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; "
+        f"grey: 99 % band of a calibrated bin",
+        fontsize=9,
+    )
     fig.tight_layout()
     return fig, axes
 

@@ -26,13 +26,17 @@ def _where_worst(rows, attribute, unit, scale=1.0):
         return ""
     worst = max(rows, key=lambda r: abs(r["mean_z"]))
     way = "over-predicts" if worst["mean_misfit_pct"] < 0 else "under-predicts"
-    return (f"{way} drift(3600 s) most at {worst[attribute] * scale:g} {unit} (observed − predicted "
-            f"{worst['mean_misfit_pct']:+.2f} percentage points, mean z = {worst['mean_z']:+.1f})")
+    return (
+        f"{way} drift(3600 s) most at {worst[attribute] * scale:g} {unit} (observed − predicted "
+        f"{worst['mean_misfit_pct']:+.2f} percentage points, mean z = {worst['mean_z']:+.1f})"
+    )
 
 
 def _parameter_text(parameters):
-    return ", ".join(f"{name} = {v['median']:.3g} (5–95 %: {v['q05']:.3g} … {v['q95']:.3g})"
-                     for name, v in parameters.items())
+    return ", ".join(
+        f"{name} = {v['median']:.3g} (5–95 %: {v['q05']:.3g} … {v['q95']:.3g})"
+        for name, v in parameters.items()
+    )
 
 
 def diagnosis_narrative(result):
@@ -43,42 +47,80 @@ def diagnosis_narrative(result):
     str
     """
     n_spec = len(result["specimens"])
-    lines = [f"# fsrbayes diagnose: {result['verdict']}" + (f" — {result['effect']}" if result["effect"] else ""), ""]
+    lines = [
+        f"# fsrbayes diagnose: {result['verdict']}"
+        + (f" — {result['effect']}" if result["effect"] else ""),
+        "",
+    ]
     voltage = _where_worst(result["misfit_by_voltage_before"], "voltage_V", "V")
     stress = _where_worst(result["misfit_by_stress_before"], "stress_Pa", "kPa", 1e-3)
-    lines.append(f"The base model (`{result['base']}`), fitted to {n_spec} specimen(s) and {result['n_tests']} creep "
-                 f"tests, misses the measured creep curves by **gap_before = {result['gap_before']:.2f}** "
-                 f"({result['gap_metric']}); drift(3600 s) alone by {result['drift_gap_before']:.2f}. "
-                 f"Across voltages it {voltage}; across stresses it {stress}.")
+    lines.append(
+        f"The base model (`{result['base']}`), fitted to {n_spec} specimen(s) and {result['n_tests']} creep "
+        f"tests, misses the measured creep curves by **gap_before = {result['gap_before']:.2f}** "
+        f"({result['gap_metric']}); drift(3600 s) alone by {result['drift_gap_before']:.2f}. "
+        f"Across voltages it {voltage}; across stresses it {stress}."
+    )
     failed = result["findings_before"]["failed"]
-    lines += ["", (f"Posterior predictive checks failing at p < {result['findings_before']['bonferroni_level']:.2g} "
-                   f"(0.01 after a Bonferroni correction over {result['findings_before']['n_checks']} checks): "
-                   f"{len(failed)}.")]
+    lines += [
+        "",
+        (
+            f"Posterior predictive checks failing at p < {result['findings_before']['bonferroni_level']:.2g} "
+            f"(0.01 after a Bonferroni correction over {result['findings_before']['n_checks']} checks): "
+            f"{len(failed)}."
+        ),
+    ]
     for f in sorted(failed, key=lambda f: f["p_value"])[:8]:
-        where = f" at {f['voltage_V']:g} V, {f['stress_Pa'] / 1e3:.0f} kPa" if "voltage_V" in f else ""
-        values = f", observed {f['observed']:.3g}, predicted {f['predicted']:.3g}" if "observed" in f else ""
-        lines.append(f"- `{f['statistic']}` of {f['specimen']}{where}{values} (p = {f['p_value']:.1e})")
+        where = (
+            f" at {f['voltage_V']:g} V, {f['stress_Pa'] / 1e3:.0f} kPa" if "voltage_V" in f else ""
+        )
+        values = (
+            f", observed {f['observed']:.3g}, predicted {f['predicted']:.3g}"
+            if "observed" in f
+            else ""
+        )
+        lines.append(
+            f"- `{f['statistic']}` of {f['specimen']}{where}{values} (p = {f['p_value']:.1e})"
+        )
     best = result["candidates"][0]
     lines.append("")
     if result["effect"]:
-        lines.append(f"Adding **{best['effect']}** ({best['summary']}) with {_parameter_text(best['parameters'])} "
-                     f"raises the evidence by ln B = {best['log_bf']:.1f} summed over {n_spec} specimen(s) "
-                     f"({best['specimens_favouring']} of {n_spec} favour it; the runner-up is "
-                     f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
-                     f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
-                     f"({100 * best['gap_closed']:.0f} % closed; drift(3600 s) misfit {result['drift_gap_before']:.2f} → "
-                     f"{result['drift_gap_after']:.2f}).")
+        lines.append(
+            f"Adding **{best['effect']}** ({best['summary']}) with {_parameter_text(best['parameters'])} "
+            f"raises the evidence by ln B = {best['log_bf']:.1f} summed over {n_spec} specimen(s) "
+            f"({best['specimens_favouring']} of {n_spec} favour it; the runner-up is "
+            f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
+            f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
+            f"({100 * best['gap_closed']:.0f} % closed; drift(3600 s) misfit {result['drift_gap_before']:.2f} → "
+            f"{result['drift_gap_after']:.2f})."
+        )
     else:
-        lines.append(f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base model "
-                     f"(best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is **adequate** for "
-                     f"these data.")
-    lines += ["", "## Candidates", "", ("| rank | effect | ln B over base | specimens favouring | gap after | "
-                                        "gap closed | parameters |"), "|---|---|---|---|---|---|---|"]
+        lines.append(
+            f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base model "
+            f"(best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is **adequate** for "
+            f"these data."
+        )
+    lines += [
+        "",
+        "## Candidates",
+        "",
+        (
+            "| rank | effect | ln B over base | specimens favouring | gap after | "
+            "gap closed | parameters |"
+        ),
+        "|---|---|---|---|---|---|---|",
+    ]
     for c in result["candidates"]:
-        lines.append(f"| {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | {c['specimens_favouring']}/{n_spec} | "
-                     f"{c['gap_after']:.2f} | {100 * c['gap_closed']:.0f} % | {_parameter_text(c['parameters'])} |")
-    lines += ["", (f"Evidence: {result['evidence_method']}. Threshold to name an effect: ln B ≥ "
-                   f"{result['threshold_log_bf']:g}. Run time {result['seconds']:.0f} s.")]
+        lines.append(
+            f"| {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | {c['specimens_favouring']}/{n_spec} | "
+            f"{c['gap_after']:.2f} | {100 * c['gap_closed']:.0f} % | {_parameter_text(c['parameters'])} |"
+        )
+    lines += [
+        "",
+        (
+            f"Evidence: {result['evidence_method']}. Threshold to name an effect: ln B ≥ "
+            f"{result['threshold_log_bf']:g}. Run time {result['seconds']:.0f} s."
+        ),
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -97,7 +139,8 @@ def _inline(text):
 
 def markdown_to_html(markdown, title="fsrbayes report"):
     """The small Markdown subset the reports use (#/## headings, paragraphs, lists, tables,
-    images with data URIs or files, `code`, **bold**) → a standalone HTML page."""
+    images with data URIs or files, `code`, **bold**) → a standalone HTML page.
+    """
     body, in_list = [], False
     lines = markdown.splitlines()
     k = 0
@@ -110,7 +153,9 @@ def markdown_to_html(markdown, title="fsrbayes report"):
                     rows.append([html.escape(c.strip()) for c in lines[k].strip("|").split("|")])
                 k += 1
             head = "".join(f"<th>{_inline(c)}</th>" for c in rows[0])
-            cells = "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows[1:])
+            cells = "".join(
+                "<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows[1:]
+            )
             body.append(f"<table><tr>{head}</tr>{cells}</table>")
             continue
         if in_list and not line.startswith("- "):
@@ -122,7 +167,9 @@ def markdown_to_html(markdown, title="fsrbayes report"):
             body.append(f"<h1>{_inline(html.escape(line[2:]))}</h1>")
         elif line.startswith("!["):
             alt, _, src = line[2:].partition("](")
-            body.append(f'<p><img alt="{html.escape(alt)}" src="{html.escape(src.rstrip(")"), quote=True)}"></p>')
+            body.append(
+                f'<p><img alt="{html.escape(alt)}" src="{html.escape(src.rstrip(")"), quote=True)}"></p>'
+            )
         elif line.startswith("- "):
             if not in_list:
                 body.append("<ul>")
@@ -133,21 +180,34 @@ def markdown_to_html(markdown, title="fsrbayes report"):
         k += 1
     if in_list:
         body.append("</ul>")
-    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
-            f"<style>{_CSS}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
+        f"<style>{_CSS}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
 
 
 def embed_figure(line, folder):
     """A Markdown image line ``![caption](file.png)`` with the PNG (relative to ``folder``) inlined
-    as a data URI, so the HTML page stands alone."""
+    as a data URI, so the HTML page stands alone.
+    """
     caption, _, name = line[2:].rstrip(")").partition("](")
     encoded = base64.b64encode((Path(folder) / name).read_bytes()).decode("ascii")
     return f"![{caption}](data:image/png;base64,{encoded})"
 
 
-FIGURES = (("drift_before_after.png", "Observed and predicted drift(3600 s) per test", plots.diagnosis_drift_plot),
-           ("misfit_by_level.png", "Standardised drift misfit per voltage and stress", plots.diagnosis_misfit_plot),
-           ("residuals_over_time.png", "Residuals over time", plots.diagnosis_residual_plot))
+FIGURES = (
+    (
+        "drift_before_after.png",
+        "Observed and predicted drift(3600 s) per test",
+        plots.diagnosis_drift_plot,
+    ),
+    (
+        "misfit_by_level.png",
+        "Standardised drift misfit per voltage and stress",
+        plots.diagnosis_misfit_plot,
+    ),
+    ("residuals_over_time.png", "Residuals over time", plots.diagnosis_residual_plot),
+)
 
 
 def write_diagnosis_report(diagnosis, folder):
@@ -173,7 +233,9 @@ def write_diagnosis_report(diagnosis, folder):
         fig, _ = make(diagnosis)
         plots.save_figure(fig, folder / name)
         md_figures.append(f"![{caption}]({name})")
-    html_figures = [embed_figure(line, folder) if line.startswith("![") else line for line in md_figures]
+    html_figures = [
+        embed_figure(line, folder) if line.startswith("![") else line for line in md_figures
+    ]
     with atomic_path(folder / "diagnosis.json") as tmp:
         tmp.write_text(json.dumps(json_ready(result), indent=2, allow_nan=False) + "\n")
     with atomic_path(folder / "report.md") as tmp:
@@ -182,4 +244,3 @@ def write_diagnosis_report(diagnosis, folder):
     with atomic_path(page) as tmp:
         tmp.write_text(markdown_to_html(text + "\n".join(html_figures), title="fsrbayes diagnose"))
     return page
-

@@ -8,8 +8,16 @@ import numpy as np
 import pytest
 
 from fsrbayes.cli import main
-from fsrbayes.inference.calibration import (SBC_SETTINGS, SBCDesign, SBCResult, _inside_share, calibrate_specimen,
-                                            format_sbc, load_sbc, sbc_ranks)
+from fsrbayes.inference.calibration import (
+    SBC_SETTINGS,
+    SBCDesign,
+    SBCResult,
+    _inside_share,
+    calibrate_specimen,
+    format_sbc,
+    load_sbc,
+    sbc_ranks,
+)
 
 TINY = replace(SBC_SETTINGS, chunk=100, min_steps=200, max_steps=200, transport_rounds=1)
 
@@ -52,8 +60,9 @@ def test_exact_posterior_draws_pass_and_histograms_sum_to_the_replications():
         assert np.all(np.abs(entry["share"] - level) < 0.08)
 
 
-@pytest.mark.parametrize("sd_factor, shift, symptom", [(0.6, 0.0, "coverage"), (1.6, 0.0, "coverage"),
-                                                       (1.0, 0.5, "p =")])
+@pytest.mark.parametrize(
+    "sd_factor, shift, symptom", [(0.6, 0.0, "coverage"), (1.6, 0.0, "coverage"), (1.0, 0.5, "p =")]
+)
 def test_overconfident_underconfident_and_biased_posteriors_are_caught(sd_factor, shift, symptom):
     result = _normal_mean_sbc(400, 99, sd_factor=sd_factor, shift=shift, seed=2)
     calibrated, failures = result.verdict()
@@ -70,10 +79,25 @@ def test_creep_replications_are_seeded_and_round_trip_through_json(tmp_path):
     design = SBCDesign(voltages=(0.2,), forces=(4.9,), samples=8)
     two = calibrate_specimen(2, design=design, settings=TINY, n_draws=19, seed=5, processes=2)
     one = calibrate_specimen(1, design=design, settings=TINY, n_draws=19, seed=5, processes=1)
-    assert two.names[:12] == ["A0", "A1", "A2", "Va", "s0", "alpha", "Rc0", "k1", "k2", "b2", "inv_b1", "sigma_rel"]
+    assert two.names[:12] == [
+        "A0",
+        "A1",
+        "A2",
+        "Va",
+        "s0",
+        "alpha",
+        "Rc0",
+        "k1",
+        "k2",
+        "b2",
+        "inv_b1",
+        "sigma_rel",
+    ]
     assert two.names[12] == "drift_3600[0.2 V, 117 kPa]"
     assert two.ranks.shape == (2, 13) and np.all((two.ranks >= 0) & (two.ranks <= 19))
-    assert np.array_equal(one.ranks[0], two.ranks[0])  # same seed, same replication on 1 or 2 processes
+    assert np.array_equal(
+        one.ranks[0], two.ranks[0]
+    )  # same seed, same replication on 1 or 2 processes
     rep = two.info["replications"][0]
     assert {"truth", "redrawn", "converged", "rhat_max", "ess_min", "seconds"} <= set(rep)
     path = tmp_path / "sbc.json"
@@ -85,8 +109,29 @@ def test_creep_replications_are_seeded_and_round_trip_through_json(tmp_path):
 
 def test_cli_calibrate_writes_json_and_figure_and_refuses_bad_bins(tmp_path, capsys):
     out = tmp_path / "sbc"
-    code = main(["calibrate", "--out", str(out), "--reps", "2", "--steps", "200", "--draws", "19", "--bins", "5",
-                 "--voltages", "3", "--forces", "9.8", "--samples", "6", "--processes", "1"])
+    code = main(
+        [
+            "calibrate",
+            "--out",
+            str(out),
+            "--reps",
+            "2",
+            "--steps",
+            "200",
+            "--draws",
+            "19",
+            "--bins",
+            "5",
+            "--voltages",
+            "3",
+            "--forces",
+            "9.8",
+            "--samples",
+            "6",
+            "--processes",
+            "1",
+        ]
+    )
     assert code in (0, 1)
     record = json.loads((out / "sbc.json").read_text())
     assert record["n_reps"] == 2 and record["bins"] == 5 and len(record["histogram"]) == 13
@@ -100,9 +145,31 @@ def test_cli_calibrate_writes_json_and_figure_and_refuses_bad_bins(tmp_path, cap
 
 def test_cli_calibrate_with_the_tempered_sampler(tmp_path, capsys):
     out = tmp_path / "sbc"
-    code = main(["calibrate", "--out", str(out), "--sampler", "tempered", "--reps", "1", "--steps", "250",
-                 "--draws", "19", "--bins", "5", "--voltages", "3", "--forces", "9.8", "--samples", "6",
-                 "--processes", "1"])
+    code = main(
+        [
+            "calibrate",
+            "--out",
+            str(out),
+            "--sampler",
+            "tempered",
+            "--reps",
+            "1",
+            "--steps",
+            "250",
+            "--draws",
+            "19",
+            "--bins",
+            "5",
+            "--voltages",
+            "3",
+            "--forces",
+            "9.8",
+            "--samples",
+            "6",
+            "--processes",
+            "1",
+        ]
+    )
     assert code in (0, 1)
     record = json.loads((out / "sbc.json").read_text())
     assert record["info"]["settings"]["ladder"]["steps"] == 250

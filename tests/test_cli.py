@@ -13,7 +13,9 @@ REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json")
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=120
+    )
 
 
 def test_demo_prints_and_writes_the_figure7_table(tmp_path):
@@ -21,24 +23,39 @@ def test_demo_prints_and_writes_the_figure7_table(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "15.61" in result.stdout and "tunneling='smooth'" in result.stdout
     payload = json.loads((tmp_path / "out" / "figure7_drift.json").read_text())
-    np.testing.assert_allclose(payload["drift_percent"]["paper"], REFERENCE["drift_3600_percent"], atol=0.02)
+    np.testing.assert_allclose(
+        payload["drift_percent"]["paper"], REFERENCE["drift_3600_percent"], atol=0.02
+    )
     assert not list((tmp_path / "out").glob(".*.tmp"))
 
 
 def test_forward_command_marks_invalid_points():
-    result = run("forward", "--sensor", "a201", "--voltages", "1,9", "--stresses", "2e5", "--tunneling", "paper")
+    result = run(
+        "forward",
+        "--sensor",
+        "a201",
+        "--voltages",
+        "1,9",
+        "--stresses",
+        "2e5",
+        "--tunneling",
+        "paper",
+    )
     assert result.returncode == 0, result.stderr
     assert "invalid" in result.stdout
 
 
-@pytest.mark.parametrize("args, message", [
-    (("forward", "--sensor", "a301"), "unknown sensor 'a301'"),
-    (("forward", "--voltages", "1,x"), "--voltages expects comma-separated numbers"),
-    (("forward", "--voltages", "-1"), "--voltages must be > 0 V"),
-    (("forward", "--stresses", "0"), "stresses must be > 0 Pa"),
-    (("demo", "--time", "-5"), "time must be >= 0"),
-    (("demo", "--processes", "0"), "--processes must be >= 1"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("forward", "--sensor", "a301"), "unknown sensor 'a301'"),
+        (("forward", "--voltages", "1,x"), "--voltages expects comma-separated numbers"),
+        (("forward", "--voltages", "-1"), "--voltages must be > 0 V"),
+        (("forward", "--stresses", "0"), "stresses must be > 0 Pa"),
+        (("demo", "--time", "-5"), "time must be >= 0"),
+        (("demo", "--processes", "0"), "--processes must be >= 1"),
+    ],
+)
 def test_bad_input_is_one_line_exit_2(args, message):
     result = run(*args)
     assert result.returncode == 2

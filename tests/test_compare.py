@@ -25,14 +25,17 @@ def small():
 
 
 def test_compare_sums_specimens_and_states_a_preference(small):
-    out = fsrbayes.compare(small.data, ["zener", "burgers"], settings=TINY, seed=1, pilot=TINY_PILOT,
-                           search=FEW_STARTS)
+    out = fsrbayes.compare(
+        small.data, ["zener", "burgers"], settings=TINY, seed=1, pilot=TINY_PILOT, search=FEW_STARTS
+    )
     assert set(out["models"]) == {"zener", "burgers"} and out["preferred"] in out["models"]
     assert out["settings"]["path"] == "reference"
     assert set(out["savage_dickey"]["per_specimen"]) == set(small.data.specimens)
     for specimen, check in out["savage_dickey"]["per_specimen"].items():
         assert np.isfinite(check["log_b_zener_over_burgers"]) and check["err"] > 0
-        z, b = (out["models"][m]["per_specimen"][specimen]["log_evidence"] for m in ("zener", "burgers"))
+        z, b = (
+            out["models"][m]["per_specimen"][specimen]["log_evidence"] for m in ("zener", "burgers")
+        )
         assert check["evidence_difference"] == pytest.approx(z - b)
     for entry in out["models"].values():
         per = [v["log_evidence"] for v in entry["per_specimen"].values()]
@@ -40,7 +43,9 @@ def test_compare_sums_specimens_and_states_a_preference(small):
         errs = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
         assert entry["log_evidence_err"] == pytest.approx(np.sqrt(np.sum(np.square(errs))))
         assert all(np.isfinite(v["elpd"]) and "max_pareto_k" in v for v in entry["loo"].values())
-        for v in entry["per_specimen"].values():  # one ladder per search and pilot: their spread is the replicates'
+        for v in entry[
+            "per_specimen"
+        ].values():  # one ladder per search and pilot: their spread is the replicates'
             assert v["sigma_pilot"] == pytest.approx(v["sigma_replicates"]) and v["sigma_pilot"] > 0
             assert len(v["reference_regions"]) == TINY.replicates
     other = next(m for m in out["models"] if m != out["preferred"])
@@ -59,23 +64,51 @@ def test_strength_words():
 
 
 def cli(*args):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_cli_compare_writes_the_contract_keys(small, tmp_path):
     data = tmp_path / "d.csv"
     syn.write_simulation(small, data)
     out = tmp_path / "cmp.json"
-    result = cli("compare", str(data), "--models", "zener,burgers", "--specimen", "a201-01", "--json", str(out),
-                 "--temps", "4", "--burn", "20", "--steps", "250", "--replicates", "2", "--starts", "3", "--no-loo",
-                 "--pilot-steps", "200")
+    result = cli(
+        "compare",
+        str(data),
+        "--models",
+        "zener,burgers",
+        "--specimen",
+        "a201-01",
+        "--json",
+        str(out),
+        "--temps",
+        "4",
+        "--burn",
+        "20",
+        "--steps",
+        "250",
+        "--replicates",
+        "2",
+        "--starts",
+        "3",
+        "--no-loo",
+        "--pilot-steps",
+        "200",
+    )
     assert result.returncode == 0, result.stderr
     saved = json.loads(out.read_text())
-    assert {"log_evidence", "log_evidence_err"} <= set(saved["models"]["zener"]) and saved["preferred"]
+    assert {"log_evidence", "log_evidence_err"} <= set(saved["models"]["zener"]) and saved[
+        "preferred"
+    ]
     assert "ln B =" in result.stdout
-    for bad, message in ((["--models", "burgers"], "at least two"), (["--models", "burgers,maxwell"], "maxwell"),
-                         (["--specimen", "nobody"], "is not in"), (["--pilot-steps", "5"], "--pilot-steps must be"),
-                         (["--starts", "0"], "--starts must be")):
+    for bad, message in (
+        (["--models", "burgers"], "at least two"),
+        (["--models", "burgers,maxwell"], "maxwell"),
+        (["--specimen", "nobody"], "is not in"),
+        (["--pilot-steps", "5"], "--pilot-steps must be"),
+        (["--starts", "0"], "--starts must be"),
+    ):
         r = cli("compare", str(data), *bad)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
@@ -88,10 +121,24 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
     on the paper's model's data the ohmic law cannot follow the voltage dependence."""
     verdicts = {}
     for truth in ("kalantari", "zener"):
-        sim = syn.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[4.9], samples=5, seed=4,
-                           rheology=truth)
-        out = fsrbayes.compare(sim.data, ["kalantari", "zener"], settings=TINY, seed=1, pilot=TINY_PILOT,
-                               search=FEW_STARTS, with_loo=False)
+        sim = syn.simulate(
+            "a201",
+            n_specimens=1,
+            voltages=[0.2, 1.0, 3.0],
+            forces=[4.9],
+            samples=5,
+            seed=4,
+            rheology=truth,
+        )
+        out = fsrbayes.compare(
+            sim.data,
+            ["kalantari", "zener"],
+            settings=TINY,
+            seed=1,
+            pilot=TINY_PILOT,
+            search=FEW_STARTS,
+            with_loo=False,
+        )
         assert "savage_dickey" not in out or not out["savage_dickey"].get("per_specimen")
         loser = next(m for m in out["models"] if m != out["preferred"])
         verdicts[truth] = (out["preferred"], out["bayes_factors"][loser])

@@ -11,8 +11,22 @@ import numpy as np
 
 def test_quick_demo_writes_the_report_and_results(tmp_path):
     out = tmp_path / "demo"
-    result = subprocess.run([sys.executable, "-m", "fsrbayes", "demo", "--quick", "--out", str(out), "--processes", "2"],
-                            capture_output=True, text=True, timeout=600)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "fsrbayes",
+            "demo",
+            "--quick",
+            "--out",
+            str(out),
+            "--processes",
+            "2",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr
     assert "Summary" in result.stdout and "report:" in result.stdout
     results = json.loads((out / "results.json").read_text())
@@ -27,7 +41,11 @@ def test_quick_demo_writes_the_report_and_results(tmp_path):
             q = group["new_specimen"]
             assert q["q05"] <= q["q25"] <= q["q50"] <= q["q75"] <= q["q95"]
         assert len(population["optimal_voltage"]) == 3
-        for name in ("population_drift_by_voltage.png", "population_drift_by_stress.png", "population.nc"):
+        for name in (
+            "population_drift_by_voltage.png",
+            "population_drift_by_stress.png",
+            "population.nc",
+        ):
             assert (out / sensor / name).is_file(), name
         assert len(list((out / sensor).glob("drift_bands_*.png"))) == 1
         assert len(list((out / sensor).glob("posterior_*.nc"))) == 1

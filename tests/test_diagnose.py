@@ -33,14 +33,20 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
     sensor = load_sensor("a201")
     checks = []
     for specimen, entry in sim.truth["specimens"].items():
-        posterior = LogPosterior.for_sensor(SpecimenData.select(sim.data, specimen), sensor, model="burgers")
+        posterior = LogPosterior.for_sensor(
+            SpecimenData.select(sim.data, specimen), sensor, model="burgers"
+        )
         truth = np.array([entry["params"][name] for name in posterior.names])
-        checks.append(predictive_checks(posterior, np.tile(truth, (400, 1)), np.random.default_rng(1)))
+        checks.append(
+            predictive_checks(posterior, np.tile(truth, (400, 1)), np.random.default_rng(1))
+        )
     n = sum(len(c.z) for c in checks)
     assert n == 54
     assert abs(drift_gap(checks) ** 2 - 1.0) < 4 * np.sqrt(2.0 / n)
     assert sum(np.isfinite(c.quarter_z).sum() for c in checks) == 4 * n
-    assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(0.5 / n)  # mean of n chi2_4 / 4: sd sqrt(0.5 / n)
+    assert abs(gap(checks) ** 2 - 1.0) < 4 * np.sqrt(
+        0.5 / n
+    )  # mean of n chi2_4 / 4: sd sqrt(0.5 / n)
     p = np.concatenate([c.p_values["quarter_means"].ravel() for c in checks])
     assert abs(np.mean(p < 0.1) - 0.1) < 4 * np.sqrt(0.09 / p.size)  # z ~ N(0, 1): p uniform
     p = np.concatenate([c.p_values["early_late"] for c in checks])
@@ -52,8 +58,17 @@ def test_checks_at_the_true_parameters_give_a_gap_near_one():
 
 
 def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
-    sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, effects=["area-creep=-30"], seed=3)
-    result = diagnose(sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=2)
+    sim = simulate(
+        "a201",
+        n_specimens=1,
+        voltages=A201_VOLTAGES,
+        samples=31,
+        effects=["area-creep=-30"],
+        seed=3,
+    )
+    result = diagnose(
+        sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=2
+    )
     assert result.verdict == "missing-effect" and result.effect == "area-creep"
     assert result.gap_after <= 0.5 * result.gap_before
     best = result.candidates[0]
@@ -69,7 +84,9 @@ def test_diagnose_calls_burgers_data_adequate():
     result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=2)
     assert result.verdict == "adequate" and result.effect is None
     assert result.gap_after == result.gap_before < 1.5
-    assert all(c["log_bf"] < 0 for c in result.candidates)  # the Occam factor of unneeded parameters
+    assert all(
+        c["log_bf"] < 0 for c in result.candidates
+    )  # the Occam factor of unneeded parameters
 
 
 def test_diagnose_rejects_bad_arguments():

@@ -10,20 +10,39 @@ from fsrbayes.data.synthetic import simulate, write_simulation
 
 
 def run(*args, timeout=300):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout
+    )
 
 
 @pytest.fixture(scope="module")
 def area_creep_csv(tmp_path_factory):
     folder = tmp_path_factory.mktemp("diagnose")
-    sim = simulate("a201", n_specimens=1, voltages=(0.5, 2.0, 4.5), samples=21, effects=["area-creep=-30"], seed=8)
+    sim = simulate(
+        "a201",
+        n_specimens=1,
+        voltages=(0.5, 2.0, 4.5),
+        samples=21,
+        effects=["area-creep=-30"],
+        seed=8,
+    )
     return write_simulation(sim, folder / "data.csv")[0]
 
 
 def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     out, report = tmp_path / "diagnosis.json", tmp_path / "report"
-    result = run("diagnose", str(area_creep_csv), "--json", str(out), "--report", str(report),
-                 "--effects", "area-creep,offset-stress", "--processes", "2")
+    result = run(
+        "diagnose",
+        str(area_creep_csv),
+        "--json",
+        str(out),
+        "--report",
+        str(report),
+        "--effects",
+        "area-creep,offset-stress",
+        "--processes",
+        "2",
+    )
     assert result.returncode == 0, result.stderr
     assert "verdict: missing-effect: area-creep" in result.stdout
     payload = json.loads(out.read_text())
@@ -33,18 +52,26 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert [c["effect"] for c in payload["candidates"]] == ["area-creep", "offset-stress"]
     html = (report / "report.html").read_text()
     assert html.count("data:image/png;base64,") == 3 and "area-creep" in html
-    for name in ("report.md", "diagnosis.json", "drift_before_after.png", "misfit_by_level.png",
-                 "residuals_over_time.png"):
+    for name in (
+        "report.md",
+        "diagnosis.json",
+        "drift_before_after.png",
+        "misfit_by_level.png",
+        "residuals_over_time.png",
+    ):
         assert (report / name).stat().st_size > 0
     assert not list(tmp_path.rglob(".*.tmp"))
 
 
-@pytest.mark.parametrize("args, message", [
-    (("--effects", "area-crepe"), "unknown effect(s) ['area-crepe']"),
-    (("--base", "maxwell"), "the first term must be one of"),
-    (("--specimens", "x-99"), "--specimens ['x-99'] not in"),
-    (("--processes", "0"), "--processes must be >= 1"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("--effects", "area-crepe"), "unknown effect(s) ['area-crepe']"),
+        (("--base", "maxwell"), "the first term must be one of"),
+        (("--specimens", "x-99"), "--specimens ['x-99'] not in"),
+        (("--processes", "0"), "--processes must be >= 1"),
+    ],
+)
 def test_diagnose_bad_input_is_one_line_exit_2(area_creep_csv, args, message):
     result = run("diagnose", str(area_creep_csv), *args)
     assert result.returncode == 2

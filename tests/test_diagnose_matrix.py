@@ -8,7 +8,13 @@ printed as a table (``pytest -m slow -s``).
 
 import pytest
 
-from validation.diagnose_study import MATRIX, PAPER_MISMATCH, diagnose_study, format_study, stress_flatness
+from validation.diagnose_study import (
+    MATRIX,
+    PAPER_MISMATCH,
+    diagnose_study,
+    format_study,
+    stress_flatness,
+)
 
 
 @pytest.fixture(scope="module")

@@ -3,9 +3,14 @@
 import numpy as np
 import pytest
 
+from fsrbayes.inference.evidence.ladder import (
+    LadderSettings,
+    _Rungs,
+    beta_ladder,
+    combine_ladder,
+    log_evidence,
+)
 from validation.closed_form import LinearGaussian, TwoModes
-from fsrbayes.inference.evidence.ladder import LadderSettings, _Rungs, beta_ladder, combine_ladder, log_evidence
-
 
 CHEAP = LadderSettings(n_temps=16, burn=300, steps=1000, replicates=4, n_walkers=40, processes=2)
 
@@ -53,8 +58,13 @@ def test_bad_settings_and_wide_priors_are_refused():
     sensor = fsrbayes.load_sensor("a201")
     prior = sensor.prior_for("burgers")
     check_priors_for_evidence(prior)
-    wide = JointPrior(prior.names, tuple(Distribution("lognormal", {"median": 1.0, "sigma": 50.0})
-                                         if n == "k2" else d for n, d in zip(prior.names, prior.dists)))
+    wide = JointPrior(
+        prior.names,
+        tuple(
+            Distribution("lognormal", {"median": 1.0, "sigma": 50.0}) if n == "k2" else d
+            for n, d in zip(prior.names, prior.dists, strict=False)
+        ),
+    )
     with pytest.raises(ValueError, match="prior of k2: lognormal sigma = 50 is too wide"):
         check_priors_for_evidence(wide)
 
@@ -88,16 +98,21 @@ def test_reported_error_matches_the_seed_to_seed_scatter():
     errors = np.array([r.log_z for r in results]) - target.exact_log_z()
     reported = np.mean([max(r.sigma_batch, r.sigma_replicates) for r in results])
     observed = errors.std(ddof=1)
-    print(f"observed scatter {observed:.3f}, mean reported Monte-Carlo sigma {reported:.3f}, mean error {errors.mean():+.3f}")
+    print(
+        f"observed scatter {observed:.3f}, mean reported Monte-Carlo sigma {reported:.3f}, mean error {errors.mean():+.3f}"
+    )
     assert 0.5 <= reported / observed <= 2.0
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("label, make_problem, n_runs", [
-    ("linear-Gaussian 2-d", lambda k: LinearGaussian(2, seed=1000 + k), 40),
-    ("linear-Gaussian 10-d", lambda k: LinearGaussian(10, seed=2000 + k), 40),
-    ("two modes 5-d", lambda k: TwoModes(), 20),
-])
+@pytest.mark.parametrize(
+    "label, make_problem, n_runs",
+    [
+        ("linear-Gaussian 2-d", lambda k: LinearGaussian(2, seed=1000 + k), 40),
+        ("linear-Gaussian 10-d", lambda k: LinearGaussian(10, seed=2000 + k), 40),
+        ("two modes 5-d", lambda k: TwoModes(), 20),
+    ],
+)
 def test_error_bars_cover_the_exact_log_z_at_their_nominal_rates(label, make_problem, n_runs):
     # Independent instances (new data, new seed): |estimate − exact| <= kσ in 68.3 % (k = 1) and
     # 95.4 % (k = 2) of the runs, within the 99 % binomial range of an honest error bar.
@@ -138,9 +153,22 @@ def test_the_printed_result_leaves_out_ti_on_the_referenced_path(path, shows_ti)
     reference's tails (nan on creep posteriors): the one-line summary must not show it there."""
     from fsrbayes.inference.evidence.ladder import EvidenceResult
 
-    result = EvidenceResult(log_z=-3.0, error=0.05, sigma_batch=0.01, sigma_replicates=0.02, sigma_disc=0.01,
-                            bridge=-3.01, ti=float("nan"), ti_corrected=float("nan"), ss_half=-3.0, replicates=[],
-                            betas=np.linspace(0, 1, 4), swap_acceptance=np.ones((1, 3)), n_evals=10, seconds=1.0,
-                            settings={"path": path})
+    result = EvidenceResult(
+        log_z=-3.0,
+        error=0.05,
+        sigma_batch=0.01,
+        sigma_replicates=0.02,
+        sigma_disc=0.01,
+        bridge=-3.01,
+        ti=float("nan"),
+        ti_corrected=float("nan"),
+        ss_half=-3.0,
+        replicates=[],
+        betas=np.linspace(0, 1, 4),
+        swap_acceptance=np.ones((1, 3)),
+        n_evals=10,
+        seconds=1.0,
+        settings={"path": path},
+    )
     assert str(result).startswith("log Z = -3.000 ± 0.050 (SS;")
     assert ("TI+corr" in str(result)) == shows_ti

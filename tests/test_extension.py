@@ -43,9 +43,13 @@ class Leak(effects.Effect):
         return 1.0 + params["leak"] * -np.expm1(-np.asarray(time, dtype=float) / 600.0)
 
 
-TOY_PARAMETERS = (parameters.Parameter("logc_rate", "–", "physical", 0.1, "toy log-time creep rate"),
-                  parameters.Parameter("leak", "–", "effect", None, "toy leakage fraction"))
-TOY_LAW = rheology.CreepLaw(LAW, ("k1", "logc_rate"), _log_creep, _log_creep_ramp, "toy: creep linear in ln t")
+TOY_PARAMETERS = (
+    parameters.Parameter("logc_rate", "–", "physical", 0.1, "toy log-time creep rate"),
+    parameters.Parameter("leak", "–", "effect", None, "toy leakage fraction"),
+)
+TOY_LAW = rheology.CreepLaw(
+    LAW, ("k1", "logc_rate"), _log_creep, _log_creep_ramp, "toy: creep linear in ln t"
+)
 TOY_EFFECT = Leak(EFFECT, ("leak",), {"leak": 0.0}, "toy: a leakage path opens")
 
 
@@ -65,10 +69,15 @@ def registered():
 def toy_sensor(registered, tmp_path):
     """The A201 file with the toy parameters, their values and priors added."""
     text = (models_directory() / "a201.toml").read_text()
-    text = text.replace('name = "a201"', 'name = "toy"').replace("aliases = [", 'aliases = ["toy-a201", ')
+    text = text.replace('name = "a201"', 'name = "toy"').replace(
+        "aliases = [", 'aliases = ["toy-a201", '
+    )
     text = text.replace("[params]\n", "[params]\nlogc_rate = 0.05\nleak = 0.0\n")
-    text = text.replace("[priors]\n", '[priors]\nlogc_rate = { dist = "halfnormal", scale = 0.2 }\n'
-                                      'leak = { dist = "normal", mu = 0.0, sigma = 0.2 }\n')
+    text = text.replace(
+        "[priors]\n",
+        '[priors]\nlogc_rate = { dist = "halfnormal", scale = 0.2 }\n'
+        'leak = { dist = "normal", mu = 0.0, sigma = 0.2 }\n',
+    )
     path = tmp_path / "toy.toml"
     path.write_text(text)
     return str(path)
@@ -92,20 +101,35 @@ def test_the_toy_law_follows_superposition_and_the_effect_its_hook(registered, a
     from fsrbayes.physics.sensor import current_history
 
     # a step at t = 0 as a history gives the same current as the step law
-    np.testing.assert_allclose(current_history(params, 1.0, loading.step(1e5), t, rheology=LAW), step, rtol=1e-12)
+    np.testing.assert_allclose(
+        current_history(params, 1.0, loading.step(1e5), t, rheology=LAW), step, rtol=1e-12
+    )
     leaky = fsrbayes.current(params, 1.0, 1e5, t, rheology=LAW, effects=(EFFECT,))
     np.testing.assert_allclose(leaky / step, 1.0 + 0.1 * -np.expm1(-t / 600.0), rtol=1e-12)
 
 
 def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
-    sim = synthetic.simulate(toy_sensor, n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=11,
-                             rheology=LAW, effects=[f"{EFFECT}=leak=0.05"], seed=3)
+    sim = synthetic.simulate(
+        toy_sensor,
+        n_specimens=1,
+        voltages=[0.5, 2.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=11,
+        rheology=LAW,
+        effects=[f"{EFFECT}=leak=0.05"],
+        seed=3,
+    )
     model = f"{LAW}+{EFFECT}"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         here = fsrbayes.fit(sim.data, model=model, sensor=toy_sensor, rng=5, settings=SHORT)
-        forked = fsrbayes.fit(sim.data, model=model, sensor=toy_sensor, rng=5,
-                              settings=SamplerSettings(**{**SHORT.__dict__, "processes": 2}))
+        forked = fsrbayes.fit(
+            sim.data,
+            model=model,
+            sensor=toy_sensor,
+            rng=5,
+            settings=SamplerSettings(**{**SHORT.__dict__, "processes": 2}),
+        )
     assert here.posterior.family is TOY_LAW and here.posterior.effect_objects == (TOY_EFFECT,)
     assert {"logc_rate", "leak"} <= set(here.posterior.names)
     np.testing.assert_array_equal(forked.run.chain, here.run.chain)
@@ -114,16 +138,32 @@ def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
 
 def test_fits_with_the_toy_model_on_a_dask_cluster(toy_sensor):
     distributed = pytest.importorskip("dask.distributed")
-    sim = synthetic.simulate(toy_sensor, n_specimens=2, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=9,
-                             rheology=LAW, effects=[f"{EFFECT}=leak=0.05"], seed=4)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    sim = synthetic.simulate(
+        toy_sensor,
+        n_specimens=2,
+        voltages=[0.5, 2.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=9,
+        rheology=LAW,
+        effects=[f"{EFFECT}=leak=0.05"],
+        seed=4,
+    )
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             # the workers' registries do not hold the toy law before the fits
             assert not any(client.run(lambda: LAW in rheology.CREEP_LAWS).values())
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            fits = fit_specimens(sim.data, scheduler=cluster.scheduler_address, model=f"{LAW}+{EFFECT}",
-                                 sensor=toy_sensor, settings=SHORT, errors="raise")
+            fits = fit_specimens(
+                sim.data,
+                scheduler=cluster.scheduler_address,
+                model=f"{LAW}+{EFFECT}",
+                sensor=toy_sensor,
+                settings=SHORT,
+                errors="raise",
+            )
     assert sorted(fits) == ["toy-01", "toy-02"]
     for result in fits.values():
         assert result.posterior.family.name == LAW and result.posterior.effects == (EFFECT,)

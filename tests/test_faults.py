@@ -7,9 +7,9 @@ import warnings
 import pytest
 
 from fsrbayes.data import synthetic
+from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
 from fsrbayes.inference.population import routes as hierarchical
 from fsrbayes.inference.population.routes import SpecimenFitWarning, fit_specimens
-from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
 from fsrbayes.inference.samplers.ensemble import SamplerSettings
 
 
@@ -25,21 +25,35 @@ def square_or_fail(job):
 @pytest.mark.parametrize("processes", [1, 2])
 def test_a_raising_job_is_named_and_the_others_kept(processes):
     seen = []
-    out = map_jobs(square_or_fail, [1, "raise", 3], processes=processes, labels=["a", "b", "c"], errors="keep",
-                   on_result=lambda k, r: seen.append(k))
+    out = map_jobs(
+        square_or_fail,
+        [1, "raise", 3],
+        processes=processes,
+        labels=["a", "b", "c"],
+        errors="keep",
+        on_result=lambda k, r: seen.append(k),
+    )
     assert out[0] == 1 and out[2] == 9
     assert out[1] == JobFailure("b", "ValueError: bad job")
     assert seen == [0, 2]
 
 
 def test_a_killed_worker_fails_only_its_own_job():
-    out = map_jobs(square_or_fail, [1, 2, "kill", 4, 5], processes=2, labels=list("abcde"), errors="keep")
+    out = map_jobs(
+        square_or_fail, [1, 2, "kill", 4, 5], processes=2, labels=list("abcde"), errors="keep"
+    )
     assert [out[k] for k in (0, 1, 3, 4)] == [1, 4, 16, 25]
-    assert isinstance(out[2], JobFailure) and out[2].label == "c" and "worker process died" in out[2].reason
+    assert (
+        isinstance(out[2], JobFailure)
+        and out[2].label == "c"
+        and "worker process died" in out[2].reason
+    )
 
 
 def test_errors_raise_names_every_failed_job():
-    with pytest.raises(JobError, match=r"2 job\(s\) failed: b: ValueError: bad job; c: its worker process died") as info:
+    with pytest.raises(
+        JobError, match=r"2 job\(s\) failed: b: ValueError: bad job; c: its worker process died"
+    ) as info:
         map_jobs(square_or_fail, [1, "raise", "kill"], processes=2, labels="abc")
     assert [f.label for f in info.value.failures] == ["b", "c"]
     assert isinstance(info.value.__cause__, ValueError)
@@ -64,11 +78,15 @@ def test_specimen_fits_keep_the_others_when_one_worker_dies(monkeypatch):
         fits = fit_specimens(sim.data, processes=2, settings=short, rng=1)
     assert list(fits) == ["a201-01", "a201-03"]
     messages = [str(w.message) for w in caught if w.category is SpecimenFitWarning]
-    assert messages == ["1 of 3 specimen fits failed, the other 2 kept: a201-02: its worker process died "
-                        "(killed by a signal or out of memory)"]
+    assert messages == [
+        "1 of 3 specimen fits failed, the other 2 kept: a201-02: its worker process died "
+        "(killed by a signal or out of memory)"
+    ]
 
 
-def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(monkeypatch, tmp_path, capsys):
+def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(
+    monkeypatch, tmp_path, capsys
+):
     import json
 
     from fsrbayes.cli import main
@@ -77,21 +95,43 @@ def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(mon
     sim = synthetic.simulate("a201", n_specimens=3, voltages=[1.0], forces=[4.9], samples=5, seed=2)
     data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
     out = tmp_path / "pop"
-    previous = signal.getsignal(signal.SIGTERM)  # the CLI turns SIGTERM into KeyboardInterrupt; not for pytest
+    previous = signal.getsignal(
+        signal.SIGTERM
+    )  # the CLI turns SIGTERM into KeyboardInterrupt; not for pytest
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            code = main(["fit", str(data), "--hierarchical", "--out", str(out), "--processes", "2", "--ensembles", "2",
-                         "--chunk", "20", "--max-steps", "20"])
+            code = main(
+                [
+                    "fit",
+                    str(data),
+                    "--hierarchical",
+                    "--out",
+                    str(out),
+                    "--processes",
+                    "2",
+                    "--ensembles",
+                    "2",
+                    "--chunk",
+                    "20",
+                    "--max-steps",
+                    "20",
+                ]
+            )
     finally:
         signal.signal(signal.SIGTERM, previous)
     err = capsys.readouterr().err
     assert code == 1
     assert "a201-02: its worker process died" in err
-    assert err.strip().splitlines()[-1] == ("fsrbayes fit: error: the fits of a201-02 failed (the reasons are in the "
-                                            "warning above); the population was built from the other specimens")
+    assert err.strip().splitlines()[-1] == (
+        "fsrbayes fit: error: the fits of a201-02 failed (the reasons are in the "
+        "warning above); the population was built from the other specimens"
+    )
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["failed_specimens"] == ["a201-02"] and sorted(summary["specimens"]) == ["a201-01", "a201-03"]
+    assert summary["failed_specimens"] == ["a201-02"] and sorted(summary["specimens"]) == [
+        "a201-01",
+        "a201-03",
+    ]
     assert (out / "population.nc").exists() and not (out / "a201-02").exists()
 
 
@@ -101,16 +141,22 @@ def test_a_full_disk_is_refused_before_sampling(monkeypatch, tmp_path, capsys):
 
     from fsrbayes.cli import common, main
 
-    sim = synthetic.simulate("a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=11, seed=2)
+    sim = synthetic.simulate(
+        "a201", n_specimens=2, voltages=[1.0, 3.0], forces=[4.9], samples=11, seed=2
+    )
     data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
     usage = collections.namedtuple("usage", "total used free")
-    monkeypatch.setattr(common.shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 20 * 10**6, 20 * 10**6))
+    monkeypatch.setattr(
+        common.shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 20 * 10**6, 20 * 10**6)
+    )
     started = time.perf_counter()
     code = main(["fit", str(data), "--out", str(tmp_path / "fit")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
-    assert err[0].startswith(f"fsrbayes fit: error: --out {tmp_path / 'fit'} has 20 MB free; fitting 2 specimens "
-                             "writes up to ")
+    assert err[0].startswith(
+        f"fsrbayes fit: error: --out {tmp_path / 'fit'} has 20 MB free; fitting 2 specimens "
+        "writes up to "
+    )
     assert time.perf_counter() - started < 10 and not list((tmp_path / "fit").iterdir())
 
 
@@ -121,7 +167,9 @@ def test_an_unwritable_output_folder_is_refused_before_sampling(monkeypatch, tmp
 
     from fsrbayes.cli import main
 
-    sim = synthetic.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=11, seed=2)
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=11, seed=2
+    )
     data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
     real_write = pathlib.Path.write_bytes
 
@@ -134,8 +182,10 @@ def test_an_unwritable_output_folder_is_refused_before_sampling(monkeypatch, tmp
     started = time.perf_counter()
     code = main(["fit", str(data), "--out", str(tmp_path / "fit")])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and err == [f"fsrbayes fit: error: --out {tmp_path / 'fit'} is not writable (Permission denied); "
-                                 "choose another folder"]
+    assert code == 2 and err == [
+        f"fsrbayes fit: error: --out {tmp_path / 'fit'} is not writable (Permission denied); "
+        "choose another folder"
+    ]
     assert time.perf_counter() - started < 10
 
 
@@ -144,7 +194,10 @@ def test_output_estimate_counts_the_checkpoint_and_the_posterior():
 
     settings = SamplerSettings(n_ensembles=4, max_steps=20000)
     # 4 ensembles x 20,000 steps x 48 walkers x (12 + 1) float64 = 399 MB of checkpoint at most.
-    assert fit_output_bytes(549, 9, 12, settings) == 4 * 20000 * 48 * 13 * 8 + 2000 * (12 + 2 * 549 + 9 * 62) * 8
+    assert (
+        fit_output_bytes(549, 9, 12, settings)
+        == 4 * 20000 * 48 * 13 * 8 + 2000 * (12 + 2 * 549 + 9 * 62) * 8
+    )
 
 
 def test_cli_hierarchical_fit_with_fewer_than_two_fits_left_says_why(monkeypatch, tmp_path, capsys):
@@ -155,11 +208,28 @@ def test_cli_hierarchical_fit_with_fewer_than_two_fits_left_says_why(monkeypatch
     data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
     previous = signal.getsignal(signal.SIGTERM)
     try:
-        code = main(["fit", str(data), "--hierarchical", "--out", str(tmp_path / "pop"), "--processes", "2",
-                     "--ensembles", "2", "--chunk", "20", "--max-steps", "20"])
+        code = main(
+            [
+                "fit",
+                str(data),
+                "--hierarchical",
+                "--out",
+                str(tmp_path / "pop"),
+                "--processes",
+                "2",
+                "--ensembles",
+                "2",
+                "--chunk",
+                "20",
+                "--max-steps",
+                "20",
+            ]
+        )
     finally:
         signal.signal(signal.SIGTERM, previous)
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1
-    assert err[0].startswith("fsrbayes fit: error: a201: 1 of 2 specimen fits succeeded, a population needs 2 (1 of 2 "
-                             "specimen fits failed, the other 1 kept: a201-02: its worker process died")
+    assert err[0].startswith(
+        "fsrbayes fit: error: a201: 1 of 2 specimen fits succeeded, a population needs 2 (1 of 2 "
+        "specimen fits failed, the other 1 kept: a201-02: its worker process died"
+    )

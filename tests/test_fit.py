@@ -15,14 +15,20 @@ import xarray as xr
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.samplers.ensemble import CheckpointMismatch, ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.ensemble import (
+    CheckpointMismatch,
+    ConvergenceWarning,
+    SamplerSettings,
+)
 
 FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 
 
 @pytest.fixture(scope="module")
 def small():
-    return syn.simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2)
+    return syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
+    )
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +40,9 @@ def result(small):
 def test_fit_returns_chains_and_a_map_near_the_truth(result, small):
     assert result.run.chain.shape[:2] == (2, 200)
     truth = small.truth["specimens"]["a201-01"]["params"]
-    u_truth = result.posterior.prior.to_unconstrained(np.array([truth[n] for n in result.posterior.names]))
+    u_truth = result.posterior.prior.to_unconstrained(
+        np.array([truth[n] for n in result.posterior.names])
+    )
     assert result.posterior(result.map_u) >= result.posterior(u_truth) - 1.0
 
 
@@ -48,8 +56,14 @@ def test_same_seed_same_fit(small, result):
 def test_output_groups_and_summary_keys(result, tmp_path):
     info = save_fit(result, tmp_path)
     tree = xr.open_datatree(tmp_path / "posterior.nc", engine="h5netcdf")
-    assert {"posterior", "log_likelihood", "posterior_predictive", "observed_data", "constant_data",
-            "sample_stats"} <= set(tree.children)
+    assert {
+        "posterior",
+        "log_likelihood",
+        "posterior_predictive",
+        "observed_data",
+        "constant_data",
+        "sample_stats",
+    } <= set(tree.children)
     n_obs = result.posterior.data.n_obs
     assert tree.log_likelihood["current"].shape[-1] == n_obs == tree.observed_data["current"].size
     assert set(tree.posterior_predictive.data_vars) == {"current", "drift", "drift_3600"}
@@ -73,8 +87,13 @@ def test_several_specimens_need_a_choice():
 
 
 def cli(*args, **kwargs):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300,
-                          **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        **kwargs,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -95,7 +114,11 @@ def _children_of(pid):
             except OSError:
                 continue
             ppid = int(status.split("PPid:")[1].split()[0])
-            if (ppid == pid or ppid == 1) and b"fsrbayes" in cmdline and b"test_killed_fit" in cmdline:
+            if (
+                (ppid == pid or ppid == 1)
+                and b"fsrbayes" in cmdline
+                and b"test_killed_fit" in cmdline
+            ):
                 found.append(int(entry))
     return found
 
@@ -103,8 +126,23 @@ def _children_of(pid):
 @pytest.mark.parametrize("stop", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
 def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     out = tmp_path / "fit"
-    args = [sys.executable, "-m", "fsrbayes", "fit", str(csv_file), "--out", str(out), "--ensembles", "2",
-            "--chunk", "50", "--max-steps", "400", "--seed", "3"]
+    args = [
+        sys.executable,
+        "-m",
+        "fsrbayes",
+        "fit",
+        str(csv_file),
+        "--out",
+        str(out),
+        "--ensembles",
+        "2",
+        "--chunk",
+        "50",
+        "--max-steps",
+        "400",
+        "--seed",
+        "3",
+    ]
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     checkpoint = out / "checkpoint.npz"
     deadline = time.time() + 240
@@ -126,19 +164,50 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     assert 0 < saved.shape[1] < 400
     if stop == signal.SIGTERM:
         return  # resuming is the same path after either signal: the SIGKILL case runs it to the end
-    result = cli("fit", str(csv_file), "--out", str(out), "--ensembles", "2", "--chunk", "50", "--max-steps", "400",
-                 "--seed", "3", "--resume")
+    result = cli(
+        "fit",
+        str(csv_file),
+        "--out",
+        str(out),
+        "--ensembles",
+        "2",
+        "--chunk",
+        "50",
+        "--max-steps",
+        "400",
+        "--seed",
+        "3",
+        "--resume",
+    )
     assert result.returncode == 0, result.stderr
     chain = np.load(checkpoint)["chain"]
     assert chain.shape[1] == 400
-    assert chain[:, :saved.shape[1]].tobytes() == saved.tobytes()
+    assert chain[:, : saved.shape[1]].tobytes() == saved.tobytes()
     assert (out / "posterior.nc").exists() and (out / "summary.json").exists()
-    assert all((out / f).exists() for f in ("corner.png", "drift_bands.png", "current_bands.png", "drift_3600.png"))
+    assert all(
+        (out / f).exists()
+        for f in ("corner.png", "drift_bands.png", "current_bands.png", "drift_3600.png")
+    )
     # A checkpoint written for another model is refused in one line.
-    refused = cli("fit", str(csv_file), "--out", str(out), "--model", "zener", "--ensembles", "2", "--chunk", "50",
-                  "--max-steps", "400", "--resume")
+    refused = cli(
+        "fit",
+        str(csv_file),
+        "--out",
+        str(out),
+        "--model",
+        "zener",
+        "--ensembles",
+        "2",
+        "--chunk",
+        "50",
+        "--max-steps",
+        "400",
+        "--resume",
+    )
     assert refused.returncode == 2
-    assert "was written for another model, other priors or another parameter order" in refused.stderr
+    assert (
+        "was written for another model, other priors or another parameter order" in refused.stderr
+    )
     assert len(refused.stderr.strip().splitlines()) == 1
 
 
@@ -148,9 +217,18 @@ def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_pat
 
     path = tmp_path / "checkpoint.npz"
     state = np.random.RandomState(0).get_state()
-    sampling._save(path, "other|data", np.zeros((2, 1, 32, 11)), np.zeros((2, 1, 32)), np.zeros((2, 32)),
-                   [state, state], FAST)
-    monkeypatch.setattr(fit_module, "find_map", lambda *a, **k: pytest.fail("the MAP search ran first"))
+    sampling._save(
+        path,
+        "other|data",
+        np.zeros((2, 1, 32, 11)),
+        np.zeros((2, 1, 32)),
+        np.zeros((2, 32)),
+        [state, state],
+        FAST,
+    )
+    monkeypatch.setattr(
+        fit_module, "find_map", lambda *a, **k: pytest.fail("the MAP search ran first")
+    )
     with pytest.raises(CheckpointMismatch, match="was written for"):
         fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
 
@@ -166,7 +244,9 @@ def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, mon
 
     notes = fit_module.design_warnings(posterior_of(small))  # forces 4.9 and 9.8 N
     assert len(notes) == 1 and "2 distinct stress levels" in notes[0] and "(A0, A1, A2)" in notes[0]
-    three = syn.simulate("a201", n_specimens=1, voltages=[1.0], forces=[1.96, 4.9, 9.8], samples=5, seed=1)
+    three = syn.simulate(
+        "a201", n_specimens=1, voltages=[1.0], forces=[1.96, 4.9, 9.8], samples=5, seed=1
+    )
     assert fit_module.design_warnings(posterior_of(three)) == []
     assert fit_module._distinct_levels([2e5, 1e5, 1.004e5]) == 2  # measured loads scatter a little
 
@@ -177,7 +257,10 @@ def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, mon
         raise Stop
 
     monkeypatch.setattr(fit_module, "find_map", stop)
-    with pytest.warns(fit_module.DesignWarning, match="test at >= 3 stresses or fix A2"), pytest.raises(Stop):
+    with (
+        pytest.warns(fit_module.DesignWarning, match="test at >= 3 stresses or fix A2"),
+        pytest.raises(Stop),
+    ):
         fsrbayes.fit(small.data, rng=7, settings=FAST)
 
 
@@ -189,7 +272,11 @@ def test_cli_fit_bad_input(csv_file, tmp_path):
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")
     result = cli("fit", str(csv_file), "--out", str(a_file / "z"))
-    assert result.returncode == 2 and "cannot be created" in result.stderr and "Traceback" not in result.stderr
+    assert (
+        result.returncode == 2
+        and "cannot be created" in result.stderr
+        and "Traceback" not in result.stderr
+    )
 
 
 def test_plots_return_figures_and_write_pngs(result, tmp_path):
@@ -234,14 +321,25 @@ def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     from fsrbayes.inference.fit import MAP_ITERATIONS
     from fsrbayes.inference.optimize import find_map
 
-    sim = syn.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=31,
-                       seed=2024)
+    sim = syn.simulate(
+        "a201",
+        n_specimens=1,
+        voltages=[0.2, 1.0, 3.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=31,
+        seed=2024,
+    )
     posterior = LogPosterior.for_sensor(SpecimenData.select(sim.data), fsrbayes.load_sensor("a201"))
     truth = np.array([sim.truth["specimens"]["a201-01"]["params"][n] for n in posterior.names])
     optima = find_map(posterior, np.random.default_rng(2024), n_starts=2, maxiter=MAP_ITERATIONS)
-    assert posterior(optima[:1])[0] >= posterior(posterior.prior.to_unconstrained(truth[None]))[0] - 0.5
+    assert (
+        posterior(optima[:1])[0]
+        >= posterior(posterior.prior.to_unconstrained(truth[None]))[0] - 0.5
+    )
     # The starts optimised in two forked workers: the same optima, bit for bit.
-    side_by_side = find_map(posterior, np.random.default_rng(2024), n_starts=2, maxiter=MAP_ITERATIONS, processes=2)
+    side_by_side = find_map(
+        posterior, np.random.default_rng(2024), n_starts=2, maxiter=MAP_ITERATIONS, processes=2
+    )
     np.testing.assert_array_equal(side_by_side, optima)
 
 
@@ -257,8 +355,13 @@ class _TailedGaussian:
         from fsrbayes.data.distributions import make_distribution
         from fsrbayes.data.prior import JointPrior
 
-        self.prior = JointPrior(("k", "inv_b1"), (make_distribution({"dist": "normal", "mu": 0.0, "sigma": 1.0}),
-                                                  make_distribution({"dist": "halfnormal", "scale": 1.0})))
+        self.prior = JointPrior(
+            ("k", "inv_b1"),
+            (
+                make_distribution({"dist": "normal", "mu": 0.0, "sigma": 1.0}),
+                make_distribution({"dist": "halfnormal", "scale": 1.0}),
+            ),
+        )
 
     def __call__(self, u):
         d = np.atleast_2d(u) - self.mean
@@ -280,7 +383,9 @@ def test_nested_starts_hold_the_half_normal_and_optimise_the_rest():
     assert [r[0][1] for r in regions] == [target.mean[1], NESTED_DEPTH]
     # ... never the only one's, and not when it lies too far below the best region
     assert len(start_regions(target, target.mean[None], starts, n_ensembles=1)) == 1
-    assert len(start_regions(target, target.mean[None], starts, 2, max_log_mass_gap=log_gap / 2)) == 1
+    assert (
+        len(start_regions(target, target.mean[None], starts, 2, max_log_mass_gap=log_gap / 2)) == 1
+    )
     # a parameter already at or below the depth needs no start
     assert nested_starts(target, np.array([0.0, NESTED_DEPTH - 1])).shape == (0, 2)
 
@@ -293,14 +398,32 @@ def test_parameter_recovery_on_twenty_simulated_specimens():
     print(format_recovery(study))
     identified = np.median(study["sd_ratio"], axis=0) < 0.5
     coverage = study["inside"].mean(axis=0)
-    for name, ok, c in zip(study["names"], identified, coverage):
+    for name, ok, c in zip(study["names"], identified, coverage, strict=False):
         if ok:
-            assert 0.8 <= c <= 1.0, f"{name}: 90% interval covers the truth in {c:.2f} of the specimens"
+            assert 0.8 <= c <= 1.0, (
+                f"{name}: 90% interval covers the truth in {c:.2f} of the specimens"
+            )
     assert np.mean(study["drift_inside"]) >= 0.85
 
 
 def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
-    result = cli("fit", str(csv_file), "--out", str(tmp_path / "p"), "--ensembles", "2", "--chunk", "20",
-                 "--max-steps", "60", "--processes", "2", "--no-plots", "--progress")
+    result = cli(
+        "fit",
+        str(csv_file),
+        "--out",
+        str(tmp_path / "p"),
+        "--ensembles",
+        "2",
+        "--chunk",
+        "20",
+        "--max-steps",
+        "60",
+        "--processes",
+        "2",
+        "--no-plots",
+        "--progress",
+    )
     assert result.returncode == 0, result.stderr
-    assert "sampling: 100%" in result.stderr and "60/60" in result.stderr and "step" in result.stderr
+    assert (
+        "sampling: 100%" in result.stderr and "60/60" in result.stderr and "step" in result.stderr
+    )

@@ -13,14 +13,20 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import fsrbayes
 from fsrbayes.data import synthetic
 from fsrbayes.data.csvio import CreepData, DataError, read_csv
 from fsrbayes.inference import LogPosterior, SpecimenData
-import fsrbayes
 
 HEADER = "specimen,sensor,voltage_V,stress_Pa,time_s,current_A\n"
-GOOD_ROWS = ["s1,a201,1.0,117085.0,0,2.9e-06", "s1,a201,1.0,117085.0,10,2.93e-06", "s1,a201,1.0,117085.0,20,2.95e-06"]
-FUZZ = settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
+GOOD_ROWS = [
+    "s1,a201,1.0,117085.0,0,2.9e-06",
+    "s1,a201,1.0,117085.0,10,2.93e-06",
+    "s1,a201,1.0,117085.0,20,2.95e-06",
+]
+FUZZ = settings(
+    max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 
 
 def read_or_data_error(path, **kwargs):
@@ -44,13 +50,36 @@ def test_random_bytes_are_data_or_one_located_error(raw, tmp_path):
     read_or_data_error(path)
 
 
-CELL = st.one_of(st.text(max_size=12), st.sampled_from(["nan", "inf", "-inf", "1e999", "-0", "0", "1e-320", "",
-                                                         "\x00", '"', "1,5", "a201", "fsr402", "NaN", " 1 "]),
-                 st.floats(allow_nan=True, allow_infinity=True).map(repr))
+CELL = st.one_of(
+    st.text(max_size=12),
+    st.sampled_from(
+        [
+            "nan",
+            "inf",
+            "-inf",
+            "1e999",
+            "-0",
+            "0",
+            "1e-320",
+            "",
+            "\x00",
+            '"',
+            "1,5",
+            "a201",
+            "fsr402",
+            "NaN",
+            " 1 ",
+        ]
+    ),
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+)
 
 
 @FUZZ
-@given(rows=st.lists(st.lists(CELL, min_size=5, max_size=7), min_size=1, max_size=8), sep=st.sampled_from([",", ";"]))
+@given(
+    rows=st.lists(st.lists(CELL, min_size=5, max_size=7), min_size=1, max_size=8),
+    sep=st.sampled_from([",", ";"]),
+)
 def test_mangled_rows_are_data_or_one_located_error(rows, sep, tmp_path):
     path = tmp_path / "fuzz.csv"
     text = HEADER.replace(",", sep) + "\n".join(sep.join(row) for row in rows) + "\n"
@@ -58,12 +87,18 @@ def test_mangled_rows_are_data_or_one_located_error(rows, sep, tmp_path):
     read_or_data_error(path, sep=sep)
 
 
-@pytest.mark.parametrize("payload", [
-    HEADER + "s1,a201,1.0,117085.0,0," + "9" * 200_000 + "\n",            # one field past csv's size limit
-    HEADER + "s1,a201,1.0,117085.0,0\x00,2.9e-06\n",                      # a NUL byte
-    HEADER + '"s1,a201,1.0,117085.0,0,2.9e-06\n',                        # an unclosed quote
-    "x" * 5_000_000,                                                      # 5 MB on one line, no header
-])
+@pytest.mark.parametrize(
+    "payload",
+    [
+        HEADER
+        + "s1,a201,1.0,117085.0,0,"
+        + "9" * 200_000
+        + "\n",  # one field past csv's size limit
+        HEADER + "s1,a201,1.0,117085.0,0\x00,2.9e-06\n",  # a NUL byte
+        HEADER + '"s1,a201,1.0,117085.0,0,2.9e-06\n',  # an unclosed quote
+        "x" * 5_000_000,  # 5 MB on one line, no header
+    ],
+)
 def test_hostile_files_give_one_located_error(payload, tmp_path):
     path = tmp_path / "hostile.csv"
     path.write_text(payload)
@@ -99,14 +134,29 @@ def test_gzip_bomb_and_oversize_files_are_refused_before_they_fill_memory(tmp_pa
 def test_cli_check_on_hostile_bytes_exits_2_without_traceback(tmp_path):
     path = tmp_path / "hostile.csv"
     path.write_bytes(HEADER.encode() + b"s1,a201,1.0,117085.0,0\x00,2.9e-06\n")
-    run = subprocess.run([sys.executable, "-m", "fsrbayes", "check", str(path)], capture_output=True, text=True,
-                         timeout=120)
-    assert run.returncode == 2 and "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
+    run = subprocess.run(
+        [sys.executable, "-m", "fsrbayes", "check", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert (
+        run.returncode == 2
+        and "Traceback" not in run.stderr
+        and len(run.stderr.strip().splitlines()) == 1
+    )
 
 
 def test_a_large_valid_file_reads_in_bounded_time(tmp_path):
-    sim = synthetic.simulate("a201", n_specimens=4, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8],
-                             samples=2000, spacing="linear", seed=1)
+    sim = synthetic.simulate(
+        "a201",
+        n_specimens=4,
+        voltages=[0.2, 1.0, 3.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=2000,
+        spacing="linear",
+        seed=1,
+    )
     path, _ = synthetic.write_simulation(sim, tmp_path / "big.csv")
     data = read_csv(path)
     assert data.n_rows == 4 * 9 * 2000
@@ -114,12 +164,17 @@ def test_a_large_valid_file_reads_in_bounded_time(tmp_path):
 
 @pytest.fixture(scope="module")
 def posterior():
-    sim = synthetic.simulate("a201", n_specimens=1, voltages=[0.2, 3.0], forces=[4.9], samples=7, seed=4)
-    return LogPosterior.for_sensor(SpecimenData.from_tests(sim.data.tests), fsrbayes.load_sensor("a201"))
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[0.2, 3.0], forces=[4.9], samples=7, seed=4
+    )
+    return LogPosterior.for_sensor(
+        SpecimenData.from_tests(sim.data.tests), fsrbayes.load_sensor("a201")
+    )
 
 
 EXTREME = st.floats(allow_nan=True, allow_infinity=True, width=64) | st.sampled_from(
-    [0.0, -0.0, 1e-308, -1e-308, 5e-324, 1e308, -1e308, 709.8, -745.2, 1e16, -1e16])
+    [0.0, -0.0, 1e-308, -1e-308, 5e-324, 1e308, -1e308, 709.8, -745.2, 1e16, -1e16]
+)
 
 
 @FUZZ
@@ -137,4 +192,6 @@ def test_extreme_batches_mixed_with_good_walkers(posterior):
     bad[::2] = rng.choice([np.nan, np.inf, -np.inf, 1e308, -1e308], size=bad[::2].shape)
     values = posterior(np.concatenate([good, bad]))
     assert not np.isnan(values).any()
-    assert np.array_equal(values[1:64:2], posterior(good)[1::2])  # bad neighbours do not change good walkers
+    assert np.array_equal(
+        values[1:64:2], posterior(good)[1::2]
+    )  # bad neighbours do not change good walkers

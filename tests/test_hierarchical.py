@@ -11,13 +11,17 @@ from scipy import integrate, stats
 from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget, KernelProposal
-from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
 from fsrbayes.inference.population.model import Population, TwoStageTarget
+from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
 from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
 SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])
-Y = 2.0 + 3.0 * np.random.default_rng(11).standard_normal(8) + SIGMA * np.random.default_rng(12).standard_normal(8)
+Y = (
+    2.0
+    + 3.0 * np.random.default_rng(11).standard_normal(8)
+    + SIGMA * np.random.default_rng(12).standard_normal(8)
+)
 SETTINGS = SamplerSettings(n_ensembles=4, chunk=250, max_steps=8000, min_steps=500, processes=1)
 
 
@@ -33,19 +37,30 @@ class GaussianSpecimen:
         u = np.atleast_2d(u)
         theta, log_jac = self.prior.from_unconstrained(u)
         z = (self.y - theta[:, 0]) / self.sigma
-        log_like = -0.5 * z * z - np.log(self.sigma * np.sqrt(2 * np.pi)) if with_likelihood else -np.inf
+        log_like = (
+            -0.5 * z * z - np.log(self.sigma * np.sqrt(2 * np.pi)) if with_likelihood else -np.inf
+        )
         return self.prior.log_prob(theta) + log_jac, np.broadcast_to(log_like, (len(u),))
 
 
 def analytic_moments(y=Y, sigma=SIGMA):
     """Posterior means and sds of μ and τ (μ ~ N(0, 10²), τ ~ HalfNormal(10)), by quadrature over τ."""
+
     def log_tau_density(tau):
         v = sigma**2 + tau**2
         a = 1 / 100 + np.sum(1 / v)
         b = np.sum(y / v)
         c = np.sum(y**2 / v)
-        return (stats.halfnorm.logpdf(tau, scale=10) - 0.5 * np.log(a) - 0.5 * np.sum(np.log(v))
-                - 0.5 * (c - b * b / a)), b / a, 1 / a
+        return (
+            (
+                stats.halfnorm.logpdf(tau, scale=10)
+                - 0.5 * np.log(a)
+                - 0.5 * np.sum(np.log(v))
+                - 0.5 * (c - b * b / a)
+            ),
+            b / a,
+            1 / a,
+        )
 
     grid = np.linspace(1e-6, 40, 40001)
     parts = np.array([log_tau_density(t) for t in grid])
@@ -62,7 +77,9 @@ def analytic_moments(y=Y, sigma=SIGMA):
 def exact_specimen_draws(n, rng):
     precision = 1 / SIGMA**2 + 1 / 100
     mean = Y / SIGMA**2 / precision
-    return [m + rng.standard_normal((n, 1)) / np.sqrt(p) for m, p in zip(mean, precision)]
+    return [
+        m + rng.standard_normal((n, 1)) / np.sqrt(p) for m, p in zip(mean, precision, strict=False)
+    ]
 
 
 def assert_matches(result, exact):
@@ -111,8 +128,13 @@ def test_two_stage_weights_match_direct_evaluation():
 
 def test_two_stage_matches_the_analytic_hyper_posterior():
     population = Population(INTERIM)
-    result = two_stage(exact_specimen_draws(1000, np.random.default_rng(1)), population, n_draws=1000,
-                       settings=SETTINGS, seed=3)
+    result = two_stage(
+        exact_specimen_draws(1000, np.random.default_rng(1)),
+        population,
+        n_draws=1000,
+        settings=SETTINGS,
+        seed=3,
+    )
     assert_matches(result, analytic_moments())
     assert result.effective_draws.min() > 250
     assert result.log_likelihood_mc_sd < 0.1
@@ -121,7 +143,12 @@ def test_two_stage_matches_the_analytic_hyper_posterior():
 def test_joint_matches_the_analytic_hyper_posterior():
     population = Population(INTERIM)
     y, sigma = Y[:5], SIGMA[:5]  # 7 parameters: the joint run costs a minute with all 8
-    result = joint([GaussianSpecimen(a, b) for a, b in zip(y, sigma)], population, settings=SETTINGS, seed=4)
+    result = joint(
+        [GaussianSpecimen(a, b) for a, b in zip(y, sigma, strict=False)],
+        population,
+        settings=SETTINGS,
+        seed=4,
+    )
     assert_matches(result, analytic_moments(y, sigma))
 
 
@@ -137,8 +164,13 @@ def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
     for k in range(8):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = two_stage(exact_specimen_draws(40, np.random.default_rng(100 + k)), population, n_draws=40,
-                               settings=settings, seed=k)
+            result = two_stage(
+                exact_specimen_draws(40, np.random.default_rng(100 + k)),
+                population,
+                n_draws=40,
+                settings=settings,
+                seed=k,
+            )
         summary = result.summary()
         means.append([summary[n]["mean"] for n in population.hyper_names])
         errors.append([summary[n]["error_mean"] for n in population.hyper_names])
@@ -151,10 +183,17 @@ def test_gibbs_joint_matches_the_analytic_hyper_posterior():
     """All 8 specimens (the ensemble route above needs a minute for 5): blocked Gibbs sweeps with
     kernel proposals from each specimen's own posterior draws."""
     population = Population(INTERIM)
-    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA)]
-    result = joint(specimens, population, settings=SETTINGS, seed=4,
-                   proposal_draws=exact_specimen_draws(1000, np.random.default_rng(1)))
-    assert isinstance(result.target, GibbsJointTarget) and result.run.chain.shape[2] == GIBBS_WALKERS
+    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
+    result = joint(
+        specimens,
+        population,
+        settings=SETTINGS,
+        seed=4,
+        proposal_draws=exact_specimen_draws(1000, np.random.default_rng(1)),
+    )
+    assert (
+        isinstance(result.target, GibbsJointTarget) and result.run.chain.shape[2] == GIBBS_WALKERS
+    )
     assert_matches(result, analytic_moments())
 
 
@@ -162,9 +201,10 @@ def test_gibbs_move_returns_the_joint_log_density_of_its_state():
     """The log-density emcee stores is assembled from cached blocks: it must equal the joint
     target's, also after the state was changed behind the move's back (cache rebuilt)."""
     population = Population(INTERIM)
-    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA)]
-    target = GibbsJointTarget(population, specimens, exact_specimen_draws(200, np.random.default_rng(2)),
-                              weak_ratio=0.0)  # the shift-and-scale move too
+    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
+    target = GibbsJointTarget(
+        population, specimens, exact_specimen_draws(200, np.random.default_rng(2)), weak_ratio=0.0
+    )  # the shift-and-scale move too
     assert target.weak == (0,)
     u = target.sample_prior(np.random.default_rng(0), 6)
     u[:, 1] = np.log(0.3)  # ω = 3: inside the bulk
@@ -189,13 +229,26 @@ def test_gibbs_joint_with_weakly_identified_specimens_matches_the_analytic_hyper
     (``test_gibbs_move_returns_the_joint_log_density_of_its_state``)."""
     population = Population(INTERIM)
     sigma = np.full(8, 4.0)
-    y = 2.0 + np.random.default_rng(11).standard_normal(8) + sigma * np.random.default_rng(12).standard_normal(8)
+    y = (
+        2.0
+        + np.random.default_rng(11).standard_normal(8)
+        + sigma * np.random.default_rng(12).standard_normal(8)
+    )
     precision = 1 / sigma**2 + 1 / 100
     rng = np.random.default_rng(1)
-    draws = [m + rng.standard_normal((1000, 1)) / np.sqrt(p) for m, p in zip(y / sigma**2 / precision, precision)]
+    draws = [
+        m + rng.standard_normal((1000, 1)) / np.sqrt(p)
+        for m, p in zip(y / sigma**2 / precision, precision, strict=False)
+    ]
     settings = SamplerSettings(n_ensembles=2, chunk=500, max_steps=6000, min_steps=500, processes=1)
-    result = joint([GaussianSpecimen(a, b) for a, b in zip(y, sigma)], population, settings=settings, seed=4,
-                   proposal_draws=draws, gibbs={"weak_ratio": 0.5})
+    result = joint(
+        [GaussianSpecimen(a, b) for a, b in zip(y, sigma, strict=False)],
+        population,
+        settings=settings,
+        seed=4,
+        proposal_draws=draws,
+        gibbs={"weak_ratio": 0.5},
+    )
     assert result.target.weak == (0,)
     assert_matches(result, analytic_moments(y, sigma))
 
@@ -228,9 +281,13 @@ def test_two_stage_warns_when_a_specimen_keeps_few_draws():
     # A specimen whose fit says little (sd 8) and sits away from the others: few of its draws
     # fall where the population is, so its importance weights concentrate on a handful.
     draws[0] = -20.0 + 8.0 * np.random.default_rng(9).standard_normal((200, 1))
-    short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=400, min_steps=400, transport_rounds=1)
+    short = SamplerSettings(
+        n_ensembles=2, chunk=100, max_steps=400, min_steps=400, transport_rounds=1
+    )
     with pytest.warns(ReweightingWarning, match="specimen 0 keeps only"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)  # a short run: only the weights matter here
+        warnings.simplefilter(
+            "ignore", ConvergenceWarning
+        )  # a short run: only the weights matter here
         result = two_stage(draws, population, n_draws=200, settings=short, seed=5)
     assert result.effective_draws[0] < 20 < result.effective_draws[1:].min()
 
@@ -238,10 +295,14 @@ def test_two_stage_warns_when_a_specimen_keeps_few_draws():
 def _small_bench(n_specimens=3):
     from fsrbayes.data import synthetic
 
-    return synthetic.simulate("a201", n_specimens=n_specimens, voltages=[0.2, 3.0], forces=[4.9], samples=11, seed=8)
+    return synthetic.simulate(
+        "a201", n_specimens=n_specimens, voltages=[0.2, 3.0], forces=[4.9], samples=11, seed=8
+    )
 
 
-SHORT_FIT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1)
+SHORT_FIT = SamplerSettings(
+    n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1
+)
 
 
 def _fits(**kwargs):
@@ -270,7 +331,9 @@ def test_specimen_fits_on_a_dask_local_cluster_equal_local_ones(serial_fits):
     from dask.distributed import LocalCluster
 
     local = serial_fits
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         remote = _fits(scheduler=cluster.scheduler_address)
     for key in local:
         assert np.array_equal(local[key].run.chain, remote[key].run.chain)
@@ -290,8 +353,12 @@ def test_two_stage_recovers_the_simulated_population(tmp_path):
 
     study = population_study(joint_route=True)
     print(format_population_study(study))
-    routes = study["routes"]  # its convergence is printed, not required: tau ~250 sweeps on omega_A0 (BENCHMARKS.md)
-    assert all(abs(row["z"]) < 4 for row in routes["rows"]), [(r["name"], r["z"]) for r in routes["rows"]]
+    routes = study[
+        "routes"
+    ]  # its convergence is printed, not required: tau ~250 sweeps on omega_A0 (BENCHMARKS.md)
+    assert all(abs(row["z"]) < 4 for row in routes["rows"]), [
+        (r["name"], r["z"]) for r in routes["rows"]
+    ]
     assert sum(not row["joint_inside"] for row in routes["rows"]) <= 5
     misses = [row["name"] for row in study["hyper"] if not row["inside"]]
     assert len(misses) <= 5, misses
@@ -310,8 +377,12 @@ def _identical_new_specimens(n_per_hyper=4000):
     sensor = load_sensor("a201")
     template = ForwardTemplate.from_sensor(sensor)
     population = Population(template.prior)
-    hyper = np.concatenate([[np.log(sensor.params[n]) for n in population.names], np.full(population.size, 1e-9)])
-    return new_specimens(population, hyper[None, :], template, n_hyper=1, n_per_hyper=n_per_hyper), sensor
+    hyper = np.concatenate(
+        [[np.log(sensor.params[n]) for n in population.names], np.full(population.size, 1e-9)]
+    )
+    return new_specimens(
+        population, hyper[None, :], template, n_hyper=1, n_per_hyper=n_per_hyper
+    ), sensor
 
 
 def test_new_specimen_drift_equals_the_forward_model_and_measurement_noise_spreads_it():

@@ -14,14 +14,18 @@ class LinearGaussianTarget(PriorScaledTarget):
 
     def __init__(self, X, y, s=0.5, tau=3.0):
         self.X, self.y, self.s = X, y, s
-        self.prior = JointPrior(tuple(f"w{i}" for i in range(X.shape[1])),
-                                tuple(Distribution("normal", {"mu": 0.0, "sigma": tau}) for _ in range(X.shape[1])))
+        self.prior = JointPrior(
+            tuple(f"w{i}" for i in range(X.shape[1])),
+            tuple(Distribution("normal", {"mu": 0.0, "sigma": tau}) for _ in range(X.shape[1])),
+        )
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
         u = np.atleast_2d(u)
         x, log_jac = self.prior.from_unconstrained(u)
         resid = self.y - x @ self.X.T
-        log_like = -0.5 * np.sum(resid**2, axis=1) / self.s**2 - len(self.y) * np.log(np.sqrt(2 * np.pi) * self.s)
+        log_like = -0.5 * np.sum(resid**2, axis=1) / self.s**2 - len(self.y) * np.log(
+            np.sqrt(2 * np.pi) * self.s
+        )
         return self.prior.log_prob(x) + log_jac, log_like
 
     def exact_log_z(self, tau=3.0):
@@ -65,5 +69,9 @@ def test_draws_follow_the_laplace_covariance():
     draws = fitted.draws(np.random.default_rng(2), 20000)
     exact = np.linalg.inv(X.T @ X / 0.5**2 + np.eye(3) / 3.0**2)
     scale = np.sqrt(np.outer(np.diag(exact), np.diag(exact)))
-    assert np.all(np.abs(np.cov(draws.T) - exact) < 0.05 * scale)  # MC sd of a covariance ~ scale·sqrt(2/n) = 0.01
-    assert np.allclose(draws.mean(axis=0), exact @ X.T @ y / 0.5**2, atol=4 * np.sqrt(np.diag(exact) / 20000).max())
+    assert np.all(
+        np.abs(np.cov(draws.T) - exact) < 0.05 * scale
+    )  # MC sd of a covariance ~ scale·sqrt(2/n) = 0.01
+    assert np.allclose(
+        draws.mean(axis=0), exact @ X.T @ y / 0.5**2, atol=4 * np.sqrt(np.diag(exact) / 20000).max()
+    )

@@ -23,9 +23,11 @@ def _imports(path):
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
             if node.level:
-                base = list(package[:-node.level]) if node.level <= len(package) else []
+                base = list(package[: -node.level]) if node.level <= len(package) else []
                 name = ".".join(base + ([node.module] if node.module else []))
-                yield from ([name] if node.module else [".".join(base + [a.name]) for a in node.names])
+                yield from (
+                    [name] if node.module else [".".join(base + [a.name]) for a in node.names]
+                )
             else:
                 yield node.module
         elif isinstance(node, ast.Import):
@@ -40,7 +42,7 @@ def test_each_layer_imports_only_itself_and_the_layers_below():
             continue
         for name in _imports(path):
             if name.startswith("fsrbayes."):
-                name = name[len("fsrbayes."):]
+                name = name[len("fsrbayes.") :]
             target = _layer(name)
             if target is not None and LAYERS.index(target) > LAYERS.index(own):
                 offences.append(f"{path.relative_to(PACKAGE)} imports {name}")
@@ -50,7 +52,9 @@ def test_each_layer_imports_only_itself_and_the_layers_below():
 
 
 def test_importing_physics_loads_no_sampler_or_plotting_library():
-    code = ("import sys, fsrbayes.physics, fsrbayes; "
-            f"print(','.join(sorted(m for m in {sorted(HEAVY)!r} if m in sys.modules)))")
+    code = (
+        "import sys, fsrbayes.physics, fsrbayes; "
+        f"print(','.join(sorted(m for m in {sorted(HEAVY)!r} if m in sys.modules)))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""

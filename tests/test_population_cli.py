@@ -11,18 +11,39 @@ from fsrbayes.data.csvio import write_csv
 
 
 def fsrbayes(*args, timeout=600):
-    return subprocess.run([sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout,
-                          check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )
 
 
 @pytest.fixture(scope="module")
 def hierarchical_fit(tmp_path_factory):
     folder = tmp_path_factory.mktemp("population")
-    sim = synthetic.simulate("a201", n_specimens=3, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=4)
+    sim = synthetic.simulate(
+        "a201", n_specimens=3, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=4
+    )
     write_csv(sim.data, folder / "data.csv")
     out = folder / "fit"
-    run = fsrbayes("fit", str(folder / "data.csv"), "--hierarchical", "--out", str(out), "--ensembles", "2",
-                   "--chunk", "100", "--max-steps", "200", "--no-plots", "--processes", "2")
+    run = fsrbayes(
+        "fit",
+        str(folder / "data.csv"),
+        "--hierarchical",
+        "--out",
+        str(out),
+        "--ensembles",
+        "2",
+        "--chunk",
+        "100",
+        "--max-steps",
+        "200",
+        "--no-plots",
+        "--processes",
+        "2",
+    )
     assert run.returncode == 0, run.stderr
     return out, run
 
@@ -37,29 +58,65 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
     assert all(v["q05"] <= v["median"] <= v["q95"] for v in hyper.values())
     assert set(summary["hierarchical"]["effective_draws"]) == set(summary["specimens"])
     assert "population posterior (two-stage)" in run.stdout
-    assert all(v["draw_error_mean"] > 0 and v["error_mean"] >= v["mcse_mean"] for v in hyper.values())
+    assert all(
+        v["draw_error_mean"] > 0 and v["error_mean"] >= v["mcse_mean"] for v in hyper.values()
+    )
 
 
 # slow (~80 s, 2 processes): the joint route's sampler is checked against the closed form in the
 # default run (test_hierarchical.py::test_gibbs_joint_matches_the_analytic_hyper_posterior).
 @pytest.mark.slow
 def test_hierarchical_fit_by_the_joint_route(tmp_path):
-    sim = synthetic.simulate("a201", n_specimens=2, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=6, seed=4)
+    sim = synthetic.simulate(
+        "a201", n_specimens=2, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=6, seed=4
+    )
     write_csv(sim.data, tmp_path / "data.csv")
     out = tmp_path / "fit"
-    run = fsrbayes("fit", str(tmp_path / "data.csv"), "--hierarchical", "--route", "joint", "--out", str(out),
-                   "--ensembles", "2", "--chunk", "100", "--max-steps", "200", "--no-plots", "--processes", "2")
+    run = fsrbayes(
+        "fit",
+        str(tmp_path / "data.csv"),
+        "--hierarchical",
+        "--route",
+        "joint",
+        "--out",
+        str(out),
+        "--ensembles",
+        "2",
+        "--chunk",
+        "100",
+        "--max-steps",
+        "200",
+        "--no-plots",
+        "--processes",
+        "2",
+    )
     assert run.returncode == 0, run.stderr
     assert "population posterior (joint)" in run.stdout
     info = json.loads((out / "summary.json").read_text())["hierarchical"]
     assert info["route"] == "joint" and "effective_draws" not in info
-    assert all(v["q05"] <= v["median"] <= v["q95"] and v["ess_bulk"] > 0 for v in info["hyper_parameters"].values())
+    assert all(
+        v["q05"] <= v["median"] <= v["q95"] and v["ess_bulk"] > 0
+        for v in info["hyper_parameters"].values()
+    )
 
 
 def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit, tmp_path):
     out, _ = hierarchical_fit
-    run = fsrbayes("drift", str(out), "--time", "3600", "--json", str(tmp_path / "drift.json"), "--plot",
-                   str(tmp_path / "box.png"), "--optimal-voltage", "0.1,9", "--hyper-draws", "40", "--as-measured")
+    run = fsrbayes(
+        "drift",
+        str(out),
+        "--time",
+        "3600",
+        "--json",
+        str(tmp_path / "drift.json"),
+        "--plot",
+        str(tmp_path / "box.png"),
+        "--optimal-voltage",
+        "0.1,9",
+        "--hyper-draws",
+        "40",
+        "--as-measured",
+    )
     assert run.returncode == 0, run.stderr
     payload = json.loads((tmp_path / "drift.json").read_text())
     assert len(payload["groups"]) == 4  # 2 voltages x 2 stresses of the data
@@ -77,7 +134,9 @@ def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit,
 
 def test_drift_command_refuses_a_folder_without_population(tmp_path):
     run = fsrbayes("drift", str(tmp_path))
-    assert run.returncode == 2 and "no population.nc" in run.stderr and "Traceback" not in run.stderr
+    assert (
+        run.returncode == 2 and "no population.nc" in run.stderr and "Traceback" not in run.stderr
+    )
     assert run.stderr.count("\n") == 1
 
 

@@ -12,8 +12,15 @@ from fsrbayes.inference import LogPosterior, SpecimenData
 
 @pytest.fixture(scope="module")
 def sim():
-    return syn.simulate("a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=21,
-                        noise_rel=0.005, seed=11)
+    return syn.simulate(
+        "a201",
+        n_specimens=1,
+        voltages=[0.2, 1.0, 3.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=21,
+        noise_rel=0.005,
+        seed=11,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +38,9 @@ def test_packs_the_tests(sim):
     data = SpecimenData.from_tests(sim.data.tests)
     assert data.time_s.shape == (9, 21) and data.mask.all() and data.n_obs == 189
     with pytest.raises(ValueError, match="one specimen"):
-        SpecimenData.from_tests(syn.simulate("a201", n_specimens=2, voltages=[1.0], forces=[4.9], samples=3).data.tests)
+        SpecimenData.from_tests(
+            syn.simulate("a201", n_specimens=2, voltages=[1.0], forces=[4.9], samples=3).data.tests
+        )
 
 
 def test_vectorised_equals_one_at_a_time(posterior, rng):
@@ -50,7 +59,9 @@ def test_likelihood_matches_a_direct_gaussian(posterior, sim):
         model = fsrbayes.current(params, test.voltage_V, test.stress_Pa, test.time_s)
         y = np.log(test.current_A)
         s = params["sigma_rel"]
-        total += np.sum(-0.5 * ((y - np.log(model)) / s) ** 2 - np.log(s) - 0.5 * np.log(2 * np.pi) - y)
+        total += np.sum(
+            -0.5 * ((y - np.log(model)) / s) ** 2 - np.log(s) - 0.5 * np.log(2 * np.pi) - y
+        )
     assert posterior.log_likelihood_pointwise(x).sum() == pytest.approx(total, rel=1e-10)
     assert posterior.log_likelihood_pointwise(x).shape == (1, 189)
 
@@ -64,7 +75,7 @@ def test_truth_beats_a_perturbed_point(posterior, sim):
 
 def test_off_support_and_invalid_points_are_minus_infinity_never_nan(posterior):
     u = np.zeros((4, posterior.ndim))
-    u[1, :] = 1e6      # overflows to inf parameters
+    u[1, :] = 1e6  # overflows to inf parameters
     u[2, :] = np.nan
     u[3, posterior.names.index("s0")] = -200.0  # gap → 0: outside the model
     values = posterior(u)
@@ -98,5 +109,7 @@ def test_missing_parameter_is_named(sim):
     data = SpecimenData.from_tests(sim.data.tests)
     sensor = fsrbayes.load_sensor("a201")
     prior = sensor.prior_for("burgers")
-    with pytest.raises(ValueError, match=r"needs parameter\(s\) \['Rpar', 'Vth'\]: neither sampled nor fixed"):
+    with pytest.raises(
+        ValueError, match=r"needs parameter\(s\) \['Rpar', 'Vth'\]: neither sampled nor fixed"
+    ):
         LogPosterior(data, prior, {}, model="burgers")

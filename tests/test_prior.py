@@ -39,13 +39,17 @@ def test_jacobian_matches_finite_differences(kind):
     x_plus, _ = prior.from_unconstrained(u + h)
     x_minus, _ = prior.from_unconstrained(u - h)
     _, log_jac = prior.from_unconstrained(u)
-    np.testing.assert_allclose(log_jac, np.log(np.abs((x_plus - x_minus)[:, 0] / (2 * h))), rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(
+        log_jac, np.log(np.abs((x_plus - x_minus)[:, 0] / (2 * h))), rtol=1e-5, atol=1e-6
+    )
 
 
 @pytest.mark.parametrize("kind", sorted(SPECS))
 def test_density_in_u_space_is_normalised(kind):
     prior = one(kind)
-    mass, _ = integrate.quad(lambda u: np.exp(prior.log_prob_unconstrained(np.array([[u]]))[0]), -60, 60, limit=400)
+    mass, _ = integrate.quad(
+        lambda u: np.exp(prior.log_prob_unconstrained(np.array([[u]]))[0]), -60, 60, limit=400
+    )
     assert mass == pytest.approx(1.0, abs=1e-6)
 
 
@@ -65,7 +69,7 @@ def test_sensor_prior_samples_and_evaluates(rng):
     assert prior.log_prob(np.full(prior.ndim, -1.0)) == -np.inf
     # Independent priors: the joint log density is the sum of the marginals.
     x = draws[0]
-    expected = sum(sensor.priors[n].logpdf(v) for n, v in zip(prior.names, x))
+    expected = sum(sensor.priors[n].logpdf(v) for n, v in zip(prior.names, x, strict=False))
     assert prior.log_prob(x) == pytest.approx(expected, rel=1e-12)
     ks = stats.kstest(draws[:, prior.names.index("Va")], sensor.priors["Va"]._frozen().cdf)
     assert ks.pvalue > 1e-3

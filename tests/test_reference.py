@@ -6,9 +6,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from validation.closed_form import LinearGaussian, TwoModes
 from fsrbayes.inference.evidence.ladder import LadderSettings
-from fsrbayes.inference.evidence.referenced import MixtureReference, ReferenceDensity, ReferencedTarget, referenced_log_evidence
+from fsrbayes.inference.evidence.referenced import (
+    MixtureReference,
+    ReferenceDensity,
+    ReferencedTarget,
+    referenced_log_evidence,
+)
+from validation.closed_form import LinearGaussian, TwoModes
 
 LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=40)
 
@@ -23,7 +28,9 @@ def test_referenced_log_z_of_the_linear_gaussian(ndim):
     assert result.error < 0.05, str(result)
     assert abs(result.log_z - truth) < 3 * result.error + 0.005, f"{result} vs exact {truth:.4f}"
     assert result.posterior_draws.shape[-1] == ndim
-    assert np.allclose(result.posterior_draws.reshape(-1, ndim).mean(axis=0), mean, atol=4 * np.sqrt(np.diag(cov)))
+    assert np.allclose(
+        result.posterior_draws.reshape(-1, ndim).mean(axis=0), mean, atol=4 * np.sqrt(np.diag(cov))
+    )
 
 
 def test_a_poor_reference_costs_precision_not_correctness():
@@ -44,8 +51,12 @@ def test_two_modes_from_a_reference_fitted_to_both():
     which = rng.uniform(size=6000) < target.weights[0]
     centres = np.where(which[:, None], target.centres[0], target.centres[1])
     draws = centres + target.s * rng.standard_normal((6000, target.ndim))
-    result = referenced_log_evidence(target, LadderSettings(n_temps=12, exponent=1.0, burn=200, steps=1000,
-                                                            replicates=4, n_walkers=40), seed=6, draws=draws)
+    result = referenced_log_evidence(
+        target,
+        LadderSettings(n_temps=12, exponent=1.0, burn=200, steps=1000, replicates=4, n_walkers=40),
+        seed=6,
+        draws=draws,
+    )
     truth = target.exact_log_z()
     assert result.error < 0.3, str(result)
     assert abs(result.log_z - truth) < 3 * result.error, f"{result} vs exact {truth:.3f}"
@@ -91,8 +102,13 @@ def _referenced_from_a_poor_reference(problem, settings, seed):
 def test_referenced_error_bars_cover_the_exact_log_z_at_their_nominal_rates():
     from validation.closed_form import NOMINAL, evidence_coverage, format_evidence_coverage
 
-    study = evidence_coverage(lambda k: LinearGaussian(10, seed=3000 + k), 40, replace(LADDER, processes=2), seed=11,
-                              estimator=_referenced_from_a_poor_reference)
+    study = evidence_coverage(
+        lambda k: LinearGaussian(10, seed=3000 + k),
+        40,
+        replace(LADDER, processes=2),
+        seed=11,
+        estimator=_referenced_from_a_poor_reference,
+    )
     print(format_evidence_coverage(study, "referenced path, linear-Gaussian 10-d, poor reference"))
     for k in NOMINAL:
         low, high = study["range_99"][k]
@@ -114,8 +130,12 @@ def test_a_reference_fitted_to_one_region_misses_the_other_and_a_mixture_does_no
     one = referenced_log_evidence(target, LADDER, seed=9, draws=_mode_draws(target, 0, rng))
     assert one.log_z - truth == pytest.approx(np.log(target.weights[0]), abs=0.05), str(one)
     assert abs(one.log_z - truth) > 5 * one.error
-    both = referenced_log_evidence(target, LADDER, seed=9, draws=[_mode_draws(target, 0, rng),
-                                                                   _mode_draws(target, 1, rng, 1000)])
+    both = referenced_log_evidence(
+        target,
+        LADDER,
+        seed=9,
+        draws=[_mode_draws(target, 0, rng), _mode_draws(target, 1, rng, 1000)],
+    )
     assert both.error < 0.1, str(both)
     assert abs(both.log_z - truth) < 3 * both.error + 0.005, f"{both} vs exact {truth:.4f}"
     assert [c["weight"] for c in both.settings["reference_components"][0]] == [0.5, 0.5]
@@ -127,7 +147,10 @@ def test_a_reference_fitted_to_one_region_misses_the_other_and_a_mixture_does_no
 def test_relabelling_keeps_u_and_draws_labels_from_their_conditional():
     target = TwoModes(ndim=2)
     rng = np.random.default_rng(10)
-    components = [ReferenceDensity.fit(_mode_draws(target, 0, rng)), ReferenceDensity.fit(_mode_draws(target, 1, rng))]
+    components = [
+        ReferenceDensity.fit(_mode_draws(target, 0, rng)),
+        ReferenceDensity.fit(_mode_draws(target, 1, rng)),
+    ]
     referenced = ReferencedTarget(target, MixtureReference.of(components, [3.0, 1.0]))
     states = referenced.sample_prior(rng, 20000)
     assert np.mean(states[:, -1] == 0) == pytest.approx(0.75, abs=0.02)
@@ -138,9 +161,13 @@ def test_relabelling_keeps_u_and_draws_labels_from_their_conditional():
     # At u midway between the regions the label's conditional is a_j·g_j(u)/g(u).
     midway = np.column_stack([np.zeros((4000, 2)), np.zeros(4000)])
     midway[:, :2] = components[0].from_target(np.zeros((4000, 2)))
-    relabelled, _ = referenced.relabel(midway, referenced.log_prior(midway), np.random.RandomState(1))
+    relabelled, _ = referenced.relabel(
+        midway, referenced.log_prior(midway), np.random.RandomState(1)
+    )
     log_p = referenced.reference.component_log_densities(np.zeros(2))
     expected = np.exp(log_p[0] - np.logaddexp(*log_p))
     assert np.mean(relabelled[:, -1] == 0) == pytest.approx(expected, abs=0.03)
     # log_ratio does not depend on the label: it is log L·π − log g at u.
-    assert np.allclose(referenced.log_likelihood(new), referenced.log_likelihood(states), equal_nan=True)
+    assert np.allclose(
+        referenced.log_likelihood(new), referenced.log_likelihood(states), equal_nan=True
+    )

@@ -14,9 +14,19 @@ import pytest
 
 from fsrbayes.demo import QUICK, run_demo
 
-CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--enable-logging=stderr", "--v=0", "--virtual-time-budget=10000"]
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--enable-logging=stderr",
+    "--v=0",
+    "--virtual-time-budget=10000",
+]
 
 # Appended to a copy of the report: after load, log how many images decoded (naturalWidth > 0).
 IMAGE_PROBE = """<script>window.addEventListener("load", () => {
@@ -28,13 +38,19 @@ IMAGE_PROBE = """<script>window.addEventListener("load", () => {
 
 def _chromium():
     path = shutil.which("chromium") or shutil.which("chromium-browser")
-    assert path, "headless Chromium is needed for this test: apt-get install chromium (Debian's package)"
+    assert path, (
+        "headless Chromium is needed for this test: apt-get install chromium (Debian's package)"
+    )
     return path
 
 
 def _run_chromium(args, tmp_path):
-    run = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args],
-                         capture_output=True, text=True, timeout=180)
+    run = subprocess.run(
+        [_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     return run
 
@@ -62,7 +78,10 @@ def test_report_opens_in_headless_chromium_and_is_not_blank(report, tmp_path):
     import matplotlib.image
 
     probed = tmp_path / "probed.html"
-    probed.write_text(report.read_text(encoding="utf-8").replace("</body>", IMAGE_PROBE + "</body>"), encoding="utf-8")
+    probed.write_text(
+        report.read_text(encoding="utf-8").replace("</body>", IMAGE_PROBE + "</body>"),
+        encoding="utf-8",
+    )
     run = _run_chromium(["--dump-dom", probed.as_uri()], tmp_path)
     console = [line for line in run.stderr.splitlines() if ":CONSOLE" in line]
     counts = [re.search(r"IMAGES (\d+)/(\d+)", line) for line in console]
@@ -74,7 +93,10 @@ def test_report_opens_in_headless_chromium_and_is_not_blank(report, tmp_path):
     assert "fsrbayes demo" in run.stdout
 
     shot = tmp_path / "report.png"
-    _run_chromium(["--window-size=1280,2400", "--hide-scrollbars", f"--screenshot={shot}", report.as_uri()], tmp_path)
+    _run_chromium(
+        ["--window-size=1280,2400", "--hide-scrollbars", f"--screenshot={shot}", report.as_uri()],
+        tmp_path,
+    )
     pixels = matplotlib.image.imread(shot)[..., :3]
     non_white = np.mean(pixels.min(axis=-1) < 0.95)
     colours = len(np.unique((pixels * 255).astype(np.uint8).reshape(-1, 3), axis=0))

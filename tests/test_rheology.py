@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from fsrbayes.physics import loading, rheology as rh
+from fsrbayes.physics import loading
+from fsrbayes.physics import rheology as rh
 
 P = {"k1": 4.73e6, "k2": 4.73e7, "b2": 2.365e10, "b1": 3.311e11}
 SIGMA = 2e5
@@ -37,15 +38,21 @@ def test_zener_is_the_exact_b1_to_infinity_limit():
 
 def test_fluidity_and_b1_are_the_same_parameter():
     t = np.linspace(0, 3600, 7)
-    np.testing.assert_allclose(rh.creep_strain(SIGMA, t, {**P, "inv_b1": 1 / P["b1"]}),
-                               rh.creep_strain(SIGMA, t, P), rtol=1e-15)
+    np.testing.assert_allclose(
+        rh.creep_strain(SIGMA, t, {**P, "inv_b1": 1 / P["b1"]}),
+        rh.creep_strain(SIGMA, t, P),
+        rtol=1e-15,
+    )
 
 
 def test_nutting_is_eq13():
     p = {"k1": 4.73e6, "psi": 6.2e-9, "n": 0.2}
     t = np.linspace(0, 3600, 11)
-    np.testing.assert_allclose(rh.creep_strain(SIGMA, t, p, "nutting"), SIGMA / p["k1"] + p["psi"] * SIGMA * t**0.2,
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        rh.creep_strain(SIGMA, t, p, "nutting"),
+        SIGMA / p["k1"] + p["psi"] * SIGMA * t**0.2,
+        rtol=1e-14,
+    )
 
 
 @pytest.mark.parametrize("rheology", ["burgers", "nutting"])
@@ -53,7 +60,9 @@ def test_ramp_compliance_is_the_integral_of_the_compliance(rheology):
     p = {**P, "psi": 6.2e-9, "n": 0.3}
     t = np.geomspace(1e-2, 1e5, 60)
     h = 1e-4 * t
-    derivative = (rh.ramp_compliance(t + h, p, rheology) - rh.ramp_compliance(t - h, p, rheology)) / (2 * h)
+    derivative = (
+        rh.ramp_compliance(t + h, p, rheology) - rh.ramp_compliance(t - h, p, rheology)
+    ) / (2 * h)
     np.testing.assert_allclose(derivative, rh.creep_compliance(t, p, rheology), rtol=1e-7)
     assert rh.ramp_compliance(0.0, p, rheology) == 0.0
 
@@ -62,33 +71,46 @@ def test_superposition_step_up_and_down_is_the_difference_of_two_steps():
     t = np.linspace(0, 7200, 301)
     t_off = 2000.0
     history = loading.step(SIGMA, 0.0, t_off)
-    expected = rh.creep_strain(SIGMA, t, P) - np.where(t >= t_off, rh.creep_strain(SIGMA, t - t_off, P), 0.0)
+    expected = rh.creep_strain(SIGMA, t, P) - np.where(
+        t >= t_off, rh.creep_strain(SIGMA, t - t_off, P), 0.0
+    )
     np.testing.assert_allclose(rh.strain_history(history, t, P), expected, rtol=1e-12, atol=1e-18)
 
 
 def test_single_step_history_equals_the_step_response():
     t = np.linspace(0, 3600, 50)
-    np.testing.assert_allclose(rh.strain_history(loading.step(SIGMA), t, P), rh.creep_strain(SIGMA, t, P), rtol=1e-14)
+    np.testing.assert_allclose(
+        rh.strain_history(loading.step(SIGMA), t, P), rh.creep_strain(SIGMA, t, P), rtol=1e-14
+    )
 
 
 def _burgers_ode(history, t_end, t_eval):
     """Burgers as spring k1 + dashpot b1 + Kelvin–Voigt (k2, b2) in series: the system behind eq. 15."""
+
     def rhs(t, y):
         sigma = history.at(t)
         return [sigma / P["b1"], (sigma - P["k2"] * y[1]) / P["b2"]]
 
-    sol = solve_ivp(rhs, (0, t_end), [0.0, 0.0], t_eval=t_eval, rtol=1e-10, atol=1e-16, max_step=5.0)
+    sol = solve_ivp(
+        rhs, (0, t_end), [0.0, 0.0], t_eval=t_eval, rtol=1e-10, atol=1e-16, max_step=5.0
+    )
     return history.at(t_eval) / P["k1"] + sol.y[0] + sol.y[1]
 
 
-@pytest.mark.parametrize("history", [
-    loading.ramp(SIGMA, 600.0, hold=1800.0),
-    loading.sine(2e5, 1e5, 0.01, 1200.0),
-    loading.cycles(2e5, 5e4, 300.0, 4, ramp_time=30.0),
-], ids=["ramp-hold-release", "sine (Figure 15)", "load-unload cycles"])
+@pytest.mark.parametrize(
+    "history",
+    [
+        loading.ramp(SIGMA, 600.0, hold=1800.0),
+        loading.sine(2e5, 1e5, 0.01, 1200.0),
+        loading.cycles(2e5, 5e4, 300.0, 4, ramp_time=30.0),
+    ],
+    ids=["ramp-hold-release", "sine (Figure 15)", "load-unload cycles"],
+)
 def test_superposition_agrees_with_integrating_the_constitutive_law(history):
     t = np.linspace(1.0, 1190.0, 120)
-    np.testing.assert_allclose(rh.strain_history(history, t, P), _burgers_ode(history, 1200.0, t), rtol=2e-5, atol=1e-9)
+    np.testing.assert_allclose(
+        rh.strain_history(history, t, P), _burgers_ode(history, 1200.0, t), rtol=2e-5, atol=1e-9
+    )
 
 
 def test_stress_history_evaluation():

@@ -24,14 +24,28 @@ EFFECTS = ("area-creep", "contact-creep", "power-law-creep", "voltage-degradatio
 @pytest.fixture(scope="module")
 def params():
     p = dict(fsrbayes.load_sensor("a201").params)
-    p.update(area_creep=-30.0, contact_creep=20.0, plc_psi=2e-9, plc_n=0.3, deg_amp=0.2, deg_onset=2.5,
-             deg_tau=600.0, deg_width=0.5, sigma0=5e3, psi=3e-8, n=0.25, R0=2e5)
+    p.update(
+        area_creep=-30.0,
+        contact_creep=20.0,
+        plc_psi=2e-9,
+        plc_n=0.3,
+        deg_amp=0.2,
+        deg_onset=2.5,
+        deg_tau=600.0,
+        deg_width=0.5,
+        sigma0=5e3,
+        psi=3e-8,
+        n=0.25,
+        R0=2e5,
+    )
     return p
 
 
 @pytest.mark.parametrize("model, seed", [("burgers", 7), ("zener+area-creep", 8)])
 def test_a_short_fit_gives_the_recorded_chain(model, seed):
-    data = syn.simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2).data
+    data = syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
+    ).data
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         result = fsrbayes.fit(data, rng=seed, settings=SHORT, model=model)
@@ -46,15 +60,20 @@ def test_every_model_family_and_effect_gives_the_recorded_currents(params):
     s = np.array([50e3, 150e3])[None, :, None]
     t = np.array([0.0, 1.0, 60.0, 3600.0])
     for family in ("burgers", "zener", "nutting", "kalantari"):
-        np.testing.assert_array_equal(fsrbayes.current(params, v, s, t, rheology=family), PINS[f"current_{family}"])
+        np.testing.assert_array_equal(
+            fsrbayes.current(params, v, s, t, rheology=family), PINS[f"current_{family}"]
+        )
     for effect in EFFECTS:
-        np.testing.assert_array_equal(fsrbayes.current(params, v, s, t, effects=(effect,)),
-                                      PINS[f"current_burgers_{effect}"])
+        np.testing.assert_array_equal(
+            fsrbayes.current(params, v, s, t, effects=(effect,)), PINS[f"current_burgers_{effect}"]
+        )
 
 
 def test_stress_histories_give_the_recorded_currents(params):
     history = loading.ramp(150e3, 2.0)
     t = np.array([2.0, 10.0, 100.0, 1000.0])
     for family in ("burgers", "zener", "nutting"):
-        got = current_history(params, 1.0, history, t, rheology=family, effects=("power-law-creep", "area-creep"))
+        got = current_history(
+            params, 1.0, history, t, rheology=family, effects=("power-law-creep", "area-creep")
+        )
         np.testing.assert_array_equal(got, PINS[f"history_{family}"])

@@ -9,8 +9,13 @@ from scipy import stats
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.samplers.ensemble import (
+    CheckpointMismatch,
+    ConvergenceWarning,
+    SamplerSettings,
+    run_ensembles,
+)
 from validation.closed_form import BentRidge
-from fsrbayes.inference.samplers.ensemble import (CheckpointMismatch, ConvergenceWarning, SamplerSettings, run_ensembles)
 
 MU = np.array([1.0, -2.0, 0.5])
 SD = np.array([0.5, 2.0, 0.1])
@@ -40,7 +45,9 @@ def thinned(run):
 def gaussian_run():
     rng = np.random.default_rng(5)
     start = MU + rng.normal(size=(4, 32, 3)) * 3 * SD
-    return run_ensembles(Gaussian(), start, seed=42, settings=SamplerSettings(chunk=400, max_steps=8000))
+    return run_ensembles(
+        Gaussian(), start, seed=42, settings=SamplerSettings(chunk=400, max_steps=8000)
+    )
 
 
 def test_gaussian_target_converges_with_right_moments(gaussian_run):
@@ -74,8 +81,15 @@ def test_same_seed_same_chains():
 
 def test_budget_exhausted_warns_with_the_numbers():
     start = MU + np.random.default_rng(1).normal(size=(2, 16, 3))
-    with pytest.warns(ConvergenceWarning, match=r"not converged after 60 steps: max R-hat .* min bulk ESS") as record:
-        run_ensembles(Gaussian(), start, seed=3, settings=SamplerSettings(n_ensembles=2, chunk=30, max_steps=60, min_steps=30))
+    with pytest.warns(
+        ConvergenceWarning, match=r"not converged after 60 steps: max R-hat .* min bulk ESS"
+    ) as record:
+        run_ensembles(
+            Gaussian(),
+            start,
+            seed=3,
+            settings=SamplerSettings(n_ensembles=2, chunk=30, max_steps=60, min_steps=30),
+        )
     assert record[0].message.report.n_steps == 60
 
 
@@ -87,24 +101,49 @@ def test_checkpoint_resume_is_exact_and_mismatches_are_refused(tmp_path):
         warnings.simplefilter("ignore", ConvergenceWarning)
         full = run_ensembles(Gaussian(), start, seed=9, settings=settings)
         # An interrupted run: stopped after 80 of 120 steps (its checkpoint holds 80).
-        run_ensembles(Gaussian(), start, seed=9, settings=SamplerSettings(n_ensembles=2, chunk=40, max_steps=80,
-                      min_steps=80), checkpoint=path, fingerprint="data|burgers|smooth|gaussian|p|f")
+        run_ensembles(
+            Gaussian(),
+            start,
+            seed=9,
+            settings=SamplerSettings(n_ensembles=2, chunk=40, max_steps=80, min_steps=80),
+            checkpoint=path,
+            fingerprint="data|burgers|smooth|gaussian|p|f",
+        )
         saved = np.load(path)["chain"].copy()
-        resumed = run_ensembles(Gaussian(), start, seed=9, settings=settings, checkpoint=path,
-                                fingerprint="data|burgers|smooth|gaussian|p|f", resume=True)
+        resumed = run_ensembles(
+            Gaussian(),
+            start,
+            seed=9,
+            settings=settings,
+            checkpoint=path,
+            fingerprint="data|burgers|smooth|gaussian|p|f",
+            resume=True,
+        )
     assert resumed.chain.shape[1] == 120
     assert resumed.chain[:, :80].tobytes() == saved.tobytes()
     assert np.array_equal(resumed.chain, full.chain)
-    with pytest.raises(CheckpointMismatch, match="written for another model, other priors or another parameter order"):
-        run_ensembles(Gaussian(), start, seed=9, settings=settings, checkpoint=path,
-                      fingerprint="data|zener|smooth|gaussian|q|f", resume=True)
+    with pytest.raises(
+        CheckpointMismatch,
+        match="written for another model, other priors or another parameter order",
+    ):
+        run_ensembles(
+            Gaussian(),
+            start,
+            seed=9,
+            settings=settings,
+            checkpoint=path,
+            fingerprint="data|zener|smooth|gaussian|q|f",
+            resume=True,
+        )
 
 
 @pytest.mark.parametrize("model", ["burgers"])
 def test_prior_only_posterior_recovers_the_prior(model):
     sim = syn.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5, seed=1)
     sensor = fsrbayes.load_sensor("a201")
-    posterior = LogPosterior.for_sensor(SpecimenData.from_tests(sim.data.tests), sensor, model=model, beta=0.0)
+    posterior = LogPosterior.for_sensor(
+        SpecimenData.from_tests(sim.data.tests), sensor, model=model, beta=0.0
+    )
     rng = np.random.default_rng(0)
     start = posterior.prior.to_unconstrained(posterior.prior.sample(rng, (2, 40)))
     # Two ensembles and 20 tau are enough for a 12-d KS check (ESS ~ 2,000 per parameter), at a third of the cost.
@@ -132,7 +171,10 @@ def test_ensembles_in_two_processes_give_the_same_chains():
 def bent_ridge_run():
     target = BentRidge()
     x = np.random.default_rng(0).standard_normal((4, 32))
-    start = np.stack([x, target.a * np.abs(x) + target.s * np.random.default_rng(1).standard_normal(x.shape)], axis=-1)
+    start = np.stack(
+        [x, target.a * np.abs(x) + target.s * np.random.default_rng(1).standard_normal(x.shape)],
+        axis=-1,
+    )
     settings = SamplerSettings(max_steps=6000, min_steps=6000, quadratic_map=False)
     return target, run_ensembles(target, start, seed=1, settings=settings)
 

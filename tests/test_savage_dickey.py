@@ -22,8 +22,11 @@ def nested_problem(seed=0, d=4, n=40, last=0.1):
 def test_chen_estimate_matches_the_exact_bayes_factor():
     X, y, mean, cov = nested_problem()
     m_d, v_d = mean[-1], cov[-1, -1]
-    exact = (stats.norm(m_d, np.sqrt(v_d)).logpdf(0.0) - stats.norm.logcdf(m_d / np.sqrt(v_d))
-             - np.log(2 * stats.norm(0, TAU).pdf(0.0)))
+    exact = (
+        stats.norm(m_d, np.sqrt(v_d)).logpdf(0.0)
+        - stats.norm.logcdf(m_d / np.sqrt(v_d))
+        - np.log(2 * stats.norm(0, TAU).pdf(0.0))
+    )
     rng = np.random.default_rng(1)
     draws = rng.multivariate_normal(mean, cov, size=60000)
     draws = draws[draws[:, -1] >= 0][:20000]  # the full model's posterior: w_d >= 0
@@ -34,4 +37,7 @@ def test_chen_estimate_matches_the_exact_bayes_factor():
     half_normal = stats.halfnorm(scale=TAU)
     result = savage_dickey(log_likelihood, draws, X.shape[1] - 1, half_normal.logpdf)
     assert result.error < 0.1
-    assert result.log_b01 == pytest.approx(exact, abs=max(3 * result.error, 0.02)), (str(result), exact)
+    assert result.log_b01 == pytest.approx(exact, abs=max(3 * result.error, 0.02)), (
+        str(result),
+        exact,
+    )

@@ -4,15 +4,20 @@ import numpy as np
 import pytest
 
 import fsrbayes
-from fsrbayes.physics import loading, peers, sensor as fsr
+from fsrbayes.physics import loading, peers
+from fsrbayes.physics import sensor as fsr
+from fsrbayes.physics.constants import KAPPA
 from fsrbayes.physics.models import model_parameters, parse_model
 from fsrbayes.physics.sensor import resistances, voltage_divider
-from fsrbayes.physics.constants import KAPPA
 
 
 def test_public_api_is_the_design_contract(a201):
-    current = fsrbayes.current(a201, [0.1, 1.0], 1e5, [0.0, 3600.0], rheology="burgers", tunneling="smooth")
-    drift = fsrbayes.drift(a201, [0.1, 1.0], 1e5, [0.0, 3600.0], rheology="zener", tunneling="paper")
+    current = fsrbayes.current(
+        a201, [0.1, 1.0], 1e5, [0.0, 3600.0], rheology="burgers", tunneling="smooth"
+    )
+    drift = fsrbayes.drift(
+        a201, [0.1, 1.0], 1e5, [0.0, 3600.0], rheology="zener", tunneling="paper"
+    )
     assert current.shape == (2,) and drift.shape == (2,)
     assert drift[0] == 0.0 and drift[1] > 0
     assert fsrbayes.load_sensor("a201").params["A0"] == 3.87e-18
@@ -71,14 +76,17 @@ def test_voltage_divider_kirchhoff_and_limits(a201):
 def test_resistances_of_figure8(a201):
     r = fsr.resistances(a201, np.array([0.01, 0.5, 5.0]), 5e4)
     np.testing.assert_allclose(r["R_fsr"], r["R_bulk"] + 2 * r["Rc"], rtol=1e-9)
-    assert r["R_bulk"][0] > 100 * r["Rc"][0]   # millivolts: the bulk dominates
-    assert r["R_bulk"][2] < 3 * r["Rc"][2]     # volts: comparable to the contact resistance
+    assert r["R_bulk"][0] > 100 * r["Rc"][0]  # millivolts: the bulk dominates
+    assert r["R_bulk"][2] < 3 * r["Rc"][2]  # volts: comparable to the contact resistance
 
 
 def test_current_history_step_equals_the_step_solution(a201):
     t = np.linspace(0, 3600, 25)
-    np.testing.assert_allclose(fsr.current_history(a201, 1.0, loading.step(1e5), t),
-                               fsrbayes.current(a201, 1.0, 1e5, t), rtol=1e-12)
+    np.testing.assert_allclose(
+        fsr.current_history(a201, 1.0, loading.step(1e5), t),
+        fsrbayes.current(a201, 1.0, 1e5, t),
+        rtol=1e-12,
+    )
 
 
 def test_figure15_sine_load_creeps_without_losing_sensitivity(a201):
@@ -100,17 +108,31 @@ def test_zhang_eq12_is_eq9_with_nutting_creep_and_no_contact():
     s = s_rest * (1 - eps)
     # Eq. 9: R ∝ s·exp(κ s sqrt(Va)) at fixed area.
     ratio = (s / s[0]) * np.exp(KAPPA * np.sqrt(va) * (s - s[0]))
-    np.testing.assert_allclose(peers.zhang_resistance_ratio(t, sigma, psi, n, eps0, va, d, theta), ratio, rtol=1e-12)
+    np.testing.assert_allclose(
+        peers.zhang_resistance_ratio(t, sigma, psi, n, eps0, va, d, theta), ratio, rtol=1e-12
+    )
 
 
 def test_kalantari_eq14_limits_and_voltage_independence():
-    kwargs = dict(R0=1e6, E0=5e6, E1=5e7, mu1=2.5e10, Va=0.229, diameter=50e-9, volume_fraction=0.2,
-                  rho1=1e-2, rho2=1e-7, hardness=1e8)
+    kwargs = dict(
+        R0=1e6,
+        E0=5e6,
+        E1=5e7,
+        mu1=2.5e10,
+        Va=0.229,
+        diameter=50e-9,
+        volume_fraction=0.2,
+        rho1=1e-2,
+        rho2=1e-7,
+        hardness=1e8,
+    )
     r0 = peers.kalantari_resistance(0.0, 4.9, 41.85e-6, **kwargs)
     eps0 = 4.9 / 41.85e-6 / kwargs["E0"]
     contact = 0.5 * (kwargs["rho1"] + kwargs["rho2"]) * np.sqrt(np.pi * kwargs["hardness"] / 4.9)
     s_rest = peers.rest_gap(50e-9, 0.2)
-    assert r0 == pytest.approx(contact + 1e6 * (1 - eps0) * np.exp(-KAPPA * np.sqrt(0.229) * s_rest * eps0), rel=1e-12)
+    assert r0 == pytest.approx(
+        contact + 1e6 * (1 - eps0) * np.exp(-KAPPA * np.sqrt(0.229) * s_rest * eps0), rel=1e-12
+    )
     t = np.linspace(0, 3600, 5)
     drift_low = peers.kalantari_current(0.1, t, 4.9, 41.85e-6, **kwargs)
     drift_high = peers.kalantari_current(5.0, t, 4.9, 41.85e-6, **kwargs)
@@ -126,20 +148,37 @@ def test_kalantari_model_in_canonical_names_is_eq14(a201):
     rho = 2 * 2 * a201["Rc0"] * np.sqrt(area) / np.sqrt(np.pi * hardness)
     t = np.linspace(0, 3600, 6)[:, None]
     volts = np.array([0.1, 1.0, 5.0])
-    expected = peers.kalantari_current(volts, t, sigma * area, area, R0=a201["R0"], E0=a201["k1"], E1=a201["k2"],
-                                       mu1=a201["b2"], Va=a201["Va"], diameter=diameter, volume_fraction=theta,
-                                       rho1=rho, rho2=0.0, hardness=hardness)
+    expected = peers.kalantari_current(
+        volts,
+        t,
+        sigma * area,
+        area,
+        R0=a201["R0"],
+        E0=a201["k1"],
+        E1=a201["k2"],
+        mu1=a201["b2"],
+        Va=a201["Va"],
+        diameter=diameter,
+        volume_fraction=theta,
+        rho1=rho,
+        rho2=0.0,
+        hardness=hardness,
+    )
     current = fsrbayes.current(a201, volts, sigma, t, rheology="kalantari")
     np.testing.assert_allclose(current, expected, rtol=1e-12)
     drift = fsrbayes.drift(a201, volts, sigma, 3600.0, rheology="kalantari")
-    np.testing.assert_allclose(drift, drift[0], rtol=1e-12)  # ohmic: the drift ignores V (the paper's objection)
+    np.testing.assert_allclose(
+        drift, drift[0], rtol=1e-12
+    )  # ohmic: the drift ignores V (the paper's objection)
     assert drift[0] > 0
     parts = resistances(a201, 1.0, sigma, 3600.0, rheology="kalantari")
     assert parts["R_fsr"] == pytest.approx(parts["R_bulk"] + 2 * parts["Rc"], rel=1e-12)
     divider = voltage_divider(a201, 5.0, 1e12, sigma, 3600.0, rheology="kalantari")
     assert divider.v_fsr / divider.current == pytest.approx(parts["R_fsr"], rel=1e-12)
     with pytest.warns(fsr.DomainWarning, match="outside the validity domain"):
-        closed = fsrbayes.current({**a201, "k1": 1e4}, 1.0, 1e5, 0.0, rheology="kalantari", on_invalid="nan")
+        closed = fsrbayes.current(
+            {**a201, "k1": 1e4}, 1.0, 1e5, 0.0, rheology="kalantari", on_invalid="nan"
+        )
     assert np.isnan(closed)  # ε = 10 ≥ 1: the gap is closed, not a negative current
 
 
@@ -148,7 +187,9 @@ def test_kalantari_takes_no_effects_and_needs_r0(a201):
         parse_model("kalantari+area-creep")
     assert model_parameters("kalantari") == ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2")
     with pytest.raises(KeyError, match="R0"):
-        fsrbayes.current({k: v for k, v in a201.items() if k != "R0"}, 1.0, 1e5, 0.0, rheology="kalantari")
+        fsrbayes.current(
+            {k: v for k, v in a201.items() if k != "R0"}, 1.0, 1e5, 0.0, rheology="kalantari"
+        )
 
 
 def test_bad_arguments_are_named(a201):

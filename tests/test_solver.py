@@ -6,14 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 import fsrbayes
 from fsrbayes import load_sensor
-from fsrbayes.physics import DomainError, DomainWarning, solve_bulk, solve_current, tunneling as tl
-from fsrbayes.physics.sensor import sensor_state
+from fsrbayes.physics import DomainError, DomainWarning, solve_bulk, solve_current
+from fsrbayes.physics import tunneling as tl
 from fsrbayes.physics.rheology import creep_strain
+from fsrbayes.physics.sensor import sensor_state
 
 # DESIGN.md §1: paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
@@ -22,7 +24,9 @@ REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json")
 def test_reference_drift_table(a201):
     stress = np.array(REFERENCE["stress_Pa"])[:, None]
     drift = fsrbayes.drift(a201, REFERENCE["voltage_V"], stress, 3600.0, tunneling="paper")
-    np.testing.assert_allclose(drift, REFERENCE["drift_3600_percent"], atol=REFERENCE["tolerance_points"])
+    np.testing.assert_allclose(
+        drift, REFERENCE["drift_3600_percent"], atol=REFERENCE["tolerance_points"]
+    )
 
 
 def test_reference_current_at_200kpa_2v(a201):
@@ -44,10 +48,19 @@ def test_agrees_with_a_per_point_brentq(a201, law, rng):
     solution = solve_bulk(v, series, s, a201["Va"], area, law=law, threshold=a201["Vth"])
     assert solution.valid.all()
     for i in np.flatnonzero(~solution.at_jump):
-        def f(x):
-            return x + series[i] * tl.tunneling_current(x, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"]) - v[i]
+
+        def f(x, i=i):
+            return (
+                x
+                + series[i]
+                * tl.tunneling_current(x, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"])
+                - v[i]
+            )
+
         root = brentq(f, 0, v[i], xtol=1e-300, rtol=1e-15)
-        expected = tl.tunneling_current(root, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"])
+        expected = tl.tunneling_current(
+            root, s[i], a201["Va"], area[i], law=law, threshold=a201["Vth"]
+        )
         assert solution.current[i] == pytest.approx(expected, rel=1e-10)
 
 
@@ -59,7 +72,9 @@ def test_broadcasts_walkers_by_curves_by_times(a201, rng):
     block = fsrbayes.current(walkers, voltage, stress, time)
     assert block.shape == (5, 3, 7)
     for w in range(5):
-        single = fsrbayes.current({k: v[w, 0, 0] for k, v in walkers.items()}, voltage, stress, time)
+        single = fsrbayes.current(
+            {k: v[w, 0, 0] for k, v in walkers.items()}, voltage, stress, time
+        )
         np.testing.assert_allclose(block[w], single, rtol=1e-13)
 
 
@@ -80,8 +95,9 @@ def test_symmetric_in_the_voltage_sign(a201):
 def test_zero_series_resistance_puts_the_whole_voltage_on_the_bulk():
     solution = solve_bulk([0.05, 0.2, 1.0], 0.0, 4.41e-9, 0.229, 1e-16)
     np.testing.assert_array_equal(solution.v_bulk, [0.05, 0.2, 1.0])
-    np.testing.assert_allclose(solution.current, tl.tunneling_current([0.05, 0.2, 1.0], 4.41e-9, 0.229, 1e-16),
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        solution.current, tl.tunneling_current([0.05, 0.2, 1.0], 4.41e-9, 0.229, 1e-16), rtol=1e-14
+    )
 
 
 def test_jump_at_va_returns_the_jump_point():
@@ -115,7 +131,9 @@ def test_paper_law_outside_its_domain_is_flagged_never_silent(a201):
     solution = solve_current(a201, voltages, 200e3, 3600.0, tunneling="paper")
     np.testing.assert_array_equal(solution.valid, [True, True, False, False])
     assert np.isnan(solution.current[2:]).all()
-    with pytest.raises(DomainError, match=r"2 of 4 points are outside the validity domain.*V_FSR=8 V"):
+    with pytest.raises(
+        DomainError, match=r"2 of 4 points are outside the validity domain.*V_FSR=8 V"
+    ):
         fsrbayes.current(a201, voltages, 200e3, 3600.0, tunneling="paper")
     masked = fsrbayes.current(a201, voltages, 200e3, 3600.0, tunneling="paper", on_invalid="mask")
     assert masked.mask.tolist() == [False, False, True, True]
@@ -132,8 +150,13 @@ def test_closed_gap_is_outside_the_domain(fsr402):
 
 
 def test_nonsense_inputs_are_flagged_not_crashing():
-    solution = solve_bulk([1.0, 1.0, 1.0, np.nan, 1.0], [1e3, -1.0, 1e3, 1e3, np.inf], 4.4e-9, 0.229,
-                          [-1e-16, 1e-16, np.nan, 1e-16, 1e-16])
+    solution = solve_bulk(
+        [1.0, 1.0, 1.0, np.nan, 1.0],
+        [1e3, -1.0, 1e3, 1e3, np.inf],
+        4.4e-9,
+        0.229,
+        [-1e-16, 1e-16, np.nan, 1e-16, 1e-16],
+    )
     assert not solution.valid.any()
     assert np.isnan(solution.current).all()
 
@@ -154,8 +177,11 @@ def _prior_box(sensor_name, rng, n):
     params = {}
     for name, dist in sensor.priors.items():
         lo, hi = dist.ppf([0.005, 0.995]) if not dist.is_fixed else (dist.args["value"],) * 2
-        params[name] = rng.uniform(lo, hi, n) if name not in ("s0", "Va", "A0", "A1", "Rc0", "k2", "b2", "psi") \
+        params[name] = (
+            rng.uniform(lo, hi, n)
+            if name not in ("s0", "Va", "A0", "A1", "Rc0", "k2", "b2", "psi")
             else np.exp(rng.uniform(np.log(lo), np.log(hi), n))
+        )
     return params
 
 
@@ -187,15 +213,24 @@ def test_property_sweep_over_the_prior_box(sensor_name, law, rng):
 
 
 @settings(max_examples=150, deadline=None)
-@given(v=st.floats(1e-3, 12.0), sigma=st.floats(1e3, 4e5), t=st.floats(0, 1e5),
-       s0=st.floats(3e-9, 6e-9), va=st.floats(0.12, 0.45), rc0=st.floats(1e4, 1e8), law=st.sampled_from(["smooth", "paper"]))
+@given(
+    v=st.floats(1e-3, 12.0),
+    sigma=st.floats(1e3, 4e5),
+    t=st.floats(0, 1e5),
+    s0=st.floats(3e-9, 6e-9),
+    va=st.floats(0.12, 0.45),
+    rc0=st.floats(1e4, 1e8),
+    law=st.sampled_from(["smooth", "paper"]),
+)
 def test_hypothesis_solutions_satisfy_the_implicit_equation(v, sigma, t, s0, va, rc0, law):
     params = {**load_sensor("a201").params, "s0": s0, "Va": va, "Rc0": rc0}
     strain = creep_strain(sigma, t, params)
     s, area, series = sensor_state(params, sigma, strain)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        solution = solve_bulk(v, series, s, va, area, law=law, threshold=0.073 if va > 0.073 else va / 2)
+        solution = solve_bulk(
+            v, series, s, va, area, law=law, threshold=0.073 if va > 0.073 else va / 2
+        )
     if solution.valid:
         assert np.isfinite(solution.current) and solution.current > 0
         assert _residual(solution, v, series) < 1e-10
@@ -206,7 +241,9 @@ def test_hypothesis_solutions_satisfy_the_implicit_equation(v, sigma, t, s0, va,
 def _hostile_inputs(rng, n):
     """Voltages of both signs and zero, series resistances down to zero, gaps and barriers
     across the opacity limit, NaN/inf/negative entries: every branch of the solver."""
-    v = rng.choice([0.0, -1.0, 1e-4, 0.05, 0.2, 0.5, 1.0, 3.0, 10.0, np.nan], n) * np.exp(rng.normal(0, 0.3, n))
+    v = rng.choice([0.0, -1.0, 1e-4, 0.05, 0.2, 0.5, 1.0, 3.0, 10.0, np.nan], n) * np.exp(
+        rng.normal(0, 0.3, n)
+    )
     rs = np.exp(rng.normal(np.log(3e3), 3, n))
     rs[rng.random(n) < 0.03] = 0.0
     rs[rng.random(n) < 0.01] = -1.0
@@ -244,12 +281,23 @@ def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng):
     s, area, series = sensor_state(walkers, sigma, creep_strain(sigma, t, walkers))
     args = (voltage, series, s, walkers["Va"], area)
     compiled = solve_bulk(*args)
-    assert compiled.valid.mean() > 0.9 and (compiled.regime == 4).any() and (compiled.regime == 2).any()
+    assert (
+        compiled.valid.mean() > 0.9
+        and (compiled.regime == 4).any()
+        and (compiled.regime == 2).any()
+    )
     _assert_same_solution(compiled, solve_bulk(*args, engine="numpy"))
     # Time reversed: the warm starts come from the other side.
     backwards = solve_bulk(*(np.broadcast_to(x, s.shape)[..., ::-1] for x in args))
-    _assert_same_solution(backwards, compiled.__class__(**{
-        k: (v[..., ::-1] if isinstance(v, np.ndarray) else v) for k, v in vars(compiled).items()}))
+    _assert_same_solution(
+        backwards,
+        compiled.__class__(
+            **{
+                k: (v[..., ::-1] if isinstance(v, np.ndarray) else v)
+                for k, v in vars(compiled).items()
+            }
+        ),
+    )
 
 
 def test_an_unknown_engine_is_refused():

@@ -11,17 +11,20 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from validation.closed_form import BentRidge
 from fsrbayes.inference.evidence.ladder import LadderSettings
-from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
+from fsrbayes.inference.output import save_fit
+from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from validation.closed_form import BentRidge
 
-
-SMALL = TemperedSettings(ladder=LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4,
-                                               n_walkers=32, top_draws=600),
-                         pilot=replace(PILOT_SETTINGS, min_steps=750, max_steps=750), search=ModeSearch(n_starts=6))
+SMALL = TemperedSettings(
+    ladder=LadderSettings(
+        n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=32, top_draws=600
+    ),
+    pilot=replace(PILOT_SETTINGS, min_steps=750, max_steps=750),
+    search=ModeSearch(n_starts=6),
+)
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +45,9 @@ def test_tempered_draws_follow_the_bent_ridge(bent):
     assert (n_ladders, n_steps, n_walk) == (4, 600, 32)
     ess = run.report.ess_bulk
     assert np.all(ess > 1000), run.report.worst()
-    assert np.all(ess < 0.2 * n_ladders * n_steps * n_walk)  # slots share states: far fewer than draws
+    assert np.all(
+        ess < 0.2 * n_ladders * n_steps * n_walk
+    )  # slots share states: far fewer than draws
     x, y = run.chain[..., 0].ravel(), run.chain[..., 1].ravel()
     se = 1 / np.sqrt(ess[0])
     assert abs(x.mean()) < 4 * se
@@ -56,7 +61,9 @@ def test_tempered_draws_follow_the_bent_ridge(bent):
     thinned = x[np.linspace(0, len(x) - 1, int(min(ess))).astype(int)]  # x ~ N(0, 1)
     assert stats.kstest(thinned, "norm").pvalue > 1e-3
     assert np.all(run.report.rhat < 1.02), run.report.worst()
-    np.testing.assert_allclose(run.log_prob, target(run.chain.reshape(-1, 2)).reshape(run.log_prob.shape))
+    np.testing.assert_allclose(
+        run.log_prob, target(run.chain.reshape(-1, 2)).reshape(run.log_prob.shape)
+    )
 
 
 def test_tempered_evidence_comes_with_the_draws(bent):
@@ -65,15 +72,21 @@ def test_tempered_evidence_comes_with_the_draws(bent):
     assert evidence.error < 0.1
 
 
-TINY = TemperedSettings(ladder=LadderSettings(n_temps=4, exponent=1.0, burn=20, steps=100, replicates=2, n_batches=10,
-                                              top_draws=100),
-                        pilot=replace(PILOT_SETTINGS, chunk=100, min_steps=300, max_steps=300),
-                        search=ModeSearch(n_starts=2), pilot_groups=1)
+TINY = TemperedSettings(
+    ladder=LadderSettings(
+        n_temps=4, exponent=1.0, burn=20, steps=100, replicates=2, n_batches=10, top_draws=100
+    ),
+    pilot=replace(PILOT_SETTINGS, chunk=100, min_steps=300, max_steps=300),
+    search=ModeSearch(n_starts=2),
+    pilot_groups=1,
+)
 
 
 @pytest.fixture(scope="module")
 def specimen():
-    return syn.simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2)
+    return syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
+    )
 
 
 def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
@@ -85,7 +98,9 @@ def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
     assert result.run.chain.shape[:2] == (2, 100)
     assert np.array_equal(result.run.chain, again.run.chain)  # same seed, same draws
     assert np.isfinite(result.evidence.log_z) and result.evidence.error > 0
-    assert result.posterior(result.map_u) >= np.max(result.run.log_prob) - 1.0  # the optimisers' best point
+    assert (
+        result.posterior(result.map_u) >= np.max(result.run.log_prob) - 1.0
+    )  # the optimisers' best point
     assert result.optima_log_post[0] == pytest.approx(result.posterior(result.map_u))
     info = save_fit(result, tmp_path)
     summary = json.loads((tmp_path / "summary.json").read_text())
@@ -99,16 +114,53 @@ def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypat
     from fsrbayes.cli import main
     from fsrbayes.inference.evidence import tempered
 
-    monkeypatch.setattr(tempered, "TEMPERED_SETTINGS", TINY)  # the CLI's ladder, pilots and search, but tiny
+    monkeypatch.setattr(
+        tempered, "TEMPERED_SETTINGS", TINY
+    )  # the CLI's ladder, pilots and search, but tiny
     csv = tmp_path / "data.csv"
     syn.write_simulation(specimen, csv)
-    assert main(["fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered", "--resume"]) == 2
+    assert (
+        main(["fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered", "--resume"])
+        == 2
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--resume works with --sampler ensemble only" in err[0]
-    assert main(["fit", str(csv), "--out", str(tmp_path / "b"), "--sampler", "tempered", "--ladder-steps", "20"]) == 2
+    assert (
+        main(
+            [
+                "fit",
+                str(csv),
+                "--out",
+                str(tmp_path / "b"),
+                "--sampler",
+                "tempered",
+                "--ladder-steps",
+                "20",
+            ]
+        )
+        == 2
+    )
     assert "--ladder-steps must be >= 100, got 20" in capsys.readouterr().err
-    assert main(["fit", str(csv), "--out", str(tmp_path / "c"), "--sampler", "tempered", "--ladder-steps", "120",
-                 "--seed", "2", "--no-plots", "--processes", "1"]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                str(csv),
+                "--out",
+                str(tmp_path / "c"),
+                "--sampler",
+                "tempered",
+                "--ladder-steps",
+                "120",
+                "--seed",
+                "2",
+                "--no-plots",
+                "--processes",
+                "1",
+            ]
+        )
+        == 0
+    )
     summary = json.loads((tmp_path / "c" / "summary.json").read_text())
     assert summary["sampler"] == "tempered" and summary["convergence"]["n_kept"] == 120
     assert summary["convergence"]["n_ensembles"] == 2
@@ -118,7 +170,9 @@ def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypat
 
 def test_tempered_sampler_refuses_what_it_cannot_do(specimen, tmp_path):
     with pytest.raises(ValueError, match="checkpoint"):
-        fsrbayes.fit(specimen.data, sampler="tempered", settings=TINY, checkpoint=tmp_path / "c.npz")
+        fsrbayes.fit(
+            specimen.data, sampler="tempered", settings=TINY, checkpoint=tmp_path / "c.npz"
+        )
     with pytest.raises(TypeError, match="TemperedSettings"):
         fsrbayes.fit(specimen.data, sampler="tempered", settings=SamplerSettings())
     with pytest.raises(ValueError, match="sampler must be one of"):

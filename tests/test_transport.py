@@ -7,8 +7,13 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.samplers.transport import (IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap,
-                                         student_t_log_density)
+from fsrbayes.inference.samplers.transport import (
+    IndependenceProposal,
+    MappedLogProb,
+    MixtureProposal,
+    TriangularMap,
+    student_t_log_density,
+)
 
 BEND, WIDTH = 1.0, 0.05
 
@@ -36,8 +41,12 @@ def test_inverse_undoes_forward_and_the_jacobian_is_the_constant_diagonal(banana
     u = banana_draws(50, np.random.default_rng(1)) * 3.0
     assert np.allclose(banana_map.forward(banana_map.inverse(u)), u, atol=1e-12)
     v0, h = np.array([0.3, -1.2, 0.7]), 1e-6
-    jac = np.column_stack([(banana_map.forward(v0 + h * e) - banana_map.forward(v0 - h * e)) / (2 * h)
-                           for e in np.eye(3)])
+    jac = np.column_stack(
+        [
+            (banana_map.forward(v0 + h * e) - banana_map.forward(v0 - h * e)) / (2 * h)
+            for e in np.eye(3)
+        ]
+    )
     assert np.log(abs(np.linalg.det(jac))) == pytest.approx(banana_map.log_det_jacobian, abs=1e-6)
 
 
@@ -80,7 +89,9 @@ def test_predictability_order_from_the_gram_matrix_equals_direct_least_squares()
     expected = tuple(reversed(backwards))
     order = _order_by_predictability(z)
     assert order == expected
-    assert order[-1] == 1 and set(order[-3:]) >= {4}  # the parabola's output goes last, the product near it
+    assert order[-1] == 1 and set(order[-3:]) >= {
+        4
+    }  # the parabola's output goes last, the product near it
 
 
 def test_identity_map_and_too_few_draws():
@@ -93,8 +104,13 @@ def test_identity_map_and_too_few_draws():
 
 def _banana_run(rounds, independence_fraction):
     start = np.random.default_rng(5).normal(size=(4, 32, 3)) * 0.3
-    settings = SamplerSettings(chunk=500, max_steps=4000, min_steps=4000, transport_rounds=rounds,
-                               independence_fraction=independence_fraction)
+    settings = SamplerSettings(
+        chunk=500,
+        max_steps=4000,
+        min_steps=4000,
+        transport_rounds=rounds,
+        independence_fraction=independence_fraction,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         return run_ensembles(Banana(), start, seed=11, settings=settings)
@@ -116,7 +132,10 @@ def mapped_banana():
 
 def test_sampling_through_the_map_is_exact_and_faster_on_a_banana(mapped_banana):
     plain, mapped = _banana_run(0, independence_fraction=0.0), mapped_banana
-    assert mapped.report.tau.max() < 0.5 * plain.report.tau.max(), (plain.report.worst(), mapped.report.worst())
+    assert mapped.report.tau.max() < 0.5 * plain.report.tau.max(), (
+        plain.report.worst(),
+        mapped.report.worst(),
+    )
     assert mapped.report.converged, mapped.report.worst()
     _assert_banana_draws(mapped)
     assert mapped.chain.shape[1] - mapped.report.n_kept == 1500  # three warm-up chunks
@@ -125,14 +144,20 @@ def test_sampling_through_the_map_is_exact_and_faster_on_a_banana(mapped_banana)
 def test_independence_moves_keep_the_banana_exact_and_cut_tau(mapped_banana):
     mixed = _banana_run(3, independence_fraction=0.3)
     assert mixed.report.converged, mixed.report.worst()
-    assert mixed.report.tau.max() < 0.7 * mapped_banana.report.tau.max(), (mapped_banana.report.worst(),
-                                                                            mixed.report.worst())
+    assert mixed.report.tau.max() < 0.7 * mapped_banana.report.tau.max(), (
+        mapped_banana.report.worst(),
+        mixed.report.worst(),
+    )
     _assert_banana_draws(mixed)
 
 
 def test_independence_proposal_ratio_is_exact():
     rng = np.random.default_rng(7)
-    draws = rng.standard_normal((5000, 4)) @ np.array([[2, 0, 0, 0], [1, 1, 0, 0], [0, 0, 3, 0], [0, 1, 0, .5]]).T + 3
+    draws = (
+        rng.standard_normal((5000, 4))
+        @ np.array([[2, 0, 0, 0], [1, 1, 0, 0], [0, 0, 3, 0], [0, 1, 0, 0.5]]).T
+        + 3
+    )
     for dof in (np.inf, 5.0):
         g = IndependenceProposal.fit(draws, dof=dof, inflate=1.3)
         x = draws[:50]
@@ -142,9 +167,14 @@ def test_independence_proposal_ratio_is_exact():
         assert np.allclose(g.log_density(new) - g.log_density(x) + log_ratio, 0.0, atol=1e-10)
         w = g.whiten(new)
         log_det = np.sum(np.log(np.diag(g.chol)))
-        assert np.allclose(g.log_density(new), student_t_log_density(w, dof) - log_det)  # normalised
-    big = IndependenceProposal.fit(draws, dof=np.inf).whiten(IndependenceProposal.fit(draws, dof=np.inf)(
-        np.zeros((20000, 4)), np.random.RandomState(2))[0])
+        assert np.allclose(
+            g.log_density(new), student_t_log_density(w, dof) - log_det
+        )  # normalised
+    big = IndependenceProposal.fit(draws, dof=np.inf).whiten(
+        IndependenceProposal.fit(draws, dof=np.inf)(np.zeros((20000, 4)), np.random.RandomState(2))[
+            0
+        ]
+    )
     assert np.allclose(np.cov(big.T), np.eye(4), atol=0.05)
     with pytest.raises(ValueError, match="independence_fraction"):
         SamplerSettings(independence_fraction=1.0)
@@ -180,7 +210,9 @@ def test_ensembles_started_in_two_separate_modes_find_their_true_weights():
 
     rng = np.random.default_rng(2)
     start = np.stack([centres[e % 2] + 0.5 * rng.standard_normal((32, 3)) for e in range(4)])
-    settings = SamplerSettings(n_ensembles=4, chunk=250, min_steps=3000, max_steps=3000, transport_rounds=3)
+    settings = SamplerSettings(
+        n_ensembles=4, chunk=250, min_steps=3000, max_steps=3000, transport_rounds=3
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         run = run_ensembles(log_prob, start, 11, settings)

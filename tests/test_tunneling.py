@@ -15,8 +15,15 @@ def test_eq9_is_ohmic_with_simmons_conductance():
     # Simmons eq. 25 written out in SI: J = 3 sqrt(2 m φ)/(2 s) (e/h)² V exp(−4π s sqrt(2 m φ)/h).
     phi_joule = VA * C.ELEMENTARY_CHARGE
     root = np.sqrt(2 * C.ELECTRON_MASS * phi_joule)
-    expected = AREA * 3 * root / (2 * S) * (C.ELEMENTARY_CHARGE / C.PLANCK_H) ** 2 * v * np.exp(
-        -4 * np.pi * S * root / C.PLANCK_H)
+    expected = (
+        AREA
+        * 3
+        * root
+        / (2 * S)
+        * (C.ELEMENTARY_CHARGE / C.PLANCK_H) ** 2
+        * v
+        * np.exp(-4 * np.pi * S * root / C.PLANCK_H)
+    )
     np.testing.assert_allclose(current, expected, rtol=1e-12)
     np.testing.assert_allclose(current / v, current[0] / v[0], rtol=1e-12)
 
@@ -34,8 +41,15 @@ def test_eq10_matches_the_direct_formula_where_it_has_no_cancellation():
     phi = VA * C.ELEMENTARY_CHARGE
     e, h, m = C.ELEMENTARY_CHARGE, C.PLANCK_H, C.ELECTRON_MASS
     lo, hi = phi - e * v / 2, phi + e * v / 2
-    direct = AREA * e / (2 * np.pi * h * S**2) * (
-        lo * np.exp(-4 * np.pi / h * S * np.sqrt(2 * m * lo)) - hi * np.exp(-4 * np.pi / h * S * np.sqrt(2 * m * hi)))
+    direct = (
+        AREA
+        * e
+        / (2 * np.pi * h * S**2)
+        * (
+            lo * np.exp(-4 * np.pi / h * S * np.sqrt(2 * m * lo))
+            - hi * np.exp(-4 * np.pi / h * S * np.sqrt(2 * m * hi))
+        )
+    )
     np.testing.assert_allclose(tl.simmons_intermediate(v, S, VA, AREA), direct, rtol=1e-10)
 
 
@@ -46,8 +60,14 @@ def test_eq11_uses_the_field_not_its_square():
     phi = VA * e
     field = v / S
     k = 8 * np.pi * np.sqrt(2 * m) * phi**1.5 / (2.96 * h * e * field)
-    expected = AREA * 2.2 * e**3 * field**2 / (8 * np.pi * h * phi) * (
-        np.exp(-k) - (1 + 2 * e * v / phi) * np.exp(-k * np.sqrt(1 + 2 * e * v / phi)))
+    expected = (
+        AREA
+        * 2.2
+        * e**3
+        * field**2
+        / (8 * np.pi * h * phi)
+        * (np.exp(-k) - (1 + 2 * e * v / phi) * np.exp(-k * np.sqrt(1 + 2 * e * v / phi)))
+    )
     np.testing.assert_allclose(tl.simmons_high_voltage(v, S, VA, AREA), expected, rtol=1e-10)
 
 
@@ -71,11 +91,16 @@ def test_exponential_dependence_on_the_gap():
     v = 1e-4
     k = C.KAPPA * np.sqrt(VA)
     # Eq. 9: log I = −log s − κ s sqrt(Va) + const.
-    paper = [np.log(tl.tunneling_current(v, s, VA, AREA, law="paper", threshold=0.073)) for s in (S, S + ds)]
+    paper = [
+        np.log(tl.tunneling_current(v, s, VA, AREA, law="paper", threshold=0.073))
+        for s in (S, S + ds)
+    ]
     assert (paper[1] - paper[0]) / ds == pytest.approx(-1 / S - k, rel=1e-5)
     # Eq. 10 as V → 0: log I = −2 log s − κ s sqrt(Va) + log(κ s sqrt(Va)/2 − 1) + const.
     smooth = [np.log(tl.tunneling_current(v, s, VA, AREA)) for s in (S, S + ds)]
-    assert (smooth[1] - smooth[0]) / ds == pytest.approx(-2 / S - k + (k / 2) / (k * S / 2 - 1), rel=1e-4)
+    assert (smooth[1] - smooth[0]) / ds == pytest.approx(
+        -2 / S - k + (k / 2) / (k * S / 2 - 1), rel=1e-4
+    )
     # Over a nanometre the current falls by exp(−κ sqrt(Va)·1 nm) up to the algebraic prefactor.
     drop = tl.tunneling_current(v, S + 1e-9, VA, AREA) / tl.tunneling_current(v, S, VA, AREA)
     assert np.log(drop) == pytest.approx(-k * 1e-9, rel=0.05)
@@ -98,7 +123,9 @@ def test_smooth_law_is_positive_and_increasing_up_to_12_volts(gap):
 
 
 def test_forward_term_joins_eq10_within_design_tolerance():
-    raw = tl.simmons_forward_shortened(VA, S, VA, AREA) / tl.simmons_intermediate(VA, S, VA, AREA) - 1
+    raw = (
+        tl.simmons_forward_shortened(VA, S, VA, AREA) / tl.simmons_intermediate(VA, S, VA, AREA) - 1
+    )
     assert 0 < raw < 1e-4
 
 

@@ -18,10 +18,16 @@ import time
 import numpy as np
 from scipy import stats
 
-from fsrbayes.utils import HALF_LOG_2PI
 from fsrbayes.inference.evidence.ladder import log_evidence
+from fsrbayes.utils import HALF_LOG_2PI
 
-__all__ = ["LinearGaussian", "TwoModes", "BentRidge", "evidence_coverage", "format_evidence_coverage"]
+__all__ = [
+    "LinearGaussian",
+    "TwoModes",
+    "BentRidge",
+    "evidence_coverage",
+    "format_evidence_coverage",
+]
 
 NOMINAL = {1.0: 0.6827, 2.0: 0.9545}
 
@@ -42,7 +48,9 @@ class LinearGaussian:
 
     def log_likelihood(self, w):
         resid = self.y - np.atleast_2d(w) @ self.X.T
-        return -0.5 * np.sum(resid**2, axis=1) / self.s**2 - len(self.y) * np.log(np.sqrt(2 * np.pi) * self.s)
+        return -0.5 * np.sum(resid**2, axis=1) / self.s**2 - len(self.y) * np.log(
+            np.sqrt(2 * np.pi) * self.s
+        )
 
     def sample_prior(self, rng, n):
         return self.m0 + self.tau * rng.standard_normal((n, self.ndim))
@@ -78,16 +86,24 @@ class TwoModes:
     def log_likelihood(self, u):
         u = np.atleast_2d(u)
         norm = self.ndim * np.log(np.sqrt(2 * np.pi) * self.s)
-        parts = [np.log(w) - 0.5 * np.sum(((u - c) / self.s) ** 2, axis=1) - norm
-                 for w, c in zip(self.weights, self.centres)]
+        parts = [
+            np.log(w) - 0.5 * np.sum(((u - c) / self.s) ** 2, axis=1) - norm
+            for w, c in zip(self.weights, self.centres, strict=False)
+        ]
         return np.logaddexp(*parts)
 
     def sample_prior(self, rng, n):
         return rng.uniform(-self.half_width, self.half_width, (n, self.ndim))
 
     def exact_log_z(self):
-        mass = sum(w * np.prod(stats.norm(c, self.s).cdf(self.half_width) - stats.norm(c, self.s).cdf(-self.half_width))
-                   for w, c in zip(self.weights, self.centres))
+        mass = sum(
+            w
+            * np.prod(
+                stats.norm(c, self.s).cdf(self.half_width)
+                - stats.norm(c, self.s).cdf(-self.half_width)
+            )
+            for w, c in zip(self.weights, self.centres, strict=False)
+        )
         return np.log(mass) - self.ndim * np.log(2 * self.half_width)
 
 
@@ -115,8 +131,6 @@ def _normal_log_pdf(x, loc, scale):
     return -0.5 * z * z - np.log(scale) - HALF_LOG_2PI
 
 
-
-
 class BentRidge:
     """Posterior x ~ N(0, 1), y | x ~ N(a·|x|, s²): two straight arms meeting at a corner — the
     shape of the creep posterior's s0–Va ridge where Simmons' law has its slope kink.
@@ -135,8 +149,9 @@ class BentRidge:
 
     def log_likelihood(self, u):
         u = np.atleast_2d(u)
-        return (_normal_log_pdf(u[:, 1], self.a * np.abs(u[:, 0]), self.s)
-                - _normal_log_pdf(u[:, 1], 0.0, self.prior.tau))
+        return _normal_log_pdf(u[:, 1], self.a * np.abs(u[:, 0]), self.s) - _normal_log_pdf(
+            u[:, 1], 0.0, self.prior.tau
+        )
 
     def sample_prior(self, rng, n):
         return self.prior.sample(rng, n)
@@ -184,15 +199,27 @@ def evidence_coverage(make_problem, n_runs, settings, *, seed=0, estimator=log_e
         coverage[k] = float(np.mean(np.abs(z) <= k))
         law = stats.binom(n_runs, p)
         band[k] = (float(law.ppf(0.005) / n_runs), float(law.ppf(0.995) / n_runs))
-    return {"z": z.tolist(), "error": [float(e) for e in errors], "sigma": [float(s) for s in sigmas],
-            "bias": float(np.mean(errors)), "coverage": coverage, "range_99": band,
-            "seconds": time.perf_counter() - start}
+    return {
+        "z": z.tolist(),
+        "error": [float(e) for e in errors],
+        "sigma": [float(s) for s in sigmas],
+        "bias": float(np.mean(errors)),
+        "coverage": coverage,
+        "range_99": band,
+        "seconds": time.perf_counter() - start,
+    }
 
 
 def format_evidence_coverage(study, label):
     """One line: coverage at 1σ and 2σ against the nominal shares and their binomial ranges."""
-    parts = [f"|z| <= {k:g}: {study['coverage'][k]:.2f} (nominal {p:.3f}, 99 % range "
-             f"{study['range_99'][k][0]:.2f}-{study['range_99'][k][1]:.2f})" for k, p in NOMINAL.items()]
-    return (f"{label}: {len(study['z'])} runs, mean error {study['bias']:+.3f} nats, sd of z "
-            f"{np.std(study['z'], ddof=1):.2f}, median sigma {np.median(study['sigma']):.3f}; " + "; ".join(parts)
-            + f"; {study['seconds']:.0f} s")
+    parts = [
+        f"|z| <= {k:g}: {study['coverage'][k]:.2f} (nominal {p:.3f}, 99 % range "
+        f"{study['range_99'][k][0]:.2f}-{study['range_99'][k][1]:.2f})"
+        for k, p in NOMINAL.items()
+    ]
+    return (
+        f"{label}: {len(study['z'])} runs, mean error {study['bias']:+.3f} nats, sd of z "
+        f"{np.std(study['z'], ddof=1):.2f}, median sigma {np.median(study['sigma']):.3f}; "
+        + "; ".join(parts)
+        + f"; {study['seconds']:.0f} s"
+    )

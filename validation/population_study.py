@@ -25,12 +25,17 @@ import numpy as np
 
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
 from fsrbayes.inference.output import DRIFT_TIME_S
 from fsrbayes.inference.population.predictive import ForwardTemplate, drift_groups, new_specimens
+from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
 from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
 
-__all__ = ["population_study", "format_population_study", "STUDY_FIT_SETTINGS", "STUDY_HYPER_SETTINGS"]
+__all__ = [
+    "population_study",
+    "format_population_study",
+    "STUDY_FIT_SETTINGS",
+    "STUDY_HYPER_SETTINGS",
+]
 
 STUDY_FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
 """Per-specimen fits for the two-stage route: two ensembles and a short budget (the reweighting
@@ -54,9 +59,18 @@ on 2 cores; ~11 τ of ω_A0 kept, so it ends with a ConvergenceWarning — its M
 the autocorrelation)."""
 
 
-def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5, 1.0, 3.0),
-                     forces=synthetic.PAPER_FORCES_N, processes=2, fit_settings=STUDY_FIT_SETTINGS,
-                     hyper_settings=None, joint_route=False):
+def population_study(
+    n_specimens=16,
+    *,
+    seed=31,
+    samples=21,
+    voltages=(0.2, 0.5, 1.0, 3.0),
+    forces=synthetic.PAPER_FORCES_N,
+    processes=2,
+    fit_settings=STUDY_FIT_SETTINGS,
+    hyper_settings=None,
+    joint_route=False,
+):
     """Simulate, fit hierarchically (two-stage) and score; returns a JSON-ready dict.
 
     With ``joint_route`` the joint route (blocked Gibbs, from the two-stage start) runs too, and
@@ -64,57 +78,107 @@ def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5,
     their combined Monte-Carlo errors (z) and over the posterior sd, plus whether the joint
     route's 90 % interval holds the simulation's value.
     """
-    sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
-                             samples=samples, seed=seed)
+    sim = synthetic.simulate(
+        "a201",
+        n_specimens=n_specimens,
+        voltages=list(voltages),
+        forces=list(forces),
+        samples=samples,
+        seed=seed,
+    )
     sensor = load_sensor("a201")
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         fits = fit_specimens(sim.data, settings=fit_settings, processes=processes, rng=seed)
     fit_seconds = time.perf_counter() - start
-    result = two_stage(fits, settings=hyper_settings or replace(STUDY_HYPER_SETTINGS, processes=processes), seed=seed)
+    result = two_stage(
+        fits,
+        settings=hyper_settings or replace(STUDY_HYPER_SETTINGS, processes=processes),
+        seed=seed,
+    )
     summary = result.summary()
     rows = []
     for name in result.population.names:
-        truth = {"mu": float(np.log(sensor.params[name])), "omega": synthetic.POPULATION_SCATTER[name]}
+        truth = {
+            "mu": float(np.log(sensor.params[name])),
+            "omega": synthetic.POPULATION_SCATTER[name],
+        }
         drawn = np.log([entry["params"][name] for entry in sim.truth["specimens"].values()])
         realised = {"mu": float(drawn.mean()), "omega": float(drawn.std(ddof=1))}
         for kind in ("mu", "omega"):
             entry = summary[f"{kind}_{name}"]
-            rows.append({"name": f"{kind}_{name}", "truth": truth[kind], "q05": entry["q05"], "median": entry["median"],
-                         "q95": entry["q95"], "inside": entry["q05"] <= truth[kind] <= entry["q95"],
-                         "realised": realised[kind],
-                         "realised_z": ((realised["mu"] - truth["mu"]) / (truth["omega"] / np.sqrt(len(drawn)))
-                                        if kind == "mu" else None)})
+            rows.append(
+                {
+                    "name": f"{kind}_{name}",
+                    "truth": truth[kind],
+                    "q05": entry["q05"],
+                    "median": entry["median"],
+                    "q95": entry["q95"],
+                    "inside": entry["q05"] <= truth[kind] <= entry["q95"],
+                    "realised": realised[kind],
+                    "realised_z": (
+                        (realised["mu"] - truth["mu"]) / (truth["omega"] / np.sqrt(len(drawn)))
+                        if kind == "mu"
+                        else None
+                    ),
+                }
+            )
     routes = None
     if joint_route:
         begin = time.perf_counter()
-        both = joint([f.posterior for f in fits.values()], result.population,
-                     settings=replace(JOINT_SETTINGS, processes=processes), seed=seed, start_from=result)
-        routes = {"seconds": time.perf_counter() - begin, "converged": bool(both.converged),
-                  "report": both.run.report.worst(), "rows": []}
+        both = joint(
+            [f.posterior for f in fits.values()],
+            result.population,
+            settings=replace(JOINT_SETTINGS, processes=processes),
+            seed=seed,
+            start_from=result,
+        )
+        routes = {
+            "seconds": time.perf_counter() - begin,
+            "converged": bool(both.converged),
+            "report": both.run.report.worst(),
+            "rows": [],
+        }
         other = both.summary()
         for row in rows:
             a, b = summary[row["name"]], other[row["name"]]
-            routes["rows"].append({"name": row["name"], "two_stage": a["mean"], "joint": b["mean"],
-                                   "z": (b["mean"] - a["mean"]) / float(np.hypot(a["error_mean"], b["error_mean"])),
-                                   "in_sd": (b["mean"] - a["mean"]) / a["sd"],
-                                   "joint_inside": b["q05"] <= row["truth"] <= b["q95"]})
+            routes["rows"].append(
+                {
+                    "name": row["name"],
+                    "two_stage": a["mean"],
+                    "joint": b["mean"],
+                    "z": (b["mean"] - a["mean"])
+                    / float(np.hypot(a["error_mean"], b["error_mean"])),
+                    "in_sd": (b["mean"] - a["mean"]) / a["sd"],
+                    "joint_inside": b["q05"] <= row["truth"] <= b["q95"],
+                }
+            )
     template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
     specimens = new_specimens(result.population, result.hyper_draws(), template, seed=seed)
     stresses = np.unique([t.stress_Pa for t in sim.data.tests])
-    sigma = [np.median(f.draws(1000)[..., f.posterior.names.index("sigma_rel")]) for f in fits.values()]
+    sigma = [
+        np.median(f.draws(1000)[..., f.posterior.names.index("sigma_rel")]) for f in fits.values()
+    ]
     noise = float(np.median(sigma))
-    groups = drift_groups(specimens, np.array(voltages, dtype=float), stresses, time_s=DRIFT_TIME_S, noise_rel=noise)
-    physical = drift_groups(specimens, np.array(voltages, dtype=float), stresses, time_s=DRIFT_TIME_S)
+    groups = drift_groups(
+        specimens, np.array(voltages, dtype=float), stresses, time_s=DRIFT_TIME_S, noise_rel=noise
+    )
+    physical = drift_groups(
+        specimens, np.array(voltages, dtype=float), stresses, time_s=DRIFT_TIME_S
+    )
     truth_covered = []
     noiseless = synthetic.noiseless_current(sim.truth)
     observed = {"voltage_V": [], "stress_Pa": [], "observed_drift_3600": []}
     covered = []
     for test in sim.data.tests:
         value = test.observed_drift(DRIFT_TIME_S)
-        group = next(g for g in groups if np.isclose(g["voltage_V"], test.voltage_V)
-                     and np.isclose(g["stress_Pa"], test.stress_Pa))
+        group = next(
+            g
+            for g in groups
+            if np.isclose(g["voltage_V"], test.voltage_V)
+            and np.isclose(g["stress_Pa"], test.stress_Pa)
+        )
         covered.append(group["new_specimen"]["q05"] <= value <= group["new_specimen"]["q95"])
         clean = physical[groups.index(group)]["new_specimen"]
         true_drift = 100.0 * (noiseless[test.key][-1] / noiseless[test.key][0] - 1.0)
@@ -122,45 +186,77 @@ def population_study(n_specimens=16, *, seed=31, samples=21, voltages=(0.2, 0.5,
         observed["voltage_V"].append(test.voltage_V)
         observed["stress_Pa"].append(test.stress_Pa)
         observed["observed_drift_3600"].append(value)
-    return {"hyper": rows, "groups": groups, "observed": {k: np.array(v) for k, v in observed.items()},
-            "observed_covered": float(np.mean(covered)), "n_observed": len(covered), "noise_rel": noise,
-            "noiseless_covered": float(np.mean(truth_covered)),
-            "hyper_converged": bool(result.converged), "hyper_report": result.run.report.worst(),
-            "fits_converged": int(sum(f.converged for f in fits.values())), "n_specimens": n_specimens,
-            "fit_seconds": fit_seconds, "seconds": time.perf_counter() - start,
-            "min_effective_draws": float(result.effective_draws.min()),
-            "log_likelihood_mc_sd": result.log_likelihood_mc_sd, "routes": routes}
+    return {
+        "hyper": rows,
+        "groups": groups,
+        "observed": {k: np.array(v) for k, v in observed.items()},
+        "observed_covered": float(np.mean(covered)),
+        "n_observed": len(covered),
+        "noise_rel": noise,
+        "noiseless_covered": float(np.mean(truth_covered)),
+        "hyper_converged": bool(result.converged),
+        "hyper_report": result.run.report.worst(),
+        "fits_converged": int(sum(f.converged for f in fits.values())),
+        "n_specimens": n_specimens,
+        "fit_seconds": fit_seconds,
+        "seconds": time.perf_counter() - start,
+        "min_effective_draws": float(result.effective_draws.min()),
+        "log_likelihood_mc_sd": result.log_likelihood_mc_sd,
+        "routes": routes,
+    }
 
 
 def format_population_study(study):
     """A plain-text table of the study."""
-    lines = [f"{'hyper-parameter':18s} {'truth':>9s} {'q05':>9s} {'median':>9s} {'q95':>9s}  inside "
-             f"{'realised':>9s} {'z':>6s}"]
+    lines = [
+        f"{'hyper-parameter':18s} {'truth':>9s} {'q05':>9s} {'median':>9s} {'q95':>9s}  inside "
+        f"{'realised':>9s} {'z':>6s}"
+    ]
     for row in study["hyper"]:
         z = "" if row["realised_z"] is None else f"{row['realised_z']:6.2f}"
-        lines.append(f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} {row['q95']:9.4f}"
-                     f"  {'yes' if row['inside'] else 'NO ':3s}  {row['realised']:9.4f} {z:>6s}")
+        lines.append(
+            f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} {row['q95']:9.4f}"
+            f"  {'yes' if row['inside'] else 'NO ':3s}  {row['realised']:9.4f} {z:>6s}"
+        )
     inside = sum(r["inside"] for r in study["hyper"])
-    lines.append(f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value (realised: mean and sd "
-                 "of the drawn specimens' log-values; z: their mean's distance from μ in units of ω/√n)")
-    lines.append(f"observed drift(3600 s) inside the new-specimen 5-95 % range as measured (noise "
-                 f"{study['noise_rel']:.4f}): {study['observed_covered']:.2f} of {study['n_observed']} tests (0.90 expected)")
-    lines.append(f"noiseless true drift(3600 s) of each specimen inside the noise-free 5-95 % range: "
-                 f"{study['noiseless_covered']:.2f} (0.90 expected)")
-    lines.append(f"hyper-posterior: {study['hyper_report']}; min effective draws {study['min_effective_draws']:.0f}; "
-                 f"log L MC sd {study['log_likelihood_mc_sd']:.2f}")
-    lines.append(f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; fits "
-                 f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s")
+    lines.append(
+        f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value (realised: mean and sd "
+        "of the drawn specimens' log-values; z: their mean's distance from μ in units of ω/√n)"
+    )
+    lines.append(
+        f"observed drift(3600 s) inside the new-specimen 5-95 % range as measured (noise "
+        f"{study['noise_rel']:.4f}): {study['observed_covered']:.2f} of {study['n_observed']} tests (0.90 expected)"
+    )
+    lines.append(
+        f"noiseless true drift(3600 s) of each specimen inside the noise-free 5-95 % range: "
+        f"{study['noiseless_covered']:.2f} (0.90 expected)"
+    )
+    lines.append(
+        f"hyper-posterior: {study['hyper_report']}; min effective draws {study['min_effective_draws']:.0f}; "
+        f"log L MC sd {study['log_likelihood_mc_sd']:.2f}"
+    )
+    lines.append(
+        f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; fits "
+        f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s"
+    )
     routes = study.get("routes")
     if routes:
         lines.append(f"joint route (blocked Gibbs): {routes['seconds']:.0f} s, {routes['report']}")
-        lines.append(f"{'hyper-parameter':18s} {'two-stage':>10s} {'joint':>10s} {'z':>6s} {'in sd':>6s}  joint inside")
+        lines.append(
+            f"{'hyper-parameter':18s} {'two-stage':>10s} {'joint':>10s} {'z':>6s} {'in sd':>6s}  joint inside"
+        )
         for row in routes["rows"]:
-            lines.append(f"{row['name']:18s} {row['two_stage']:10.4f} {row['joint']:10.4f} {row['z']:6.2f} "
-                         f"{row['in_sd']:6.3f}  {'yes' if row['joint_inside'] else 'NO'}")
+            lines.append(
+                f"{row['name']:18s} {row['two_stage']:10.4f} {row['joint']:10.4f} {row['z']:6.2f} "
+                f"{row['in_sd']:6.3f}  {'yes' if row['joint_inside'] else 'NO'}"
+            )
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
     counts = [int(a) for a in sys.argv[1:] if a.isdigit()]
-    print(format_population_study(population_study(counts[0] if counts else 16, joint_route="--joint" in sys.argv)))
+    print(
+        format_population_study(
+            population_study(counts[0] if counts else 16, joint_route="--joint" in sys.argv)
+        )
+    )

@@ -24,14 +24,25 @@ from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSett
 
 __all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
 
-RECOVERY_SETTINGS = SamplerSettings(n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2)
+RECOVERY_SETTINGS = SamplerSettings(
+    n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2
+)
 """Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
 
 DRIFT_TIME_S = 3600.0
 
 
-def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0, 3.0), forces=(1.96, 4.9, 9.8),
-                   settings=RECOVERY_SETTINGS, level=0.90, max_draws=1000):
+def recovery_study(
+    n_specimens=20,
+    *,
+    seed=2024,
+    samples=31,
+    voltages=(0.2, 1.0, 3.0),
+    forces=(1.96, 4.9, 9.8),
+    settings=RECOVERY_SETTINGS,
+    level=0.90,
+    max_draws=1000,
+):
     """Simulate ``n_specimens`` A201 specimens, fit each, and score the credible intervals.
 
     Returns
@@ -42,8 +53,14 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
         creep test); ``converged`` (per specimen); ``seconds``; ``truth_quantile`` (share of
         draws below the truth, specimens × parameters: uniform when calibrated).
     """
-    sim = synthetic.simulate("a201", n_specimens=n_specimens, voltages=list(voltages), forces=list(forces),
-                             samples=samples, seed=seed)
+    sim = synthetic.simulate(
+        "a201",
+        n_specimens=n_specimens,
+        voltages=list(voltages),
+        forces=list(forces),
+        samples=samples,
+        seed=seed,
+    )
     sensor = load_sensor("a201")
     tail = (1.0 - level) / 2.0
     inside, sd_ratio, drift_inside, converged, seconds, rank = [], [], [], [], [], []
@@ -61,29 +78,41 @@ def recovery_study(n_specimens=20, *, seed=2024, samples=31, voltages=(0.2, 1.0,
         inside.append((low <= truth) & (truth <= high))
         rank.append(np.mean(draws < truth, axis=0))
         u = posterior.prior.to_unconstrained(draws)
-        prior_u = posterior.prior.to_unconstrained(posterior.prior.sample(np.random.default_rng(k), 4000))
+        prior_u = posterior.prior.to_unconstrained(
+            posterior.prior.sample(np.random.default_rng(k), 4000)
+        )
         sd_ratio.append(u.std(axis=0) / prior_u.std(axis=0))
         predicted = posterior.drift_percent(draws, DRIFT_TIME_S)
         true_drift = posterior.drift_percent(truth[None, :], DRIFT_TIME_S)[0]
         lo, hi = np.quantile(predicted, [tail, 1.0 - tail], axis=0)
         drift_inside.extend(((lo <= true_drift) & (true_drift <= hi)).tolist())
-    return {"names": list(posterior.names), "inside": np.array(inside), "sd_ratio": np.array(sd_ratio),
-            "drift_inside": drift_inside, "converged": converged, "seconds": seconds,
-            "truth_quantile": np.array(rank)}
+    return {
+        "names": list(posterior.names),
+        "inside": np.array(inside),
+        "sd_ratio": np.array(sd_ratio),
+        "drift_inside": drift_inside,
+        "converged": converged,
+        "seconds": seconds,
+        "truth_quantile": np.array(rank),
+    }
 
 
 def coverage_at(study, levels=(0.5, 0.8, 0.9)):
     """Share of specimens whose central ``level`` interval holds the truth, per level and parameter
     (from the share of draws below the truth)."""
     q = study["truth_quantile"]
-    return {level: np.mean((q >= (1 - level) / 2) & (q <= (1 + level) / 2), axis=0) for level in levels}
+    return {
+        level: np.mean((q >= (1 - level) / 2) & (q <= (1 + level) / 2), axis=0) for level in levels
+    }
 
 
 def format_recovery(study):
     """A table: coverage at 50/80/90 % and posterior/prior sd ratio per parameter, drift coverage, timing."""
     coverage = coverage_at(study)
-    lines = [f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} {'misses low/high':>16s} "
-             f"{'sd post/prior':>14s}  identified"]
+    lines = [
+        f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} {'misses low/high':>16s} "
+        f"{'sd post/prior':>14s}  identified"
+    ]
     for i, name in enumerate(study["names"]):
         ratio = float(np.median(study["sd_ratio"][:, i]))
         verdict = "yes" if ratio < 0.5 else ("no (posterior ~ prior)" if ratio > 0.8 else "weakly")
@@ -92,9 +121,13 @@ def format_recovery(study):
         cover = " ".join(f"{coverage[level][i]:8.2f}" for level in (0.5, 0.8, 0.9))
         lines.append(f"{name:10s} {cover} {misses:>16s} {ratio:14.3f}  {verdict}")
     drift = np.array(study["drift_inside"])
-    lines.append(f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests")
-    lines.append(f"converged {sum(study['converged'])}/{len(study['converged'])}; "
-                 f"{np.mean(study['seconds']):.0f} s per fit")
+    lines.append(
+        f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests"
+    )
+    lines.append(
+        f"converged {sum(study['converged'])}/{len(study['converged'])}; "
+        f"{np.mean(study['seconds']):.0f} s per fit"
+    )
     return "\n".join(lines)
 
 

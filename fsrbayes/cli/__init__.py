@@ -20,22 +20,45 @@ __all__ = ["main", "build_parser", "UsageError"]
 
 
 def build_parser():
+    """The ``fsrbayes`` argument parser with every subcommand."""
     parser = argparse.ArgumentParser(prog="fsrbayes", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"fsrbayes {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="the main job: the paper's study re-done the Bayesian way on the embedded data "
-                          "(HTML report, JSON, netCDF)")
-    demo.add_argument("--out", default="fsrbayes-demo", help="folder for the results (default fsrbayes-demo)")
-    demo.add_argument("--quick", action="store_true", help="a look in about a minute: fewer specimens and voltages")
-    demo.add_argument("--processes", type=int, help="specimen fits side by side (default: one per core)")
+    demo = sub.add_parser(
+        "demo",
+        help="the main job: the paper's study re-done the Bayesian way on the embedded data "
+        "(HTML report, JSON, netCDF)",
+    )
+    demo.add_argument(
+        "--out", default="fsrbayes-demo", help="folder for the results (default fsrbayes-demo)"
+    )
+    demo.add_argument(
+        "--quick",
+        action="store_true",
+        help="a look in about a minute: fewer specimens and voltages",
+    )
+    demo.add_argument(
+        "--processes", type=int, help="specimen fits side by side (default: one per core)"
+    )
     demo.add_argument("--seed", type=int, default=2017)
-    demo.add_argument("--time", type=float, default=3600.0, help="time of the Figure 7 drift table in s (default 3600)")
-    demo.add_argument("--figure7-only", action="store_true", help="only the forward-model table (seconds)")
+    demo.add_argument(
+        "--time",
+        type=float,
+        default=3600.0,
+        help="time of the Figure 7 drift table in s (default 3600)",
+    )
+    demo.add_argument(
+        "--figure7-only", action="store_true", help="only the forward-model table (seconds)"
+    )
     demo.set_defaults(func=cmd_demo)
 
-    fwd = sub.add_parser("forward", help="drift table of a sensor's default model over voltages and stresses")
-    fwd.add_argument("--sensor", default="a201", help=f"one of {available_sensors()} (default a201)")
+    fwd = sub.add_parser(
+        "forward", help="drift table of a sensor's default model over voltages and stresses"
+    )
+    fwd.add_argument(
+        "--sensor", default="a201", help=f"one of {available_sensors()} (default a201)"
+    )
     fwd.add_argument("--voltages", default="0.1,0.2,0.5,1,2", help="V_FSR list in V")
     group = fwd.add_mutually_exclusive_group()
     group.add_argument("--stresses", default="50e3,100e3,200e3", help="stress list in Pa")
@@ -44,89 +67,188 @@ def build_parser():
     fwd.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fwd.set_defaults(func=cmd_forward)
 
-    sim = sub.add_parser("simulate", help="the virtual test bench: creep tests with known truth (CSV + truth JSON)")
+    sim = sub.add_parser(
+        "simulate", help="the virtual test bench: creep tests with known truth (CSV + truth JSON)"
+    )
     sim.add_argument("-o", "--output", required=True, help="CSV to write (.csv or .csv.gz)")
     sim.add_argument("--truth", help="truth JSON (default: beside the CSV, <name>.truth.json)")
-    sim.add_argument("--preset", choices=("paper",), help="the paper's protocol: 16 specimens, 1.96/4.9/9.8 N, "
-                     "its voltage lists, 1 h sampled every 10 s")
-    sim.add_argument("--sensor", default="a201", help="sensor name(s), comma-separated (default a201)")
+    sim.add_argument(
+        "--preset",
+        choices=("paper",),
+        help="the paper's protocol: 16 specimens, 1.96/4.9/9.8 N, "
+        "its voltage lists, 1 h sampled every 10 s",
+    )
+    sim.add_argument(
+        "--sensor", default="a201", help="sensor name(s), comma-separated (default a201)"
+    )
     sim.add_argument("--specimens", type=int, help="specimens per sensor (default 16)")
-    sim.add_argument("--voltages", help="V_FSR list in V (default: the paper's list for the sensor)")
+    sim.add_argument(
+        "--voltages", help="V_FSR list in V (default: the paper's list for the sensor)"
+    )
     group = sim.add_mutually_exclusive_group()
     group.add_argument("--stresses", help="stress list in Pa")
     group.add_argument("--forces", help="force list in N (default 1.96,4.9,9.8)")
-    sim.add_argument("--duration", type=float, default=3600.0, help="length of each test in s (default 3600)")
+    sim.add_argument(
+        "--duration", type=float, default=3600.0, help="length of each test in s (default 3600)"
+    )
     sim.add_argument("--samples", type=int, help="samples per test (default 25; paper preset 361)")
-    sim.add_argument("--spacing", choices=("log", "linear"), help="sampling times (default log; preset linear)")
-    sim.add_argument("--scatter", type=float, default=1.0, help="specimen-to-specimen variation, x the "
-                     "documented population log-scales (0: identical specimens)")
-    sim.add_argument("--noise", type=float, default=0.005, help="relative noise of each sample (default 0.005)")
-    sim.add_argument("--amp-offset", type=float, default=0.0, help="sd of a constant amplifier offset per test, V")
-    sim.add_argument("--readout", choices=("current", "amplifier"), default="current",
-                     help="write current_A, or vo_V and rf_ohm (eq. 23)")
-    sim.add_argument("--rheology", choices=model_families(), default="burgers",
-                     help="creep law of the paper's model, or kalantari (the peer model of eq. 14; no --effect)")
+    sim.add_argument(
+        "--spacing", choices=("log", "linear"), help="sampling times (default log; preset linear)"
+    )
+    sim.add_argument(
+        "--scatter",
+        type=float,
+        default=1.0,
+        help="specimen-to-specimen variation, x the "
+        "documented population log-scales (0: identical specimens)",
+    )
+    sim.add_argument(
+        "--noise", type=float, default=0.005, help="relative noise of each sample (default 0.005)"
+    )
+    sim.add_argument(
+        "--amp-offset",
+        type=float,
+        default=0.0,
+        help="sd of a constant amplifier offset per test, V",
+    )
+    sim.add_argument(
+        "--readout",
+        choices=("current", "amplifier"),
+        default="current",
+        help="write current_A, or vo_V and rf_ohm (eq. 23)",
+    )
+    sim.add_argument(
+        "--rheology",
+        choices=model_families(),
+        default="burgers",
+        help="creep law of the paper's model, or kalantari (the peer model of eq. 14; no --effect)",
+    )
     sim.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
-    sim.add_argument("--effect", action="append", metavar="NAME[=params]",
-                     help=f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets its "
-                     "main parameter, NAME=key=value,key=value any of them")
+    sim.add_argument(
+        "--effect",
+        action="append",
+        metavar="NAME[=params]",
+        help=f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets its "
+        "main parameter, NAME=key=value,key=value any of them",
+    )
     sim.add_argument("--seed", type=int, default=0, help="random seed (same seed, same bytes)")
-    sim.add_argument("--digits", type=int, help="significant digits in the CSV (default: exact round trip)")
+    sim.add_argument(
+        "--digits", type=int, help="significant digits in the CSV (default: exact round trip)"
+    )
     sim.set_defaults(func=cmd_simulate)
 
-    fit_ = sub.add_parser("fit", help="Bayesian fit per specimen with emcee (posterior.nc + summary.json)")
+    fit_ = sub.add_parser(
+        "fit", help="Bayesian fit per specimen with emcee (posterior.nc + summary.json)"
+    )
     fit_.add_argument("data", help="creep-test CSV")
-    fit_.add_argument("--out", required=True, help="output folder (one subfolder per specimen when several)")
+    fit_.add_argument(
+        "--out", required=True, help="output folder (one subfolder per specimen when several)"
+    )
     fit_.add_argument("--specimen", help="fit only this specimen")
-    fit_.add_argument("--model", default="burgers", help="burgers, zener or nutting, optionally +effect terms; or kalantari "
-                      "(Kalantari et al.'s eq. 14)")
+    fit_.add_argument(
+        "--model",
+        default="burgers",
+        help="burgers, zener or nutting, optionally +effect terms; or kalantari "
+        "(Kalantari et al.'s eq. 14)",
+    )
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fit_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
-    fit_.add_argument("--chunk", type=int, default=500, help="steps between convergence checks and checkpoints")
+    fit_.add_argument(
+        "--chunk", type=int, default=500, help="steps between convergence checks and checkpoints"
+    )
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
-    fit_.add_argument("--sampler", choices=("ensemble", "tempered"), default="ensemble",
-                      help="emcee ensembles until convergence (default), or the top rung of tempered ladders started "
-                      "from a fitted reference: mixes between the arms of a bent ridge and gives log Z too")
-    fit_.add_argument("--ladder-steps", type=int, help="--sampler tempered: production steps per ladder (default 600)")
-    fit_.add_argument("--processes", type=int, help="processes running ensembles side by side "
-                      "(default: one per core, at most one per ensemble; same chains either way)")
+    fit_.add_argument(
+        "--sampler",
+        choices=("ensemble", "tempered"),
+        default="ensemble",
+        help="emcee ensembles until convergence (default), or the top rung of tempered ladders started "
+        "from a fitted reference: mixes between the arms of a bent ridge and gives log Z too",
+    )
+    fit_.add_argument(
+        "--ladder-steps",
+        type=int,
+        help="--sampler tempered: production steps per ladder (default 600)",
+    )
+    fit_.add_argument(
+        "--processes",
+        type=int,
+        help="processes running ensembles side by side "
+        "(default: one per core, at most one per ensemble; same chains either way)",
+    )
     fit_.add_argument("--progress", action="store_true", help="show a progress bar on stderr")
-    fit_.add_argument("--hierarchical", action="store_true",
-                      help="fit all specimens (in parallel) and the population posterior across them")
-    fit_.add_argument("--route", choices=("two-stage", "joint"), default="two-stage",
-                      help="hierarchical: reweight per-specimen draws (default) or sample everything jointly")
-    fit_.add_argument("--scheduler", help="hierarchical: dask.distributed scheduler address for the specimen fits")
-    fit_.add_argument("--no-plots", dest="plots", action="store_false",
-                      help="skip the figures (corner, credible bands, drift(3600 s) per test)")
+    fit_.add_argument(
+        "--hierarchical",
+        action="store_true",
+        help="fit all specimens (in parallel) and the population posterior across them",
+    )
+    fit_.add_argument(
+        "--route",
+        choices=("two-stage", "joint"),
+        default="two-stage",
+        help="hierarchical: reweight per-specimen draws (default) or sample everything jointly",
+    )
+    fit_.add_argument(
+        "--scheduler", help="hierarchical: dask.distributed scheduler address for the specimen fits"
+    )
+    fit_.add_argument(
+        "--no-plots",
+        dest="plots",
+        action="store_false",
+        help="skip the figures (corner, credible bands, drift(3600 s) per test)",
+    )
     fit_.add_argument("--sep", default=",", help="CSV field separator")
     fit_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     fit_.set_defaults(func=cmd_fit)
 
-    cmp_ = sub.add_parser("compare", help="model comparison by log-evidence (stepping-stone) with error bars")
+    cmp_ = sub.add_parser(
+        "compare", help="model comparison by log-evidence (stepping-stone) with error bars"
+    )
     cmp_.add_argument("data", help="creep-test CSV")
-    cmp_.add_argument("--models", default="zener,burgers", help="comma-separated models: burgers, zener, nutting (+effects), "
-                      "kalantari (default zener,burgers)")
+    cmp_.add_argument(
+        "--models",
+        default="zener,burgers",
+        help="comma-separated models: burgers, zener, nutting (+effects), "
+        "kalantari (default zener,burgers)",
+    )
     cmp_.add_argument("--specimen", help="compare on this specimen only (default: all, summed)")
     cmp_.add_argument("--json", help="write the result here (atomically)")
     cmp_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     cmp_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
-    cmp_.add_argument("--path", choices=("reference", "prior"), default="reference",
-                      help="where the beta ladder starts: a reference density fitted to a pilot run (default) "
-                           "or the prior (needs a far denser ladder on creep data)")
-    cmp_.add_argument("--temps", type=int, help="rungs of the beta ladder (default 8 from the reference, 32 from "
-                                                "the prior)")
+    cmp_.add_argument(
+        "--path",
+        choices=("reference", "prior"),
+        default="reference",
+        help="where the beta ladder starts: a reference density fitted to a pilot run (default) "
+        "or the prior (needs a far denser ladder on creep data)",
+    )
+    cmp_.add_argument(
+        "--temps",
+        type=int,
+        help="rungs of the beta ladder (default 8 from the reference, 32 from the prior)",
+    )
     cmp_.add_argument("--burn", type=int, help="burn-in steps per rung (default 100 / 500)")
     cmp_.add_argument("--steps", type=int, help="production steps (default 600 / 2000)")
-    cmp_.add_argument("--pilot-steps", type=int, default=1250,
-                      help="steps of the pilot run the reference is fitted to (default 1250; 3 transport rounds "
-                           "take the first 60 %%)")
-    cmp_.add_argument("--replicates", type=int, default=4, help="independent ladders, each from its own region search, "
-                      "pilot and reference (default 4)")
-    cmp_.add_argument("--starts", type=int, default=12, help="optimiser starts of each region search (default 12)")
+    cmp_.add_argument(
+        "--pilot-steps",
+        type=int,
+        default=1250,
+        help="steps of the pilot run the reference is fitted to (default 1250; 3 transport rounds "
+        "take the first 60 %%)",
+    )
+    cmp_.add_argument(
+        "--replicates",
+        type=int,
+        default=4,
+        help="independent ladders, each from its own region search, "
+        "pilot and reference (default 4)",
+    )
+    cmp_.add_argument(
+        "--starts", type=int, default=12, help="optimiser starts of each region search (default 12)"
+    )
     cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument("--no-loo", action="store_true", help="skip PSIS-LOO")
@@ -134,15 +256,27 @@ def build_parser():
     cmp_.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     cmp_.set_defaults(func=cmd_compare)
 
-    dia = sub.add_parser("diagnose", help="find what the model misses, name the missing effect, show the gap shrink")
+    dia = sub.add_parser(
+        "diagnose", help="find what the model misses, name the missing effect, show the gap shrink"
+    )
     dia.add_argument("data", help="creep-test CSV")
-    dia.add_argument("--json", help="write the result here (atomically; keys verdict, effect, gap_before, ...)")
-    dia.add_argument("--report", metavar="DIR", help="folder for report.html/.md, figures and diagnosis.json")
+    dia.add_argument(
+        "--json", help="write the result here (atomically; keys verdict, effect, gap_before, ...)"
+    )
+    dia.add_argument(
+        "--report", metavar="DIR", help="folder for report.html/.md, figures and diagnosis.json"
+    )
     dia.add_argument("--base", default="burgers", help="base model (default burgers)")
-    dia.add_argument("--effects", help=f"candidate effects, comma-separated (default all: {','.join(EFFECTS)})")
+    dia.add_argument(
+        "--effects", help=f"candidate effects, comma-separated (default all: {','.join(EFFECTS)})"
+    )
     dia.add_argument("--specimens", help="specimens to use, comma-separated (default all)")
-    dia.add_argument("--threshold", type=float, default=10.0,
-                     help="ln B over the base model (summed over specimens) needed to name an effect (default 10)")
+    dia.add_argument(
+        "--threshold",
+        type=float,
+        default=10.0,
+        help="ln B over the base model (summed over specimens) needed to name an effect (default 10)",
+    )
     dia.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     dia.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
     dia.add_argument("--processes", type=int, help="specimens side by side (default: one per core)")
@@ -151,49 +285,100 @@ def build_parser():
     dia.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     dia.set_defaults(func=cmd_diagnose)
 
-    cal = sub.add_parser("calibrate", help="simulation-based calibration of the per-specimen fit: rank "
-                         "histograms, uniformity tests, coverage at 50/80/90 %% (exit 1 if not calibrated)")
+    cal = sub.add_parser(
+        "calibrate",
+        help="simulation-based calibration of the per-specimen fit: rank "
+        "histograms, uniformity tests, coverage at 50/80/90 %% (exit 1 if not calibrated)",
+    )
     cal.add_argument("--out", required=True, help="folder for sbc.json and rank_histograms.png")
-    cal.add_argument("--sensor", default="a201", help=f"priors of one of {available_sensors()} (default a201)")
-    cal.add_argument("--model", default="burgers", help="creep law, optionally +effect terms (default burgers)")
+    cal.add_argument(
+        "--sensor", default="a201", help=f"priors of one of {available_sensors()} (default a201)"
+    )
+    cal.add_argument(
+        "--model", default="burgers", help="creep law, optionally +effect terms (default burgers)"
+    )
     cal.add_argument("--reps", type=int, default=100, help="replications (default 100)")
-    cal.add_argument("--draws", type=int, default=99, help="posterior draws per replication, L (default 99)")
-    cal.add_argument("--bins", type=int, default=10, help="rank histogram bins; must divide L + 1 (default 10)")
-    cal.add_argument("--sampler", choices=("ensemble", "tempered"), default="ensemble",
-                     help="fit with emcee ensembles or the tempered ladders (default ensemble)")
-    cal.add_argument("--map", choices=("auto", "affine"), default="auto",
-                     help="--sampler ensemble: the transport map's form (auto: quadratic up to 14 parameters)")
-    cal.add_argument("--steps", type=int, help="steps per ensemble and fit (default 1500), or per ladder rung with "
-                     "--sampler tempered (default 300)")
-    cal.add_argument("--voltages", default="0.1,1,3", help="V_FSR of the simulated tests (default 0.1,1,3)")
-    cal.add_argument("--forces", default="1.96,4.9,9.8",
-                     help="forces in N of the simulated tests (default 1.96,4.9,9.8)")
-    cal.add_argument("--samples", type=int, default=8, help="log-spaced samples per test over 1 h (default 8)")
-    cal.add_argument("--processes", type=int, help="replications side by side (default: one per core)")
+    cal.add_argument(
+        "--draws", type=int, default=99, help="posterior draws per replication, L (default 99)"
+    )
+    cal.add_argument(
+        "--bins", type=int, default=10, help="rank histogram bins; must divide L + 1 (default 10)"
+    )
+    cal.add_argument(
+        "--sampler",
+        choices=("ensemble", "tempered"),
+        default="ensemble",
+        help="fit with emcee ensembles or the tempered ladders (default ensemble)",
+    )
+    cal.add_argument(
+        "--map",
+        choices=("auto", "affine"),
+        default="auto",
+        help="--sampler ensemble: the transport map's form (auto: quadratic up to 14 parameters)",
+    )
+    cal.add_argument(
+        "--steps",
+        type=int,
+        help="steps per ensemble and fit (default 1500), or per ladder rung with "
+        "--sampler tempered (default 300)",
+    )
+    cal.add_argument(
+        "--voltages", default="0.1,1,3", help="V_FSR of the simulated tests (default 0.1,1,3)"
+    )
+    cal.add_argument(
+        "--forces",
+        default="1.96,4.9,9.8",
+        help="forces in N of the simulated tests (default 1.96,4.9,9.8)",
+    )
+    cal.add_argument(
+        "--samples", type=int, default=8, help="log-spaced samples per test over 1 h (default 8)"
+    )
+    cal.add_argument(
+        "--processes", type=int, help="replications side by side (default: one per core)"
+    )
     cal.add_argument("--seed", type=int, default=0)
     cal.set_defaults(func=cmd_calibrate)
 
-    drf = sub.add_parser("drift", help="population drift(t) of a new specimen from a hierarchical fit; optimal voltage")
+    drf = sub.add_parser(
+        "drift",
+        help="population drift(t) of a new specimen from a hierarchical fit; optimal voltage",
+    )
     drf.add_argument("fit_dir", help="output folder of 'fsrbayes fit --hierarchical'")
-    drf.add_argument("--time", type=float, default=3600.0, help="time of the drift in s (default 3600)")
+    drf.add_argument(
+        "--time", type=float, default=3600.0, help="time of the drift in s (default 3600)"
+    )
     drf.add_argument("--json", help="write the groups (and optimal voltages) here, atomically")
     drf.add_argument("--plot", help="box-plot figure (PNG/PDF/SVG)")
-    drf.add_argument("--by", choices=("voltage", "stress"), default="voltage",
-                     help="x axis of the figure: voltage (Figures 10, 11) or stress (Figures 13, 14)")
+    drf.add_argument(
+        "--by",
+        choices=("voltage", "stress"),
+        default="voltage",
+        help="x axis of the figure: voltage (Figures 10, 11) or stress (Figures 13, 14)",
+    )
     drf.add_argument("--voltages", help="V_FSR list in V (default: the data's)")
     drf.add_argument("--stresses", help="stress list in Pa (default: the data's)")
-    drf.add_argument("--optimal-voltage", metavar="VMIN,VMAX",
-                     help="the sourcing voltage minimising |drift| of a new specimen per stress, within VMIN..VMAX")
-    drf.add_argument("--as-measured", action="store_true",
-                     help="drift as a rig measures it: add the fitted measurement noise to both readings "
-                          "(the fair comparison with observed drifts; default: the physical, noise-free drift)")
-    drf.add_argument("--hyper-draws", type=int, default=200, help="hyper-posterior draws used (default 200)")
+    drf.add_argument(
+        "--optimal-voltage",
+        metavar="VMIN,VMAX",
+        help="the sourcing voltage minimising |drift| of a new specimen per stress, within VMIN..VMAX",
+    )
+    drf.add_argument(
+        "--as-measured",
+        action="store_true",
+        help="drift as a rig measures it: add the fitted measurement noise to both readings "
+        "(the fair comparison with observed drifts; default: the physical, noise-free drift)",
+    )
+    drf.add_argument(
+        "--hyper-draws", type=int, default=200, help="hyper-posterior draws used (default 200)"
+    )
     drf.add_argument("--seed", type=int, default=0)
     drf.set_defaults(func=cmd_drift)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
     chk.add_argument("data", help="CSV file (DESIGN format)")
-    chk.add_argument("--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)")
+    chk.add_argument(
+        "--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)"
+    )
     chk.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
     chk.set_defaults(func=cmd_check)
     return parser

@@ -25,12 +25,18 @@ def cmd_compare(args):
     for model in models:
         parse_model(model)
     if args.specimen is not None and args.specimen not in data.specimens:
-        raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
+        raise UsageError(
+            f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
+        )
     base = REFERENCED_LADDER if args.path == "reference" else LadderSettings()
     chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
     try:
-        settings = replace(base, **{k: v for k, v in chosen.items() if v is not None}, replicates=args.replicates,
-                           processes=args.processes or min(args.replicates, os.cpu_count() or 1))
+        settings = replace(
+            base,
+            **{k: v for k, v in chosen.items() if v is not None},
+            replicates=args.replicates,
+            processes=args.processes or min(args.replicates, os.cpu_count() or 1),
+        )
     except ValueError as exc:
         raise UsageError(f"compare settings: {exc}") from None
     if args.pilot_steps < 100:
@@ -38,17 +44,31 @@ def cmd_compare(args):
     if args.starts < 1:
         raise UsageError(f"--starts must be >= 1, got {args.starts}")
     chunk = args.pilot_steps // 5
-    pilot = SamplerSettings(n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3)
+    pilot = SamplerSettings(
+        n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3
+    )
     if args.json:
         writable(Path(args.json).parent)
-    result = compare(data, models, [args.specimen] if args.specimen else None, tunneling=args.tunneling,
-                     likelihood=args.likelihood, settings=settings, seed=args.seed, with_loo=not args.no_loo,
-                     path=args.path, pilot=pilot, search=replace(MODE_SEARCH, n_starts=args.starts))
+    result = compare(
+        data,
+        models,
+        [args.specimen] if args.specimen else None,
+        tunneling=args.tunneling,
+        likelihood=args.likelihood,
+        settings=settings,
+        seed=args.seed,
+        with_loo=not args.no_loo,
+        path=args.path,
+        pilot=pilot,
+        search=replace(MODE_SEARCH, n_starts=args.starts),
+    )
     for name, entry in result["models"].items():
         print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
     for name, bf in result["bayes_factors"].items():
-        print(f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± {bf['err']:.2f} "
-              f"({bf['strength']})")
+        print(
+            f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± {bf['err']:.2f} "
+            f"({bf['strength']})"
+        )
     if args.json:
         write_json_atomic(Path(args.json), result)
     return 0
@@ -66,22 +86,42 @@ def cmd_diagnose(args):
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
         unknown = [e for e in effects if e not in EFFECTS]
         if unknown:
-            raise UsageError(f"--effects: unknown effect(s) {unknown}; expected names from {sorted(EFFECTS)}")
+            raise UsageError(
+                f"--effects: unknown effect(s) {unknown}; expected names from {sorted(EFFECTS)}"
+            )
     specimens = [s.strip() for s in args.specimens.split(",")] if args.specimens else None
     missing = [s for s in specimens or () if s not in data.specimens]
     if missing:
         raise UsageError(f"--specimens {missing} not in {args.data}; it has {data.specimens[:8]}")
-    for path in (Path(args.json).parent if args.json else None, Path(args.report) if args.report else None):
+    for path in (
+        Path(args.json).parent if args.json else None,
+        Path(args.report) if args.report else None,
+    ):
         if path is not None:
             writable(path)
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
-    result = diagnose(data, args.base, effects=effects, specimens=specimens, tunneling=args.tunneling,
-                      likelihood=args.likelihood, threshold=args.threshold, seed=args.seed, processes=args.processes)
+    result = diagnose(
+        data,
+        args.base,
+        effects=effects,
+        specimens=specimens,
+        tunneling=args.tunneling,
+        likelihood=args.likelihood,
+        threshold=args.threshold,
+        seed=args.seed,
+        processes=args.processes,
+    )
     print(f"gap before ({args.base}): {result.gap_before:.2f}")
     for c in result.candidates:
-        print(f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = {c['gap_after']:.2f}")
-    named = f": {result.effect} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})" if result.effect else ""
+        print(
+            f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = {c['gap_after']:.2f}"
+        )
+    named = (
+        f": {result.effect} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
+        if result.effect
+        else ""
+    )
     print(f"verdict: {result.verdict}{named}")
     if args.json:
         write_json_atomic(Path(args.json), json_ready(result.as_dict()))
@@ -95,8 +135,14 @@ def cmd_calibrate(args):
     from dataclasses import replace
 
     from ..data.sensors import load_sensor
-    from ..inference.calibration import SBC_SETTINGS, SBC_TEMPERED_SETTINGS, SBCDesign, calibrate_specimen, format_sbc
-    from ..plots import sbc_rank_plot, save_figure
+    from ..inference.calibration import (
+        SBC_SETTINGS,
+        SBC_TEMPERED_SETTINGS,
+        SBCDesign,
+        calibrate_specimen,
+        format_sbc,
+    )
+    from ..plots import save_figure, sbc_rank_plot
     from .common import floats
 
     load_sensor(args.sensor)
@@ -111,28 +157,51 @@ def cmd_calibrate(args):
         raise UsageError(f"--bins must divide --draws + 1 = {args.draws + 1}, got {args.bins}")
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
-    design = SBCDesign(args.sensor, args.model, tuple(floats(args.voltages, "voltages")),
-                       tuple(floats(args.forces, "forces")), args.samples)
+    design = SBCDesign(
+        args.sensor,
+        args.model,
+        tuple(floats(args.voltages, "voltages")),
+        tuple(floats(args.forces, "forces")),
+        args.samples,
+    )
     if tempered:
         ladder = SBC_TEMPERED_SETTINGS.ladder
         if args.steps < 10 * ladder.n_batches:
-            raise UsageError(f"--steps must be >= {10 * ladder.n_batches} with --sampler tempered, got {args.steps}")
-        settings = replace(SBC_TEMPERED_SETTINGS, ladder=replace(ladder, steps=args.steps, top_draws=args.steps))
+            raise UsageError(
+                f"--steps must be >= {10 * ladder.n_batches} with --sampler tempered, got {args.steps}"
+            )
+        settings = replace(
+            SBC_TEMPERED_SETTINGS, ladder=replace(ladder, steps=args.steps, top_draws=args.steps)
+        )
     else:
-        settings = replace(SBC_SETTINGS, min_steps=args.steps, max_steps=args.steps,
-                           chunk=min(SBC_SETTINGS.chunk, max(1, args.steps // 4)),
-                           quadratic_map=False if args.map == "affine" else None)
+        settings = replace(
+            SBC_SETTINGS,
+            min_steps=args.steps,
+            max_steps=args.steps,
+            chunk=min(SBC_SETTINGS.chunk, max(1, args.steps // 4)),
+            quadratic_map=False if args.map == "affine" else None,
+        )
     out = Path(args.out)
     writable(out)
     done = []
 
     def progress(index, rep):
         done.append(index)
-        print(f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS {rep['ess_min']:.0f}, "
-              f"max R-hat {rep['rhat_max']:.3f}", flush=True)
+        print(
+            f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS {rep['ess_min']:.0f}, "
+            f"max R-hat {rep['rhat_max']:.3f}",
+            flush=True,
+        )
 
-    result = calibrate_specimen(args.reps, design=design, settings=settings, n_draws=args.draws, seed=args.seed,
-                                processes=args.processes, on_result=progress)
+    result = calibrate_specimen(
+        args.reps,
+        design=design,
+        settings=settings,
+        n_draws=args.draws,
+        seed=args.seed,
+        processes=args.processes,
+        on_result=progress,
+    )
     print(format_sbc(result, bins=args.bins))
     record = result.as_dict(bins=args.bins)
     write_json_atomic(out / "sbc.json", json_ready(record))

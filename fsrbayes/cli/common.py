@@ -5,8 +5,15 @@ import signal
 
 import numpy as np
 
-__all__ = ["UsageError", "FitFailed", "floats", "writable", "fit_output_bytes", "enough_space",
-           "install_sigterm_handler"]
+__all__ = [
+    "UsageError",
+    "FitFailed",
+    "floats",
+    "writable",
+    "fit_output_bytes",
+    "enough_space",
+    "install_sigterm_handler",
+]
 
 
 class UsageError(Exception):
@@ -33,13 +40,17 @@ def writable(folder):
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise UsageError(f"--out {folder} cannot be created ({exc.strerror}); choose another folder") from None
+        raise UsageError(
+            f"--out {folder} cannot be created ({exc.strerror}); choose another folder"
+        ) from None
     probe = folder / ".fsrbayes-write-test"
     try:
         probe.write_bytes(b"x" * 4096)
         probe.unlink()
     except OSError as exc:
-        raise UsageError(f"--out {folder} is not writable ({exc.strerror}); choose another folder") from None
+        raise UsageError(
+            f"--out {folder} is not writable ({exc.strerror}); choose another folder"
+        ) from None
 
 
 def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_grid=61):
@@ -51,7 +62,9 @@ def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_gr
     """
     checkpoint = 0  # the tempered sampler writes none
     if hasattr(settings, "max_steps"):
-        checkpoint = settings.n_ensembles * settings.max_steps * settings.walkers_for(ndim) * (ndim + 1) * 8
+        checkpoint = (
+            settings.n_ensembles * settings.max_steps * settings.walkers_for(ndim) * (ndim + 1) * 8
+        )
     tree = max_draws * (ndim + 2 * n_samples + n_tests * (n_grid + 1)) * 8
     return checkpoint + tree
 
@@ -60,8 +73,10 @@ def enough_space(folder, need_bytes, what):
     """UsageError before any sampling when ``folder``'s disk has less than 1.2 × ``need_bytes`` free."""
     free = shutil.disk_usage(folder).free
     if free < 1.2 * need_bytes:
-        raise UsageError(f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to {need_bytes / 1e6:.0f} MB "
-                         "(checkpoint and posterior); free some space or choose another folder")
+        raise UsageError(
+            f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to {need_bytes / 1e6:.0f} MB "
+            "(checkpoint and posterior); free some space or choose another folder"
+        )
 
 
 def stop_on_sigterm(signum, frame):

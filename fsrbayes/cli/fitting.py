@@ -10,7 +10,15 @@ import numpy as np
 
 from ..data import csvio
 from ..utils import write_json_atomic
-from .common import FitFailed, UsageError, enough_space, fit_output_bytes, floats, install_sigterm_handler, writable
+from .common import (
+    FitFailed,
+    UsageError,
+    enough_space,
+    fit_output_bytes,
+    floats,
+    install_sigterm_handler,
+    writable,
+)
 
 CHECKPOINT = "checkpoint.npz"
 
@@ -23,15 +31,22 @@ def cmd_fit(args):
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     if args.specimen is not None and args.specimen not in data.specimens:
-        raise UsageError(f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}")
+        raise UsageError(
+            f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
+        )
     out = Path(args.out)
     writable(out)
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
-    settings = SamplerSettings(n_ensembles=args.ensembles, n_walkers=args.walkers, chunk=args.chunk,
-                               max_steps=args.max_steps, min_steps=min(args.chunk, args.max_steps),
-                               processes=processes)
+    settings = SamplerSettings(
+        n_ensembles=args.ensembles,
+        n_walkers=args.walkers,
+        chunk=args.chunk,
+        max_steps=args.max_steps,
+        min_steps=min(args.chunk, args.max_steps),
+        processes=processes,
+    )
     if args.sampler == "tempered":
         settings = _tempered_settings(args)
     specimens = [args.specimen] if args.specimen else data.specimens
@@ -47,9 +62,18 @@ def cmd_fit(args):
             warnings.simplefilter("always", ConvergenceWarning)
             warnings.simplefilter("always", DesignWarning)
             checkpoint = folder / CHECKPOINT if args.sampler == "ensemble" else None
-            result = fit(data, specimen, model=args.model, tunneling=args.tunneling, likelihood=args.likelihood,
-                         rng=args.seed, settings=settings, checkpoint=checkpoint, resume=args.resume,
-                         progress=args.progress)
+            result = fit(
+                data,
+                specimen,
+                model=args.model,
+                tunneling=args.tunneling,
+                likelihood=args.likelihood,
+                rng=args.seed,
+                settings=settings,
+                checkpoint=checkpoint,
+                resume=args.resume,
+                progress=args.progress,
+            )
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
@@ -59,8 +83,10 @@ def cmd_fit(args):
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
     if len(specimens) > 1:
-        write_json_atomic(out / "summary.json", {"converged": all(s["converged"] for s in summaries.values()),
-                                                 "specimens": summaries})
+        write_json_atomic(
+            out / "summary.json",
+            {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
+        )
     return 0
 
 
@@ -72,15 +98,20 @@ def _tempered_settings(args):
 
     for flag, bad in (("--hierarchical", args.hierarchical), ("--resume", args.resume)):
         if bad:
-            raise UsageError(f"{flag} works with --sampler ensemble only; the tempered sampler runs fixed-length "
-                             "ladders without checkpoints")
+            raise UsageError(
+                f"{flag} works with --sampler ensemble only; the tempered sampler runs fixed-length "
+                "ladders without checkpoints"
+            )
     ladder = TEMPERED_SETTINGS.ladder
     steps = args.ladder_steps if args.ladder_steps is not None else ladder.steps
     if steps < 10 * ladder.n_batches:
         raise UsageError(f"--ladder-steps must be >= {10 * ladder.n_batches}, got {steps}")
     processes = args.processes or min(ladder.replicates, os.cpu_count() or 1)
-    return replace(TEMPERED_SETTINGS, ladder=replace(ladder, steps=steps, top_draws=steps, n_walkers=args.walkers),
-                   processes=processes)
+    return replace(
+        TEMPERED_SETTINGS,
+        ladder=replace(ladder, steps=steps, top_draws=steps, n_walkers=args.walkers),
+        processes=processes,
+    )
 
 
 def _check_space(args, data, specimens, settings, out):
@@ -92,19 +123,26 @@ def _check_space(args, data, specimens, settings, out):
     for specimen in specimens:
         part = data.select(specimen=specimen)
         packed = SpecimenData.from_tests(part.tests)
-        ndim = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=args.model, tunneling=args.tunneling,
-                                       likelihood=args.likelihood).ndim
+        ndim = LogPosterior.for_sensor(
+            packed,
+            load_sensor(packed.sensor),
+            model=args.model,
+            tunneling=args.tunneling,
+            likelihood=args.likelihood,
+        ).ndim
         need += fit_output_bytes(part.n_rows, len(part.tests), ndim, settings)
-    enough_space(out, need, f"fitting {len(specimens)} specimen{'s' if len(specimens) != 1 else ''}")
+    enough_space(
+        out, need, f"fitting {len(specimens)} specimen{'s' if len(specimens) != 1 else ''}"
+    )
 
 
 def _fit_hierarchical(args, data, settings, out):
     """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
     from dataclasses import replace
 
-    from ..inference.population.routes import SpecimenFitWarning, fit_specimens, joint, two_stage
     from ..inference.output import save_fit, save_population
     from ..inference.population.predictive import ForwardTemplate
+    from ..inference.population.routes import SpecimenFitWarning, fit_specimens, joint, two_stage
 
     if args.specimen is not None:
         raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
@@ -113,51 +151,94 @@ def _fit_hierarchical(args, data, settings, out):
     for sensor in data.sensors:
         part = data.select(sensor=sensor)
         if len(part.specimens) < 2:
-            raise UsageError(f"--hierarchical needs at least 2 specimens of sensor {sensor!r} in {args.data}, "
-                             f"got {len(part.specimens)}")
+            raise UsageError(
+                f"--hierarchical needs at least 2 specimens of sensor {sensor!r} in {args.data}, "
+                f"got {len(part.specimens)}"
+            )
         folder = out if len(data.sensors) == 1 else out / sensor
         folder.mkdir(parents=True, exist_ok=True)
-        print(f"{sensor}: fitting {len(part.specimens)} specimens ({args.processes or os.cpu_count()} processes)",
-              flush=True)
+        print(
+            f"{sensor}: fitting {len(part.specimens)} specimens ({args.processes or os.cpu_count()} processes)",
+            flush=True,
+        )
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            fits = fit_specimens(part, settings=settings, processes=args.processes, scheduler=args.scheduler,
-                                 model=args.model, tunneling=args.tunneling, likelihood=args.likelihood, rng=args.seed)
+            fits = fit_specimens(
+                part,
+                settings=settings,
+                processes=args.processes,
+                scheduler=args.scheduler,
+                model=args.model,
+                tunneling=args.tunneling,
+                likelihood=args.likelihood,
+                rng=args.seed,
+            )
             failed = [s for s in part.specimens if s not in fits]
             if len(fits) < 2:
-                why = "; ".join(str(w.message) for w in caught if issubclass(w.category, SpecimenFitWarning))
-                raise FitFailed(f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a population "
-                                f"needs 2 ({why})")
+                why = "; ".join(
+                    str(w.message) for w in caught if issubclass(w.category, SpecimenFitWarning)
+                )
+                raise FitFailed(
+                    f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a population "
+                    f"needs 2 ({why})"
+                )
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)
                 summaries[specimen] = save_fit(result, folder / specimen)
-                print(f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
-                      f"{result.run.report.worst()}", flush=True)
-            hyper_settings = replace(settings, processes=min(settings.n_ensembles, args.processes or os.cpu_count() or 1))
+                print(
+                    f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
+                    f"{result.run.report.worst()}",
+                    flush=True,
+                )
+            hyper_settings = replace(
+                settings, processes=min(settings.n_ensembles, args.processes or os.cpu_count() or 1)
+            )
             result = two_stage(fits, settings=hyper_settings, seed=args.seed)
             if args.route == "joint":
-                result = joint([f.posterior for f in fits.values()], result.population, settings=hyper_settings,
-                               seed=args.seed, start_from=result, labels=list(fits))
-        notes = [str(w.message) for w in caught
-                 if issubclass(w.category, UserWarning) and "fsrbayes" in w.category.__module__]
+                result = joint(
+                    [f.posterior for f in fits.values()],
+                    result.population,
+                    settings=hyper_settings,
+                    seed=args.seed,
+                    start_from=result,
+                    labels=list(fits),
+                )
+        notes = [
+            str(w.message)
+            for w in caught
+            if issubclass(w.category, UserWarning) and "fsrbayes" in w.category.__module__
+        ]
         for note in dict.fromkeys(notes):  # once each: every specimen of a design warns alike
             print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
         template = ForwardTemplate.from_posterior(next(iter(fits.values())).posterior)
         observed = [t for s in summaries.values() for t in s["tests"]]
-        noise = float(np.median([s["parameters"]["sigma_rel"]["median"] for s in summaries.values()]))
+        noise = float(
+            np.median([s["parameters"]["sigma_rel"]["median"] for s in summaries.values()])
+        )
         info = save_population(result, template, observed, folder, noise_rel=noise)
         converged = all(s["converged"] for s in summaries.values()) and info["converged"]
-        write_json_atomic(folder / "summary.json", {"converged": converged, "specimens": summaries,
-                                                    "failed_specimens": failed, "hierarchical": info})
+        write_json_atomic(
+            folder / "summary.json",
+            {
+                "converged": converged,
+                "specimens": summaries,
+                "failed_specimens": failed,
+                "hierarchical": info,
+            },
+        )
         overall["converged"] &= converged
         overall["sensors"][sensor] = str(folder)
         overall.setdefault("failed", []).extend(failed)
-        print(f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
-              f"{result.run.report.worst()}; wrote {folder / 'population.nc'}")
+        print(
+            f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
+            f"{result.run.report.worst()}; wrote {folder / 'population.nc'}"
+        )
     if overall.get("failed"):
-        raise FitFailed(f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning above); "
-                        "the population was built from the other specimens")
+        raise FitFailed(
+            f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning above); "
+            "the population was built from the other specimens"
+        )
     return 0
 
 
@@ -167,8 +248,10 @@ def _population_folders(fit_dir):
         return [folder]
     found = sorted(p.parent for p in folder.glob("*/population.nc"))
     if not found:
-        raise UsageError(f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out {fit_dir}' "
-                         "first")
+        raise UsageError(
+            f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out {fit_dir}' "
+            "first"
+        )
     return found
 
 
@@ -178,13 +261,20 @@ def cmd_drift(args):
 
     from ..data.sensors import load_sensor
     from ..inference.population.model import Population
-    from ..inference.population.predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
+    from ..inference.population.predictive import (
+        ForwardTemplate,
+        drift_groups,
+        new_specimens,
+        optimal_voltage,
+    )
 
     if args.time <= 0:
         raise UsageError(f"--time must be > 0 s, got {args.time:g}")
     v_range = floats(args.optimal_voltage, "optimal-voltage") if args.optimal_voltage else None
     if v_range is not None and (len(v_range) != 2 or not 0 < v_range[0] < v_range[1]):
-        raise UsageError(f"--optimal-voltage takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.optimal_voltage!r}")
+        raise UsageError(
+            f"--optimal-voltage takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.optimal_voltage!r}"
+        )
     for path in (args.json, args.plot):
         if path:
             writable(Path(path).parent)
@@ -195,35 +285,60 @@ def cmd_drift(args):
         attrs = tree.attrs
         sensor = load_sensor(attrs["sensor"])
         noise = json.loads(attrs["noise"])
-        template = ForwardTemplate.from_sensor(sensor, attrs["fsrbayes_model"], attrs["tunneling"],
-                                               "student" if "nu" in noise else "gaussian")
+        template = ForwardTemplate.from_sensor(
+            sensor,
+            attrs["fsrbayes_model"],
+            attrs["tunneling"],
+            "student" if "nu" in noise else "gaussian",
+        )
         population = Population(template.prior, json.loads(attrs["population"]))
-        hyper = np.stack([tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1)
-        constant = {k: tree.constant_data[k].values for k in ("voltage_V", "stress_Pa", "observed_drift_3600")}
-        volts = floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
-        stresses = floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
-        specimens = new_specimens(population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed)
+        hyper = np.stack(
+            [tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1
+        )
+        constant = {
+            k: tree.constant_data[k].values
+            for k in ("voltage_V", "stress_Pa", "observed_drift_3600")
+        }
+        volts = (
+            floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
+        )
+        stresses = (
+            floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
+        )
+        specimens = new_specimens(
+            population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed
+        )
         noise = float(attrs.get("measurement_noise", 0.0)) if args.as_measured else None
-        groups = drift_groups(specimens, volts, stresses, time_s=args.time, noise_rel=noise, seed=args.seed)
+        groups = drift_groups(
+            specimens, volts, stresses, time_s=args.time, noise_rel=noise, seed=args.seed
+        )
         payload["groups"] += groups
         if v_range is not None:
             for stress in stresses:
                 best = optimal_voltage(specimens, stress, v_range, time_s=args.time)
                 payload["optimal_voltage"].append({"sensor": sensor.name, **best})
-                print(f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} V "
-                      f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there {best['drift_at_optimum']['q50']:.2f} %")
+                print(
+                    f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} V "
+                    f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there {best['drift_at_optimum']['q50']:.2f} %"
+                )
         for g in groups:
             q = g["new_specimen"]
-            print(f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen drift "
-                  f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % {q['q05']:.2f}..{q['q95']:.2f}")
+            print(
+                f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen drift "
+                f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % {q['q05']:.2f}..{q['q95']:.2f}"
+            )
         figures.append((groups, constant))
     if args.json:
         write_json_atomic(Path(args.json), payload)
     if args.plot:
         from .. import plots
 
-        groups, constant = figures[0] if len(figures) == 1 else ([g for f in figures for g in f[0]], None)
-        plots.save_figure(plots.population_drift_plot(groups, constant, by=args.by)[0], Path(args.plot))
+        groups, constant = (
+            figures[0] if len(figures) == 1 else ([g for f in figures for g in f[0]], None)
+        )
+        plots.save_figure(
+            plots.population_drift_plot(groups, constant, by=args.by)[0], Path(args.plot)
+        )
     return 0
 
 

@@ -17,15 +17,21 @@ FIGURE7_VOLTAGES = (0.03, 0.22, 0.4, 2.0)
 
 
 def _drift_table(params, voltages, stresses, time_s, tunneling):
-    table = fsr.drift(params, voltages, np.asarray(stresses)[:, None], time_s, tunneling=tunneling,
-                      on_invalid="mask")
+    table = fsr.drift(
+        params,
+        voltages,
+        np.asarray(stresses)[:, None],
+        time_s,
+        tunneling=tunneling,
+        on_invalid="mask",
+    )
     return np.ma.filled(np.ma.asarray(table), np.nan)
 
 
 def _format_table(table, voltages, stresses):
     head = "stress \\ V_FSR " + "".join(f"{v:>9g} V" for v in voltages)
     rows = [head]
-    for sigma, row in zip(stresses, table):
+    for sigma, row in zip(stresses, table, strict=False):
         cells = "".join(f"{x:>11.2f}" if np.isfinite(x) else f"{'invalid':>11s}" for x in row)
         rows.append(f"{sigma / 1e3:10.0f} kPa  {cells}")
     return "\n".join(rows)
@@ -33,7 +39,8 @@ def _format_table(table, voltages, stresses):
 
 def cmd_demo(args):
     """The main job: the paper's Figure 7 from Table 1, then the Bayesian study of the default data
-    (:func:`fsrbayes.demo.run_demo`); one HTML report, JSON and netCDF results in ``--out``."""
+    (:func:`fsrbayes.demo.run_demo`); one HTML report, JSON and netCDF results in ``--out``.
+    """
     if args.time < 0:
         raise UsageError(f"--time must be >= 0 s, got {args.time:g}")
     if args.processes is not None and args.processes < 1:
@@ -46,19 +53,33 @@ def cmd_demo(args):
     from ..demo import FULL, QUICK, run_demo
 
     plan = QUICK if args.quick else FULL
-    print(f"\nThe Bayesian study ({plan.name} plan; progress below, report at the end):", flush=True)
-    results = run_demo(out, plan, processes=args.processes, seed=args.seed,
-                       echo=lambda line: print(line, flush=True))
+    print(
+        f"\nThe Bayesian study ({plan.name} plan; progress below, report at the end):", flush=True
+    )
+    results = run_demo(
+        out,
+        plan,
+        processes=args.processes,
+        seed=args.seed,
+        echo=lambda line: print(line, flush=True),
+    )
     print("\nSummary")
     for sensor, e in results["evidence"].items():
-        print(f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, summed over "
-              f"{len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}")
+        print(
+            f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, summed over "
+            f"{len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}"
+        )
     for sensor, pop in results["population"].items():
-        best = ", ".join(f"{o['stress_Pa'] / 1e3:.0f} kPa: {o['median']:.2g} V" for o in pop["optimal_voltage"])
+        best = ", ".join(
+            f"{o['stress_Pa'] / 1e3:.0f} kPa: {o['median']:.2g} V" for o in pop["optimal_voltage"]
+        )
         print(f"  {sensor}: optimal sourcing voltage (new specimen, median) {best}")
     d = results["diagnose"]
-    print(f"  diagnose ({', '.join(d['specimens'])}): verdict {d['verdict']}"
-          + (f" ({d['effect']})" if d["effect"] else "") + f", gap {d['gap_before']:.2f}")
+    print(
+        f"  diagnose ({', '.join(d['specimens'])}): verdict {d['verdict']}"
+        + (f" ({d['effect']})" if d["effect"] else "")
+        + f", gap {d['gap_before']:.2f}"
+    )
     for note in results["warnings"]:
         print(f"  note: {note}")
     print(f"report: {results['report']} ({results['seconds']:.0f} s)")
@@ -67,7 +88,8 @@ def cmd_demo(args):
 
 def _figure7(time_s, out):
     """Figure 7 of the paper from Table 1: drift(3600 s) over stress × voltage (A201), printed and
-    written to ``figure7_drift.json``."""
+    written to ``figure7_drift.json``.
+    """
     sensor = load_sensor("a201")
     params = dict(sensor.params)
     voltages, stresses = np.array(FIGURE7_VOLTAGES), np.array(FIGURE7_STRESSES)
@@ -80,18 +102,28 @@ def _figure7(time_s, out):
         print(f"tunneling={law!r}")
         print(_format_table(table, voltages, stresses))
         print()
-    print("drift falls with the sourcing voltage (R_bulk shrinks towards the creep-free Rc) and grows")
+    print(
+        "drift falls with the sourcing voltage (R_bulk shrinks towards the creep-free Rc) and grows"
+    )
     print("with stress, as the paper's Figure 7 shows.")
     strain0 = 200e3 / params["k1"]
     peak = float(paper_peak_voltage(params["s0"] * (1 - strain0), params["Va"]))
-    print(f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the bulk "
-          f"at 200 kPa); the smooth law holds at any voltage.")
+    print(
+        f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the bulk "
+        f"at 200 kPa); the smooth law holds at any voltage."
+    )
     observed = _default_data_drift(time_s)
-    payload = {"sensor": sensor.name, "time_s": time_s, "voltages_V": voltages.tolist(),
-               "stresses_Pa": stresses.tolist(),
-               "drift_percent": {law: [[None if not np.isfinite(x) else float(x) for x in row] for row in t]
-                                 for law, t in results.items()},
-               "default_data_observed_drift": observed}
+    payload = {
+        "sensor": sensor.name,
+        "time_s": time_s,
+        "voltages_V": voltages.tolist(),
+        "stresses_Pa": stresses.tolist(),
+        "drift_percent": {
+            law: [[None if not np.isfinite(x) else float(x) for x in row] for row in t]
+            for law, t in results.items()
+        },
+        "default_data_observed_drift": observed,
+    }
     write_json_atomic(out / "figure7_drift.json", payload)
     print(f"\nwrote {out / 'figure7_drift.json'}", flush=True)
 
@@ -100,17 +132,34 @@ def _default_data_drift(time_s):
     """Print and return the observed drift spread of the embedded data set (Figures 10/11 preview)."""
     data = synthetic.default_data()
     print(f"\n{data.summary()}")
-    print(f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per voltage")
+    print(
+        f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per voltage"
+    )
     summary = []
     for sensor in data.sensors:
         sub = data.select(sensor=sensor)
         middle = sorted({t.stress_Pa for t in sub})[1]
         cells = []
         for volt in sorted({t.voltage_V for t in sub}):
-            drifts = np.array([t.observed_drift(time_s) for t in sub if t.voltage_V == volt and t.stress_Pa == middle])
+            drifts = np.array(
+                [
+                    t.observed_drift(time_s)
+                    for t in sub
+                    if t.voltage_V == volt and t.stress_Pa == middle
+                ]
+            )
             q25, q50, q75 = np.percentile(drifts, [25, 50, 75])
             cells.append(f"{volt:g} V: {q50:.2f} [{q25:.2f}, {q75:.2f}]")
-            summary.append({"sensor": sensor, "voltage_V": volt, "stress_Pa": middle, "q25": q25, "q50": q50, "q75": q75})
+            summary.append(
+                {
+                    "sensor": sensor,
+                    "voltage_V": volt,
+                    "stress_Pa": middle,
+                    "q25": q25,
+                    "q50": q50,
+                    "q75": q75,
+                }
+            )
         print(f"  {sensor} ({middle / 1e3:.1f} kPa): " + "; ".join(cells))
     return summary
 
@@ -128,10 +177,14 @@ def cmd_forward(args):
     if np.any(stresses <= 0):
         raise UsageError(f"stresses must be > 0 Pa, got {stresses.min():g}")
     table = _drift_table(dict(sensor.params), voltages, stresses, args.time, args.tunneling)
-    print(f"{sensor.description}: drift({args.time:g} s) in %, rheology burgers, tunneling {args.tunneling}")
+    print(
+        f"{sensor.description}: drift({args.time:g} s) in %, rheology burgers, tunneling {args.tunneling}"
+    )
     print(_format_table(table, voltages, stresses))
     if not np.all(np.isfinite(table)):
-        print("'invalid': outside the paper law's validity domain (eq. 11 past its peak); try --tunneling smooth")
+        print(
+            "'invalid': outside the paper law's validity domain (eq. 11 past its peak); try --tunneling smooth"
+        )
     return 0
 
 
@@ -141,21 +194,39 @@ def cmd_simulate(args):
     out = Path(args.output)
     if not out.parent.is_dir():
         raise UsageError(f"-o: directory {out.parent} does not exist")
-    common = dict(noise_rel=args.noise, amp_offset_V=args.amp_offset, readout=args.readout, rheology=args.rheology,
-                  tunneling=args.tunneling, effects=args.effect or (), seed=args.seed, scatter=args.scatter)
+    common = dict(
+        noise_rel=args.noise,
+        amp_offset_V=args.amp_offset,
+        readout=args.readout,
+        rheology=args.rheology,
+        tunneling=args.tunneling,
+        effects=args.effect or (),
+        seed=args.seed,
+        scatter=args.scatter,
+    )
     if args.preset == "paper":
         for flag in ("voltages", "stresses", "forces"):
             if getattr(args, flag) is not None:
                 raise UsageError(f"--preset paper fixes the protocol; drop --{flag}")
-        sim = synthetic.paper_protocol(sensors, samples=args.samples or 361, spacing=args.spacing or "linear",
-                                       n_specimens=args.specimens or 16, **common)
+        sim = synthetic.paper_protocol(
+            sensors,
+            samples=args.samples or 361,
+            spacing=args.spacing or "linear",
+            n_specimens=args.specimens or 16,
+            **common,
+        )
     else:
         sim = synthetic.simulate(
-            sensors, n_specimens=args.specimens or 16,
+            sensors,
+            n_specimens=args.specimens or 16,
             voltages=None if args.voltages is None else floats(args.voltages, "voltages"),
             stresses=None if args.stresses is None else floats(args.stresses, "stresses"),
             forces=None if args.forces is None else floats(args.forces, "forces"),
-            duration=args.duration, samples=args.samples or 25, spacing=args.spacing or "log", **common)
+            duration=args.duration,
+            samples=args.samples or 25,
+            spacing=args.spacing or "log",
+            **common,
+        )
     csv_path, truth_path = synthetic.write_simulation(sim, out, args.truth, digits=args.digits)
     print(sim.data.summary().replace(sim.data.source, str(csv_path), 1))
     effects = ", ".join(sim.truth["effects"]) or "none"

@@ -3,4 +3,11 @@
 from .distributions import Distribution, make_distribution
 from .sensors import Sensor, available_sensors, load_sensor, models_directory
 
-__all__ = ["Distribution", "make_distribution", "Sensor", "available_sensors", "load_sensor", "models_directory"]
+__all__ = [
+    "Distribution",
+    "make_distribution",
+    "Sensor",
+    "available_sensors",
+    "load_sensor",
+    "models_directory",
+]

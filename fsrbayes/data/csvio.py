@@ -43,7 +43,11 @@ class DataError(ValueError):
     """
 
     def __init__(self, message, path="<data>", line=None, column=None):
-        where = str(path) + (f" line {line}" if line is not None else "") + (f", column {column}" if column else "")
+        where = (
+            str(path)
+            + (f" line {line}" if line is not None else "")
+            + (f", column {column}" if column else "")
+        )
         super().__init__(f"{where}: {message}")
         self.path, self.line, self.column = str(path), line, column
 
@@ -128,16 +132,26 @@ class CreepData:
     def select(self, specimen=None, sensor=None):
         """The tests of one specimen and/or one sensor, as a new :class:`CreepData`."""
         if specimen is not None and specimen not in self.specimens:
-            raise ValueError(f"specimen {specimen!r} is not in {self.source}; it has {self.specimens[:10]}"
-                             + (" …" if len(self.specimens) > 10 else ""))
-        tests = tuple(t for t in self.tests if (specimen is None or t.specimen == specimen)
-                      and (sensor is None or t.sensor == sensor))
+            raise ValueError(
+                f"specimen {specimen!r} is not in {self.source}; it has {self.specimens[:10]}"
+                + (" …" if len(self.specimens) > 10 else "")
+            )
+        tests = tuple(
+            t
+            for t in self.tests
+            if (specimen is None or t.specimen == specimen)
+            and (sensor is None or t.sensor == sensor)
+        )
         return CreepData(tests, self.source)
 
     def columns(self):
         """The data as flat columns (dict of arrays), one entry per sample, test by test."""
         sizes = [t.time_s.size for t in self.tests]
-        rep = lambda values: np.repeat(np.array(values, dtype=object if isinstance(values[0], str) else float), sizes)  # noqa: E731
+
+        def rep(values):
+            kind = object if isinstance(values[0], str) else float
+            return np.repeat(np.array(values, dtype=kind), sizes)
+
         return {
             "specimen": rep([t.specimen for t in self.tests]),
             "sensor": rep([t.sensor for t in self.tests]),
@@ -151,15 +165,19 @@ class CreepData:
     def summary(self):
         """A few lines describing the data set."""
         n_spec = len(self.specimens)
-        lines = [f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "
-                 f"{n_spec} specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"]
+        lines = [
+            f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "
+            f"{n_spec} specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"
+        ]
         for sensor in self.sensors:
             sub = self.select(sensor=sensor)
             volts = sorted({t.voltage_V for t in sub})
             stresses = sorted({t.stress_Pa for t in sub})
             longest = max(t.time_s[-1] for t in sub)
-            lines.append(f"  {sensor}: {len(sub.specimens)} specimen{'s' if len(sub.specimens) != 1 else ''}, voltages {', '.join(f'{v:g}' for v in volts)} V, "
-                         f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s")
+            lines.append(
+                f"  {sensor}: {len(sub.specimens)} specimen{'s' if len(sub.specimens) != 1 else ''}, voltages {', '.join(f'{v:g}' for v in volts)} V, "
+                f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
+            )
         return "\n".join(lines)
 
 
@@ -172,8 +190,11 @@ def _decode(path):
     try:
         size = Path(path).stat().st_size
         if size > MAX_TEXT_BYTES:
-            raise DataError(f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in memory; "
-                            "split it (per sensor or specimen)", path)
+            raise DataError(
+                f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in memory; "
+                "split it (per sensor or specimen)",
+                path,
+            )
         raw = Path(path).read_bytes()
     except FileNotFoundError:
         raise DataError("file not found", path) from None
@@ -186,18 +207,28 @@ def _decode(path):
 
         try:
             with gzip.GzipFile(fileobj=io.BytesIO(raw)) as handle:
-                raw = handle.read(MAX_TEXT_BYTES + 1)  # never more than the cap in memory, however it unpacks
+                raw = handle.read(
+                    MAX_TEXT_BYTES + 1
+                )  # never more than the cap in memory, however it unpacks
         except (OSError, EOFError, zlib.error) as exc:
-            raise DataError(f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or a "
-                            "whole .csv.gz", path) from None
+            raise DataError(
+                f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or a "
+                "whole .csv.gz",
+                path,
+            ) from None
         if len(raw) > MAX_TEXT_BYTES:
-            raise DataError(f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too large to read "
-                            "in memory); split it (per sensor or specimen)", path)
+            raise DataError(
+                f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too large to read "
+                "in memory); split it (per sensor or specimen)",
+                path,
+            )
     try:
         # utf-8-sig strips the byte-order mark Excel writes; the header then reads normally.
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise DataError(f"not UTF-8 text (byte {exc.start}); save the file as CSV UTF-8", path) from None
+        raise DataError(
+            f"not UTF-8 text (byte {exc.start}); save the file as CSV UTF-8", path
+        ) from None
 
 
 def _parse_floats(values, name, line_no, path, decimal_comma):
@@ -211,7 +242,9 @@ def _parse_floats(values, name, line_no, path, decimal_comma):
                 float(value)
             except ValueError:
                 shown = value if value.strip() else "an empty field"
-                raise DataError(f"expected a number, got {shown!r}", path, int(line_no[i]), name) from None
+                raise DataError(
+                    f"expected a number, got {shown!r}", path, int(line_no[i]), name
+                ) from None
         raise
     bad = ~np.isfinite(array)
     if bad.any():
@@ -269,18 +302,28 @@ def read_csv(path, *, sep=",", shift_time=False):
     """
     text = _decode(path)
     if not text.strip():
-        raise DataError("the file is empty; expected a header line and data rows "
-                        "(specimen,sensor,voltage_V,stress_Pa,time_s,current_A)", path)
+        raise DataError(
+            "the file is empty; expected a header line and data rows "
+            "(specimen,sensor,voltage_V,stress_Pa,time_s,current_A)",
+            path,
+        )
     lines = text.splitlines()
     if sep == "," and ";" in lines[0] and "," not in lines[0]:
-        raise DataError("fields are separated by ';', expected ','; re-export as comma-separated "
-                        "or read with sep=';' (CLI: --sep ';')", path, 1)
+        raise DataError(
+            "fields are separated by ';', expected ','; re-export as comma-separated "
+            "or read with sep=';' (CLI: --sep ';')",
+            path,
+            1,
+        )
     reader = csv.reader(io.StringIO(text), delimiter=sep, strict=True)
     try:
         rows = list(reader)
     except csv.Error as exc:  # a NUL byte, an unclosed quote, a field past csv's size limit
-        raise DataError(f"not readable as CSV ({exc}); expected plain comma-separated fields", path,
-                        reader.line_num) from None
+        raise DataError(
+            f"not readable as CSV ({exc}); expected plain comma-separated fields",
+            path,
+            reader.line_num,
+        ) from None
     names = _columns_of(rows[0], path)
     width = len(names)
     body, line_numbers = [], []
@@ -288,7 +331,9 @@ def read_csv(path, *, sep=",", shift_time=False):
         if len(row) != width:
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue  # a blank line holds no sample
-            raise DataError(f"expected {width} fields like the header, got {len(row)}", path, number)
+            raise DataError(
+                f"expected {width} fields like the header, got {len(row)}", path, number
+            )
         body.append(row)
         line_numbers.append(number)
     if not body:
@@ -297,7 +342,7 @@ def read_csv(path, *, sep=",", shift_time=False):
 
 
 def _validate(names, body, line_no, path, decimal_comma, shift_time):
-    cols = dict(zip(names, (list(c) for c in zip(*body))))
+    cols = dict(zip(names, (list(c) for c in zip(*body, strict=False)), strict=False))
 
     def floats(name):
         return _parse_floats(cols[name], name, line_no, path, decimal_comma)
@@ -307,7 +352,9 @@ def _validate(names, body, line_no, path, decimal_comma, shift_time):
     specimen = [s.strip() for s in cols["specimen"]]
     empty = [i for i, s in enumerate(specimen) if not s]
     if empty:
-        raise DataError("expected a specimen id, got an empty field", path, int(line_no[empty[0]]), "specimen")
+        raise DataError(
+            "expected a specimen id, got an empty field", path, int(line_no[empty[0]]), "specimen"
+        )
     sensor_names = _sensor_column(cols["sensor"], line_no, path)
     if "stress_Pa" in cols:
         stress = floats("stress_Pa")
@@ -327,13 +374,32 @@ def _validate(names, body, line_no, path, decimal_comma, shift_time):
         bad = current <= 0
         if bad.any():
             i = int(np.argmax(bad))
-            raise DataError(f"the inverting amplifier's output must be negative for a positive current (eq. 23), "
-                            f"got vo_V = {vo[i]:g}", path, int(line_no[i]), "vo_V")
+            raise DataError(
+                f"the inverting amplifier's output must be negative for a positive current (eq. 23), "
+                f"got vo_V = {vo[i]:g}",
+                path,
+                int(line_no[i]),
+                "vo_V",
+            )
     _require_positive(voltage, "voltage_V", path, line_no, "voltage")
     _check_units(stress, voltage, current, line_no, path, "stress_Pa" in cols)
     test = [t.strip() for t in cols["test"]] if "test" in cols else [""] * len(body)
-    return CreepData(_group(specimen, sensor_names, voltage, stress, test, time, current, line_no, path, body,
-                            shift_time), str(path))
+    return CreepData(
+        _group(
+            specimen,
+            sensor_names,
+            voltage,
+            stress,
+            test,
+            time,
+            current,
+            line_no,
+            path,
+            body,
+            shift_time,
+        ),
+        str(path),
+    )
 
 
 def _sensor_column(values, line_no, path):
@@ -353,16 +419,29 @@ def _sensor_column(values, line_no, path):
 def _check_units(stress, voltage, current, line_no, path, stress_given):
     if stress_given and np.any(stress < STRESS_PLAUSIBLE_MIN_PA):
         i = int(np.argmax(stress < STRESS_PLAUSIBLE_MIN_PA))
-        raise DataError(f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); "
-                        "stress_Pa must be in pascals: multiply by 1000", path, int(line_no[i]), "stress_Pa")
+        raise DataError(
+            f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); "
+            "stress_Pa must be in pascals: multiply by 1000",
+            path,
+            int(line_no[i]),
+            "stress_Pa",
+        )
     if np.any(voltage > VOLTAGE_PLAUSIBLE_MAX_V):
         i = int(np.argmax(voltage > VOLTAGE_PLAUSIBLE_MAX_V))
-        raise DataError(f"voltage {voltage[i]:g} V looks like mV; voltage_V must be in volts", path,
-                        int(line_no[i]), "voltage_V")
+        raise DataError(
+            f"voltage {voltage[i]:g} V looks like mV; voltage_V must be in volts",
+            path,
+            int(line_no[i]),
+            "voltage_V",
+        )
     if np.any(current > CURRENT_PLAUSIBLE_MAX_A):
         i = int(np.argmax(current > CURRENT_PLAUSIBLE_MAX_A))
-        raise DataError(f"current {current[i]:g} A looks like mA or µA; current_A must be in amperes", path,
-                        int(line_no[i]), "current_A")
+        raise DataError(
+            f"current {current[i]:g} A looks like mA or µA; current_A must be in amperes",
+            path,
+            int(line_no[i]),
+            "current_A",
+        )
 
 
 def _codes(values):
@@ -382,8 +461,12 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
     if clash.any():
         i = int(np.argmax(clash))
         j = int(np.argmax(spec_code == spec_code[i]))
-        raise DataError(f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} here",
-                        path, int(line_no[i]), "sensor")
+        raise DataError(
+            f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} here",
+            path,
+            int(line_no[i]),
+            "sensor",
+        )
     keys = np.rec.fromarrays([spec_code, voltage, stress, test_code])
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     inverse = inverse.ravel()
@@ -395,21 +478,37 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
         idx = members[g]
         i0 = idx[0]
         spec, volt, sigma, label = specimen[i0], float(voltage[i0]), float(stress[i0]), test[i0]
-        name = f"test (specimen {spec!r}, {volt:g} V, {sigma:g} Pa" + (f", test {label!r}" if label else "") + ")"
+        name = (
+            f"test (specimen {spec!r}, {volt:g} V, {sigma:g} Pa"
+            + (f", test {label!r}" if label else "")
+            + ")"
+        )
         t, lines = time[idx], line_no[idx]
         if idx.size < 3:
-            raise DataError(f"{name} has {idx.size} sample(s); a creep test needs at least 3", path, int(lines[0]))
+            raise DataError(
+                f"{name} has {idx.size} sample(s); a creep test needs at least 3",
+                path,
+                int(lines[0]),
+            )
         steps = np.diff(t)
         if np.any(steps <= 0):
             j = int(np.argmax(steps <= 0)) + 1
             _report_duplicate(body, idx, j, lines, path)
-            raise DataError(f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line {lines[j - 1]})",
-                            path, int(lines[j]), "time_s")
+            raise DataError(
+                f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line {lines[j - 1]})",
+                path,
+                int(lines[j]),
+                "time_s",
+            )
         if t[0] != 0:
             if not shift_time:
-                raise DataError(f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its times "
-                                "to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
-                                path, int(lines[0]), "time_s")
+                raise DataError(
+                    f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its times "
+                    "to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
+                    path,
+                    int(lines[0]),
+                    "time_s",
+                )
             t = t - t[0]
         tests.append(CreepTest(spec, sensor[i0], volt, sigma, label, t, current[idx], lines))
     return tuple(tests)
@@ -447,25 +546,40 @@ def write_csv(data, path, *, readout="current", rf_ohm=None, digits=None):
         raise ValueError(f"readout must be 'current' or 'amplifier', got {readout!r}")
     fmt = _format if digits is None else (lambda v: f"{float(v):.{digits}g}")
     with_test = any(t.test for t in data.tests)
-    header = ["specimen", "sensor", "voltage_V", "stress_Pa"] + (["test"] if with_test else []) + ["time_s"]
+    header = (
+        ["specimen", "sensor", "voltage_V", "stress_Pa"]
+        + (["test"] if with_test else [])
+        + ["time_s"]
+    )
     header += ["current_A"] if readout == "current" else ["vo_V", "rf_ohm"]
     out = [",".join(header)]
     for test in data.tests:
-        prefix = f"{test.specimen},{test.sensor},{_format(test.voltage_V)},{_format(test.stress_Pa)}" + (
-            f",{test.test}" if with_test else "")
+        prefix = (
+            f"{test.specimen},{test.sensor},{_format(test.voltage_V)},{_format(test.stress_Pa)}"
+            + (f",{test.test}" if with_test else "")
+        )
         if readout == "current":
-            out += [f"{prefix},{fmt(t)},{fmt(i)}" for t, i in zip(test.time_s, test.current_A)]
+            out += [
+                f"{prefix},{fmt(t)},{fmt(i)}"
+                for t, i in zip(test.time_s, test.current_A, strict=False)
+            ]
         else:
             rf = rf_ohm[test.key] if isinstance(rf_ohm, dict) else rf_ohm
             vo = -test.current_A * rf
-            out += [f"{prefix},{fmt(t)},{fmt(v)},{_format(rf)}" for t, v in zip(test.time_s, vo)]
+            out += [
+                f"{prefix},{fmt(t)},{fmt(v)},{_format(rf)}"
+                for t, v in zip(test.time_s, vo, strict=False)
+            ]
     payload = ("\n".join(out) + "\n").encode()
     path = Path(path)
     with atomic_path(path) as tmp:
         if path.suffix == ".gz":
             import gzip
 
-            with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as handle:
+            with (
+                open(tmp, "wb") as raw,
+                gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as handle,
+            ):
                 handle.write(payload)
         else:
             tmp.write_bytes(payload)

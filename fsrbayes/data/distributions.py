@@ -111,7 +111,11 @@ class Distribution:
                 return np.where(x > 0, value, -np.inf)
             if self.kind == "halfnormal":
                 z = x / a["scale"]
-                return np.where(x >= 0, math.log(2.0) - 0.5 * z * z - math.log(a["scale"]) - HALF_LOG_2PI, -np.inf)
+                return np.where(
+                    x >= 0,
+                    math.log(2.0) - 0.5 * z * z - math.log(a["scale"]) - HALF_LOG_2PI,
+                    -np.inf,
+                )
             if self.kind == "gamma":
                 k, r = a["shape"], a["rate"]
                 value = k * math.log(r) + (k - 1.0) * np.log(x) - r * x - special.gammaln(k)
@@ -120,11 +124,19 @@ class Distribution:
             if self.kind == "uniform":
                 return np.where(inside, -math.log(a["upper"] - a["lower"]), -np.inf)
             if self.kind == "loguniform":
-                return np.where(inside, -np.log(x) - math.log(math.log(a["upper"]) - math.log(a["lower"])), -np.inf)
+                return np.where(
+                    inside,
+                    -np.log(x) - math.log(math.log(a["upper"]) - math.log(a["lower"])),
+                    -np.inf,
+                )
             # truncnormal
             z = (x - a["mu"]) / a["sigma"]
-            mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr((a["lower"] - a["mu"]) / a["sigma"])
-            return np.where(inside, -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI - math.log(mass), -np.inf)
+            mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr(
+                (a["lower"] - a["mu"]) / a["sigma"]
+            )
+            return np.where(
+                inside, -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI - math.log(mass), -np.inf
+            )
 
     def sample(self, rng, size=None):
         """Draw from the distribution with the given ``numpy.random.Generator``."""
@@ -134,7 +146,8 @@ class Distribution:
 
     def ppf(self, q):
         """Quantile function; closed forms (nested sampling's prior transform calls it per point,
-        where building a frozen scipy distribution cost ~1 ms), scipy for the gamma."""
+        where building a frozen scipy distribution cost ~1 ms), scipy for the gamma.
+        """
         q = np.asarray(q, dtype=float)
         a = self.args
         if self.kind == "fixed":
@@ -152,8 +165,12 @@ class Distribution:
                 return a["lower"] * np.exp(q * math.log(a["upper"] / a["lower"]))
             if self.kind == "truncnormal":
                 lo, hi = (a["lower"] - a["mu"]) / a["sigma"], (a["upper"] - a["mu"]) / a["sigma"]
-                if lo > 0:  # both bounds in the upper tail: invert the mirrored, accurate lower tail
-                    z = -special.ndtri(special.ndtr(-lo) - q * (special.ndtr(-lo) - special.ndtr(-hi)))
+                if (
+                    lo > 0
+                ):  # both bounds in the upper tail: invert the mirrored, accurate lower tail
+                    z = -special.ndtri(
+                        special.ndtr(-lo) - q * (special.ndtr(-lo) - special.ndtr(-hi))
+                    )
                 else:
                     z = special.ndtri(special.ndtr(lo) + q * (special.ndtr(hi) - special.ndtr(lo)))
                 return np.clip(a["mu"] + a["sigma"] * z, a["lower"], a["upper"])
@@ -184,7 +201,9 @@ def make_distribution(spec, where="prior"):
         With one line naming ``where``, what was expected and what came in.
     """
     if not isinstance(spec, dict):
-        raise ValueError(f"{where}: expected a table like {{dist = \"lognormal\", median = 1, sigma = 1}}, got {spec!r}")
+        raise ValueError(
+            f'{where}: expected a table like {{dist = "lognormal", median = 1, sigma = 1}}, got {spec!r}'
+        )
     kind = spec.get("dist")
     if kind not in VOCABULARY:
         raise ValueError(f"{where}: dist must be one of {sorted(VOCABULARY)}, got {kind!r}")
@@ -192,11 +211,17 @@ def make_distribution(spec, where="prior"):
     extra = sorted(set(spec) - set(required) - {"dist"})
     missing = [k for k in required if k not in spec]
     if missing or extra:
-        raise ValueError(f"{where}: {kind} takes keys {list(required)}, missing {missing}, unknown {extra}")
+        raise ValueError(
+            f"{where}: {kind} takes keys {list(required)}, missing {missing}, unknown {extra}"
+        )
     args = {}
     for key in required:
         value = spec[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
             raise ValueError(f"{where}: {key} must be a finite number, got {value!r}")
         args[key] = float(value)
     _check_arguments(kind, args, where)
@@ -221,5 +246,7 @@ def _check_arguments(kind, a, where):
     if kind == "gamma":
         need(a["shape"] > 0 and a["rate"] > 0, "shape > 0 and rate > 0")
     if kind == "truncnormal":
-        mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr((a["lower"] - a["mu"]) / a["sigma"])
+        mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr(
+            (a["lower"] - a["mu"]) / a["sigma"]
+        )
         need(mass > 1e-12, "an interval that holds probability mass")

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-
 __all__ = ["JointPrior"]
 
 _LOG_KINDS = ("lognormal", "halfnormal", "gamma")
@@ -53,9 +52,11 @@ class JointPrior:
     def __post_init__(self):
         if len(self.names) != len(self.dists):
             raise ValueError("names and dists differ in length")
-        fixed = [n for n, d in zip(self.names, self.dists) if d.is_fixed]
+        fixed = [n for n, d in zip(self.names, self.dists, strict=False) if d.is_fixed]
         if fixed:
-            raise ValueError(f"fixed parameters {fixed} are not sampled; leave them out of the joint prior")
+            raise ValueError(
+                f"fixed parameters {fixed} are not sampled; leave them out of the joint prior"
+            )
 
     @classmethod
     def from_priors(cls, priors, names):
@@ -75,7 +76,9 @@ class JointPrior:
         """Log prior density at x (…, ndim) → (…); −inf outside the support."""
         x = np.asarray(x, dtype=float)
         with np.errstate(invalid="ignore", divide="ignore"):
-            total = sum(np.asarray(d.logpdf(x[..., i]), dtype=float) for i, d in enumerate(self.dists))
+            total = sum(
+                np.asarray(d.logpdf(x[..., i]), dtype=float) for i, d in enumerate(self.dists)
+            )
         return np.where(np.isnan(total), -np.inf, total)
 
     def from_unconstrained(self, u):
@@ -122,7 +125,11 @@ class JointPrior:
                 u[..., i] = (np.log(xi) - centre) / scale
             else:
                 lo, hi = a["lower"], a["upper"]
-                p = (np.log(xi) - np.log(lo)) / (np.log(hi) - np.log(lo)) if d.kind == "loguniform" else (xi - lo) / (hi - lo)
+                p = (
+                    (np.log(xi) - np.log(lo)) / (np.log(hi) - np.log(lo))
+                    if d.kind == "loguniform"
+                    else (xi - lo) / (hi - lo)
+                )
                 u[..., i] = special.logit(p)
         return u
 
@@ -138,9 +145,8 @@ class JointPrior:
 
     def describe(self):
         """One line per parameter: name and prior."""
-        return "\n".join(f"{n:>14s} ~ {d!r}" for n, d in zip(self.names, self.dists))
+        return "\n".join(f"{n:>14s} ~ {d!r}" for n, d in zip(self.names, self.dists, strict=False))
 
     def fingerprint(self):
         """A string that changes whenever the names, their order or any prior changes."""
-        return ";".join(f"{n}={d!r}" for n, d in zip(self.names, self.dists))
-
+        return ";".join(f"{n}={d!r}" for n, d in zip(self.names, self.dists, strict=False))

@@ -131,24 +131,37 @@ def _parse(path, raw):
         raise ValueError(f"{where}: [sensor] is missing {missing}")
     area = sensor["area_m2"]
     if not isinstance(area, (int, float)) or not (0 < area < 1):
-        raise ValueError(f"{where}: sensor.area_m2 must be a positive area in m² below 1, got {area!r}")
+        raise ValueError(
+            f"{where}: sensor.area_m2 must be a positive area in m² below 1, got {area!r}"
+        )
     params = raw.get("params", {})
     priors_raw = raw.get("priors", {})
     for table, values in (("params", params), ("priors", priors_raw)):
         unknown = sorted(set(values) - set(PARAMETERS))
         if unknown:
-            raise ValueError(f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(PARAMETERS)}")
+            raise ValueError(
+                f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(PARAMETERS)}"
+            )
     for name, value in params.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
             raise ValueError(f"{where}: params.{name} must be a finite number, got {value!r}")
     missing_prior = sorted(set(params) - set(priors_raw))
     if missing_prior:
         raise ValueError(f"{where}: every parameter needs a prior; [priors] lacks {missing_prior}")
-    priors = {name: make_distribution(spec, f"{where}: priors.{name}") for name, spec in priors_raw.items()}
+    priors = {
+        name: make_distribution(spec, f"{where}: priors.{name}")
+        for name, spec in priors_raw.items()
+    }
     for name, dist in priors.items():
         lo, hi = dist.support
         if name in params and not (lo <= params[name] <= hi):
-            raise ValueError(f"{where}: params.{name} = {params[name]:g} lies outside its prior's support [{lo:g}, {hi:g}]")
+            raise ValueError(
+                f"{where}: params.{name} = {params[name]:g} lies outside its prior's support [{lo:g}, {hi:g}]"
+            )
     return Sensor(
         name=str(sensor["name"]),
         description=str(sensor["description"]),
@@ -202,6 +215,10 @@ def load_sensor(name):
     for sensor in _bundled().values():
         names = [sensor.name, *sensor.aliases]
         known.append(sensor.name)
-        if wanted in {_normalise(n) for n in names} or wanted.replace("-", "") in {_normalise(n).replace("-", "") for n in names}:
+        if wanted in {_normalise(n) for n in names} or wanted.replace("-", "") in {
+            _normalise(n).replace("-", "") for n in names
+        }:
             return sensor
-    raise ValueError(f"unknown sensor {name!r}: expected one of {sorted(known)} (or an alias, or a .toml path)")
+    raise ValueError(
+        f"unknown sensor {name!r}: expected one of {sorted(known)} (or an alias, or a .toml path)"
+    )

@@ -35,9 +35,20 @@ from .csvio import CreepData, CreepTest, read_csv, write_csv
 from .sensors import load_sensor
 
 __all__ = [
-    "POPULATION_SCATTER", "PAPER_FORCES_N", "PAPER_VOLTAGES", "EFFECT_DEFAULTS", "Simulation",
-    "parse_effect", "draw_specimens", "simulate", "paper_protocol", "write_simulation", "load_truth",
-    "noiseless_current", "default_data", "default_truth",
+    "POPULATION_SCATTER",
+    "PAPER_FORCES_N",
+    "PAPER_VOLTAGES",
+    "EFFECT_DEFAULTS",
+    "Simulation",
+    "parse_effect",
+    "draw_specimens",
+    "simulate",
+    "paper_protocol",
+    "write_simulation",
+    "load_truth",
+    "noiseless_current",
+    "default_data",
+    "default_truth",
 ]
 
 POPULATION_SCATTER = population_scatter()
@@ -101,11 +112,15 @@ def parse_effect(spec):
             key, _, value = item.partition("=") if "=" in item else (parameters[0], "=", item)
             key = key.strip()
             if key not in parameters:
-                raise ValueError(f"effect {name!r} has parameters {list(parameters)}, got {key!r} in {spec!r}")
+                raise ValueError(
+                    f"effect {name!r} has parameters {list(parameters)}, got {key!r} in {spec!r}"
+                )
             try:
                 values[key] = float(value)
             except ValueError:
-                raise ValueError(f"effect {name!r}: {key} must be a number, got {value!r}") from None
+                raise ValueError(
+                    f"effect {name!r}: {key} must be a number, got {value!r}"
+                ) from None
     return name, values
 
 
@@ -148,8 +163,15 @@ def _time_grid(duration, samples, spacing):
 
 def _specimen_grid(params, volts, loads, times, rheology, tunneling, effects):
     """Model currents of one specimen on the (voltage, stress, time) grid, shape (V, S, T)."""
-    return model_current(params, volts[:, None, None], loads[None, :, None], times, rheology=rheology,
-                         tunneling=tunneling, effects=tuple(effects))
+    return model_current(
+        params,
+        volts[:, None, None],
+        loads[None, :, None],
+        times,
+        rheology=rheology,
+        tunneling=tunneling,
+        effects=tuple(effects),
+    )
 
 
 def noiseless_current(truth):
@@ -166,17 +188,40 @@ def noiseless_current(truth):
     for specimen, entry in truth["specimens"].items():
         protocol = truth["protocol"]["sensors"][entry["sensor"]]
         volts, loads = np.array(protocol["voltages_V"]), np.array(protocol["stresses_Pa"])
-        grid = _specimen_grid(entry["params"], volts, loads, times, truth["rheology"], truth["tunneling"],
-                              truth["effects"])
+        grid = _specimen_grid(
+            entry["params"],
+            volts,
+            loads,
+            times,
+            truth["rheology"],
+            truth["tunneling"],
+            truth["effects"],
+        )
         for i, v in enumerate(volts):
             for j, sigma in enumerate(loads):
                 out[(specimen, float(v), float(sigma), "")] = grid[i, j]
     return out
 
 
-def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, forces=None, duration=3600.0,
-             samples=25, spacing="log", scatter=1.0, noise_rel=0.005, amp_offset_V=0.0, readout="current",
-             rheology="burgers", tunneling="smooth", effects=(), seed=0):
+def simulate(
+    sensors="a201",
+    *,
+    n_specimens=16,
+    voltages=None,
+    stresses=None,
+    forces=None,
+    duration=3600.0,
+    samples=25,
+    spacing="log",
+    scatter=1.0,
+    noise_rel=0.005,
+    amp_offset_V=0.0,
+    readout="current",
+    rheology="burgers",
+    tunneling="smooth",
+    effects=(),
+    seed=0,
+):
     """Simulate creep tests of one or more sensor types.
 
     Parameters
@@ -216,7 +261,11 @@ def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, fo
         raise ValueError(f"n_specimens must be >= 1, got {n_specimens}")
     if stresses is not None and forces is not None:
         raise ValueError("give stresses or forces, not both")
-    for label, value in (("noise_rel", noise_rel), ("amp_offset_V", amp_offset_V), ("scatter", scatter)):
+    for label, value in (
+        ("noise_rel", noise_rel),
+        ("amp_offset_V", amp_offset_V),
+        ("scatter", scatter),
+    ):
         if value < 0:
             raise ValueError(f"{label} must be >= 0, got {value}")
     rng = np.random.default_rng(seed)
@@ -225,9 +274,15 @@ def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, fo
     effect_names, effect_params = (), {}
     for name in names:
         sensor = load_sensor(name)
-        volts = np.array(voltages if voltages is not None else PAPER_VOLTAGES.get(sensor.name, (0.1, 1.0, 2.0)), float)
-        loads = (np.array(stresses, float) if stresses is not None
-                 else sensor.stress(np.array(forces if forces is not None else PAPER_FORCES_N, float)))
+        volts = np.array(
+            voltages if voltages is not None else PAPER_VOLTAGES.get(sensor.name, (0.1, 1.0, 2.0)),
+            float,
+        )
+        loads = (
+            np.array(stresses, float)
+            if stresses is not None
+            else sensor.stress(np.array(forces if forces is not None else PAPER_FORCES_N, float))
+        )
         if np.any(volts <= 0) or np.any(loads <= 0):
             raise ValueError("voltages and stresses (forces) must be > 0")
         resolved = _effect_params(sensor, effects)
@@ -250,11 +305,21 @@ def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, fo
                     if offset:
                         reading = reading - offset / rf  # eq. 23 with V_o = −I·R_f + offset
                     rf_map[key] = rf
-                    tests.append(CreepTest(specimen, sensor.name, float(v), float(sigma), "", times.copy(), reading))
+                    tests.append(
+                        CreepTest(
+                            specimen, sensor.name, float(v), float(sigma), "", times.copy(), reading
+                        )
+                    )
     truth = {
-        "fsrbayes_version": __version__, "seed": seed, "sensors": [load_sensor(n).name for n in names],
-        "rheology": rheology, "tunneling": tunneling, "effects": list(effect_names), "effect_params": effect_params,
-        "noise": {"relative": noise_rel, "amplifier_offset_V": amp_offset_V}, "readout": readout,
+        "fsrbayes_version": __version__,
+        "seed": seed,
+        "sensors": [load_sensor(n).name for n in names],
+        "rheology": rheology,
+        "tunneling": tunneling,
+        "effects": list(effect_names),
+        "effect_params": effect_params,
+        "noise": {"relative": noise_rel, "amplifier_offset_V": amp_offset_V},
+        "readout": readout,
         "population": {"scatter": scatter, "log_sd": population_scatter()},
         "protocol": {"sensors": protocol, "times_s": times.tolist()},
         "specimens": specimens,
@@ -262,7 +327,9 @@ def simulate(sensors="a201", *, n_specimens=16, voltages=None, stresses=None, fo
     return Simulation(CreepData(tuple(tests), f"simulation(seed={seed})"), truth, rf_map)
 
 
-def paper_protocol(sensors=("a201", "fsr402"), *, samples=361, spacing="linear", tunneling="smooth", **kwargs):
+def paper_protocol(
+    sensors=("a201", "fsr402"), *, samples=361, spacing="linear", tunneling="smooth", **kwargs
+):
     """The paper's section 4.2 protocol: 16 specimens, 1.96/4.9/9.8 N, its voltage lists, 1 h.
 
     With the smooth law every listed voltage is inside the model's domain. With
@@ -277,19 +344,40 @@ def paper_protocol(sensors=("a201", "fsr402"), *, samples=361, spacing="linear",
         volts = np.array(PAPER_VOLTAGES[sensor.name])
         if tunneling == "paper":
             top = sensor.stress(max(PAPER_FORCES_N))
-            ok = np.isfinite(np.ma.filled(model_current(dict(sensor.params), volts, top, 3600.0, tunneling="paper",
-                                                        on_invalid="mask"), np.nan))
+            ok = np.isfinite(
+                np.ma.filled(
+                    model_current(
+                        dict(sensor.params),
+                        volts,
+                        top,
+                        3600.0,
+                        tunneling="paper",
+                        on_invalid="mask",
+                    ),
+                    np.nan,
+                )
+            )
             volts = volts[ok]
-        sims.append(simulate(name, voltages=volts, samples=samples, spacing=spacing, tunneling=tunneling,
-                             **{"n_specimens": 16, **kwargs}))
+        sims.append(
+            simulate(
+                name,
+                voltages=volts,
+                samples=samples,
+                spacing=spacing,
+                tunneling=tunneling,
+                **{"n_specimens": 16, **kwargs},
+            )
+        )
     return _merge(sims) if len(sims) > 1 else sims[0]
 
 
 def _merge(sims):
     truth = dict(sims[0].truth)
     truth["sensors"] = [s for sim in sims for s in sim.truth["sensors"]]
-    truth["protocol"] = {"sensors": {k: v for sim in sims for k, v in sim.truth["protocol"]["sensors"].items()},
-                         "times_s": sims[0].truth["protocol"]["times_s"]}
+    truth["protocol"] = {
+        "sensors": {k: v for sim in sims for k, v in sim.truth["protocol"]["sensors"].items()},
+        "times_s": sims[0].truth["protocol"]["times_s"],
+    }
     truth["specimens"] = {k: v for sim in sims for k, v in sim.truth["specimens"].items()}
     truth["effect_params"] = {k: v for sim in sims for k, v in sim.truth["effect_params"].items()}
     rf = {k: v for sim in sims for k, v in sim.rf_ohm.items()}
@@ -310,7 +398,13 @@ def write_simulation(simulation, csv_path, truth_path=None, *, digits=None):
         stem = csv_path.name.removesuffix(".gz").removesuffix(".csv")
         truth_path = csv_path.with_name(stem + ".truth.json")
     truth_path = Path(truth_path)
-    write_csv(simulation.data, csv_path, readout=simulation.truth["readout"], rf_ohm=simulation.rf_ohm, digits=digits)
+    write_csv(
+        simulation.data,
+        csv_path,
+        readout=simulation.truth["readout"],
+        rf_ohm=simulation.rf_ohm,
+        digits=digits,
+    )
     with atomic_path(truth_path) as tmp:
         tmp.write_text(json.dumps(simulation.truth, indent=1, sort_keys=True) + "\n")
     return csv_path, truth_path
@@ -357,7 +451,9 @@ def default_truth():
 def build_default(folder):
     """Write the embedded default data set into ``folder`` (what ships in the package)."""
     sim = paper_protocol(("a201", "fsr402"), samples=25, spacing="log", seed=2017)
-    return write_simulation(sim, Path(folder) / DEFAULT_DATA, Path(folder) / DEFAULT_TRUTH, digits=6)
+    return write_simulation(
+        sim, Path(folder) / DEFAULT_DATA, Path(folder) / DEFAULT_TRUTH, digits=6
+    )
 
 
 if __name__ == "__main__":

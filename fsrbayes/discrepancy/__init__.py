@@ -1,5 +1,6 @@
 """The discrepancy workflow: find where model and data disagree, name the missing effect, add it,
-show the gap shrink (:func:`diagnose`), and the predictive checks it rests on."""
+show the gap shrink (:func:`diagnose`), and the predictive checks it rests on.
+"""
 
 from .checks import predictive_checks
 from .diagnose import DEFAULT_THRESHOLD, GAP_METRIC, Diagnosis, diagnose

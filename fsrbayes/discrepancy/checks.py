@@ -42,8 +42,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-__all__ = ["DRIFT_TIME_S", "TEST_STATISTICS", "SPECIMEN_STATISTICS", "SpecimenChecks", "predictive_checks",
-           "gap", "drift_gap", "two_sided_p"]
+__all__ = [
+    "DRIFT_TIME_S",
+    "TEST_STATISTICS",
+    "SPECIMEN_STATISTICS",
+    "SpecimenChecks",
+    "predictive_checks",
+    "gap",
+    "drift_gap",
+    "two_sided_p",
+]
 
 DRIFT_TIME_S = 3600.0
 """The time of the headline drift (the paper's one-hour creep tests)."""
@@ -95,7 +103,8 @@ def _interpolation(time_s, mask, at_s):
 
 def _quarter_weights(mask, parts=N_QUARTERS):
     """Weights (C, T, parts) that average each test's valid samples over ``parts`` consecutive blocks
-    (NaN for a test with fewer than 2 samples per block)."""
+    (NaN for a test with fewer than 2 samples per block).
+    """
     weights = np.zeros((*mask.shape, parts))
     for i in range(mask.shape[0]):
         index = np.flatnonzero(mask[i])
@@ -166,8 +175,12 @@ def loo_pit(y, log_mu, sigma, mask, nu=None):
         log_w, k = np.full((int(mask.sum()), len(sigma)), -np.log(len(sigma))), np.full(1, np.nan)
     pit = np.full(y.shape, np.nan)
     pit[mask] = np.clip(np.sum(np.exp(log_w) * cdf[:, mask].T, axis=1), 0.0, 1.0)
-    p_values = np.array([stats.kstest(pit[i][mask[i]], "uniform").pvalue if mask[i].sum() >= 5 else np.nan
-                         for i in range(y.shape[0])])
+    p_values = np.array(
+        [
+            stats.kstest(pit[i][mask[i]], "uniform").pvalue if mask[i].sum() >= 5 else np.nan
+            for i in range(y.shape[0])
+        ]
+    )
     return pit, p_values, float(np.max(k))
 
 
@@ -235,14 +248,17 @@ class SpecimenChecks:
     @property
     def z(self):
         """Standardised misfit of drift(3600 s) per test, (D_obs − mean D_rep)/sd D_rep."""
-        return (self.observed_drift - self.replicated_drift.mean(axis=0)) / self.replicated_drift.std(axis=0, ddof=1)
+        return (
+            self.observed_drift - self.replicated_drift.mean(axis=0)
+        ) / self.replicated_drift.std(axis=0, ddof=1)
 
     @property
     def quarter_distance(self):
         """Per test, the squared Mahalanobis distance of the observed quarter means from their
         replicates, over the number of quarters: (T_obs − m)ᵀ Σ⁻¹ (T_obs − m) / 4, with m and Σ
         the mean and covariance of the replicated quarter means; ~χ²₄/4 (mean 1) under an
-        adequate model with a known truth. Shape (C,); NaN for tests too short to cut."""
+        adequate model with a known truth. Shape (C,); NaN for tests too short to cut.
+        """
         observed, replicated = self.observed["quarter_means"][0], self.replicated["quarter_means"]
         out = np.full(observed.shape[0], np.nan)
         ok = np.all(np.isfinite(observed), axis=1)
@@ -286,8 +302,10 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     log_mu = posterior.log_model_current(draws)
     keep = np.all(np.isfinite(log_mu[:, data.mask]), axis=1)
     if keep.sum() < 20:
-        raise ValueError(f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside the "
-                         f"model's domain; need at least 20 for predictive checks")
+        raise ValueError(
+            f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside the "
+            f"model's domain; need at least 20 for predictive checks"
+        )
     draws, log_mu = draws[keep], log_mu[keep]
     params = posterior.parameters(draws)
     sigma = params["sigma_rel"][:, None, None]
@@ -313,8 +331,12 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     with np.errstate(invalid="ignore"):
         r_obs, r_rep = (y_obs - log_mu) / sigma, (y_rep - log_mu) / sigma
         for name, weights in (("early_late", early_late_w), ("logtime_trend", slope_w)):
-            observed[name] = np.einsum("sct,ct->sc", np.where(data.mask, r_obs, 0.0), np.nan_to_num(weights))
-            replicated[name] = np.einsum("sct,ct->sc", np.where(data.mask, r_rep, 0.0), np.nan_to_num(weights))
+            observed[name] = np.einsum(
+                "sct,ct->sc", np.where(data.mask, r_obs, 0.0), np.nan_to_num(weights)
+            )
+            replicated[name] = np.einsum(
+                "sct,ct->sc", np.where(data.mask, r_rep, 0.0), np.nan_to_num(weights)
+            )
             undefined = np.isnan(weights[:, 0])
             observed[name][:, undefined] = np.nan
             replicated[name][:, undefined] = np.nan
@@ -324,16 +346,42 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         means = np.einsum("sct,ctq->scq", np.where(data.mask, values, 0.0), np.nan_to_num(quarters))
         means[:, undefined] = np.nan
         (observed if name == "observed" else replicated)["quarter_means"] = means
-    for name, covariate in (("stress_trend", np.log(data.stress_Pa)), ("voltage_trend", np.log(data.voltage_V))):
+    for name, covariate in (
+        ("stress_trend", np.log(data.stress_Pa)),
+        ("voltage_trend", np.log(data.voltage_V)),
+    ):
         observed[name] = _slope_over(d_obs - d_model, covariate)
         replicated[name] = _slope_over(d_rep - d_model, covariate)
     p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
-    pit, p_values["loo_pit"], max_k = loo_pit(data.log_current, log_mu, params["sigma_rel"], data.mask,
-                                              params["nu"] if posterior.likelihood == "student" else None)
+    pit, p_values["loo_pit"], max_k = loo_pit(
+        data.log_current,
+        log_mu,
+        params["sigma_rel"],
+        data.mask,
+        params["nu"] if posterior.likelihood == "student" else None,
+    )
     residual = np.where(data.mask, r_obs.mean(axis=0), np.nan)
-    return SpecimenChecks(data.specimen, data.sensor, posterior.model, data.test_keys, data.voltage_V.copy(),
-                          data.stress_Pa.copy(), at, d_obs[0].copy(), d_rep, d_model, p_values, observed, replicated,
-                          data.time_s.copy(), residual, draws, tuple(posterior.names), pit, max_k)
+    return SpecimenChecks(
+        data.specimen,
+        data.sensor,
+        posterior.model,
+        data.test_keys,
+        data.voltage_V.copy(),
+        data.stress_Pa.copy(),
+        at,
+        d_obs[0].copy(),
+        d_rep,
+        d_model,
+        p_values,
+        observed,
+        replicated,
+        data.time_s.copy(),
+        residual,
+        draws,
+        tuple(posterior.names),
+        pit,
+        max_k,
+    )
 
 
 def gap(checks):

@@ -30,10 +30,9 @@ import numpy as np
 
 from ..data.sensors import load_sensor
 from ..inference.evidence.laplace import laplace_fit
-from ..inference.parallel import map_jobs
-from ..inference.posterior import LogPosterior
 from ..inference.likelihood import SpecimenData
-from ..inference.parallel import single_threaded_blas
+from ..inference.parallel import map_jobs, single_threaded_blas
+from ..inference.posterior import LogPosterior
 from ..physics.effects import EFFECTS, check_effects
 from ..physics.models import model_components, parse_model, register_components
 from .checks import (
@@ -49,10 +48,12 @@ __all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
 
 DEFAULT_THRESHOLD = 10.0
 """ln B of an effect over the base model (summed over specimens) needed to name it."""
-GAP_METRIC = ("rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's samples "
-              "(level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 = (observed - "
-              "predictive mean)' inverse(predictive covariance) (observed - predictive mean); ~1 or below for an "
-              "adequate model (about 0.75 on fitted virtual-bench data)")
+GAP_METRIC = (
+    "rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's samples "
+    "(level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 = (observed - "
+    "predictive mean)' inverse(predictive covariance) (observed - predictive mean); ~1 or below for an "
+    "adequate model (about 0.75 on fitted virtual-bench data)"
+)
 
 
 @dataclass
@@ -82,17 +83,29 @@ def _diagnose_one(job):
     with single_threaded_blas():
         base_post = LogPosterior.for_sensor(packed, sensor, model=options["base"], **kwargs)
         base = laplace_fit(base_post, rng, n_starts=options["n_starts"])
-        out = SpecimenDiagnosis(specimen, base, predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng))
+        out = SpecimenDiagnosis(
+            specimen,
+            base,
+            predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
+        )
         for effect in options["effects"]:
-            post = LogPosterior.for_sensor(packed, sensor, model=f"{options['base']}+{effect}", **kwargs)
-            fitted = laplace_fit(post, rng, n_starts=options["n_starts"], base=base, null=EFFECTS[effect].null)
-            out.candidates[effect] = (fitted, predictive_checks(post, fitted.local_draws(rng, options["n_draws"]), rng))
+            post = LogPosterior.for_sensor(
+                packed, sensor, model=f"{options['base']}+{effect}", **kwargs
+            )
+            fitted = laplace_fit(
+                post, rng, n_starts=options["n_starts"], base=base, null=EFFECTS[effect].null
+            )
+            out.candidates[effect] = (
+                fitted,
+                predictive_checks(post, fitted.local_draws(rng, options["n_draws"]), rng),
+            )
     return out
 
 
 def _effect_parameters(per_specimen, effect):
     """Per effect parameter: median of the per-specimen posterior medians, and the 5–95 % range of
-    the pooled posterior draws."""
+    the pooled posterior draws.
+    """
     out = {}
     draws = {}
     for diag in per_specimen:
@@ -103,8 +116,12 @@ def _effect_parameters(per_specimen, effect):
     for name, columns in draws.items():
         medians = [float(np.median(c)) for c in columns]
         pooled = np.concatenate(columns)
-        out[name] = {"median": float(np.median(medians)), "q05": float(np.quantile(pooled, 0.05)),
-                     "q95": float(np.quantile(pooled, 0.95)), "per_specimen_median": medians}
+        out[name] = {
+            "median": float(np.median(medians)),
+            "q05": float(np.quantile(pooled, 0.05)),
+            "q95": float(np.quantile(pooled, 0.95)),
+            "per_specimen_median": medians,
+        }
     return out
 
 
@@ -118,8 +135,13 @@ def _findings(checks, alpha=0.01):
         for name in (*TEST_STATISTICS, "loo_pit"):
             for where in np.argwhere(c.p_values[name] < level):
                 i = where[0]
-                entry = {"statistic": name, "specimen": c.specimen, "voltage_V": float(c.voltage_V[i]),
-                         "stress_Pa": float(c.stress_Pa[i]), "p_value": float(c.p_values[name][tuple(where)])}
+                entry = {
+                    "statistic": name,
+                    "specimen": c.specimen,
+                    "voltage_V": float(c.voltage_V[i]),
+                    "stress_Pa": float(c.stress_Pa[i]),
+                    "p_value": float(c.p_values[name][tuple(where)]),
+                }
                 if name == "quarter_means":
                     entry["quarter"] = int(where[1]) + 1
                 if name in c.observed:
@@ -131,23 +153,42 @@ def _findings(checks, alpha=0.01):
         for name in SPECIMEN_STATISTICS:
             p = float(c.p_values[name])
             if p < level:
-                found.append({"statistic": name, "specimen": c.specimen, "p_value": p,
-                              "observed": float(np.nanmean(c.observed[name])),
-                              "predicted": float(np.nanmean(c.replicated[name]))})
-    return {"alpha": alpha, "n_checks": int(n_checks), "bonferroni_level": level, "failed": found,
-            "loo_pit_max_pareto_k": float(max(c.max_pareto_k for c in checks))}
+                found.append(
+                    {
+                        "statistic": name,
+                        "specimen": c.specimen,
+                        "p_value": p,
+                        "observed": float(np.nanmean(c.observed[name])),
+                        "predicted": float(np.nanmean(c.replicated[name])),
+                    }
+                )
+    return {
+        "alpha": alpha,
+        "n_checks": int(n_checks),
+        "bonferroni_level": level,
+        "failed": found,
+        "loo_pit_max_pareto_k": float(max(c.max_pareto_k for c in checks)),
+    }
 
 
 def misfit_by(checks, attribute):
     """Mean observed − predicted drift(3600 s) and mean z per level of voltage or stress."""
     values = np.concatenate([getattr(c, attribute) for c in checks])
-    misfit = np.concatenate([c.observed_drift - np.median(c.replicated_drift, axis=0) for c in checks])
+    misfit = np.concatenate(
+        [c.observed_drift - np.median(c.replicated_drift, axis=0) for c in checks]
+    )
     z = np.concatenate([c.z for c in checks])
     out = []
     for level in np.unique(np.round(values, 9)):
         sel = np.isclose(values, level, rtol=1e-9)
-        out.append({attribute: float(level), "tests": int(sel.sum()), "mean_misfit_pct": float(np.mean(misfit[sel])),
-                    "mean_z": float(np.nanmean(z[sel]))})
+        out.append(
+            {
+                attribute: float(level),
+                "tests": int(sel.sum()),
+                "mean_misfit_pct": float(np.mean(misfit[sel])),
+                "mean_z": float(np.nanmean(z[sel])),
+            }
+        )
     return out
 
 
@@ -193,19 +234,31 @@ class Diagnosis:
 
     def as_dict(self):
         """JSON-ready: the keys of DESIGN.md §4 (verdict, effect, gap_before, gap_after,
-        gap_metric, candidates) and the findings, per-level misfits and settings."""
+        gap_metric, candidates) and the findings, per-level misfits and settings.
+        """
         before = self.checks()
         out = {
-            "verdict": self.verdict, "effect": self.effect, "gap_before": self.gap_before, "gap_after": self.gap_after,
-            "gap_metric": GAP_METRIC, "drift_gap_before": drift_gap(before),
-            "drift_gap_after": drift_gap(self.checks(self.effect)) if self.effect else drift_gap(before),
-            "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests", "base": self.base, "threshold_log_bf": self.threshold,
+            "verdict": self.verdict,
+            "effect": self.effect,
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+            "gap_metric": GAP_METRIC,
+            "drift_gap_before": drift_gap(before),
+            "drift_gap_after": drift_gap(self.checks(self.effect))
+            if self.effect
+            else drift_gap(before),
+            "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
+            "base": self.base,
+            "threshold_log_bf": self.threshold,
             "evidence_method": "laplace (MAP + finite-difference Hessian in the sampler's u-space), per specimen, summed",
-            "drift_time_s": DRIFT_TIME_S, "specimens": [d.specimen for d in self.specimens],
+            "drift_time_s": DRIFT_TIME_S,
+            "specimens": [d.specimen for d in self.specimens],
             "n_tests": int(sum(len(c.test_keys) for c in before)),
-            "candidates": self.candidates, "findings_before": self.findings,
+            "candidates": self.candidates,
+            "findings_before": self.findings,
             "misfit_by_voltage_before": misfit_by(before, "voltage_V"),
-            "misfit_by_stress_before": misfit_by(before, "stress_Pa"), "seconds": self.seconds,
+            "misfit_by_stress_before": misfit_by(before, "stress_Pa"),
+            "seconds": self.seconds,
         }
         if self.effect is not None:
             after = self.checks(self.effect)
@@ -215,9 +268,23 @@ class Diagnosis:
         return out
 
 
-def diagnose(data, base="burgers", *, effects=None, specimens=None, sensor=None, tunneling="smooth",
-             likelihood="gaussian", threshold=DEFAULT_THRESHOLD, n_draws=400, n_starts=2, seed=0, processes=None,
-             executor=None, scheduler=None):
+def diagnose(
+    data,
+    base="burgers",
+    *,
+    effects=None,
+    specimens=None,
+    sensor=None,
+    tunneling="smooth",
+    likelihood="gaussian",
+    threshold=DEFAULT_THRESHOLD,
+    n_draws=400,
+    n_starts=2,
+    seed=0,
+    processes=None,
+    executor=None,
+    scheduler=None,
+):
     """Diagnose what the base creep model misses in a data set, and what fixes it.
 
     Parameters
@@ -252,33 +319,57 @@ def diagnose(data, base="burgers", *, effects=None, specimens=None, sensor=None,
     started = time.perf_counter()
     family, had = parse_model(base)
     if family == "kalantari":
-        raise ValueError("diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) takes "
-                         "none: use burgers, zener or nutting")
-    effects = check_effects(effects if effects is not None else [e for e in EFFECTS if e not in had])
+        raise ValueError(
+            "diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) takes "
+            "none: use burgers, zener or nutting"
+        )
+    effects = check_effects(
+        effects if effects is not None else [e for e in EFFECTS if e not in had]
+    )
     effects = tuple(e for e in effects if e not in had)
     if not effects:
         raise ValueError(f"no candidate effect left to try on base model {base!r}")
     if threshold <= 0:
         raise ValueError(f"threshold must be > 0 (a ln Bayes factor), got {threshold}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
-    options = {"base": base, "effects": effects, "sensor": sensor, "tunneling": tunneling, "likelihood": likelihood,
-               "n_draws": int(n_draws), "n_starts": int(n_starts),
-               "components": {name: model_components(name if name == base else f"{base}+{name}")
-                              for name in (base, *effects)}}
-    jobs = [(data.select(specimen=s), s, dict(options, seed=[seed, k])) for k, s in enumerate(specimens)]
-    per_specimen = map_jobs(_diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes)
+    options = {
+        "base": base,
+        "effects": effects,
+        "sensor": sensor,
+        "tunneling": tunneling,
+        "likelihood": likelihood,
+        "n_draws": int(n_draws),
+        "n_starts": int(n_starts),
+        "components": {
+            name: model_components(name if name == base else f"{base}+{name}")
+            for name in (base, *effects)
+        },
+    }
+    jobs = [
+        (data.select(specimen=s), s, dict(options, seed=[seed, k])) for k, s in enumerate(specimens)
+    ]
+    per_specimen = map_jobs(
+        _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
+    )
     gap_before = gap([d.base_checks for d in per_specimen])
     candidates = []
     for effect in effects:
         per = {d.specimen: float(d.log_bf(effect)) for d in per_specimen}
         gap_effect = gap([d.candidates[effect][1] for d in per_specimen])
-        candidates.append({
-            "effect": effect, "model": f"{base}+{effect}", "summary": EFFECTS[effect].summary,
-            "log_bf": float(sum(per.values())), "log_bf_per_specimen": per,
-            "specimens_favouring": int(sum(v > 0 for v in per.values())),
-            "gap_after": gap_effect, "drift_gap_after": drift_gap([d.candidates[effect][1] for d in per_specimen]),
-            "gap_closed": float(1.0 - gap_effect / gap_before) if gap_before > 0 else 0.0,
-            "parameters": _effect_parameters(per_specimen, effect)})
+        candidates.append(
+            {
+                "effect": effect,
+                "model": f"{base}+{effect}",
+                "summary": EFFECTS[effect].summary,
+                "log_bf": float(sum(per.values())),
+                "log_bf_per_specimen": per,
+                "specimens_favouring": int(sum(v > 0 for v in per.values())),
+                "gap_after": gap_effect,
+                "drift_gap_after": drift_gap([d.candidates[effect][1] for d in per_specimen]),
+                "gap_closed": float(1.0 - gap_effect / gap_before) if gap_before > 0 else 0.0,
+                "parameters": _effect_parameters(per_specimen, effect),
+            }
+        )
     candidates.sort(key=lambda c: -c["log_bf"])
     for rank, c in enumerate(candidates, start=1):
         c["rank"] = rank
@@ -287,7 +378,19 @@ def diagnose(data, base="burgers", *, effects=None, specimens=None, sensor=None,
     if len(candidates) > 1:
         best["margin_over_next"] = best["log_bf"] - candidates[1]["log_bf"]
     findings = _findings([d.base_checks for d in per_specimen])
-    findings_after = _findings([d.candidates[best["effect"]][1] for d in per_specimen]) if named else None
-    return Diagnosis("missing-effect" if named else "adequate", best["effect"] if named else None, gap_before,
-                     best["gap_after"] if named else gap_before, candidates, base, per_specimen, float(threshold),
-                     findings, findings_after, time.perf_counter() - started)
+    findings_after = (
+        _findings([d.candidates[best["effect"]][1] for d in per_specimen]) if named else None
+    )
+    return Diagnosis(
+        "missing-effect" if named else "adequate",
+        best["effect"] if named else None,
+        gap_before,
+        best["gap_after"] if named else gap_before,
+        candidates,
+        base,
+        per_specimen,
+        float(threshold),
+        findings,
+        findings_after,
+        time.perf_counter() - started,
+    )

@@ -39,31 +39,45 @@ from scipy import stats
 
 from ..data import synthetic
 from ..data.sensors import load_sensor
-from .fit import fit
-from .likelihood import SpecimenData
-from .parallel import map_jobs
-from .posterior import LogPosterior
 from .evidence.ladder import LadderSettings
 from .evidence.referenced import PILOT_SETTINGS, ModeSearch
-from .samplers.ensemble import ConvergenceWarning, SamplerSettings
-from .parallel import single_threaded_blas
 from .evidence.tempered import TemperedSettings
+from .fit import fit
+from .likelihood import SpecimenData
+from .parallel import map_jobs, single_threaded_blas
+from .posterior import LogPosterior
+from .samplers.ensemble import ConvergenceWarning, SamplerSettings
 
-__all__ = ["SBCDesign", "SBCResult", "SBC_SETTINGS", "SBC_TEMPERED_SETTINGS", "sbc_ranks", "calibrate_specimen", "format_sbc", "load_sbc"]
+__all__ = [
+    "SBCDesign",
+    "SBCResult",
+    "SBC_SETTINGS",
+    "SBC_TEMPERED_SETTINGS",
+    "sbc_ranks",
+    "calibrate_specimen",
+    "format_sbc",
+    "load_sbc",
+]
 
 DRIFT_TIME_S = 3600.0
 LEVELS = (0.5, 0.8, 0.9)
 
-SBC_SETTINGS = SamplerSettings(n_ensembles=2, chunk=250, min_steps=1500, max_steps=1500, transport_rounds=3,
-                               processes=1)
+SBC_SETTINGS = SamplerSettings(
+    n_ensembles=2, chunk=250, min_steps=1500, max_steps=1500, transport_rounds=3, processes=1
+)
 """Fixed-length runs (every replication costs the same): two ensembles of max(32, 4·ndim)
 walkers, 750 warm-up steps with transport-map refits, 750 kept steps — on the default
 :class:`SBCDesign` the fits' largest τ is ~10–55 steps (VALIDATION.md §1). Replications run
 side by side, so each fit uses one process."""
 
 SBC_TEMPERED_SETTINGS = TemperedSettings(
-    ladder=LadderSettings(n_temps=6, exponent=1.0, burn=100, steps=300, replicates=2, top_draws=300),
-    pilot=replace(PILOT_SETTINGS, min_steps=750, max_steps=750), search=ModeSearch(n_starts=8), pilot_groups=1)
+    ladder=LadderSettings(
+        n_temps=6, exponent=1.0, burn=100, steps=300, replicates=2, top_draws=300
+    ),
+    pilot=replace(PILOT_SETTINGS, min_steps=750, max_steps=750),
+    search=ModeSearch(n_starts=8),
+    pilot_groups=1,
+)
 """The tempered sampler cut to ~30 s per replication of the reduced design on one core: one mode
 search (8 optimiser starts), 750-step pilots, two ladders of 6 rungs × 300 steps. Too short to
 converge (the top rung's ensemble mean has τ ≈ 200 steps on these posteriors): with it the SBC
@@ -104,9 +118,17 @@ class SBCDesign:
 
     def template(self):
         """A LogPosterior on this design (its measured currents are placeholders)."""
-        sim = synthetic.simulate(self.sensor, n_specimens=1, voltages=list(self.voltages), forces=list(self.forces),
-                                 samples=self.samples, spacing=self.spacing, duration=self.duration, scatter=0.0,
-                                 seed=0)
+        sim = synthetic.simulate(
+            self.sensor,
+            n_specimens=1,
+            voltages=list(self.voltages),
+            forces=list(self.forces),
+            samples=self.samples,
+            spacing=self.spacing,
+            duration=self.duration,
+            scatter=0.0,
+            seed=0,
+        )
         data = SpecimenData.from_tests(sim.data.tests)
         return LogPosterior.for_sensor(data, load_sensor(self.sensor), model=self.model)
 
@@ -184,47 +206,79 @@ class SBCResult:
 
     def coverage(self, levels=LEVELS, mass=0.99):
         """Per level: share of replications whose central interval holds the truth, per quantity,
-        the expected share p_ℓ and the ``mass`` binomial range of the share under calibration."""
+        the expected share p_ℓ and the ``mass`` binomial range of the share under calibration.
+        """
         q = (self.ranks + 0.5) / (self.n_draws + 1)
         out = {}
         for level in levels:
             inside = (q >= (1 - level) / 2) & (q <= (1 + level) / 2)
             expected = _inside_share(self.n_draws, level)
             law = stats.binom(self.n_reps, expected)
-            out[level] = {"share": inside.mean(axis=0), "expected": expected,
-                          "range": (law.ppf((1 - mass) / 2) / self.n_reps, law.ppf((1 + mass) / 2) / self.n_reps)}
+            out[level] = {
+                "share": inside.mean(axis=0),
+                "expected": expected,
+                "range": (
+                    law.ppf((1 - mass) / 2) / self.n_reps,
+                    law.ppf((1 + mass) / 2) / self.n_reps,
+                ),
+            }
         return out
 
     def verdict(self, alpha=0.01, bins=10):
         """(calibrated, failures): no uniformity p-value below alpha/(2·Q) (Bonferroni), and every
-        coverage share inside its binomial range at 1 − alpha/(3·Q)."""
+        coverage share inside its binomial range at 1 − alpha/(3·Q).
+        """
         n_q = len(self.names)
         p = self.uniformity(bins)
-        failures = [f"{self.names[q]}: {test} p = {p[test][q]:.2g} < {alpha / (2 * n_q):.2g}"
-                    for test in ("chi2", "ks") for q in range(n_q) if p[test][q] < alpha / (2 * n_q)]
+        failures = [
+            f"{self.names[q]}: {test} p = {p[test][q]:.2g} < {alpha / (2 * n_q):.2g}"
+            for test in ("chi2", "ks")
+            for q in range(n_q)
+            if p[test][q] < alpha / (2 * n_q)
+        ]
         for level, entry in self.coverage(mass=1 - alpha / (len(LEVELS) * n_q)).items():
             low, high = entry["range"]
-            failures += [f"{self.names[q]}: {level:.0%} coverage {entry['share'][q]:.2f} outside [{low:.2f}, {high:.2f}]"
-                         for q in range(n_q) if not low <= entry["share"][q] <= high]
+            failures += [
+                f"{self.names[q]}: {level:.0%} coverage {entry['share'][q]:.2f} outside [{low:.2f}, {high:.2f}]"
+                for q in range(n_q)
+                if not low <= entry["share"][q] <= high
+            ]
         return not failures, failures
 
     def as_dict(self, bins=10, alpha=0.01):
         """JSON-ready: ranks, p-values, histogram, band, coverage, verdict, info."""
         p = self.uniformity(bins)
         calibrated, failures = self.verdict(alpha, bins)
-        coverage = {f"{level:g}": {"share": dict(zip(self.names, map(float, e["share"]))), "expected": e["expected"],
-                                   "range_99": [float(v) for v in e["range"]]}
-                    for level, e in self.coverage().items()}
-        return {"names": list(self.names), "n_reps": self.n_reps, "n_draws": self.n_draws, "bins": bins,
-                "ranks": self.ranks.tolist(), "p_chi2": dict(zip(self.names, map(float, p["chi2"]))),
-                "p_ks": dict(zip(self.names, map(float, p["ks"]))), "histogram": self.histogram(bins).T.tolist(),
-                "band_99": list(self.band(bins)), "coverage": coverage, "alpha": alpha,
-                "calibrated": calibrated, "failures": failures, "info": self.info}
+        coverage = {
+            f"{level:g}": {
+                "share": dict(zip(self.names, map(float, e["share"]), strict=False)),
+                "expected": e["expected"],
+                "range_99": [float(v) for v in e["range"]],
+            }
+            for level, e in self.coverage().items()
+        }
+        return {
+            "names": list(self.names),
+            "n_reps": self.n_reps,
+            "n_draws": self.n_draws,
+            "bins": bins,
+            "ranks": self.ranks.tolist(),
+            "p_chi2": dict(zip(self.names, map(float, p["chi2"]), strict=False)),
+            "p_ks": dict(zip(self.names, map(float, p["ks"]), strict=False)),
+            "histogram": self.histogram(bins).T.tolist(),
+            "band_99": list(self.band(bins)),
+            "coverage": coverage,
+            "alpha": alpha,
+            "calibrated": calibrated,
+            "failures": failures,
+            "info": self.info,
+        }
 
 
 def _replicate(job):
     """One SBC replication (module level: picklable for worker processes), BLAS on one thread:
-    replications run side by side (two on two cores took 40 s each with threaded BLAS, 10 s without)."""
+    replications run side by side (two on two cores took 40 s each with threaded BLAS, 10 s without).
+    """
     with single_threaded_blas():
         return _replicate_here(*job)
 
@@ -241,30 +295,60 @@ def _replicate_here(design, settings, n_draws, seed_seq):
             break
         redrawn += 1
         if redrawn > 1000:
-            raise RuntimeError(f"1000 prior draws in a row gave no valid current for design {design}")
+            raise RuntimeError(
+                f"1000 prior draws in a row gave no valid current for design {design}"
+            )
     sigma = truth[0, template.names.index("sigma_rel")]
     observed = log_current + sigma * rng.standard_normal(log_current.shape)
-    data = SpecimenData(template.data.specimen, template.data.sensor, template.data.voltage_V,
-                        template.data.stress_Pa, template.data.time_s, observed, template.data.mask,
-                        template.data.test_keys)
+    data = SpecimenData(
+        template.data.specimen,
+        template.data.sensor,
+        template.data.voltage_V,
+        template.data.stress_Pa,
+        template.data.time_s,
+        observed,
+        template.data.mask,
+        template.data.test_keys,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fit(data, model=design.model, sensor=design.sensor, rng=int(rng.integers(2**31)), settings=settings)
+        result = fit(
+            data,
+            model=design.model,
+            sensor=design.sensor,
+            rng=int(rng.integers(2**31)),
+            settings=settings,
+        )
     draws = result.draws(10**9).reshape(-1, template.ndim)
     draws = draws[np.linspace(0, len(draws) - 1, n_draws).round().astype(int)]
     posterior = result.posterior
     quantities = np.hstack([draws, posterior.drift_percent(draws, DRIFT_TIME_S)])
     true_values = np.concatenate([truth[0], posterior.drift_percent(truth, DRIFT_TIME_S)[0]])
     report = result.run.report
-    return {"ranks": sbc_ranks(true_values, quantities), "truth": true_values.tolist(), "redrawn": redrawn,
-            "converged": report.converged, "rhat_max": float(np.nanmax(report.rhat)),
-            "ess_min": float(np.min(report.ess_bulk)), "tau_max": float(np.max(report.tau)),
-            "n_kept": int(report.n_kept), "seconds": time.perf_counter() - start,
-            "log_z": None if result.evidence is None else float(result.evidence.log_z)}
+    return {
+        "ranks": sbc_ranks(true_values, quantities),
+        "truth": true_values.tolist(),
+        "redrawn": redrawn,
+        "converged": report.converged,
+        "rhat_max": float(np.nanmax(report.rhat)),
+        "ess_min": float(np.min(report.ess_bulk)),
+        "tau_max": float(np.max(report.tau)),
+        "n_kept": int(report.n_kept),
+        "seconds": time.perf_counter() - start,
+        "log_z": None if result.evidence is None else float(result.evidence.log_z),
+    }
 
 
-def calibrate_specimen(n_reps=100, *, design=SBCDesign(), settings=SBC_SETTINGS, n_draws=99, seed=0, processes=None,
-                       on_result=None):
+def calibrate_specimen(
+    n_reps=100,
+    *,
+    design=SBCDesign(),
+    settings=SBC_SETTINGS,
+    n_draws=99,
+    seed=0,
+    processes=None,
+    on_result=None,
+):
     """Simulation-based calibration of the per-specimen fit (module docstring).
 
     Parameters
@@ -292,15 +376,27 @@ def calibrate_specimen(n_reps=100, *, design=SBCDesign(), settings=SBC_SETTINGS,
     if n_reps < 1 or n_draws < 1:
         raise ValueError(f"n_reps and n_draws must be >= 1, got {n_reps} and {n_draws}")
     template = design.template()
-    names = list(template.names) + [f"drift_3600[{v:g} V, {s / 1e3:.0f} kPa]"
-                                    for v, s in zip(template.data.voltage_V, template.data.stress_Pa)]
+    names = list(template.names) + [
+        f"drift_3600[{v:g} V, {s / 1e3:.0f} kPa]"
+        for v, s in zip(template.data.voltage_V, template.data.stress_Pa, strict=False)
+    ]
     jobs = [(design, settings, n_draws, s) for s in np.random.SeedSequence(seed).spawn(n_reps)]
     start = time.perf_counter()
-    reps = map_jobs(_replicate, jobs, processes=processes, on_result=on_result,
-                    labels=[f"replication {k}" for k in range(n_reps)])
-    info = {"design": asdict(design), "settings": asdict(settings), "seed": seed,
-            "seconds": time.perf_counter() - start, "processes": processes,
-            "replications": [{k: v for k, v in r.items() if k != "ranks"} for r in reps]}
+    reps = map_jobs(
+        _replicate,
+        jobs,
+        processes=processes,
+        on_result=on_result,
+        labels=[f"replication {k}" for k in range(n_reps)],
+    )
+    info = {
+        "design": asdict(design),
+        "settings": asdict(settings),
+        "seed": seed,
+        "seconds": time.perf_counter() - start,
+        "processes": processes,
+        "replications": [{k: v for k, v in r.items() if k != "ranks"} for r in reps],
+    }
     return SBCResult(names, np.array([r["ranks"] for r in reps]), n_draws, info)
 
 
@@ -308,7 +404,9 @@ def format_sbc(result, bins=10, alpha=0.01):
     """A table: uniformity p-values and coverage at 50/80/90 % per quantity, and the verdict."""
     p = result.uniformity(bins)
     coverage = result.coverage()
-    header = f"{'quantity':30s} {'p chi2':>8s} {'p KS':>8s} " + " ".join(f"{f'cov {lv:.0%}':>8s}" for lv in LEVELS)
+    header = f"{'quantity':30s} {'p chi2':>8s} {'p KS':>8s} " + " ".join(
+        f"{f'cov {lv:.0%}':>8s}" for lv in LEVELS
+    )
     lines = [header]
     for q, name in enumerate(result.names):
         cov = " ".join(f"{coverage[lv]['share'][q]:8.2f}" for lv in LEVELS)
@@ -318,12 +416,17 @@ def format_sbc(result, bins=10, alpha=0.01):
     calibrated, failures = result.verdict(alpha, bins)
     reps = result.info.get("replications", [])
     if reps:
-        lines.append(f"{result.n_reps} replications, L = {result.n_draws} draws each; fits: "
-                     f"{np.mean([r['seconds'] for r in reps]):.0f} s each, min ESS "
-                     f"{min(r['ess_min'] for r in reps):.0f}, max R-hat {max(r['rhat_max'] for r in reps):.3f}; "
-                     f"{sum(r['redrawn'] for r in reps)} prior draws redrawn (no valid current)")
-    lines.append("calibrated: no uniformity test below alpha/(2Q) and coverage within binomial error"
-                 if calibrated else "NOT calibrated: " + "; ".join(failures))
+        lines.append(
+            f"{result.n_reps} replications, L = {result.n_draws} draws each; fits: "
+            f"{np.mean([r['seconds'] for r in reps]):.0f} s each, min ESS "
+            f"{min(r['ess_min'] for r in reps):.0f}, max R-hat {max(r['rhat_max'] for r in reps):.3f}; "
+            f"{sum(r['redrawn'] for r in reps)} prior draws redrawn (no valid current)"
+        )
+    lines.append(
+        "calibrated: no uniformity test below alpha/(2Q) and coverage within binomial error"
+        if calibrated
+        else "NOT calibrated: " + "; ".join(failures)
+    )
     return "\n".join(lines)
 
 
@@ -334,8 +437,12 @@ def load_sbc(record):
         from pathlib import Path
 
         record = json.loads(Path(record).read_text())
-    return SBCResult(list(record["names"]), np.array(record["ranks"], dtype=int), int(record["n_draws"]),
-                     record.get("info", {}))
+    return SBCResult(
+        list(record["names"]),
+        np.array(record["ranks"], dtype=int),
+        int(record["n_draws"]),
+        record.get("info", {}),
+    )
 
 
 if __name__ == "__main__":
@@ -344,9 +451,15 @@ if __name__ == "__main__":
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 100
     done = []
-    study = calibrate_specimen(n, processes=2, on_result=lambda i, r: print(f"replication {len(done.append(i) or done)}/{n}: "
-                                                                             f"{r['seconds']:.0f} s, min ESS {r['ess_min']:.0f}",
-                                                                             flush=True))
+    study = calibrate_specimen(
+        n,
+        processes=2,
+        on_result=lambda i, r: print(
+            f"replication {len(done.append(i) or done)}/{n}: "
+            f"{r['seconds']:.0f} s, min ESS {r['ess_min']:.0f}",
+            flush=True,
+        ),
+    )
     print(format_sbc(study))
     if len(sys.argv) > 2:
         with open(sys.argv[2], "w") as handle:

@@ -16,15 +16,24 @@ import numpy as np
 from ..data.sensors import load_sensor
 from ..utils import json_ready
 from .evidence.ladder import LadderSettings, log_evidence
-from .posterior import LogPosterior
-from .likelihood import SpecimenData
-from .evidence.referenced import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, referenced_log_evidence
+from .evidence.referenced import (
+    MODE_SEARCH,
+    PILOT_SETTINGS,
+    REFERENCED_LADDER,
+    referenced_log_evidence,
+)
 from .evidence.savage_dickey import savage_dickey_posterior
+from .likelihood import SpecimenData
+from .posterior import LogPosterior
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
 
-KASS_RAFTERY = ((2.0, "not worth more than a bare mention"), (6.0, "positive"), (10.0, "strong"),
-                (np.inf, "very strong"))
+KASS_RAFTERY = (
+    (2.0, "not worth more than a bare mention"),
+    (6.0, "positive"),
+    (10.0, "strong"),
+    (np.inf, "very strong"),
+)
 """Upper bounds on 2·ln B and their words (Kass & Raftery, JASA 90, 773, 1995)."""
 
 
@@ -45,14 +54,23 @@ def _loo(posterior, draws_u):
     x, _ = posterior.prior.from_unconstrained(flat)
     with np.errstate(all="ignore"):
         pointwise = posterior.log_likelihood_pointwise(x)
-    tree = from_dict({"posterior": {"u": flat.reshape(n_chain, n_draw, -1)},
-                      "log_likelihood": {"current": pointwise.reshape(n_chain, n_draw, -1)}})
+    tree = from_dict(
+        {
+            "posterior": {"u": flat.reshape(n_chain, n_draw, -1)},
+            "log_likelihood": {"current": pointwise.reshape(n_chain, n_draw, -1)},
+        }
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # reported below as max_pareto_k / reliable
         result = loo(tree, var_name="current", pointwise=True)
     max_k = float(np.max(np.asarray(result.pareto_k)))
-    return {"elpd": float(result.elpd), "se": float(result.se), "p": float(result.p), "max_pareto_k": max_k,
-            "reliable": bool(max_k < 0.7)}
+    return {
+        "elpd": float(result.elpd),
+        "se": float(result.se),
+        "p": float(result.p),
+        "max_pareto_k": max_k,
+        "reliable": bool(max_k < 0.7),
+    }
 
 
 PATHS = ("reference", "prior")
@@ -60,9 +78,22 @@ PATHS = ("reference", "prior")
 cross) or the prior (thousands of nats on creep data; kept for the closed-form validation)."""
 
 
-def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, tunneling="smooth",
-            likelihood="gaussian", settings=None, seed=0, with_loo=True, path="reference", pilot=None, search=None,
-            estimator=None):
+def compare(
+    data,
+    models=("zener", "burgers"),
+    specimens=None,
+    *,
+    sensor=None,
+    tunneling="smooth",
+    likelihood="gaussian",
+    settings=None,
+    seed=0,
+    with_loo=True,
+    path="reference",
+    pilot=None,
+    search=None,
+    estimator=None,
+):
     """Compare creep models on every (or the chosen) specimen by log-evidence.
 
     Parameters
@@ -104,27 +135,42 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
         raise ValueError(f"path must be one of {PATHS}, got {path!r}")
     settings = settings or (REFERENCED_LADDER if path == "reference" else LadderSettings())
     specimens = list(specimens) if specimens is not None else list(data.specimens)
-    out = {"models": {}, "specimens": specimens, "scale": "Kass & Raftery 1995 on 2 ln B: <2 bare mention, "
-           "2-6 positive, 6-10 strong, >10 very strong; inconclusive when ln B < 2 sigma",
-           "settings": {**asdict(settings), "path": path}}
+    out = {
+        "models": {},
+        "specimens": specimens,
+        "scale": "Kass & Raftery 1995 on 2 ln B: <2 bare mention, "
+        "2-6 positive, 6-10 strong, >10 very strong; inconclusive when ln B < 2 sigma",
+        "settings": {**asdict(settings), "path": path},
+    }
     burgers_draws = {}
     for m_index, model in enumerate(models):
         entry = {"per_specimen": {}, "loo": {}}
         for s_index, specimen in enumerate(specimens):
             packed = SpecimenData.select(data, specimen)
-            chosen = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
-            posterior = LogPosterior.for_sensor(packed, chosen, model=model, tunneling=tunneling,
-                                                likelihood=likelihood)
+            chosen = (
+                load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
+            )
+            posterior = LogPosterior.for_sensor(
+                packed, chosen, model=model, tunneling=tunneling, likelihood=likelihood
+            )
             job_seed = [seed, m_index, s_index]
             if estimator is not None:
                 result = estimator(posterior, job_seed)
             elif path == "reference":
-                result = referenced_log_evidence(posterior, settings, seed=job_seed, pilot=pilot or PILOT_SETTINGS,
-                                                 search=search or MODE_SEARCH).estimate()
+                result = referenced_log_evidence(
+                    posterior,
+                    settings,
+                    seed=job_seed,
+                    pilot=pilot or PILOT_SETTINGS,
+                    search=search or MODE_SEARCH,
+                ).estimate()
             else:
                 result = log_evidence(posterior, settings, seed=job_seed).estimate()
-            entry["per_specimen"][specimen] = {"log_evidence": result.log_z, "log_evidence_err": result.error,
-                                               **result.details}
+            entry["per_specimen"][specimen] = {
+                "log_evidence": result.log_z,
+                "log_evidence_err": result.error,
+                **result.details,
+            }
             if result.posterior_draws is None:
                 continue
             if with_loo:
@@ -146,9 +192,15 @@ def compare(data, models=("zener", "burgers"), specimens=None, *, sensor=None, t
         other = out["models"][model]
         log_bf = best["log_evidence"] - other["log_evidence"]
         error = float(np.hypot(best["log_evidence_err"], other["log_evidence_err"]))
-        out["bayes_factors"][model] = {"log_bf_preferred_over": log_bf, "err": error, "strength": strength(log_bf, error)}
+        out["bayes_factors"][model] = {
+            "log_bf_preferred_over": log_bf,
+            "err": error,
+            "strength": strength(log_bf, error),
+        }
     rank = {words: i for i, (_, words) in enumerate(KASS_RAFTERY)}  # the weakest comparison speaks
-    out["strength"] = min((v["strength"] for v in out["bayes_factors"].values()), key=lambda w: rank.get(w, -1))
+    out["strength"] = min(
+        (v["strength"] for v in out["bayes_factors"].values()), key=lambda w: rank.get(w, -1)
+    )
     if burgers_draws:
         out["savage_dickey"] = _savage_dickey_check(out, burgers_draws)
     return json_ready(out)
@@ -158,7 +210,8 @@ def _savage_dickey_check(out, burgers_draws, max_draws=8000):
     """Savage–Dickey ln B(zener over burgers) per specimen from the Burgers β = 1 draws, beside
     the evidence difference (both ± error); ``reliable`` is False when the posterior of the
     fluidity lies so far from 0 (mean > 3.5 sd) that the density at 0 is a far-tail estimate, or
-    when fewer than 200 effective draws carry the estimate."""
+    when fewer than 200 effective draws carry the estimate.
+    """
     per = {}
     for specimen, (posterior, draws_u) in burgers_draws.items():
         flat = draws_u.reshape(-1, posterior.ndim)
@@ -167,8 +220,17 @@ def _savage_dickey_check(out, burgers_draws, max_draws=8000):
         result = savage_dickey_posterior(posterior, x)
         phi = x[:, posterior.names.index("inv_b1")]
         z, b = (out["models"][m]["per_specimen"][specimen] for m in ("zener", "burgers"))
-        per[specimen] = {"log_b_zener_over_burgers": result.log_b01, "err": result.error,
-                         "evidence_difference": z["log_evidence"] - b["log_evidence"],
-                         "evidence_difference_err": float(np.hypot(z["log_evidence_err"], b["log_evidence_err"])),
-                         "ess": result.ess, "reliable": bool(phi.mean() < 3.5 * phi.std() and result.ess >= 200)}
-    return {"per_specimen": per, "method": "Chen's importance-weighted density of inv_b1 at 0 (Savage-Dickey)"}
+        per[specimen] = {
+            "log_b_zener_over_burgers": result.log_b01,
+            "err": result.error,
+            "evidence_difference": z["log_evidence"] - b["log_evidence"],
+            "evidence_difference_err": float(
+                np.hypot(z["log_evidence_err"], b["log_evidence_err"])
+            ),
+            "ess": result.ess,
+            "reliable": bool(phi.mean() < 3.5 * phi.std() and result.ess >= 200),
+        }
+    return {
+        "per_specimen": per,
+        "method": "Chen's importance-weighted density of inv_b1 at 0 (Savage-Dickey)",
+    }

@@ -28,12 +28,26 @@ import numpy as np
 
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .posterior import LogPosterior
 from .optimize import ensemble_start, find_map, nested_starts, start_regions
-from .samplers.ensemble import EnsembleRun, SamplerSettings, check_checkpoint, even_index, run_ensembles
+from .posterior import LogPosterior
+from .samplers.ensemble import (
+    EnsembleRun,
+    SamplerSettings,
+    check_checkpoint,
+    even_index,
+    run_ensembles,
+)
 
-__all__ = ["FitResult", "fit", "find_map", "separate_regions", "design_warnings", "DesignWarning", "MAP_STARTS",
-           "MAP_ITERATIONS", "SAMPLERS", "FIT_SETTINGS"]
+__all__ = [
+    "FitResult",
+    "fit",
+    "design_warnings",
+    "DesignWarning",
+    "MAP_STARTS",
+    "MAP_ITERATIONS",
+    "SAMPLERS",
+    "FIT_SETTINGS",
+]
 
 MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
@@ -84,10 +98,12 @@ def design_warnings(posterior):
     sampled = [name for name in AREA_COEFFICIENTS if name in posterior.names]
     levels = _distinct_levels(posterior.data.stress_Pa)
     if len(sampled) > levels:
-        return [f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law A(σ) "
-                f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A only at the "
-                f"tested stresses, the rest is prior along a curved ridge that mixes slowly; test at "
-                f">= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"]
+        return [
+            f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law A(σ) "
+            f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A only at the "
+            f"tested stresses, the rest is prior along a curved ridge that mixes slowly; test at "
+            f">= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"
+        ]
     return []
 
 
@@ -151,8 +167,10 @@ def _sampler_and_settings(sampler, settings):
     if settings is None:
         settings = TemperedSettings() if sampler == "tempered" else FIT_SETTINGS
     if not isinstance(settings, expected):
-        raise TypeError(f"sampler={sampler!r} needs settings of type {expected.__name__}, "
-                        f"got {type(settings).__name__}")
+        raise TypeError(
+            f"sampler={sampler!r} needs settings of type {expected.__name__}, "
+            f"got {type(settings).__name__}"
+        )
     return sampler, settings
 
 
@@ -164,8 +182,21 @@ def _best_draw(run):
 SAMPLERS = ("ensemble", "tempered")
 
 
-def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood="gaussian", sensor=None,
-        rng=None, settings=None, checkpoint=None, resume=False, progress=False, sampler=None):
+def fit(
+    data,
+    specimen=None,
+    *,
+    model="burgers",
+    tunneling="smooth",
+    likelihood="gaussian",
+    sensor=None,
+    rng=None,
+    settings=None,
+    checkpoint=None,
+    resume=False,
+    progress=False,
+    sampler=None,
+):
     """Fit one specimen's creep tests.
 
     Parameters
@@ -202,15 +233,23 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
     """
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
-    posterior = LogPosterior.for_sensor(packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood)
+    posterior = LogPosterior.for_sensor(
+        packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood
+    )
     sampler, settings = _sampler_and_settings(sampler, settings)
     for note in design_warnings(posterior):
         warnings.warn(DesignWarning(note), stacklevel=2)
-    seed = int(rng) if isinstance(rng, (int, np.integer)) else int(np.random.default_rng(rng).integers(2**31))
+    seed = (
+        int(rng)
+        if isinstance(rng, (int, np.integer))
+        else int(np.random.default_rng(rng).integers(2**31))
+    )
     if sampler == "tempered":
         if checkpoint is not None or resume:
-            raise ValueError("checkpoint/resume work with sampler='ensemble' only; the tempered sampler runs "
-                             "fixed-length ladders")
+            raise ValueError(
+                "checkpoint/resume work with sampler='ensemble' only; the tempered sampler runs "
+                "fixed-length ladders"
+            )
         from .evidence.tempered import reference_optima, tempered_run
 
         run, evidence = tempered_run(posterior, settings, seed, names=posterior.names)
@@ -218,22 +257,49 @@ def fit(data, specimen=None, *, model="burgers", tunneling="smooth", likelihood=
         if not len(optima):  # references fitted to given draws: no search ran
             return FitResult(posterior, run, _best_draw(run), seed, None, "tempered", evidence)
         values = posterior(optima)
-        return FitResult(posterior, run, optima[int(np.argmax(values))], seed, np.sort(values)[::-1], "tempered",
-                         evidence)
-    if resume and checkpoint is not None:  # a mismatched checkpoint is refused before the MAP search
+        return FitResult(
+            posterior,
+            run,
+            optima[int(np.argmax(values))],
+            seed,
+            np.sort(values)[::-1],
+            "tempered",
+            evidence,
+        )
+    if (
+        resume and checkpoint is not None
+    ):  # a mismatched checkpoint is refused before the MAP search
         check_checkpoint(checkpoint, posterior.fingerprint(), settings.n_ensembles)
     generator = np.random.default_rng(seed)
-    optima = find_map(posterior, generator, n_starts=max(MAP_STARTS, settings.n_ensembles), maxiter=MAP_ITERATIONS,
-                      processes=settings.processes)
+    optima = find_map(
+        posterior,
+        generator,
+        n_starts=max(MAP_STARTS, settings.n_ensembles),
+        maxiter=MAP_ITERATIONS,
+        processes=settings.processes,
+    )
     n_walk = settings.walkers_for(posterior.ndim)
     # Ensembles start in the separate regions in turn (module docstring). Started in a lower
     # region, an ensemble used to stay there (R-hat 1.94 after 3,000 steps, 9 tests x 61
     # samples); the mixture independence proposal now carries its walkers across.
-    regions = start_regions(posterior, optima, nested_starts(posterior, optima[0]), settings.n_ensembles)
-    start = np.concatenate([ensemble_start(posterior, u, generator, (1, n_walk), root_cov=root)
-                            for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))])
-    run = run_ensembles(posterior, start, seed, settings, names=posterior.names, checkpoint=checkpoint,
-                        fingerprint=posterior.fingerprint(), resume=resume, progress=progress)
+    regions = start_regions(
+        posterior, optima, nested_starts(posterior, optima[0]), settings.n_ensembles
+    )
+    start = np.concatenate(
+        [
+            ensemble_start(posterior, u, generator, (1, n_walk), root_cov=root)
+            for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
+        ]
+    )
+    run = run_ensembles(
+        posterior,
+        start,
+        seed,
+        settings,
+        names=posterior.names,
+        checkpoint=checkpoint,
+        fingerprint=posterior.fingerprint(),
+        resume=resume,
+        progress=progress,
+    )
     return FitResult(posterior, run, optima[0], seed, posterior(optima))
-
-

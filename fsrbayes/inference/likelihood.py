@@ -70,8 +70,16 @@ class SpecimenData:
             time[i, :n], time[i, n:] = t.time_s, t.time_s[-1]
             logc[i, :n], logc[i, n:] = np.log(t.current_A), np.log(t.current_A[-1])
             mask[i, :n] = True
-        return cls(tests[0].specimen, tests[0].sensor, np.array([t.voltage_V for t in tests]),
-                   np.array([t.stress_Pa for t in tests]), time, logc, mask, tuple(t.key for t in tests))
+        return cls(
+            tests[0].specimen,
+            tests[0].sensor,
+            np.array([t.voltage_V for t in tests]),
+            np.array([t.stress_Pa for t in tests]),
+            time,
+            logc,
+            mask,
+            tuple(t.key for t in tests),
+        )
 
     @classmethod
     def select(cls, data, specimen=None):
@@ -90,12 +98,16 @@ class SpecimenData:
         if isinstance(data, SpecimenData):
             return data
         if not isinstance(data, CreepData):
-            raise TypeError(f"data must be CreepData (from read_csv or simulate) or SpecimenData, "
-                            f"got {type(data).__name__}")
+            raise TypeError(
+                f"data must be CreepData (from read_csv or simulate) or SpecimenData, "
+                f"got {type(data).__name__}"
+            )
         if specimen is None:
             if len(data.specimens) != 1:
-                raise ValueError(f"the data hold {len(data.specimens)} specimens; choose one with specimen=... "
-                                 f"(e.g. {data.specimens[0]!r})")
+                raise ValueError(
+                    f"the data hold {len(data.specimens)} specimens; choose one with specimen=... "
+                    f"(e.g. {data.specimens[0]!r})"
+                )
             specimen = data.specimens[0]
         return cls.from_tests(data.select(specimen=specimen).tests)
 
@@ -145,6 +157,12 @@ def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian
         value = -0.5 * resid**2 - np.log(sigma) - HALF_LOG_2PI - y
     else:
         nu = np.asarray(nu, dtype=float)[:, None]
-        value = (special.gammaln(0.5 * (nu + 1)) - special.gammaln(0.5 * nu) - 0.5 * np.log(nu * np.pi)
-                 - 0.5 * (nu + 1) * np.log1p(resid**2 / nu) - np.log(sigma) - y)
+        value = (
+            special.gammaln(0.5 * (nu + 1))
+            - special.gammaln(0.5 * nu)
+            - 0.5 * np.log(nu * np.pi)
+            - 0.5 * (nu + 1) * np.log1p(resid**2 / nu)
+            - np.log(sigma)
+            - y
+        )
     return np.where(np.isfinite(value), value, -np.inf)

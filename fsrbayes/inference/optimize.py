@@ -13,11 +13,20 @@ evidence, the Laplace approximation and the population routes share them.
 import numpy as np
 from scipy import optimize
 
-from .parallel import fork_pool
-from .parallel import single_threaded_blas
+from .parallel import fork_pool, single_threaded_blas
 
-__all__ = ["NESTED_DEPTH", "NegativeLogPosterior", "ensemble_start", "find_map", "laplace_start", "nested_starts",
-           "polish", "root_covariance", "separate_regions", "start_regions"]
+__all__ = [
+    "NESTED_DEPTH",
+    "NegativeLogPosterior",
+    "ensemble_start",
+    "find_map",
+    "laplace_start",
+    "nested_starts",
+    "polish",
+    "root_covariance",
+    "separate_regions",
+    "start_regions",
+]
 
 
 class NegativeLogPosterior:
@@ -31,8 +40,13 @@ class NegativeLogPosterior:
         self.posterior = posterior
         self.basis = np.eye(posterior.ndim) if basis is None else basis
         self.origin = np.zeros(posterior.ndim) if origin is None else origin
-        self.offsets = np.vstack([np.zeros(posterior.ndim), step * np.eye(posterior.ndim),
-                                  -step * np.eye(posterior.ndim)])
+        self.offsets = np.vstack(
+            [
+                np.zeros(posterior.ndim),
+                step * np.eye(posterior.ndim),
+                -step * np.eye(posterior.ndim),
+            ]
+        )
         self.step = step
 
     def __call__(self, w):
@@ -40,7 +54,7 @@ class NegativeLogPosterior:
         n = self.posterior.ndim
         if not np.all(np.isfinite(values)):
             return (values[0] if np.isfinite(values[0]) else 1e300), np.zeros(n)
-        return values[0], (values[1:n + 1] - values[n + 1:]) / (2 * self.step)
+        return values[0], (values[1 : n + 1] - values[n + 1 :]) / (2 * self.step)
 
 
 def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, processes=1):
@@ -71,11 +85,15 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, proc
         One optimum per start, best first (repeated if fewer starts gave a finite posterior).
     """
     prior = posterior.prior
-    candidates = np.vstack([np.zeros(prior.ndim), prior.to_unconstrained(prior.sample(rng, n_candidates))])
+    candidates = np.vstack(
+        [np.zeros(prior.ndim), prior.to_unconstrained(prior.sample(rng, n_candidates))]
+    )
     values = posterior(candidates)
     starts = [candidates[i] for i in np.argsort(values)[::-1][:n_starts] if np.isfinite(values[i])]
     if not starts:
-        raise RuntimeError("no prior draw gives a finite posterior: check the data against the model's domain")
+        raise RuntimeError(
+            "no prior draw gives a finite posterior: check the data against the model's domain"
+        )
     optima = _optimise_starts(posterior, starts, maxiter, processes)
     optima.sort(key=lambda item: -item[0])
     optima = [u for _, u in optima]
@@ -88,17 +106,25 @@ def _optimise_starts(posterior, starts, maxiter, processes):
     if workers <= 1:
         return [_optimise_start(posterior, u, maxiter) for u in starts]
     with fork_pool(workers) as pool:
-        return list(pool.map(_optimise_start, [posterior] * len(starts), starts, [maxiter] * len(starts)))
+        return list(
+            pool.map(_optimise_start, [posterior] * len(starts), starts, [maxiter] * len(starts))
+        )
 
 
 def _optimise_start(posterior, u0, maxiter):
     """One start of :func:`find_map`: L-BFGS-B, then the whitened polish; returns (value, u).
 
     BLAS runs on one thread: the finite-difference gradient's 25 × 12 products are far too
-    small for its thread pool."""
+    small for its thread pool.
+    """
     with single_threaded_blas():
-        result = optimize.minimize(NegativeLogPosterior(posterior), u0, jac=True, method="L-BFGS-B",
-                                   options={"maxiter": maxiter, "maxfun": 2 * maxiter})
+        result = optimize.minimize(
+            NegativeLogPosterior(posterior),
+            u0,
+            jac=True,
+            method="L-BFGS-B",
+            options={"maxiter": maxiter, "maxfun": 2 * maxiter},
+        )
         return polish(posterior, result.x, -result.fun)[::-1]
 
 
@@ -143,8 +169,13 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
             continue
         held = _Slice(posterior, index, depth)
         v0 = np.delete(u_best, index)
-        result = optimize.minimize(NegativeLogPosterior(held), v0, jac=True, method="L-BFGS-B",
-                                   options={"maxiter": 2000, "maxfun": 4000})
+        result = optimize.minimize(
+            NegativeLogPosterior(held),
+            v0,
+            jac=True,
+            method="L-BFGS-B",
+            options={"maxiter": 2000, "maxfun": 4000},
+        )
         if np.isfinite(result.fun):
             v, _ = polish(held, result.x, -result.fun)
             starts.append(held.full(v))
@@ -161,8 +192,14 @@ def root_covariance(posterior, u_map, step=1e-3):
     n = posterior.ndim
     eye = step * np.eye(n)
     i, j = np.triu_indices(n)
-    corners = np.concatenate([u_map + eye[i] + eye[j], u_map + eye[i] - eye[j], u_map - eye[i] + eye[j],
-                              u_map - eye[i] - eye[j]])
+    corners = np.concatenate(
+        [
+            u_map + eye[i] + eye[j],
+            u_map + eye[i] - eye[j],
+            u_map - eye[i] + eye[j],
+            u_map - eye[i] - eye[j],
+        ]
+    )
     f = posterior(corners).reshape(4, -1)
     upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
     hessian = np.zeros((n, n))
@@ -187,7 +224,8 @@ def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3
 
 def ensemble_start(posterior, u_map, rng, shape, root_cov=None):
     """:func:`laplace_start`, with walkers that landed outside the posterior's support moved to
-    a tight ball around ``u_map``; shape (E, W) → (E, W, ndim)."""
+    a tight ball around ``u_map``; shape (E, W) → (E, W, ndim).
+    """
     start = laplace_start(posterior, u_map, rng, shape, root_cov=root_cov)
     bad = ~np.isfinite(posterior(start.reshape(-1, posterior.ndim))).reshape(start.shape[:-1])
     start[bad] = u_map + 1e-3 * rng.standard_normal((int(bad.sum()), posterior.ndim))
@@ -213,17 +251,22 @@ def separate_regions(posterior, optima, *, separation=2.0, max_regions=None, max
     list of (ndarray (ndim,), float)
         Each region's optimum and its Laplace log mass.
     """
-    return [(u, mass) for u, _, mass in _regions(posterior, optima, separation, max_regions, max_log_mass_gap)]
+    return [
+        (u, mass)
+        for u, _, mass in _regions(posterior, optima, separation, max_regions, max_log_mass_gap)
+    ]
 
 
 def _regions(posterior, optima, separation=2.0, max_regions=None, max_log_mass_gap=10.0):
     """:func:`separate_regions` with each region's Laplace root covariance: (u, root, mass)."""
     values = np.asarray(posterior(np.atleast_2d(optima)), dtype=float)
     kept = []
-    for u, value in zip(np.atleast_2d(optima), values):
+    for u, value in zip(np.atleast_2d(optima), values, strict=False):
         if not np.isfinite(value):
             continue
-        if any(np.linalg.norm(np.linalg.solve(root, u - other)) < separation for other, root, _ in kept):
+        if any(
+            np.linalg.norm(np.linalg.solve(root, u - other)) < separation for other, root, _ in kept
+        ):
             continue
         root = root_covariance(posterior, u)
         kept.append((u, root, float(value + np.linalg.slogdet(root)[1])))
@@ -238,14 +281,17 @@ def start_regions(posterior, optima, tails, n_ensembles, max_log_mass_gap=10.0):
     """Where the ensembles start: the optima's separate regions, and up to ``n_ensembles − 1``
     nested-model starts (:func:`nested_starts`) whose Laplace mass is within
     ``max_log_mass_gap`` of the best region's — these take the places of the weakest regions,
-    because no optimiser start reaches a tail and the sampler reaches it slowly."""
+    because no optimiser start reaches a tail and the sampler reaches it slowly.
+    """
     found = _regions(posterior, optima, max_log_mass_gap=max_log_mass_gap)
     if len(tails):
         best = found[0][2]
-        tails = [t for t in _regions(posterior, tails) if t[2] >= best - max_log_mass_gap][:n_ensembles - 1]
+        tails = [t for t in _regions(posterior, tails) if t[2] >= best - max_log_mass_gap][
+            : n_ensembles - 1
+        ]
     else:
         tails = []
-    return found[:n_ensembles - len(tails)] + tails
+    return found[: n_ensembles - len(tails)] + tails
 
 
 def polish(posterior, u, value, rounds=4, tol=1e-3):
@@ -258,8 +304,13 @@ def polish(posterior, u, value, rounds=4, tol=1e-3):
     for _ in range(rounds):
         root = root_covariance(posterior, u)
         objective = NegativeLogPosterior(posterior, basis=root, origin=u)
-        result = optimize.minimize(objective, np.zeros(posterior.ndim), jac=True, method="L-BFGS-B",
-                                   options={"maxiter": 2000, "maxfun": 4000})
+        result = optimize.minimize(
+            objective,
+            np.zeros(posterior.ndim),
+            jac=True,
+            method="L-BFGS-B",
+            options={"maxiter": 2000, "maxfun": 4000},
+        )
         if not np.isfinite(result.fun) or -result.fun <= value + tol:
             if np.isfinite(result.fun) and -result.fun > value:
                 u, value = u + root @ result.x, -result.fun

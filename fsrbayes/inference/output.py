@@ -15,7 +15,14 @@ from ..data.csvio import observed_drift
 from ..utils import atomic_path, write_json_atomic
 from .samplers.ensemble import even_index
 
-__all__ = ["to_datatree", "summary", "save_fit", "population_datatree", "save_population", "DRIFT_TIME_S"]
+__all__ = [
+    "to_datatree",
+    "summary",
+    "save_fit",
+    "population_datatree",
+    "save_population",
+    "DRIFT_TIME_S",
+]
 
 DRIFT_TIME_S = 3600.0
 
@@ -26,20 +33,36 @@ def _predictive(result, draws, rng, n_grid=61):
     flat = draws.reshape(-1, draws.shape[-1])
     log_model = posterior.log_model_current(flat)
     sigma = posterior.parameters(flat)["sigma_rel"]
-    replicated = np.exp(log_model[:, data.mask] + sigma[:, None] * rng.standard_normal((flat.shape[0], data.n_obs)))
+    replicated = np.exp(
+        log_model[:, data.mask] + sigma[:, None] * rng.standard_normal((flat.shape[0], data.n_obs))
+    )
     grid = np.linspace(0.0, max(DRIFT_TIME_S, float(data.time_s.max())), n_grid)
     times = np.concatenate([grid, [DRIFT_TIME_S]])
-    log_on_grid = posterior.log_model_current(flat, np.broadcast_to(times, (data.n_tests, times.size)))
+    log_on_grid = posterior.log_model_current(
+        flat, np.broadcast_to(times, (data.n_tests, times.size))
+    )
     start = posterior.log_model_current(flat, np.zeros((data.n_tests, 1)))
     drift = 100.0 * np.expm1(log_on_grid - start)
     shape = draws.shape[:2]
-    return (replicated.reshape(*shape, -1), drift[..., :-1].reshape(*shape, data.n_tests, n_grid),
-            drift[..., -1].reshape(*shape, data.n_tests), grid)
+    return (
+        replicated.reshape(*shape, -1),
+        drift[..., :-1].reshape(*shape, data.n_tests, n_grid),
+        drift[..., -1].reshape(*shape, data.n_tests),
+        grid,
+    )
 
 
 def _observed_drift(data):
-    return np.array([observed_drift(data.time_s[i][data.mask[i]], np.exp(data.log_current[i][data.mask[i]]),
-                                    DRIFT_TIME_S) for i in range(data.n_tests)])
+    return np.array(
+        [
+            observed_drift(
+                data.time_s[i][data.mask[i]],
+                np.exp(data.log_current[i][data.mask[i]]),
+                DRIFT_TIME_S,
+            )
+            for i in range(data.n_tests)
+        ]
+    )
 
 
 def to_datatree(result, *, max_draws=2000, seed=0):
@@ -63,19 +86,40 @@ def to_datatree(result, *, max_draws=2000, seed=0):
         "log_likelihood": {"current": pointwise},
         "posterior_predictive": {"current": replicated, "drift": drift, "drift_3600": drift_3600},
         "observed_data": {"current": np.exp(data.log_current[data.mask])},
-        "constant_data": {"voltage_V": data.voltage_V, "stress_Pa": data.stress_Pa,
-                          "time_s": data.time_s[data.mask], "test_index": test_index,
-                          "observed_drift_3600": _observed_drift(data)},
+        "constant_data": {
+            "voltage_V": data.voltage_V,
+            "stress_Pa": data.stress_Pa,
+            "time_s": data.time_s[data.mask],
+            "test_index": test_index,
+            "observed_drift_3600": _observed_drift(data),
+        },
         "sample_stats": {"lp": log_post},
     }
-    dims = {"current": ["obs"], "drift": ["test", "drift_time"], "drift_3600": ["test"], "voltage_V": ["test"],
-            "stress_Pa": ["test"], "time_s": ["obs"], "test_index": ["obs"], "observed_drift_3600": ["test"]}
+    dims = {
+        "current": ["obs"],
+        "drift": ["test", "drift_time"],
+        "drift_3600": ["test"],
+        "voltage_V": ["test"],
+        "stress_Pa": ["test"],
+        "time_s": ["obs"],
+        "test_index": ["obs"],
+        "observed_drift_3600": ["test"],
+    }
     coords = {"test": np.arange(data.n_tests), "obs": np.arange(data.n_obs), "drift_time": grid}
-    attrs = {"fsrbayes_model": posterior.model, "tunneling": posterior.tunneling,
-             "likelihood": posterior.likelihood, "specimen": data.specimen, "sensor": data.sensor,
-             "converged": int(report.converged) if report else 0, "seed": result.seed,
-             "convergence": json.dumps(report.as_dict() if report else {"method": result.method}, allow_nan=True),
-             "fixed_parameters": json.dumps(posterior.fixed), "sampler": getattr(result, "sampler", "ensemble")}
+    attrs = {
+        "fsrbayes_model": posterior.model,
+        "tunneling": posterior.tunneling,
+        "likelihood": posterior.likelihood,
+        "specimen": data.specimen,
+        "sensor": data.sensor,
+        "converged": int(report.converged) if report else 0,
+        "seed": result.seed,
+        "convergence": json.dumps(
+            report.as_dict() if report else {"method": result.method}, allow_nan=True
+        ),
+        "fixed_parameters": json.dumps(posterior.fixed),
+        "sampler": getattr(result, "sampler", "ensemble"),
+    }
     tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(attrs)
     return tree
@@ -102,20 +146,43 @@ def summary(result, tree):
     data = posterior.data
     drift = tree.posterior_predictive["drift_3600"].values
     observed = tree.constant_data["observed_drift_3600"].values
-    tests = [{"specimen": data.specimen, "voltage_V": float(data.voltage_V[i]), "stress_Pa": float(data.stress_Pa[i]),
-              "drift_3600": _q(drift[..., i].ravel()), "observed_drift_3600": _finite(observed[i])}
-             for i in range(data.n_tests)]
-    return {"converged": bool(report.converged), "specimen": data.specimen, "sensor": data.sensor,
-            "model": posterior.model, "tunneling": posterior.tunneling, "likelihood": posterior.likelihood,
-            "parameters": parameters, "tests": tests,
-            "convergence": {"n_steps": report.n_steps, "n_kept": report.n_kept,
-                            "max_r_hat": _finite(np.nanmax(report.rhat)) if np.isfinite(report.rhat).any() else None,
-                            "min_ess_bulk": _finite(np.min(report.ess_bulk)),
-                            "max_tau": _finite(np.max(report.tau)), "n_ensembles": int(result.run.chain.shape[0]),
-                            "n_walkers": int(result.run.chain.shape[2])},
-            "fixed_parameters": posterior.fixed,
-            "map_log_posterior": [float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])],
-            "sampler": getattr(result, "sampler", "ensemble"), "log_evidence": _evidence(result)}
+    tests = [
+        {
+            "specimen": data.specimen,
+            "voltage_V": float(data.voltage_V[i]),
+            "stress_Pa": float(data.stress_Pa[i]),
+            "drift_3600": _q(drift[..., i].ravel()),
+            "observed_drift_3600": _finite(observed[i]),
+        }
+        for i in range(data.n_tests)
+    ]
+    return {
+        "converged": bool(report.converged),
+        "specimen": data.specimen,
+        "sensor": data.sensor,
+        "model": posterior.model,
+        "tunneling": posterior.tunneling,
+        "likelihood": posterior.likelihood,
+        "parameters": parameters,
+        "tests": tests,
+        "convergence": {
+            "n_steps": report.n_steps,
+            "n_kept": report.n_kept,
+            "max_r_hat": _finite(np.nanmax(report.rhat))
+            if np.isfinite(report.rhat).any()
+            else None,
+            "min_ess_bulk": _finite(np.min(report.ess_bulk)),
+            "max_tau": _finite(np.max(report.tau)),
+            "n_ensembles": int(result.run.chain.shape[0]),
+            "n_walkers": int(result.run.chain.shape[2]),
+        },
+        "fixed_parameters": posterior.fixed,
+        "map_log_posterior": [
+            float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])
+        ],
+        "sampler": getattr(result, "sampler", "ensemble"),
+        "log_evidence": _evidence(result),
+    }
 
 
 def _evidence(result):
@@ -123,9 +190,15 @@ def _evidence(result):
     evidence = getattr(result, "evidence", None)
     if evidence is None:
         return None
-    return {"log_z": float(evidence.log_z), "error": float(evidence.error), "bridge": float(evidence.bridge),
-            "sigma_replicates": float(evidence.sigma_replicates), "sigma_pilot": float(evidence.sigma_pilot),
-            "sigma_disc": float(evidence.sigma_disc), "method": "referenced stepping-stone ladders"}
+    return {
+        "log_z": float(evidence.log_z),
+        "error": float(evidence.error),
+        "bridge": float(evidence.bridge),
+        "sigma_replicates": float(evidence.sigma_replicates),
+        "sigma_pilot": float(evidence.sigma_pilot),
+        "sigma_disc": float(evidence.sigma_disc),
+        "method": "referenced stepping-stone ladders",
+    }
 
 
 def save_fit(result, folder, *, stem="posterior"):
@@ -167,24 +240,41 @@ def population_datatree(result, template, observed, *, noise_rel=None, max_draws
     hyper = result.population.hyper_prior.from_unconstrained(flat[:, index])[0]
     groups = {
         "posterior": {name: hyper[..., k] for k, name in enumerate(result.population.hyper_names)},
-        "constant_data": {"observed_drift_3600": np.array([t["observed_drift_3600"] for t in observed], dtype=float),
-                          "voltage_V": np.array([t["voltage_V"] for t in observed], dtype=float),
-                          "stress_Pa": np.array([t["stress_Pa"] for t in observed], dtype=float),
-                          "specimen": np.array([t["specimen"] for t in observed])},
+        "constant_data": {
+            "observed_drift_3600": np.array(
+                [t["observed_drift_3600"] for t in observed], dtype=float
+            ),
+            "voltage_V": np.array([t["voltage_V"] for t in observed], dtype=float),
+            "stress_Pa": np.array([t["stress_Pa"] for t in observed], dtype=float),
+            "specimen": np.array([t["specimen"] for t in observed]),
+        },
     }
     dims = {k: ["test"] for k in groups["constant_data"]}
     if result.effective_draws is not None:
-        groups["sample_stats"] = {"effective_draws": np.broadcast_to(result.effective_draws, (n_ens, 1, len(
-            result.effective_draws)))}
+        groups["sample_stats"] = {
+            "effective_draws": np.broadcast_to(
+                result.effective_draws, (n_ens, 1, len(result.effective_draws))
+            )
+        }
         dims["effective_draws"] = ["specimen_index"]
     tree = from_dict(groups, dims=dims)
-    tree.attrs.update({"sensor": template.sensor, "fsrbayes_model": template.model, "tunneling": template.tunneling,
-                       "route": result.route, "population": json.dumps(list(result.population.names)),
-                       "noise": json.dumps([n for n in template.prior.names if n not in result.population.names]),
-                       "specimens": json.dumps([str(s) for s in result.specimens]),
-                       "converged": int(result.converged), "seed": result.seed,
-                       "measurement_noise": float(noise_rel) if noise_rel else 0.0,
-                       "convergence": json.dumps(result.run.report.as_dict(), allow_nan=True)})
+    tree.attrs.update(
+        {
+            "sensor": template.sensor,
+            "fsrbayes_model": template.model,
+            "tunneling": template.tunneling,
+            "route": result.route,
+            "population": json.dumps(list(result.population.names)),
+            "noise": json.dumps(
+                [n for n in template.prior.names if n not in result.population.names]
+            ),
+            "specimens": json.dumps([str(s) for s in result.specimens]),
+            "converged": int(result.converged),
+            "seed": result.seed,
+            "measurement_noise": float(noise_rel) if noise_rel else 0.0,
+            "convergence": json.dumps(result.run.report.as_dict(), allow_nan=True),
+        }
+    )
     return tree
 
 
@@ -193,10 +283,19 @@ def save_population(result, template, observed, folder, *, noise_rel=None):
     tree = population_datatree(result, template, observed, noise_rel=noise_rel)
     with atomic_path(folder / "population.nc") as tmp:
         tree.to_netcdf(tmp, engine="h5netcdf")
-    hyper = {name: {k: _finite(v) for k, v in entry.items()} for name, entry in result.summary().items()}
-    info = {"route": result.route, "converged": bool(result.converged), "hyper_parameters": hyper,
-            "population_parameters": list(result.population.names), "measurement_noise": noise_rel}
+    hyper = {
+        name: {k: _finite(v) for k, v in entry.items()} for name, entry in result.summary().items()
+    }
+    info = {
+        "route": result.route,
+        "converged": bool(result.converged),
+        "hyper_parameters": hyper,
+        "population_parameters": list(result.population.names),
+        "measurement_noise": noise_rel,
+    }
     if result.effective_draws is not None:
-        info["effective_draws"] = dict(zip(map(str, result.specimens), map(_finite, result.effective_draws)))
+        info["effective_draws"] = dict(
+            zip(map(str, result.specimens), map(_finite, result.effective_draws), strict=False)
+        )
         info["log_likelihood_mc_sd"] = _finite(result.log_likelihood_mc_sd)
     return info

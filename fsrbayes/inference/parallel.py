@@ -33,7 +33,9 @@ class JobError(RuntimeError):
 
     def __init__(self, failures):
         self.failures = list(failures)
-        super().__init__(f"{len(self.failures)} job(s) failed: " + "; ".join(str(f) for f in self.failures))
+        super().__init__(
+            f"{len(self.failures)} job(s) failed: " + "; ".join(str(f) for f in self.failures)
+        )
 
 
 def _exit_with_parent(parent_pid):
@@ -41,6 +43,7 @@ def _exit_with_parent(parent_pid):
 
     Forked workers hold their own ends of the pool's pipes and would otherwise wait forever.
     """
+
     def watch():
         while os.getppid() == parent_pid:
             time.sleep(0.5)
@@ -52,9 +55,14 @@ def _exit_with_parent(parent_pid):
 def fork_pool(workers):
     """A process pool of forked workers (they inherit the targets without pickling them) that
     exit when this process dies — the pool behind ensembles, ladders and region searches run
-    side by side."""
-    return concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
-                                                  initializer=_exit_with_parent, initargs=(os.getpid(),))
+    side by side.
+    """
+    return concurrent.futures.ProcessPoolExecutor(
+        workers,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=_exit_with_parent,
+        initargs=(os.getpid(),),
+    )
 
 
 def _describe(exc):
@@ -70,7 +78,8 @@ def _default_sigterm():
     The command line turns SIGTERM into KeyboardInterrupt so that a fit stops at a checkpoint;
     a forked worker inherits that handler, and when its pool breaks, the pool's SIGTERM makes a
     worker blocked sending a large result (a fit's chains) catch the interrupt and try to send
-    it again — forever (seen on Python 3.12: one worker killed, the CLI hung at exit)."""
+    it again — forever (seen on Python 3.12: one worker killed, the CLI hung at exit).
+    """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
@@ -86,9 +95,12 @@ def _run_local(function, jobs, workers, emit):
 
     Jobs lost to a dead worker (the pool breaks for every job still running or queued) are
     retried each alone in a fresh single-worker pool, so one job that kills its worker cannot
-    take the others with it; a job whose worker dies again fails with that reason."""
+    take the others with it; a job whose worker dies again fails with that reason.
+    """
     lost = []
-    with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_default_sigterm) as pool:
+    with concurrent.futures.ProcessPoolExecutor(
+        max_workers=min(workers, len(jobs)), initializer=_default_sigterm
+    ) as pool:
         futures = [pool.submit(function, job) for job in jobs]
         for index, future in enumerate(futures):
             try:
@@ -100,7 +112,9 @@ def _run_local(function, jobs, workers, emit):
             except Exception as exc:  # noqa: BLE001 - a job's own error is reported under its label
                 emit(index, exc)
     for index in lost:
-        with concurrent.futures.ProcessPoolExecutor(max_workers=1, initializer=_default_sigterm) as pool:
+        with concurrent.futures.ProcessPoolExecutor(
+            max_workers=1, initializer=_default_sigterm
+        ) as pool:
             try:
                 emit(index, pool.submit(function, jobs[index]).result())
             except Exception as exc:  # noqa: BLE001 - includes BrokenProcessPool
@@ -126,8 +140,17 @@ def _run_executor(executor, function, jobs, emit):
             emit(index, exc)
 
 
-def map_jobs(function, jobs, *, executor=None, scheduler=None, processes=None, on_result=None, labels=None,
-             errors="raise"):
+def map_jobs(
+    function,
+    jobs,
+    *,
+    executor=None,
+    scheduler=None,
+    processes=None,
+    on_result=None,
+    labels=None,
+    errors="raise",
+):
     """``list(map(function, jobs))``, spread over workers, with failures named.
 
     Parameters
@@ -181,7 +204,9 @@ def map_jobs(function, jobs, *, executor=None, scheduler=None, processes=None, o
         try:
             from dask.distributed import Client
         except ImportError:
-            raise ImportError("a dask scheduler needs dask.distributed: pip install 'fsrbayes[dask]'") from None
+            raise ImportError(
+                "a dask scheduler needs dask.distributed: pip install 'fsrbayes[dask]'"
+            ) from None
         with Client(scheduler) as client:
             _run_executor(client.get_executor(), function, jobs, emit)
     elif workers == 1 or len(jobs) <= 1:

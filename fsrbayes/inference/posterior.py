@@ -26,7 +26,8 @@ def noise_parameters(likelihood):
 class PriorScaledTarget:
     """What every target sampled in prior-scaled u-space offers the MAP search, the ensemble
     engine and the evidence ladder. Subclasses set ``prior`` (a JointPrior) and define
-    ``log_prior_and_likelihood(u, with_likelihood=True)``; ``beta`` tempers the likelihood."""
+    ``log_prior_and_likelihood(u, with_likelihood=True)``; ``beta`` tempers the likelihood.
+    """
 
     prior = None
     beta = 1.0
@@ -44,7 +45,7 @@ class PriorScaledTarget:
         return self.log_prior_and_likelihood(u)[1]
 
     def sample_prior(self, rng, n):
-        """n independent prior draws in u-space, shape (n, ndim)."""
+        """N independent prior draws in u-space, shape (n, ndim)."""
         return self.prior.to_unconstrained(self.prior.sample(rng, n))
 
     def __call__(self, u):
@@ -78,7 +79,17 @@ class LogPosterior(PriorScaledTarget):
         Likelihood power (1 for the posterior, < 1 for the power posteriors of the evidence).
     """
 
-    def __init__(self, data, prior, fixed, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0):
+    def __init__(
+        self,
+        data,
+        prior,
+        fixed,
+        *,
+        model="burgers",
+        tunneling="smooth",
+        likelihood="gaussian",
+        beta=1.0,
+    ):
         if not isinstance(data, SpecimenData):
             raise TypeError(f"data must be SpecimenData, got {type(data).__name__}")
         if not isinstance(prior, JointPrior):
@@ -98,23 +109,37 @@ class LogPosterior(PriorScaledTarget):
         needed = set(model_parameters(model)) | set(noise_parameters(likelihood))
         missing = sorted(needed - set(prior.names) - set(self.fixed))
         if missing:
-            raise ValueError(f"model {model!r} needs parameter(s) {missing}: neither sampled nor fixed")
+            raise ValueError(
+                f"model {model!r} needs parameter(s) {missing}: neither sampled nor fixed"
+            )
         overlap = sorted(set(prior.names) & set(self.fixed))
         if overlap:
             raise ValueError(f"parameter(s) {overlap} are both sampled and fixed")
 
     @classmethod
-    def for_sensor(cls, data, sensor, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0):
+    def for_sensor(
+        cls, data, sensor, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0
+    ):
         """Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at defaults."""
         prior = sensor.prior_for(model, noise_parameters(likelihood))
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
-        return cls(data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta)
+        return cls(
+            data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
+        )
 
     def fingerprint(self):
         """Changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
         fixed = ";".join(f"{k}={v!r}" for k, v in sorted(self.fixed.items()))
-        return "|".join([self.data.fingerprint(), self.model, self.tunneling, self.likelihood,
-                         self.prior.fingerprint(), fixed])
+        return "|".join(
+            [
+                self.data.fingerprint(),
+                self.model,
+                self.tunneling,
+                self.likelihood,
+                self.prior.fingerprint(),
+                fixed,
+            ]
+        )
 
     def parameters(self, x):
         """All physical parameters for x (W, ndim): sampled ones from x, the rest fixed."""
@@ -124,14 +149,21 @@ class LogPosterior(PriorScaledTarget):
         return params
 
     def log_model_current(self, x, time_s=None):
-        """log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
+        """Log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
 
         −inf where the parameters leave the model's validity domain.
         """
         params = {k: v[:, None, None] for k, v in self.parameters(x).items()}
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
-        solution = solve_current(params, self.data.voltage_V[:, None], self.data.stress_Pa[:, None], time,
-                                 rheology=self.family, tunneling=self.tunneling, effects=self.effect_objects)
+        solution = solve_current(
+            params,
+            self.data.voltage_V[:, None],
+            self.data.stress_Pa[:, None],
+            time,
+            rheology=self.family,
+            tunneling=self.tunneling,
+            effects=self.effect_objects,
+        )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)
         return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
@@ -146,8 +178,13 @@ class LogPosterior(PriorScaledTarget):
     def log_likelihood_pointwise(self, x):
         """Log-likelihood per observed sample, shape (W, N)."""
         params = self.parameters(x)
-        return log_likelihood_pointwise(self.log_model_current(x), self.data, params["sigma_rel"],
-                                        likelihood=self.likelihood, nu=params.get("nu"))
+        return log_likelihood_pointwise(
+            self.log_model_current(x),
+            self.data,
+            params["sigma_rel"],
+            likelihood=self.likelihood,
+            nu=params.get("nu"),
+        )
 
     def log_prior(self, u):
         """Log density of u under the prior (including the Jacobian)."""
@@ -155,7 +192,8 @@ class LogPosterior(PriorScaledTarget):
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
         """(log prior of u incl. Jacobian, total log-likelihood), each (W,); the likelihood is −inf
-        off the prior's support or the model's domain, never NaN. One transform for both."""
+        off the prior's support or the model's domain, never NaN. One transform for both.
+        """
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
         with np.errstate(all="ignore"):  # inf or nan in u: −inf below, not a warning in the sampler
             x, log_jac = self.prior.from_unconstrained(u2)
@@ -168,7 +206,10 @@ class LogPosterior(PriorScaledTarget):
                 with np.errstate(all="ignore"):
                     log_like[ok] = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
             except Exception as exc:
-                exc.add_note(f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0]))}")
+                exc.add_note(
+                    f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0], strict=False))}"
+                )
                 raise
-        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
-
+        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(
+            np.isnan(log_like), -np.inf, log_like
+        )

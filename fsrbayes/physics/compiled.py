@@ -29,7 +29,11 @@ from .constants import CURRENT_SCALE, KAPPA
 
 __all__ = ["solve_smooth"]
 
-_SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = float(tl.SQRT_HALF), float(tl.SQRT_THREE_HALVES), float(tl.OPACITY_LIMIT)
+_SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = (
+    float(tl.SQRT_HALF),
+    float(tl.SQRT_THREE_HALVES),
+    float(tl.OPACITY_LIMIT),
+)
 _LOG_CURRENT_SCALE = math.log(CURRENT_SCALE)
 _LOG_TWO = math.log(2.0)
 _INVALID, _OHMIC, _INTERMEDIATE, _FORWARD = 0, 1, 2, 4
@@ -60,14 +64,16 @@ def _log_prefactor_10(log_a, s):
 @numba.njit(**_JIT)
 def _log_ohmic_conductance(opacity, log_pre10):
     """Eq. 9's log conductance, log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)
-    (``tunneling.log_ohmic_conductance``)."""
+    (``tunneling.log_ohmic_conductance``).
+    """
     return math.log(0.75 * opacity) + log_pre10 - opacity
 
 
 @numba.njit(**_JIT)
 def _forward_constants(ks, va, sqrt_va, log_va, log_pre10):
     """``tunneling.prepare_forward`` from row constants: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2,
-    the log-w offset and ρ."""
+    the log-w offset and ρ.
+    """
     g = ks * va * sqrt_va * _SQRT_HALF
     rho = 3.0 * math.exp(-ks * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))
     return log_pre10 - _LOG_TWO - log_va, g, g / va - 2.0 * log_va, rho
@@ -122,8 +128,12 @@ def _newton(forward, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_it
             lo = ell
         step = -h / (x * rest * slope + share)
         ell_new = ell + step
-        done = ((abs(step) <= finish and ell_new >= lo and ell_new <= hi) or h == 0
-                or not hi > lo or iteration == max_iter)
+        done = (
+            (abs(step) <= finish and ell_new >= lo and ell_new <= hi)
+            or h == 0
+            or not hi > lo
+            or iteration == max_iter
+        )
         if done:
             ell_root = ell if h == 0 else ell_new
             x_done = v / (1.0 + math.exp(-ell_root))
@@ -135,8 +145,21 @@ def _newton(forward, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_it
 
 
 @numba.njit(**_JIT)
-def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, log_a, warm_ell, warm_regime,
-                     finish, max_iter):
+def _solve_row_point(
+    v,
+    log_v,
+    log_rs,
+    log_v_minus_va,
+    s,
+    va,
+    sqrt_va,
+    log_va,
+    log_a,
+    warm_ell,
+    warm_regime,
+    finish,
+    max_iter,
+):
     """One valid point with V > 0 and R_s > 0 of a row: (log I, V_bulk, regime, ℓ, iterations).
 
     The constants of :func:`~fsrbayes.physics.tunneling.prepare_intermediate`,
@@ -161,7 +184,9 @@ def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, l
         if h_va < 0:
             regime = _FORWARD
             if warm_regime != _FORWARD:
-                slope_va = 0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
+                slope_va = (
+                    0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
+                )
                 share, rest = va / v, (v - va) / v
                 start = math.log(share / rest) - h_va / (va * rest * slope_va + share)
         elif not h_va >= 0:
@@ -169,14 +194,30 @@ def _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va, log_va, l
     if regime == _INTERMEDIATE:
         if warm_regime != _INTERMEDIATE:
             # The ohmic root ℓ = −log(R_s·G0), G0 eq. 10's conductance at V → 0.
-            start = -(log_rs + _log_ohmic_conductance(opacity, log_pre10)
-                      + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
-        x, log_i, ell, its = _newton(False, v, log_v, 0.0, min(v, va), start, log_pre10 + log_rs, ks, va, 0.0,
-                                     finish, max_iter)
+            start = -(
+                log_rs
+                + _log_ohmic_conductance(opacity, log_pre10)
+                + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity))
+            )
+        x, log_i, ell, its = _newton(
+            False,
+            v,
+            log_v,
+            0.0,
+            min(v, va),
+            start,
+            log_pre10 + log_rs,
+            ks,
+            va,
+            0.0,
+            finish,
+            max_iter,
+        )
     else:
         log_pre, g, log_w_offset, rho = _forward_constants(ks, va, sqrt_va, log_va, log_pre10)
-        x, log_i, ell, its = _newton(True, v, log_v, va, v, start, log_pre + log_rs, g, log_w_offset, rho,
-                                     finish, max_iter)
+        x, log_i, ell, its = _newton(
+            True, v, log_v, va, v, start, log_pre + log_rs, g, log_w_offset, rho, finish, max_iter
+        )
     return log_i - log_rs, x, regime, ell, its
 
 
@@ -197,12 +238,23 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
     warm_ell, warm_regime = math.nan, -1
     for i in range(n):
         rs, va, a = rs_in[i], va_in[i], a_in[i]
-        if i == 0 or not (voltage[i] == voltage[i - 1] and rs == rs_in[i - 1] and va == va_in[i - 1]
-                          and a == a_in[i - 1]):
+        if i == 0 or not (
+            voltage[i] == voltage[i - 1]
+            and rs == rs_in[i - 1]
+            and va == va_in[i - 1]
+            and a == a_in[i - 1]
+        ):
             v = abs(voltage[i])
             sign = 1.0 if voltage[i] > 0 else (-1.0 if voltage[i] < 0 else 0.0)
-            row_ok = (math.isfinite(v) and math.isfinite(rs) and rs >= 0 and a > 0 and math.isfinite(a)
-                      and va > 0 and math.isfinite(va))
+            row_ok = (
+                math.isfinite(v)
+                and math.isfinite(rs)
+                and rs >= 0
+                and a > 0
+                and math.isfinite(a)
+                and va > 0
+                and math.isfinite(va)
+            )
             if row_ok:
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
                 log_v, log_rs = _log(v), _log(rs)
@@ -224,12 +276,27 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
                 log_i = _intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]
                 regime[i] = _INTERMEDIATE
             else:
-                log_i = _forward(v, log_v, *_forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10))[0]
+                log_i = _forward(
+                    v, log_v, *_forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10)
+                )[0]
                 regime[i] = _FORWARD
             current[i], v_bulk[i] = sign * math.exp(log_i), sign * v
             continue
-        log_i, x, point_regime, ell, its = _solve_row_point(v, log_v, log_rs, log_v_minus_va, s, va, sqrt_va,
-                                                            log_va, log_a, warm_ell, warm_regime, finish, max_iter)
+        log_i, x, point_regime, ell, its = _solve_row_point(
+            v,
+            log_v,
+            log_rs,
+            log_v_minus_va,
+            s,
+            va,
+            sqrt_va,
+            log_va,
+            log_a,
+            warm_ell,
+            warm_regime,
+            finish,
+            max_iter,
+        )
         regime[i] = point_regime
         if point_regime == _INVALID:
             current[i], v_bulk[i] = math.nan, math.nan
@@ -251,6 +318,16 @@ def solve_smooth(voltage, series_resistance, gap, barrier, area, finish, max_ite
     current = np.empty(n)
     v_bulk = np.empty(n)
     regime = np.empty(n, dtype=np.int8)
-    iterations = _solve_all(voltage, series_resistance, gap, barrier, area, float(finish), int(max_iter),
-                            current, v_bulk, regime)
+    iterations = _solve_all(
+        voltage,
+        series_resistance,
+        gap,
+        barrier,
+        area,
+        float(finish),
+        int(max_iter),
+        current,
+        v_bulk,
+        regime,
+    )
     return current, v_bulk, regime, int(iterations)

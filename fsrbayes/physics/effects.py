@@ -126,7 +126,8 @@ class OffsetStress(Effect):
     """Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
 
     The contact law reads ``sigma0`` itself (0 without the effect), so no hook is needed: the
-    effect only makes σ0 a model parameter."""
+    effect only makes σ0 a model parameter.
+    """
 
 
 EFFECTS = {}
@@ -142,23 +143,31 @@ def register_effect(effect, *, replace=False):
     if not isinstance(effect, Effect):
         raise TypeError(f"register_effect takes an Effect, got {type(effect).__name__}")
     if effect.name in EFFECTS and not replace:
-        raise ValueError(f"an effect named {effect.name!r} is already registered (replace=True to replace it)")
+        raise ValueError(
+            f"an effect named {effect.name!r} is already registered (replace=True to replace it)"
+        )
     if "+" in effect.name or not effect.name:
         raise ValueError(f"an effect's name must be non-empty and hold no '+', got {effect.name!r}")
     unknown = [p for p in effect.parameters if p not in PARAMETERS]
     if unknown:
-        raise ValueError(f"effect {effect.name!r}: parameter(s) {unknown} are not in the parameter table; "
-                         "register them first with fsrbayes.physics.parameters.register_parameter")
+        raise ValueError(
+            f"effect {effect.name!r}: parameter(s) {unknown} are not in the parameter table; "
+            "register them first with fsrbayes.physics.parameters.register_parameter"
+        )
     stray = sorted(set(effect.null) - set(effect.parameters))
     if stray:
-        raise ValueError(f"effect {effect.name!r}: null values for {stray}, which are not its parameters")
+        raise ValueError(
+            f"effect {effect.name!r}: null values for {stray}, which are not its parameters"
+        )
     EFFECTS[effect.name] = effect
     return effect
 
 
 for _parameter in (
     Parameter("area_creep", "–", "effect", None, "area creep per unit creep strain"),
-    Parameter("contact_creep", "–", "effect", None, "contact-resistance creep per unit creep strain"),
+    Parameter(
+        "contact_creep", "–", "effect", None, "contact-resistance creep per unit creep strain"
+    ),
     Parameter("plc_psi", "1/(Pa·s^n)", "effect", None, "power-law creep coefficient"),
     Parameter("plc_n", "–", "effect", None, "power-law creep exponent"),
     Parameter("deg_amp", "–", "effect", None, "log-current lost to degradation at full switch-on"),
@@ -170,14 +179,33 @@ for _parameter in (
     register_parameter(_parameter)
 
 for _effect in (
-    AreaCreep("area-creep", ("area_creep",), {"area_creep": 0.0}, "the effective tunneling area creeps with the polymer"),
-    ContactCreep("contact-creep", ("contact_creep",), {"contact_creep": 0.0},
-                 "the contact resistance creeps as contact paths form"),
-    PowerLawCreep("power-law-creep", ("plc_psi", "plc_n"), {"plc_psi": 0.0},
-                  "creep kinetics with a power-law (Nutting) term"),
-    VoltageDegradation("voltage-degradation", ("deg_amp", "deg_onset", "deg_tau", "deg_width"), {"deg_amp": 0.0},
-                       "conduction paths are lost above an onset voltage"),
-    OffsetStress("offset-stress", ("sigma0",), {"sigma0": 0.0}, "a preload stress in the contact resistance"),
+    AreaCreep(
+        "area-creep",
+        ("area_creep",),
+        {"area_creep": 0.0},
+        "the effective tunneling area creeps with the polymer",
+    ),
+    ContactCreep(
+        "contact-creep",
+        ("contact_creep",),
+        {"contact_creep": 0.0},
+        "the contact resistance creeps as contact paths form",
+    ),
+    PowerLawCreep(
+        "power-law-creep",
+        ("plc_psi", "plc_n"),
+        {"plc_psi": 0.0},
+        "creep kinetics with a power-law (Nutting) term",
+    ),
+    VoltageDegradation(
+        "voltage-degradation",
+        ("deg_amp", "deg_onset", "deg_tau", "deg_width"),
+        {"deg_amp": 0.0},
+        "conduction paths are lost above an onset voltage",
+    ),
+    OffsetStress(
+        "offset-stress", ("sigma0",), {"sigma0": 0.0}, "a preload stress in the contact resistance"
+    ),
 ):
     register_effect(_effect)
 
@@ -197,8 +225,10 @@ def resolve_effects(effects):
         elif effect in EFFECTS:
             resolved.append(EFFECTS[effect])
         else:
-            raise ValueError(f"unknown effect(s) {[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
-                             f" expected names from {sorted(EFFECTS)}")
+            raise ValueError(
+                f"unknown effect(s) {[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
+                f" expected names from {sorted(EFFECTS)}"
+            )
     names = [e.name for e in resolved]
     if len(set(names)) != len(names):
         raise ValueError(f"effect listed twice in {names}")

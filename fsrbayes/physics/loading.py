@@ -109,7 +109,9 @@ def sine(mean, amplitude, frequency, duration, *, points_per_period=200):
     (2π/200)²/8 ≈ 1.2e-4 of the amplitude.
     """
     if amplitude > mean:
-        raise ValueError(f"sine load needs mean >= amplitude to stay compressive, got {mean} < {amplitude}")
+        raise ValueError(
+            f"sine load needs mean >= amplitude to stay compressive, got {mean} < {amplitude}"
+        )
     n = max(2, int(np.ceil(duration * frequency * points_per_period)) + 1)
     times = np.linspace(0.0, duration, n)
     stress = mean + amplitude * np.sin(2 * np.pi * frequency * times)

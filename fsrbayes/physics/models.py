@@ -16,8 +16,18 @@ from .parameters import PARAMETERS, Parameter, register_parameter
 from .peers import kalantari_solution
 from .rheology import CREEP_LAWS, ZENER, CreepLaw, creep_law, register_creep_law
 
-__all__ = ["BASE_PARAMETERS", "PEER_MODELS", "PeerModel", "model_components", "model_families", "model_family",
-           "model_parameters", "parse_model", "register_components", "register_peer_model"]
+__all__ = [
+    "BASE_PARAMETERS",
+    "PEER_MODELS",
+    "PeerModel",
+    "model_components",
+    "model_families",
+    "model_family",
+    "model_parameters",
+    "parse_model",
+    "register_components",
+    "register_peer_model",
+]
 
 BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0")
 """Parameters of the tunneling and contact laws every paper-circuit model uses (Vth: paper law only)."""
@@ -64,9 +74,16 @@ def register_peer_model(model, *, replace=False):
     return model
 
 
-KALANTARI = register_peer_model(PeerModel(
-    "kalantari", ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2"), ZENER, kalantari_solution, 0.5,
-    "Kalantari et al. (eq. 14): ohmic bulk R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε), Zener creep, Hertzian contact"))
+KALANTARI = register_peer_model(
+    PeerModel(
+        "kalantari",
+        ("R0", "s0", "Va", "Rc0", "k1", "k2", "b2"),
+        ZENER,
+        kalantari_solution,
+        0.5,
+        "Kalantari et al. (eq. 14): ohmic bulk R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε), Zener creep, Hertzian contact",
+    )
+)
 """Kalantari et al.'s eq. 14 in the canonical names: bulk resistance at rest R0, rest gap s0
 (their D·[(π/6θ)^(1/3) − 1]) and barrier Va, the Hertzian contact 2·Rc0·σ^(−1/2) (their
 (ρ1 + ρ2)/2·sqrt(πH/F)) and the Zener element E0, E1, μ1 = k1, k2, b2."""
@@ -106,10 +123,14 @@ def parse_model(model):
     parts = [p.strip() for p in str(model).split("+")]
     family, effects = parts[0].lower(), parts[1:]
     if family not in CREEP_LAWS and family not in PEER_MODELS:
-        raise ValueError(f"model {model!r}: the first term must be one of {model_families()}, got {family!r}")
+        raise ValueError(
+            f"model {model!r}: the first term must be one of {model_families()}, got {family!r}"
+        )
     if family in PEER_MODELS and effects:
-        raise ValueError(f"model {model!r}: the peer model {family!r} takes no +effect terms; "
-                         f"the effect catalogue extends the paper's model ({', '.join(CREEP_LAWS)})")
+        raise ValueError(
+            f"model {model!r}: the peer model {family!r} takes no +effect terms; "
+            f"the effect catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
+        )
     return family, tuple(e.name for e in resolve_effects(effects))
 
 

@@ -10,8 +10,14 @@ parameters, off at their null value) and ``nuisance`` (the noise model).
 
 from dataclasses import dataclass
 
-__all__ = ["PARAMETERS", "Parameter", "parameter_units", "physical_parameters", "population_scatter",
-           "register_parameter"]
+__all__ = [
+    "PARAMETERS",
+    "Parameter",
+    "parameter_units",
+    "physical_parameters",
+    "population_scatter",
+    "register_parameter",
+]
 
 ROLES = ("physical", "effect", "nuisance")
 
@@ -40,9 +46,13 @@ class Parameter:
 
     def __post_init__(self):
         if self.role not in ROLES:
-            raise ValueError(f"parameter {self.name!r}: role must be one of {ROLES}, got {self.role!r}")
+            raise ValueError(
+                f"parameter {self.name!r}: role must be one of {ROLES}, got {self.role!r}"
+            )
         if self.population_log_sd is not None and not self.population_log_sd >= 0:
-            raise ValueError(f"parameter {self.name!r}: population_log_sd must be >= 0, got {self.population_log_sd}")
+            raise ValueError(
+                f"parameter {self.name!r}: population_log_sd must be >= 0, got {self.population_log_sd}"
+            )
 
 
 PARAMETERS = {}
@@ -55,7 +65,9 @@ def register_parameter(parameter, *, replace=False):
         raise TypeError(f"register_parameter takes a Parameter, got {type(parameter).__name__}")
     known = PARAMETERS.get(parameter.name)
     if known is not None and known != parameter and not replace:
-        raise ValueError(f"parameter {parameter.name!r} is already in the table as {known} (replace=True to replace)")
+        raise ValueError(
+            f"parameter {parameter.name!r} is already in the table as {known} (replace=True to replace)"
+        )
     PARAMETERS[parameter.name] = parameter
     return parameter
 
@@ -97,4 +109,8 @@ def physical_parameters():
 
 def population_scatter():
     """Name → population log-sd of every parameter that varies between specimens, in table order."""
-    return {name: p.population_log_sd for name, p in PARAMETERS.items() if p.population_log_sd is not None}
+    return {
+        name: p.population_log_sd
+        for name, p in PARAMETERS.items()
+        if p.population_log_sd is not None
+    }

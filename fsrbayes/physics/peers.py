@@ -19,13 +19,21 @@ from .contact import contact_resistance
 from .rheology import burgers_compliance
 from .solver import INVALID, OHMIC, BulkSolution
 
-__all__ = ["rest_gap", "zhang_resistance_ratio", "kalantari_bulk_resistance", "kalantari_resistance", "kalantari_current",
-           "kalantari_solution"]
+__all__ = [
+    "rest_gap",
+    "zhang_resistance_ratio",
+    "kalantari_bulk_resistance",
+    "kalantari_resistance",
+    "kalantari_current",
+    "kalantari_solution",
+]
 
 
 def rest_gap(diameter, volume_fraction):
     """Inter-particle gap at rest D·[(π/(6θ))^(1/3) − 1] in m (cubic-lattice estimate)."""
-    return diameter * ((np.pi / (6.0 * np.asarray(volume_fraction, dtype=float))) ** (1.0 / 3.0) - 1.0)
+    return diameter * (
+        (np.pi / (6.0 * np.asarray(volume_fraction, dtype=float))) ** (1.0 / 3.0) - 1.0
+    )
 
 
 def zhang_resistance_ratio(t, stress, psi, n, eps0, Va, diameter, volume_fraction):
@@ -82,8 +90,9 @@ def kalantari_bulk_resistance(strain, R0, rest_gap, Va):
     return R0 * (1.0 - strain) * np.exp(-KAPPA * np.sqrt(Va) * rest_gap * strain)
 
 
-def kalantari_resistance(t, force, sensor_area, *, R0, E0, E1, mu1, Va, diameter, volume_fraction,
-                         rho1, rho2, hardness):
+def kalantari_resistance(
+    t, force, sensor_area, *, R0, E0, E1, mu1, Va, diameter, volume_fraction, rho1, rho2, hardness
+):
     """Total resistance of Kalantari et al., eq. 14 (Zener creep, constant contact resistance).
 
     R(t) = (ρ1 + ρ2)/2·sqrt(πH/F) + R0·(1 − ε(t))·exp{−(4π/h)sqrt(2mVa)·s_rest·ε(t)},
@@ -154,6 +163,11 @@ def kalantari_solution(params, voltage, stress, strain, extra_series=0.0):
         valid = (strain < 1.0) & np.isfinite(total) & (total > 0) & np.isfinite(voltage)
         current = np.where(valid, voltage / np.where(valid, total, 1.0), np.nan)
     shape = current.shape
-    return BulkSolution(current=current, v_bulk=np.broadcast_to(current * bulk, shape).copy(),
-                        valid=np.broadcast_to(valid, shape).copy(), at_jump=np.zeros(shape, dtype=bool),
-                        regime=np.where(valid, OHMIC, INVALID).astype(np.int8), iterations=0)
+    return BulkSolution(
+        current=current,
+        v_bulk=np.broadcast_to(current * bulk, shape).copy(),
+        valid=np.broadcast_to(valid, shape).copy(),
+        at_jump=np.zeros(shape, dtype=bool),
+        regime=np.where(valid, OHMIC, INVALID).astype(np.int8),
+        iterations=0,
+    )

@@ -45,6 +45,7 @@ __all__ = [
     "fluidity",
 ]
 
+
 def fluidity(params):
     """The Burgers fluidity 1/b1 from a parameter mapping (``inv_b1`` or ``b1``).
 
@@ -199,21 +200,46 @@ def register_creep_law(law, *, replace=False):
     if not isinstance(law, CreepLaw):
         raise TypeError(f"register_creep_law takes a CreepLaw, got {type(law).__name__}")
     if law.name in CREEP_LAWS and not replace:
-        raise ValueError(f"a creep law named {law.name!r} is already registered (replace=True to replace it)")
+        raise ValueError(
+            f"a creep law named {law.name!r} is already registered (replace=True to replace it)"
+        )
     unknown = [p for p in law.parameters if p not in PARAMETERS]
     if unknown:
-        raise ValueError(f"creep law {law.name!r}: parameter(s) {unknown} are not in the parameter table; "
-                         "register them first with fsrbayes.physics.parameters.register_parameter")
+        raise ValueError(
+            f"creep law {law.name!r}: parameter(s) {unknown} are not in the parameter table; "
+            "register them first with fsrbayes.physics.parameters.register_parameter"
+        )
     CREEP_LAWS[law.name] = law
     return law
 
 
-BURGERS = register_creep_law(CreepLaw("burgers", ("k1", "k2", "b2", "inv_b1"), _burgers, _burgers_ramp,
-                                      "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)"))
-ZENER = register_creep_law(CreepLaw("zener", ("k1", "k2", "b2"), _zener, _zener_ramp,
-                                    "Zener: Burgers without linear flow, its b1 -> inf limit"))
-NUTTING = register_creep_law(CreepLaw("nutting", ("k1", "psi", "n"), _nutting, _nutting_ramp,
-                                      "Nutting power-law creep (eq. 13, Zhang et al.)"))
+BURGERS = register_creep_law(
+    CreepLaw(
+        "burgers",
+        ("k1", "k2", "b2", "inv_b1"),
+        _burgers,
+        _burgers_ramp,
+        "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)",
+    )
+)
+ZENER = register_creep_law(
+    CreepLaw(
+        "zener",
+        ("k1", "k2", "b2"),
+        _zener,
+        _zener_ramp,
+        "Zener: Burgers without linear flow, its b1 -> inf limit",
+    )
+)
+NUTTING = register_creep_law(
+    CreepLaw(
+        "nutting",
+        ("k1", "psi", "n"),
+        _nutting,
+        _nutting_ramp,
+        "Nutting power-law creep (eq. 13, Zhang et al.)",
+    )
+)
 
 
 def creep_law(rheology):
@@ -277,11 +303,11 @@ def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
     out = np.empty(flat.shape)
     step = max(1, chunk // max(1, jump_times.size + 2 * ramp_starts.size))
     for start in range(0, flat.size, step):
-        tt = flat[start:start + step, None]
+        tt = flat[start : start + step, None]
         part = (jump_sizes * law.compliance(tt - jump_times, params)).sum(axis=1)
         if ramp_slopes.size:
             rise = law.ramp_compliance(tt - ramp_starts, params)
             rise -= law.ramp_compliance(tt - ramp_ends, params)
             part += (ramp_slopes * rise).sum(axis=1)
-        out[start:start + step] = part
+        out[start : start + step] = part
     return out.reshape(t.shape)

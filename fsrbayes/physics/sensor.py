@@ -75,8 +75,9 @@ def sensor_state(params, stress, strain):
     Paper eqs. (5), (6), (7)/(18).
     """
     stress = np.asarray(stress, dtype=float)
-    series = 2.0 * contact_resistance(stress, params["Rc0"], params["alpha"], params.get("Rpar", 0.0),
-                                      params.get("sigma0", 0.0))
+    series = 2.0 * contact_resistance(
+        stress, params["Rc0"], params["alpha"], params.get("Rpar", 0.0), params.get("sigma0", 0.0)
+    )
     area = effective_area(stress, params["A0"], params["A1"], params["A2"])
     return gap(params["s0"], strain), area, series
 
@@ -90,8 +91,9 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
         for effect in effects:
             area, series = effect.adjust_state(params, area, series, creep)
     threshold = params["Vth"] if tunneling == "paper" else None
-    solution = solve_bulk(voltage, series + extra_series, s, params["Va"], area, law=tunneling,
-                          threshold=threshold)
+    solution = solve_bulk(
+        voltage, series + extra_series, s, params["Va"], area, law=tunneling, threshold=threshold
+    )
     factor = None
     for effect in effects:
         own = effect.current_factor(params, voltage, time)
@@ -102,12 +104,18 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
     return solution
 
 
-def _solve_model(params, voltage, stress, strain, family, tunneling, effects=(), time=0.0, extra_series=0.0):
+def _solve_model(
+    params, voltage, stress, strain, family, tunneling, effects=(), time=0.0, extra_series=0.0
+):
     """The circuit of the model family: a peer model's own, or the paper's implicit one."""
     if isinstance(family, PeerModel):
-        _check_choice("tunneling", tunneling, TUNNELING_LAWS)  # accepted, unused: its circuit is its own
+        _check_choice(
+            "tunneling", tunneling, TUNNELING_LAWS
+        )  # accepted, unused: its circuit is its own
         if effects:
-            raise ValueError(f"the peer model {family.name!r} takes no effects, got {[e.name for e in effects]}")
+            raise ValueError(
+                f"the peer model {family.name!r} takes no effects, got {[e.name for e in effects]}"
+            )
         return family.solve(params, voltage, stress, strain, extra_series)
     return _solve(params, voltage, stress, strain, tunneling, extra_series, effects, time)
 
@@ -140,7 +148,9 @@ def _strain_step(params, stress, time, family, effects=()):
     return strain
 
 
-def solve_current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", effects=()):
+def solve_current(
+    params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", effects=()
+):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
     ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`), or gives them as
@@ -168,13 +178,17 @@ def _apply_policy(solution, on_invalid, voltage, stress, time):
         return value
     n_bad = int(bad.sum())
     first = np.unravel_index(np.argmax(bad), bad.shape)
-    where = {name: float(np.broadcast_to(np.asarray(arr, dtype=float), bad.shape)[first])
-             for name, arr in (("voltage_V", voltage), ("stress_Pa", stress), ("time_s", time))}
-    message = (f"{n_bad} of {bad.size} points are outside the validity domain of the model "
-               f"(first at V_FSR={where['voltage_V']:g} V, stress={where['stress_Pa']:g} Pa, "
-               f"t={where['time_s']:g} s): the paper law stops increasing above its eq.-11 peak "
-               f"(~3.6-3.9 V across the bulk for A201) or the gap closed; use tunneling='smooth', "
-               f"lower voltages, or on_invalid='mask'/'nan'")
+    where = {
+        name: float(np.broadcast_to(np.asarray(arr, dtype=float), bad.shape)[first])
+        for name, arr in (("voltage_V", voltage), ("stress_Pa", stress), ("time_s", time))
+    }
+    message = (
+        f"{n_bad} of {bad.size} points are outside the validity domain of the model "
+        f"(first at V_FSR={where['voltage_V']:g} V, stress={where['stress_Pa']:g} Pa, "
+        f"t={where['time_s']:g} s): the paper law stops increasing above its eq.-11 peak "
+        f"(~3.6-3.9 V across the bulk for A201) or the gap closed; use tunneling='smooth', "
+        f"lower voltages, or on_invalid='mask'/'nan'"
+    )
     if on_invalid == "raise":
         raise DomainError(message, n_bad, where)
     if on_invalid == "mask":
@@ -183,8 +197,17 @@ def _apply_policy(solution, on_invalid, voltage, stress, time):
     return value
 
 
-def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise",
-            effects=()):
+def current(
+    params,
+    voltage,
+    stress,
+    time,
+    *,
+    rheology="burgers",
+    tunneling="smooth",
+    on_invalid="raise",
+    effects=(),
+):
     """Sensor current I(t) in A after a stress step held from t = 0 (eqs. 17–21).
 
     Parameters
@@ -216,12 +239,23 @@ def current(params, voltage, stress, time, *, rheology="burgers", tunneling="smo
     ----------
     Paper eqs. (1), (4)–(6), (17)–(21).
     """
-    solution = solve_current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling, effects=effects)
+    solution = solve_current(
+        params, voltage, stress, time, rheology=rheology, tunneling=tunneling, effects=effects
+    )
     return _apply_policy(solution, on_invalid, voltage, stress, time)
 
 
-def drift(params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", on_invalid="raise",
-          effects=()):
+def drift(
+    params,
+    voltage,
+    stress,
+    time,
+    *,
+    rheology="burgers",
+    tunneling="smooth",
+    on_invalid="raise",
+    effects=(),
+):
     """Normalised current drift in %, 100·(I(t) − I(0))/I(0), eq. 22.
 
     Same arguments as :func:`current`; I(0) is the current right after the step (strain
@@ -231,15 +265,40 @@ def drift(params, voltage, stress, time, *, rheology="burgers", tunneling="smoot
     ----------
     Paper eq. (22).
     """
-    now = current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling,
-                  on_invalid=on_invalid, effects=effects)
-    start = current(params, voltage, stress, np.zeros_like(np.asarray(time, dtype=float)),
-                    rheology=rheology, tunneling=tunneling, on_invalid=on_invalid, effects=effects)
+    now = current(
+        params,
+        voltage,
+        stress,
+        time,
+        rheology=rheology,
+        tunneling=tunneling,
+        on_invalid=on_invalid,
+        effects=effects,
+    )
+    start = current(
+        params,
+        voltage,
+        stress,
+        np.zeros_like(np.asarray(time, dtype=float)),
+        rheology=rheology,
+        tunneling=tunneling,
+        on_invalid=on_invalid,
+        effects=effects,
+    )
     return 100.0 * (now - start) / start
 
 
-def current_history(params, voltage, history, time, *, rheology="burgers", tunneling="smooth",
-                    on_invalid="raise", effects=()):
+def current_history(
+    params,
+    voltage,
+    history,
+    time,
+    *,
+    rheology="burgers",
+    tunneling="smooth",
+    on_invalid="raise",
+    effects=(),
+):
     """Sensor current for an arbitrary stress history σ(t) (Boltzmann superposition).
 
     Parameters
@@ -267,7 +326,9 @@ def current_history(params, voltage, history, time, *, rheology="burgers", tunne
     time = np.asarray(time, dtype=float)
     stress = history.at(time)
     if np.any(stress <= 0):
-        raise ValueError(f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} Pa")
+        raise ValueError(
+            f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} Pa"
+        )
     strain = _creep_law(family).strain_history(history, time, params)
     for effect in effects:
         extra = effect.extra_strain_history(params, history, time)
@@ -294,12 +355,19 @@ def resistances(params, voltage, stress, time=0.0, *, rheology="burgers", tunnel
     if isinstance(family, PeerModel):
         rc = contact_resistance(stress, params["Rc0"], family.contact_alpha)
     else:
-        rc = contact_resistance(stress, params["Rc0"], params["alpha"], params.get("Rpar", 0.0),
-                                params.get("sigma0", 0.0))
+        rc = contact_resistance(
+            stress,
+            params["Rc0"],
+            params["alpha"],
+            params.get("Rpar", 0.0),
+            params.get("sigma0", 0.0),
+        )
     with np.errstate(invalid="ignore", divide="ignore"):
-        return {"R_fsr": np.asarray(voltage) / solution.current,
-                "R_bulk": solution.v_bulk / solution.current,
-                "Rc": np.broadcast_to(rc, solution.current.shape).copy()}
+        return {
+            "R_fsr": np.asarray(voltage) / solution.current,
+            "R_bulk": solution.v_bulk / solution.current,
+            "Rc": np.broadcast_to(rc, solution.current.shape).copy(),
+        }
 
 
 def amplifier_output(current_A, rf_ohm):
@@ -339,8 +407,9 @@ class DividerResult:
     valid: np.ndarray
 
 
-def voltage_divider(params, supply, load_resistance, stress, time=0.0, *, rheology="burgers",
-                    tunneling="smooth"):
+def voltage_divider(
+    params, supply, load_resistance, stress, time=0.0, *, rheology="burgers", tunneling="smooth"
+):
     """V_FSR of a sensor in series with a load resistor across a supply (Figure 17).
 
     The supply sees V_s = V_bulk + (2·Rc + R_L)·I, the same implicit equation as the sensor
@@ -373,5 +442,9 @@ def voltage_divider(params, supply, load_resistance, stress, time=0.0, *, rheolo
         raise ValueError(f"load_resistance must be >= 0 ohm, got min {load.min():g}")
     solution = _solve_model(params, supply, stress, strain, family, tunneling, extra_series=load)
     v_out = solution.current * load
-    return DividerResult(v_fsr=np.asarray(supply, dtype=float) - v_out, current=solution.current,
-                         v_out=v_out, valid=solution.valid)
+    return DividerResult(
+        v_fsr=np.asarray(supply, dtype=float) - v_out,
+        current=solution.current,
+        v_out=v_out,
+        valid=solution.valid,
+    )

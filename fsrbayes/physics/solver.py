@@ -32,8 +32,14 @@ from . import tunneling as tl
 
 __all__ = ["BulkSolution", "solve_bulk", "REGIMES"]
 
-REGIMES = {0: "invalid", 1: "ohmic (eq. 9)", 2: "intermediate (eq. 10)", 3: "high voltage (eq. 11)",
-           4: "shortened barrier (smooth)", 5: "jump point"}
+REGIMES = {
+    0: "invalid",
+    1: "ohmic (eq. 9)",
+    2: "intermediate (eq. 10)",
+    3: "high voltage (eq. 11)",
+    4: "shortened barrier (smooth)",
+    5: "jump point",
+}
 INVALID, OHMIC, INTERMEDIATE, HIGH, FORWARD, JUMP = range(6)
 _BRANCH_NAME = {INTERMEDIATE: "intermediate", HIGH: "high", FORWARD: "forward"}
 ENGINES = ("compiled", "numpy")
@@ -101,7 +107,9 @@ def _fallback(lo, hi):
     """Bisection in ℓ, or a step of 4 towards an infinite end of the bracket."""
     finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
     with np.errstate(invalid="ignore"):
-        return np.where(finite_lo & finite_hi, 0.5 * (lo + hi), np.where(finite_lo, lo + 4.0, hi - 4.0))
+        return np.where(
+            finite_lo & finite_hi, 0.5 * (lo + hi), np.where(finite_lo, lo + 4.0, hi - 4.0)
+        )
 
 
 def _newton_block(evaluate, consts, v, lo, hi, ell, finish, max_iter):
@@ -134,7 +142,9 @@ def _newton_block(evaluate, consts, v, lo, hi, ell, finish, max_iter):
         ell_new = ell + step
         # A step below `finish` leaves an error ~step² after it: take it without another
         # evaluation, moving log I to first order (its error is ~step² as well).
-        done = ((np.abs(step) <= finish) & (ell_new >= lo) & (ell_new <= hi)) | (h == 0) | ~(hi > lo)
+        done = (
+            ((np.abs(step) <= finish) & (ell_new >= lo) & (ell_new <= hi)) | (h == 0) | ~(hi > lo)
+        )
         done &= running
         if iterations == max_iter:
             done = running
@@ -151,8 +161,14 @@ def _newton_block(evaluate, consts, v, lo, hi, ell, finish, max_iter):
             if n_running == 0:
                 break
             if n_running <= 0.75 * running.size:
-                idx, v, log_v, lo, hi, ell_new = (idx[running], v[running], log_v[running], lo[running],
-                                                  hi[running], ell_new[running])
+                idx, v, log_v, lo, hi, ell_new = (
+                    idx[running],
+                    v[running],
+                    log_v[running],
+                    lo[running],
+                    hi[running],
+                    ell_new[running],
+                )
                 consts = tuple(c[running] for c in consts)
                 running = np.ones(n_running, dtype=bool)
         ell = ell_new
@@ -173,12 +189,25 @@ def _newton(branch, v, log_rs, s, phi, a, lo, hi, start, finish, max_iter):
     lo, hi = _logit(lo, v), _logit(hi, v)
     ell = np.where((start > lo) & (start < hi), start, _fallback(lo, hi))
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        x, log_i, iterations = _newton_block(evaluate, tuple(consts), v, lo, hi, ell, finish, max_iter)
+        x, log_i, iterations = _newton_block(
+            evaluate, tuple(consts), v, lo, hi, ell, finish, max_iter
+        )
     return x, log_i - log_rs, iterations
 
 
-def solve_bulk(voltage, series_resistance, gap, barrier, area, *, law="smooth", threshold=None,
-               finish=FINISH, max_iter=100, engine="compiled"):
+def solve_bulk(
+    voltage,
+    series_resistance,
+    gap,
+    barrier,
+    area,
+    *,
+    law="smooth",
+    threshold=None,
+    finish=FINISH,
+    max_iter=100,
+    engine="compiled",
+):
     """Solve V = V_bulk + R_s·I(V_bulk) for the sensor current, over any broadcast shape.
 
     Parameters
@@ -253,7 +282,9 @@ def _solve_blocks(flat, law, finish, max_iter):
         for begin in range(0, n, CHUNK):
             block = slice(begin, begin + CHUNK)
             parts = [None if x is None else x[block] for x in flat]
-            current[block], v_bulk[block], regime[block], its = _solve_block(*parts, law, finish, max_iter)
+            current[block], v_bulk[block], regime[block], its = _solve_block(
+                *parts, law, finish, max_iter
+            )
             iterations = max(iterations, its)
     return current, v_bulk, regime, iterations
 
@@ -270,8 +301,13 @@ def _classify_paper(rest, v, vth, peak, log_rs, s, phi, a, regime, x):
     n = v.size
     h10_va = np.full(n, np.inf)
     sel = np.flatnonzero(rest & (v > phi))
-    h10_va[sel] = _branch_h(INTERMEDIATE, phi[sel], v[sel], log_rs[sel], s[sel], phi[sel], a[sel])[0]
-    for mask, lower, branch in ((rest & (h10_va >= 0), vth, INTERMEDIATE), (rest & (h10_va < 0), phi, HIGH)):
+    h10_va[sel] = _branch_h(INTERMEDIATE, phi[sel], v[sel], log_rs[sel], s[sel], phi[sel], a[sel])[
+        0
+    ]
+    for mask, lower, branch in (
+        (rest & (h10_va >= 0), vth, INTERMEDIATE),
+        (rest & (h10_va < 0), phi, HIGH),
+    ):
         sel = np.flatnonzero(mask)
         h_lo = _branch_h(branch, lower[sel], v[sel], log_rs[sel], s[sel], phi[sel], a[sel])[0]
         jump = np.zeros(n, dtype=bool)
@@ -293,8 +329,15 @@ def _solve_block(v_signed, rs, s, phi, a, vth, law, finish, max_iter):
     log_i = np.full(n, np.nan)
     regime = np.zeros(n, dtype=np.int8)
     with np.errstate(invalid="ignore"):
-        ok = (np.isfinite(v) & np.isfinite(rs) & (rs >= 0) & (a > 0) & np.isfinite(a)
-              & tl.smooth_law_is_valid(s, phi) & np.isfinite(phi))
+        ok = (
+            np.isfinite(v)
+            & np.isfinite(rs)
+            & (rs >= 0)
+            & (a > 0)
+            & np.isfinite(a)
+            & tl.smooth_law_is_valid(s, phi)
+            & np.isfinite(phi)
+        )
         if vth is not None:
             ok &= np.isfinite(vth) & (vth > 0) & (vth < phi)
     zero_v = ok & (v == 0)
@@ -318,11 +361,15 @@ def _solve_block(v_signed, rs, s, phi, a, vth, law, finish, max_iter):
         h_va = np.full(n, np.inf)
         start_above = np.full(n, np.nan)
         sel = np.flatnonzero(above_va)
-        h_va[sel], start_above[sel] = _branch_h(INTERMEDIATE, phi[sel], v[sel], log_rs[sel], s[sel],
-                                                phi[sel], a[sel])
+        h_va[sel], start_above[sel] = _branch_h(
+            INTERMEDIATE, phi[sel], v[sel], log_rs[sel], s[sel], phi[sel], a[sel]
+        )
         regime[todo & (h_va >= 0)] = INTERMEDIATE
         regime[todo & (h_va < 0)] = FORWARD
-        plan = [(INTERMEDIATE, np.zeros(n), np.minimum(v, phi), None), (FORWARD, phi, v, start_above)]
+        plan = [
+            (INTERMEDIATE, np.zeros(n), np.minimum(v, phi), None),
+            (FORWARD, phi, v, start_above),
+        ]
     else:
         # Eq. 9 is linear: its root is closed form, x = V/(1 + R_s·G); it counts if x < Vth.
         ohmic_g = np.exp(log_g9)
@@ -340,7 +387,10 @@ def _solve_block(v_signed, rs, s, phi, a, vth, law, finish, max_iter):
         # What is left would need eq. 11 past its peak: outside the validity domain.
         short_bad = short & (v >= phi) & (v > peak)
         regime[short_bad] = INVALID
-        plan = [(INTERMEDIATE, vth, np.minimum(v, phi), None), (HIGH, phi, np.minimum(v, peak), None)]
+        plan = [
+            (INTERMEDIATE, vth, np.minimum(v, phi), None),
+            (HIGH, phi, np.minimum(v, peak), None),
+        ]
 
     # Zero series resistance: evaluate the law at V directly.
     for branch in (INTERMEDIATE, HIGH, FORWARD):
@@ -363,8 +413,9 @@ def _solve_block(v_signed, rs, s, phi, a, vth, law, finish, max_iter):
             start = -(log_rs[sel] + log_g9[sel] + np.log((2.0 / 3.0) * (1.0 - 2.0 / opacity[sel])))
         else:
             start = start_at_va[sel]
-        x[sel], log_i[sel], its = _newton(branch, v[sel], log_rs[sel], s[sel], phi[sel], a[sel],
-                                          lo, hi, start, finish, max_iter)
+        x[sel], log_i[sel], its = _newton(
+            branch, v[sel], log_rs[sel], s[sel], phi[sel], a[sel], lo, hi, start, finish, max_iter
+        )
         iterations = max(iterations, its)
 
     current = np.exp(log_i)

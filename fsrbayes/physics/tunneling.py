@@ -57,8 +57,9 @@ TUNNELING_LAWS = ("paper", "smooth")
 # solver prepares once and evaluates in every Newton step; the public functions below
 # compose the two. ``evaluate`` also takes log(V_bulk), which the solver has for free.
 
+
 def log_ohmic_conductance(gap, barrier, area):
-    """log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
+    """Log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
     opacity = KAPPA * gap * np.sqrt(barrier)
     return np.log(0.75 * opacity / gap**2 * CURRENT_SCALE * area) - opacity
 
@@ -104,8 +105,11 @@ def _high_voltage_terms(v_bulk, c, barrier):
 
 def prepare_high_voltage(gap, barrier, area):
     """Constants of eq. 11: log(2.2 e² A/(8πh Va s²)), c = (2/2.96)κ s Va^1.5, Va."""
-    return (np.log(0.55 * CURRENT_SCALE * area / (barrier * gap**2)),
-            (2.0 / 2.96) * KAPPA * gap * barrier**1.5, barrier)
+    return (
+        np.log(0.55 * CURRENT_SCALE * area / (barrier * gap**2)),
+        (2.0 / 2.96) * KAPPA * gap * barrier**1.5,
+        barrier,
+    )
 
 
 def evaluate_high_voltage(v_bulk, log_v, log_prefactor, c, barrier):
@@ -125,8 +129,12 @@ def prepare_forward(gap, barrier, area):
     """
     g = KAPPA * gap * barrier**1.5 * SQRT_HALF
     rho = 3.0 * np.exp(-KAPPA * gap * np.sqrt(barrier) * (SQRT_THREE_HALVES - SQRT_HALF))
-    return (np.log(area * CURRENT_SCALE / (2.0 * gap**2 * barrier)), g,
-            g / barrier - 2.0 * np.log(barrier), rho)
+    return (
+        np.log(area * CURRENT_SCALE / (2.0 * gap**2 * barrier)),
+        g,
+        g / barrier - 2.0 * np.log(barrier),
+        rho,
+    )
 
 
 def evaluate_forward(v_bulk, log_v, log_prefactor, g, log_w_offset, rho):
@@ -170,6 +178,7 @@ def log_forward_faded(v_bulk, gap, barrier, area):
 
 
 # --------------------------------------------------------------------------- public laws
+
 
 def simmons_ohmic(v_bulk, gap, barrier, area):
     """Bulk current of the ohmic (millivolt) regime, eq. 9 / 19.
@@ -271,7 +280,9 @@ def tunneling_current(v_bulk, gap, barrier, area, *, law="smooth", threshold=Non
     """
     if law not in TUNNELING_LAWS:
         raise ValueError(f"tunneling law must be one of {TUNNELING_LAWS}, got {law!r}")
-    v, s, phi, a = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (v_bulk, gap, barrier, area)))
+    v, s, phi, a = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (v_bulk, gap, barrier, area))
+    )
     out = np.zeros(v.shape)
     positive = v > 0
     if law == "smooth":
@@ -304,6 +315,7 @@ def smooth_law_is_valid(gap, barrier):
 
 
 # --------------------------------------------------------------------------- eq. 11 peak
+
 
 def _eq11_slope_sign(u, b):
     """Derivative of u²[e^{−b/u} − (1+2u)e^{−b·sqrt(1+2u)/u}] in u, divided by e^{−b/u}.

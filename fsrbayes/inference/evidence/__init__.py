@@ -16,7 +16,13 @@ Every log Z reaches its callers as an :class:`EvidenceEstimate`.
 from .estimate import EvidenceEstimate
 from .ladder import EvidenceResult, LadderSettings, log_evidence
 from .laplace import LaplaceFit, LocalDraws, laplace_fit
-from .referenced import MODE_SEARCH, PILOT_SETTINGS, REFERENCED_LADDER, ModeSearch, referenced_log_evidence
+from .referenced import (
+    MODE_SEARCH,
+    PILOT_SETTINGS,
+    REFERENCED_LADDER,
+    ModeSearch,
+    referenced_log_evidence,
+)
 from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
 from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_run
 

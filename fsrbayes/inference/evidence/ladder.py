@@ -34,13 +34,21 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.special import logsumexp
 
-from .estimate import EvidenceEstimate
-from ..parallel import fork_pool
+from ..parallel import fork_pool, single_threaded_blas
 from ..samplers.ensemble import walkers_for
-from ..parallel import single_threaded_blas
+from .estimate import EvidenceEstimate
 
-__all__ = ["EvidenceResult", "LadderSettings", "beta_ladder", "check_priors_for_evidence", "log_evidence",
-           "combine_ladder", "summarise_ladders", "run_ladders", "ladder_evaluations"]
+__all__ = [
+    "EvidenceResult",
+    "LadderSettings",
+    "beta_ladder",
+    "check_priors_for_evidence",
+    "log_evidence",
+    "combine_ladder",
+    "summarise_ladders",
+    "run_ladders",
+    "ladder_evaluations",
+]
 
 
 @dataclass(frozen=True)
@@ -85,9 +93,13 @@ class LadderSettings:
         if self.n_temps < 3:
             raise ValueError(f"n_temps must be >= 3, got {self.n_temps}")
         if self.replicates < 2:
-            raise ValueError(f"replicates must be >= 2 (their spread is part of the error bar), got {self.replicates}")
+            raise ValueError(
+                f"replicates must be >= 2 (their spread is part of the error bar), got {self.replicates}"
+            )
         if self.steps < 10 * self.n_batches:
-            raise ValueError(f"steps must be >= 10 per batch ({10 * self.n_batches}), got {self.steps}")
+            raise ValueError(
+                f"steps must be >= 10 per batch ({10 * self.n_batches}), got {self.steps}"
+            )
         if self.top_draws < 1:
             raise ValueError(f"top_draws must be >= 1, got {self.top_draws}")
 
@@ -114,22 +126,28 @@ def check_priors_for_evidence(prior):
     ValueError
         One line naming the parameter, its prior and the limit.
     """
-    for name, dist in zip(prior.names, prior.dists):
+    for name, dist in zip(prior.names, prior.dists, strict=False):
         args = dist.args
         if dist.kind == "lognormal" and args["sigma"] > MAX_LOG_SIGMA:
-            raise ValueError(f"prior of {name}: lognormal sigma = {args['sigma']:g} is too wide for an evidence "
-                             f"(limit {MAX_LOG_SIGMA:g}, i.e. a factor e^{MAX_LOG_SIGMA:g} per sd)")
+            raise ValueError(
+                f"prior of {name}: lognormal sigma = {args['sigma']:g} is too wide for an evidence "
+                f"(limit {MAX_LOG_SIGMA:g}, i.e. a factor e^{MAX_LOG_SIGMA:g} per sd)"
+            )
         if dist.kind == "loguniform" and np.log10(args["upper"] / args["lower"]) > MAX_DECADES:
-            raise ValueError(f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} decades "
-                             f"is too wide for an evidence (limit {MAX_DECADES:g})")
+            raise ValueError(
+                f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} decades "
+                f"is too wide for an evidence (limit {MAX_DECADES:g})"
+            )
         for key, value in args.items():
             if not np.isfinite(value):
-                raise ValueError(f"prior of {name}: {key} = {value} makes the prior improper; the evidence needs a "
-                                 "proper prior")
+                raise ValueError(
+                    f"prior of {name}: {key} = {value} makes the prior improper; the evidence needs a "
+                    "proper prior"
+                )
 
 
 def evaluate_target(target, u):
-    """log π and log L at u (N, ndim); log L is −inf wherever log π is."""
+    """Log π and log L at u (N, ndim); log L is −inf wherever log π is."""
     if hasattr(target, "log_prior_and_likelihood"):  # one parameter transform for both
         lp, ll = target.log_prior_and_likelihood(u)
         return np.asarray(lp, dtype=float), np.where(np.isfinite(lp), ll, -np.inf)
@@ -142,7 +160,7 @@ def evaluate_target(target, u):
 
 
 def _tempered(lp, ll, beta):
-    """log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of the model)."""
+    """Log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of the model)."""
     beta = np.broadcast_to(beta, np.shape(lp))
     with np.errstate(invalid="ignore"):
         value = lp + beta * ll
@@ -168,7 +186,11 @@ class _Rungs:
         n_rungs, n_walk, width = coords.shape
         self.n_move = target.ndim
         lp, ll = evaluate_target(target, coords.reshape(-1, width))
-        self.coords, self.lp, self.ll = coords.copy(), lp.reshape(n_rungs, n_walk), ll.reshape(n_rungs, n_walk)
+        self.coords, self.lp, self.ll = (
+            coords.copy(),
+            lp.reshape(n_rungs, n_walk),
+            ll.reshape(n_rungs, n_walk),
+        )
 
     def step(self):
         n_rungs, n_walk, width = self.coords.shape
@@ -176,24 +198,36 @@ class _Rungs:
         half_size = n_walk // 2
         order = np.argsort(self.random.rand(n_rungs, n_walk), axis=1)  # a random split per rung
         rows = np.arange(n_rungs)[:, None]
-        for moving, fixed in ((order[:, :half_size], order[:, half_size:]), (order[:, half_size:], order[:, :half_size])):
+        for moving, fixed in (
+            (order[:, :half_size], order[:, half_size:]),
+            (order[:, half_size:], order[:, :half_size]),
+        ):
             x = self.coords[rows, moving]
             z = ((self.a - 1.0) * self.random.rand(n_rungs, half_size) + 1.0) ** 2 / self.a
-            partners = self.coords[rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]]
+            partners = self.coords[
+                rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]
+            ]
             proposal = partners - (partners - x) * z[..., None]
             proposal[..., ndim:] = x[..., ndim:]
             lp, ll = evaluate_target(self.target, proposal.reshape(-1, width))
             lp, ll = lp.reshape(n_rungs, half_size), ll.reshape(n_rungs, half_size)
             beta = self.betas[:, None]
             with np.errstate(invalid="ignore"):
-                diff = ((ndim - 1.0) * np.log(z) + _tempered(lp, ll, beta)
-                        - _tempered(self.lp[rows, moving], self.ll[rows, moving], beta))
-            accept = np.log(self.random.rand(n_rungs, half_size)) < np.where(np.isnan(diff), -np.inf, diff)
+                diff = (
+                    (ndim - 1.0) * np.log(z)
+                    + _tempered(lp, ll, beta)
+                    - _tempered(self.lp[rows, moving], self.ll[rows, moving], beta)
+                )
+            accept = np.log(self.random.rand(n_rungs, half_size)) < np.where(
+                np.isnan(diff), -np.inf, diff
+            )
             r, w = np.nonzero(accept)
             self.coords[r, moving[r, w]] = proposal[r, w]
             self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
         if hasattr(self.target, "relabel"):
-            coords, lp = self.target.relabel(self.coords.reshape(-1, width), self.lp.reshape(-1), self.random)
+            coords, lp = self.target.relabel(
+                self.coords.reshape(-1, width), self.lp.reshape(-1), self.random
+            )
             self.coords, self.lp = coords.reshape(self.coords.shape), lp.reshape(self.lp.shape)
 
 
@@ -201,18 +235,23 @@ def _replace_dead_walkers(rung, rng):
     """Walkers whose tempered density is −inf (a prior or reference draw outside the model's
     domain) take the place of randomly chosen live ones: a walker at −inf accepts any proposal
     but may never be offered one during a short burn-in, and its −inf would then reach the
-    production rungs (the bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC."""
+    production rungs (the bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC.
+    """
     dead = ~np.isfinite(_tempered(rung.lp[0], rung.ll[0], rung.betas[0]))
     live = np.flatnonzero(~dead)
     if dead.any() and live.size >= 2:
         donors = rng.choice(live, size=int(dead.sum()))
-        rung.coords[0, dead], rung.lp[0, dead], rung.ll[0, dead] = (rung.coords[0, donors], rung.lp[0, donors],
-                                                                    rung.ll[0, donors])
+        rung.coords[0, dead], rung.lp[0, dead], rung.ll[0, dead] = (
+            rung.coords[0, donors],
+            rung.lp[0, donors],
+            rung.ll[0, donors],
+        )
 
 
 def _run_ladder(target, betas, settings, seed):
     """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and
-    ``settings.top_draws`` evenly thinned ensembles of the β = 1 rung (posterior draws, (top_draws, W, ndim))."""
+    ``settings.top_draws`` evenly thinned ensembles of the β = 1 rung (posterior draws, (top_draws, W, ndim)).
+    """
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     rng = np.random.default_rng(seed)
     random = np.random.RandomState(seed.generate_state(4))
@@ -223,14 +262,19 @@ def _run_ladder(target, betas, settings, seed):
     previous = prior_draws()
     coords = np.empty((n_temps - 1, n_walk, previous.shape[-1]))
     for k in range(1, n_temps):
-        rung = _Rungs(target, betas[k:k + 1], previous[None], random)
+        rung = _Rungs(target, betas[k : k + 1], previous[None], random)
         _replace_dead_walkers(rung, rng)
         for _ in range(settings.burn):
             rung.step()
         coords[k - 1] = previous = rung.coords[0]
     rungs = _Rungs(target, betas[1:], coords, random)
     ll = np.empty((n_temps, settings.steps, n_walk))
-    keep = set(np.linspace(0, settings.steps - 1, min(settings.top_draws, settings.steps)).round().astype(int).tolist())
+    keep = set(
+        np.linspace(0, settings.steps - 1, min(settings.top_draws, settings.steps))
+        .round()
+        .astype(int)
+        .tolist()
+    )
     top = []
     tried = np.zeros(n_temps - 1)
     accepted = np.zeros(n_temps - 1)
@@ -246,7 +290,9 @@ def _run_ladder(target, betas, settings, seed):
                 partner = rng.permutation(n_walk)
                 with np.errstate(invalid="ignore"):
                     log_accept = (betas[k] - betas[k - 1]) * (lls[k - 1][partner] - lls[k])
-                swap = np.log(rng.uniform(size=n_walk)) < np.where(np.isnan(log_accept), -np.inf, log_accept)
+                swap = np.log(rng.uniform(size=n_walk)) < np.where(
+                    np.isnan(log_accept), -np.inf, log_accept
+                )
                 tried[k - 1] += n_walk
                 accepted[k - 1] += swap.sum()
                 for arrays in (coords, lls, lps):
@@ -313,15 +359,25 @@ def combine_ladder(ll, betas, n_batches=25):
     weights[:-1] += d / 2.0
     weights[1:] += d / 2.0
     z = np.einsum("k,kt->t", weights, ll.mean(axis=2))
-    var_ti = float(_batch_covariance(z[:, None], n_batches)[0, 0]) if np.all(np.isfinite(z)) else np.nan
+    var_ti = (
+        float(_batch_covariance(z[:, None], n_batches)[0, 0]) if np.all(np.isfinite(z)) else np.nan
+    )
     # Stepping-stone on every other rung (a discretisation diagnostic).
     half = list(range(0, n_k, 2)) + ([n_k - 1] if (n_k - 1) % 2 else [])
     ss_half = 0.0
-    for a, b in zip(half[:-1], half[1:]):
+    for a, b in zip(half[:-1], half[1:], strict=False):
         x = (betas[b] - betas[a]) * ll[a]
         ss_half += float(logsumexp(x) - np.log(x.size))
-    return {"ss": float(ss_log), "bridge": float(br_log), "ti": ti, "ti_corrected": ti_corrected,
-            "ss_half": ss_half, "var_ss": var_ss, "var_bridge": var_bridge, "var_ti": var_ti}
+    return {
+        "ss": float(ss_log),
+        "bridge": float(br_log),
+        "ti": ti,
+        "ti_corrected": ti_corrected,
+        "ss_half": ss_half,
+        "var_ss": var_ss,
+        "var_bridge": var_bridge,
+        "var_ti": var_ti,
+    }
 
 
 @dataclass
@@ -371,23 +427,37 @@ class EvidenceResult:
     @property
     def method(self):
         """``"referenced stepping-stone"`` or ``"stepping-stone"`` (from the prior)."""
-        return "referenced stepping-stone" if self.settings.get("path") == "reference" else "stepping-stone"
+        return (
+            "referenced stepping-stone"
+            if self.settings.get("path") == "reference"
+            else "stepping-stone"
+        )
 
     def estimate(self):
-        """This result as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`.
+        """Return the result as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`.
 
         ``details`` holds the error budget, the other estimators, the separate reference
         regions, the lowest swap acceptance and the wall time; the draws are each ladder's
         β = 1 rung, flattened to (ladders, draws, ndim).
         """
-        details = {"bridge": self.bridge, "ti_corrected": self.ti_corrected, "sigma_batch": self.sigma_batch,
-                   "sigma_replicates": self.sigma_replicates, "sigma_disc": self.sigma_disc,
-                   "sigma_pilot": self.sigma_pilot,
-                   "reference_regions": [len(group) for group in self.settings.get("reference_components", [])],
-                   "min_swap_acceptance": float(np.min(self.swap_acceptance)), "seconds": self.seconds}
+        details = {
+            "bridge": self.bridge,
+            "ti_corrected": self.ti_corrected,
+            "sigma_batch": self.sigma_batch,
+            "sigma_replicates": self.sigma_replicates,
+            "sigma_disc": self.sigma_disc,
+            "sigma_pilot": self.sigma_pilot,
+            "reference_regions": [
+                len(group) for group in self.settings.get("reference_components", [])
+            ],
+            "min_swap_acceptance": float(np.min(self.swap_acceptance)),
+            "seconds": self.seconds,
+        }
         draws = None
         if self.posterior_draws is not None:
-            draws = self.posterior_draws.reshape(len(self.posterior_draws), -1, self.posterior_draws.shape[-1])
+            draws = self.posterior_draws.reshape(
+                len(self.posterior_draws), -1, self.posterior_draws.shape[-1]
+            )
         return EvidenceEstimate(self.log_z, self.error, self.method, details, draws)
 
     def as_dict(self):
@@ -401,10 +471,14 @@ class EvidenceResult:
         pilot = f", pilots {self.sigma_pilot:.3f}" if self.sigma_pilot else ""
         # On the referenced path TI integrates log(L·π/g), whose variance at β = 0 is huge in
         # the reference's tails (nan or 1e14 on the creep posteriors): not worth printing.
-        ti = "" if self.settings.get("path") == "reference" else f", TI+corr {self.ti_corrected:.3f}"
-        return (f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
-                f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}"
-                f"{ti})")
+        ti = (
+            "" if self.settings.get("path") == "reference" else f", TI+corr {self.ti_corrected:.3f}"
+        )
+        return (
+            f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
+            f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}"
+            f"{ti})"
+        )
 
 
 def _ladder_job(target, betas, settings, seed):
@@ -414,7 +488,7 @@ def _ladder_job(target, betas, settings, seed):
 
 
 def log_evidence(target, settings=LadderSettings(), seed=0):
-    """log Z of a target with ``ndim``, ``log_prior(u)``, ``log_likelihood(u)`` and ``sample_prior(rng, n)``.
+    """Log Z of a target with ``ndim``, ``log_prior(u)``, ``log_likelihood(u)`` and ``sample_prior(rng, n)``.
 
     ``log_prior`` must be a normalised density of u (the creep posteriors' prior-scaled u-space
     density includes the Jacobian), vectorised over rows like ``log_likelihood``.
@@ -430,27 +504,40 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
     seeds = seed.spawn(settings.replicates)
     start = time.perf_counter()
     results = run_ladders([(target, betas, settings, s) for s in seeds], settings.processes)
-    return summarise_ladders([r[0] for r in results], betas, np.array([r[1] for r in results]),
-                             ladder_evaluations(settings, target.ndim, len(seeds)), time.perf_counter() - start,
-                             asdict(settings), np.array([r[2] for r in results]))
+    return summarise_ladders(
+        [r[0] for r in results],
+        betas,
+        np.array([r[1] for r in results]),
+        ladder_evaluations(settings, target.ndim, len(seeds)),
+        time.perf_counter() - start,
+        asdict(settings),
+        np.array([r[2] for r in results]),
+    )
 
 
 def run_ladders(jobs, processes=1):
     """Run ladder jobs ``(target, betas, settings, seed)`` side by side on ``processes`` worker
-    processes; returns, per job, (:func:`combine_ladder` dict, swap acceptance, β = 1 draws)."""
+    processes; returns, per job, (:func:`combine_ladder` dict, swap acceptance, β = 1 draws).
+    """
     if processes > 1 and len(jobs) > 1:
         with fork_pool(min(processes, len(jobs))) as pool:
-            return list(pool.map(_ladder_job, *zip(*jobs)))
+            return list(pool.map(_ladder_job, *zip(*jobs, strict=False)))
     return [_ladder_job(*job) for job in jobs]
 
 
 def ladder_evaluations(settings, ndim, n_ladders):
     """Likelihood evaluations of ``n_ladders`` ladders run with ``settings``."""
     n_walk = settings.walkers_for(ndim)
-    return int(n_ladders * n_walk * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1))
+    return int(
+        n_ladders
+        * n_walk
+        * ((settings.n_temps - 1) * (settings.burn + settings.steps) + settings.steps + 1)
+    )
 
 
-def summarise_ladders(parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None):
+def summarise_ladders(
+    parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None
+):
     """The :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder` dicts).
 
     ``groups`` (one label per ladder) marks ladders that share a reference density; the spread
@@ -468,6 +555,22 @@ def summarise_ladders(parts, betas, swap_acceptance, n_evals, seconds, settings,
         sigma_pilot = float(group_means.std(ddof=1) / np.sqrt(len(group_means)))
     sigma_disc = abs(mean("ss") - mean("bridge"))
     error = float(np.hypot(max(sigma_batch, sigma_replicates, sigma_pilot), sigma_disc))
-    return EvidenceResult(mean("ss"), error, sigma_batch, sigma_replicates, sigma_disc, mean("bridge"), mean("ti"),
-                          mean("ti_corrected"), mean("ss_half"), list(parts), betas, swap_acceptance, int(n_evals),
-                          seconds, settings, posterior_draws, sigma_pilot)
+    return EvidenceResult(
+        mean("ss"),
+        error,
+        sigma_batch,
+        sigma_replicates,
+        sigma_disc,
+        mean("bridge"),
+        mean("ti"),
+        mean("ti_corrected"),
+        mean("ss_half"),
+        list(parts),
+        betas,
+        swap_acceptance,
+        int(n_evals),
+        seconds,
+        settings,
+        posterior_draws,
+        sigma_pilot,
+    )

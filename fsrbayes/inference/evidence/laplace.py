@@ -24,11 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...utils import HALF_LOG_2PI
-from .estimate import EvidenceEstimate
 from ..optimize import find_map, polish, root_covariance
+from .estimate import EvidenceEstimate
 
 __all__ = ["LocalDraws", "LaplaceFit", "laplace_fit"]
-
 
 
 @dataclass
@@ -62,22 +61,24 @@ class LaplaceFit:
 
     def estimate(self):
         """The Laplace log Z as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`
-        (no error bar: the approximation's error is not a Monte-Carlo one and is not estimated)."""
-        return EvidenceEstimate(self.log_evidence, float("nan"), "laplace",
-                                {"log_post_map": float(self.log_post_map)})
+        (no error bar: the approximation's error is not a Monte-Carlo one and is not estimated).
+        """
+        return EvidenceEstimate(
+            self.log_evidence, float("nan"), "laplace", {"log_post_map": float(self.log_post_map)}
+        )
 
     @property
     def x_map(self):
         """The MAP point in physical units, as a dict."""
         x, _ = self.posterior.prior.from_unconstrained(self.u_map[None, :])
-        return dict(zip(self.posterior.names, x[0]))
+        return dict(zip(self.posterior.names, x[0], strict=False))
 
     def draws_u(self, rng, n):
-        """n draws of the Gaussian approximation in u-space, shape (n, ndim)."""
+        """N draws of the Gaussian approximation in u-space, shape (n, ndim)."""
         return self.u_map + rng.standard_normal((n, self.posterior.ndim)) @ self.root_cov.T
 
     def local_draws(self, rng, n, *, steps=400, n_walkers=None):
-        """n posterior draws (physical units) from a short ensemble run started at the mode.
+        """N posterior draws (physical units) from a short ensemble run started at the mode.
 
         The Gaussian of :meth:`draws` is a poor posterior where the creep posterior bends or is
         bounded only by its prior: on a 9-test specimen its draws put the model current 0.7 σ
@@ -100,7 +101,9 @@ class LaplaceFit:
         start = self.u_map + 0.1 * rng.standard_normal((n_walkers, d)) @ self.root_cov.T
         bad = ~np.isfinite(self.posterior(start))
         start[bad] = self.u_map + 1e-4 * rng.standard_normal((int(bad.sum()), d))
-        sampler = emcee.EnsembleSampler(n_walkers, d, self.posterior, vectorize=True, moves=ensemble_moves(0.2))
+        sampler = emcee.EnsembleSampler(
+            n_walkers, d, self.posterior, vectorize=True, moves=ensemble_moves(0.2)
+        )
         sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
         sampler.run_mcmc(start, steps)
         kept = sampler.get_chain(discard=steps // 2, flat=True)
@@ -109,7 +112,7 @@ class LaplaceFit:
         return x
 
     def draws(self, rng, n):
-        """n draws in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
+        """N draws in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
         out = np.empty((0, self.posterior.ndim))
         for _ in range(20):
             u = self.draws_u(rng, n)
@@ -118,12 +121,14 @@ class LaplaceFit:
             out = np.vstack([out, x])
             if len(out) >= n:
                 return out[:n]
-        raise RuntimeError(f"the Laplace approximation of {getattr(self.posterior, 'model', 'the model')} puts "
-                           f"almost no mass on the prior's support")
+        raise RuntimeError(
+            f"the Laplace approximation of {getattr(self.posterior, 'model', 'the model')} puts "
+            f"almost no mass on the prior's support"
+        )
 
 
 def _nested_starts(posterior, base, null, rng, n_extra=32):
-    """u of ``posterior`` at the base fit's optimum, the extra parameters at ``null`` and at
+    """U of ``posterior`` at the base fit's optimum, the extra parameters at ``null`` and at
     ``n_extra`` prior draws, shape (n_extra + 1, ndim).
 
     The prior draws matter where the extension is flat at its null value (an onset voltage
@@ -133,7 +138,7 @@ def _nested_starts(posterior, base, null, rng, n_extra=32):
     """
     base_x = base.x_map
     x = posterior.prior.sample(rng, n_extra + 1)
-    for i, (name, dist) in enumerate(zip(posterior.names, posterior.prior.dists)):
+    for i, (name, dist) in enumerate(zip(posterior.names, posterior.prior.dists, strict=False)):
         if name in base_x:
             x[:, i] = base_x[name]
         elif name in null:
@@ -181,7 +186,6 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
     return LaplaceFit(posterior, u_best, float(value), root_covariance(posterior, u_best))
 
 
-
 @dataclass
 class LocalDraws:
     """Posterior draws from :meth:`LaplaceFit.local_draws`, shaped like a fit's output for
@@ -205,5 +209,9 @@ class LocalDraws:
 
     def draws(self, max_draws=2000):
         """Draws in physical units, shape (1, D, ndim), evenly thinned to at most ``max_draws``."""
-        index = np.linspace(0, len(self.values) - 1, min(max_draws, len(self.values))).round().astype(int)
+        index = (
+            np.linspace(0, len(self.values) - 1, min(max_draws, len(self.values)))
+            .round()
+            .astype(int)
+        )
         return self.values[index][None]

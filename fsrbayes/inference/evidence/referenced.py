@@ -50,17 +50,39 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from scipy.special import logsumexp
 
-from .ladder import (LadderSettings, evaluate_target, beta_ladder, check_priors_for_evidence, ladder_evaluations, run_ladders,
-                       summarise_ladders)
 from ..optimize import ensemble_start, find_map, separate_regions
-from ..parallel import fork_pool
+from ..parallel import fork_pool, single_threaded_blas
 from ..samplers.ensemble import ConvergenceWarning, SamplerSettings, run_ensembles
-from ..parallel import single_threaded_blas
-from ..samplers.transport import IndependenceProposal, TriangularMap, student_t_draws, student_t_log_density
+from ..samplers.transport import (
+    IndependenceProposal,
+    TriangularMap,
+    student_t_draws,
+    student_t_log_density,
+)
+from .ladder import (
+    LadderSettings,
+    beta_ladder,
+    check_priors_for_evidence,
+    evaluate_target,
+    ladder_evaluations,
+    run_ladders,
+    summarise_ladders,
+)
 
-__all__ = ["ReferenceDensity", "MixtureReference", "ReferencedTarget", "ModeSearch", "MODE_SEARCH", "PILOT_SETTINGS",
-           "REFERENCED_LADDER", "distinct_optima", "pilot_draws", "pilot_reference", "minor_pilot",
-           "referenced_log_evidence"]
+__all__ = [
+    "ReferenceDensity",
+    "MixtureReference",
+    "ReferencedTarget",
+    "ModeSearch",
+    "MODE_SEARCH",
+    "PILOT_SETTINGS",
+    "REFERENCED_LADDER",
+    "distinct_optima",
+    "pilot_draws",
+    "pilot_reference",
+    "minor_pilot",
+    "referenced_log_evidence",
+]
 
 
 @dataclass(frozen=True)
@@ -92,7 +114,7 @@ class ReferenceDensity:
 
     @property
     def log_det_jacobian(self):
-        """log |du/dw| (constant)."""
+        """Log |du/dw| (constant)."""
         return self.transport.log_det_jacobian + float(np.sum(np.log(np.diag(self.chol))))
 
     def to_target(self, w):
@@ -109,7 +131,7 @@ class ReferenceDensity:
         return student_t_log_density(w, self.dof)
 
     def sample_w(self, rng, n):
-        """n i.i.d. draws of w."""
+        """N i.i.d. draws of w."""
         return student_t_draws(rng, n, self.ndim, self.dof)
 
 
@@ -132,7 +154,9 @@ class MixtureReference:
         components = tuple(components)
         weights = np.ones(len(components)) if weights is None else np.asarray(weights, dtype=float)
         if len(weights) != len(components) or np.any(weights <= 0):
-            raise ValueError(f"need one positive weight per component ({len(components)}), got {weights}")
+            raise ValueError(
+                f"need one positive weight per component ({len(components)}), got {weights}"
+            )
         return cls(components, np.log(weights / weights.sum()))
 
     @property
@@ -140,12 +164,17 @@ class MixtureReference:
         return self.components[0].ndim
 
     def component_log_densities(self, u):
-        """log a_j + log g_j(u), shape (…, J)."""
-        return np.stack([log_a + c.log_prob_w(c.from_target(u)) - c.log_det_jacobian
-                         for log_a, c in zip(self.log_weights, self.components)], axis=-1)
+        """Log a_j + log g_j(u), shape (…, J)."""
+        return np.stack(
+            [
+                log_a + c.log_prob_w(c.from_target(u)) - c.log_det_jacobian
+                for log_a, c in zip(self.log_weights, self.components, strict=False)
+            ],
+            axis=-1,
+        )
 
     def log_density(self, u):
-        """log g(u)."""
+        """Log g(u)."""
         return logsumexp(self.component_log_densities(u), axis=-1)
 
 
@@ -180,7 +209,7 @@ class ReferencedTarget:
         return state[..., :-1], np.nan_to_num(state[..., -1]).astype(int)
 
     def to_target(self, state):
-        """u of states (…, ndim + 1)."""
+        """U of states (…, ndim + 1)."""
         w, labels = self._split(state)
         u = np.empty_like(w)
         for j, component in enumerate(self.reference.components):
@@ -196,7 +225,9 @@ class ReferencedTarget:
 
     def log_prior(self, state):
         w, labels = self._split(state)
-        return self.reference.log_weights[labels] + student_t_log_density(w, self.reference.components[0].dof)
+        return self.reference.log_weights[labels] + student_t_log_density(
+            w, self.reference.components[0].dof
+        )
 
     def log_likelihood(self, state):
         return self.log_prior_and_likelihood(state)[1]
@@ -223,7 +254,11 @@ class ReferencedTarget:
             log_p = self.reference.component_log_densities(u)
         ok = np.all(np.isfinite(log_p), axis=-1)
         cumulative = np.cumsum(np.exp(log_p - logsumexp(log_p, axis=-1, keepdims=True)), axis=-1)
-        labels = (random.rand(len(u), 1) > cumulative).sum(axis=-1).clip(0, len(self.reference.components) - 1)
+        labels = (
+            (random.rand(len(u), 1) > cumulative)
+            .sum(axis=-1)
+            .clip(0, len(self.reference.components) - 1)
+        )
         states, log_prior = states.copy(), log_prior.copy()
         for j, component in enumerate(self.reference.components):
             mine = ok & (labels == j)
@@ -233,21 +268,29 @@ class ReferencedTarget:
         return states, log_prior
 
 
-PILOT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=250, min_steps=1250, max_steps=1250, transport_rounds=3)
+PILOT_SETTINGS = SamplerSettings(
+    n_ensembles=2, chunk=250, min_steps=1250, max_steps=1250, transport_rounds=3
+)
 """Pilot run for the reference: three transport-map warm-up rounds, then 500 kept steps."""
 
 REFERENCED_LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4)
 """Ladder from g to the posterior: few, evenly spaced rungs suffice when g is close."""
 
 
-def pilot_draws(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000, start=None):
+def pilot_draws(
+    posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000, start=None
+):
     """Posterior draws in u (n, ndim) from a short run started at ``start`` (default: the MAP of
     two optimiser starts). ConvergenceWarnings of the pilot are silenced: its quality only
-    affects the evidence's precision."""
-
+    affects the evidence's precision.
+    """
     rng = np.random.default_rng(seed)
-    optimum = find_map(posterior, rng, n_starts=2)[0] if start is None else np.asarray(start, dtype=float)
-    start = ensemble_start(posterior, optimum, rng, (settings.n_ensembles, settings.walkers_for(posterior.ndim)))
+    optimum = (
+        find_map(posterior, rng, n_starts=2)[0] if start is None else np.asarray(start, dtype=float)
+    )
+    start = ensemble_start(
+        posterior, optimum, rng, (settings.n_ensembles, settings.walkers_for(posterior.ndim))
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         run = run_ensembles(posterior, start, seed, replace(settings, processes=processes))
@@ -299,14 +342,18 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
     list of (ndarray (ndim,), float)
         Each optimum with its Laplace log mass log p(u*) + log|Σ|^½.
     """
-
     optima = find_map(posterior, rng, n_starts=search.n_starts)
-    return separate_regions(posterior, optima, separation=search.separation, max_regions=search.max_modes,
-                            max_log_mass_gap=search.max_log_mass_gap)
+    return separate_regions(
+        posterior,
+        optima,
+        separation=search.separation,
+        max_regions=search.max_modes,
+        max_log_mass_gap=search.max_log_mass_gap,
+    )
 
 
 def _importance_log_z(posterior, component, rng, n):
-    """log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
+    """Log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
     log_ratio = ReferencedTarget(posterior, component).log_likelihood(component.sample_w(rng, n))
     return float(logsumexp(log_ratio) - np.log(n))
 
@@ -318,12 +365,24 @@ def _search_job(posterior, seed, search):
 
 def minor_pilot(settings):
     """The pilot of a region other than the best: half the chunk and half the steps."""
-    return replace(settings, chunk=max(50, settings.chunk // 2), min_steps=max(1, settings.min_steps // 2),
-                   max_steps=max(1, settings.max_steps // 2))
+    return replace(
+        settings,
+        chunk=max(50, settings.chunk // 2),
+        min_steps=max(1, settings.min_steps // 2),
+        max_steps=max(1, settings.max_steps // 2),
+    )
 
 
-def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof=10.0, search=MODE_SEARCH,
-                    modes=None, quadratic=None):
+def pilot_reference(
+    posterior,
+    seed=0,
+    settings=PILOT_SETTINGS,
+    processes=1,
+    dof=10.0,
+    search=MODE_SEARCH,
+    modes=None,
+    quadratic=None,
+):
     """The reference g for the evidence: one pilot run and one t component per separate region.
 
     Separate regions come from :func:`distinct_optima`; the weights a_j are proportional to each
@@ -347,23 +406,48 @@ def pilot_reference(posterior, seed=0, settings=PILOT_SETTINGS, processes=1, dof
         modes = distinct_optima(posterior, np.random.default_rng(seeds[0]), search)
     rng = np.random.default_rng(seeds[1])
     components, log_z = [], []
-    for region, ((optimum, _), pilot_seed) in enumerate(zip(modes, seeds[2:])):
-        draws = pilot_draws(posterior, pilot_seed, settings if region == 0 else minor_pilot(settings), processes,
-                            start=optimum)
+    for region, ((optimum, _), pilot_seed) in enumerate(zip(modes, seeds[2:], strict=False)):
+        draws = pilot_draws(
+            posterior,
+            pilot_seed,
+            settings if region == 0 else minor_pilot(settings),
+            processes,
+            start=optimum,
+        )
         components.append(ReferenceDensity.fit(draws, dof, quadratic))
         log_z.append(_importance_log_z(posterior, components[-1], rng, search.importance_draws))
     log_z = np.array(log_z)
-    weights = np.exp(np.maximum(log_z - np.max(log_z), np.log(0.1))) if np.all(np.isfinite(log_z)) else None
+    weights = (
+        np.exp(np.maximum(log_z - np.max(log_z), np.log(0.1)))
+        if np.all(np.isfinite(log_z))
+        else None
+    )
     reference = MixtureReference.of(components, weights)
-    report = [{"optimum": [float(x) for x in optimum], "laplace_log_mass": mass, "importance_log_z": float(z),
-               "weight": float(np.exp(log_a))}
-              for (optimum, mass), z, log_a in zip(modes, log_z, reference.log_weights)]
+    report = [
+        {
+            "optimum": [float(x) for x in optimum],
+            "laplace_log_mass": mass,
+            "importance_log_z": float(z),
+            "weight": float(np.exp(log_a)),
+        }
+        for (optimum, mass), z, log_a in zip(modes, log_z, reference.log_weights, strict=False)
+    ]
     return reference, report
 
 
-def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, dof=10.0, draws=None,
-                            pilot=PILOT_SETTINGS, search=MODE_SEARCH, pilot_groups=4, quadratic=None):
-    """log Z = log ∫ L·π along the referenced path (module docstring).
+def referenced_log_evidence(
+    posterior,
+    settings=REFERENCED_LADDER,
+    seed=0,
+    *,
+    dof=10.0,
+    draws=None,
+    pilot=PILOT_SETTINGS,
+    search=MODE_SEARCH,
+    pilot_groups=4,
+    quadratic=None,
+):
+    """Log Z = log ∫ L·π along the referenced path (module docstring).
 
     Parameters
     ----------
@@ -405,38 +489,76 @@ def referenced_log_evidence(posterior, settings=REFERENCED_LADDER, seed=0, *, do
         check_priors_for_evidence(posterior.prior)
     start = time.perf_counter()
     n_groups = 1 if draws is not None else max(1, min(int(pilot_groups), settings.replicates))
-    seeds = np.random.SeedSequence(seed).spawn(3 * n_groups)  # each g independent of its ladders' draws
-    group_replicates = np.diff(np.linspace(0, settings.replicates, n_groups + 1).round().astype(int))
+    seeds = np.random.SeedSequence(seed).spawn(
+        3 * n_groups
+    )  # each g independent of its ladders' draws
+    group_replicates = np.diff(
+        np.linspace(0, settings.replicates, n_groups + 1).round().astype(int)
+    )
     if draws is None:  # the groups' searches side by side (the optimiser runs on one core)
         jobs = [(posterior, s, search) for s in seeds[2::3]]
         if settings.processes > 1 and n_groups > 1:
             with fork_pool(min(settings.processes, n_groups)) as pool:
-                group_modes = list(pool.map(_search_job, *zip(*jobs)))
+                group_modes = list(pool.map(_search_job, *zip(*jobs, strict=False)))
         else:
             group_modes = [_search_job(*job) for job in jobs]
     targets, reports = [], []
     for group, pilot_seed in enumerate(seeds[::3]):
         if draws is None:
-            reference, report = pilot_reference(posterior, pilot_seed, pilot, settings.processes, dof, search,
-                                                modes=group_modes[group], quadratic=quadratic)
+            reference, report = pilot_reference(
+                posterior,
+                pilot_seed,
+                pilot,
+                settings.processes,
+                dof,
+                search,
+                modes=group_modes[group],
+                quadratic=quadratic,
+            )
         else:
             arrays = [draws] if np.ndim(draws[0]) == 1 else list(draws)
-            reference = MixtureReference.of([ReferenceDensity.fit(array, dof, quadratic) for array in arrays])
-            report = [{"draws": len(array), "weight": float(np.exp(log_a))}
-                      for array, log_a in zip(arrays, reference.log_weights)]
+            reference = MixtureReference.of(
+                [ReferenceDensity.fit(array, dof, quadratic) for array in arrays]
+            )
+            report = [
+                {"draws": len(array), "weight": float(np.exp(log_a))}
+                for array, log_a in zip(arrays, reference.log_weights, strict=False)
+            ]
         targets.append(ReferencedTarget(posterior, reference))
         reports.append(report)
     # Every group's ladders side by side: one ladder per group is the default.
     betas = beta_ladder(settings.n_temps, settings.exponent)
     labels = [group for group, count in enumerate(group_replicates) for _ in range(int(count))]
-    ladder_seeds = [s for group_seed, count in zip(seeds[1::3], group_replicates) for s in group_seed.spawn(int(count))]
-    results = run_ladders([(targets[g], betas, settings, s) for g, s in zip(labels, ladder_seeds)], settings.processes)
+    ladder_seeds = [
+        s
+        for group_seed, count in zip(seeds[1::3], group_replicates, strict=False)
+        for s in group_seed.spawn(int(count))
+    ]
+    results = run_ladders(
+        [(targets[g], betas, settings, s) for g, s in zip(labels, ladder_seeds, strict=False)],
+        settings.processes,
+    )
     merged = summarise_ladders(
-        [r[0] for r in results], betas, np.array([r[1] for r in results]),
-        ladder_evaluations(settings, posterior.ndim, len(results)), time.perf_counter() - start,
-        {**asdict(settings), "path": "reference", "reference_dof": float(dof), "reference_components": reports,
-         "pilot": None if draws is not None else {"steps": pilot.max_steps, "ensembles": pilot.n_ensembles,
-                                                  "optimiser_starts": search.n_starts, "groups": n_groups}},
-        np.array([targets[g].to_target(r[2]) for g, r in zip(labels, results)]),
-        groups=labels if n_groups > 1 else None)
+        [r[0] for r in results],
+        betas,
+        np.array([r[1] for r in results]),
+        ladder_evaluations(settings, posterior.ndim, len(results)),
+        time.perf_counter() - start,
+        {
+            **asdict(settings),
+            "path": "reference",
+            "reference_dof": float(dof),
+            "reference_components": reports,
+            "pilot": None
+            if draws is not None
+            else {
+                "steps": pilot.max_steps,
+                "ensembles": pilot.n_ensembles,
+                "optimiser_starts": search.n_starts,
+                "groups": n_groups,
+            },
+        },
+        np.array([targets[g].to_target(r[2]) for g, r in zip(labels, results, strict=False)]),
+        groups=labels if n_groups > 1 else None,
+    )
     return merged

@@ -30,7 +30,8 @@ __all__ = ["SavageDickey", "savage_dickey", "savage_dickey_posterior"]
 @dataclass(frozen=True)
 class SavageDickey:
     """log B01 (null over full model) with its Monte-Carlo error: the larger of batch means over
-    the draws in time order and the i.i.d. error of a mean of weights, sqrt(1/ESS − 1/N)."""
+    the draws in time order and the i.i.d. error of a mean of weights, sqrt(1/ESS − 1/N).
+    """
 
     log_b01: float
     error: float
@@ -39,12 +40,14 @@ class SavageDickey:
     """Importance ESS of the terms averaged (few dominant draws: an unreliable estimate)."""
 
     def __str__(self):
-        return (f"log B01 = {self.log_b01:.3f} ± {self.error:.3f} (Savage–Dickey, {self.n_draws} draws, "
-                f"ESS {self.ess:.0f})")
+        return (
+            f"log B01 = {self.log_b01:.3f} ± {self.error:.3f} (Savage–Dickey, {self.n_draws} draws, "
+            f"ESS {self.ess:.0f})"
+        )
 
 
 def _log_w(draws, index, lower):
-    """log w(φ | ψ) at every draw: a normal whose mean is linear in the other parameters ψ
+    """Log w(φ | ψ) at every draw: a normal whose mean is linear in the other parameters ψ
     (least squares on the draws, ψ standardised), truncated to φ ≥ ``lower``.
 
     Chen's identity holds for any conditional density w(φ | ψ); the closer it is to
@@ -57,15 +60,19 @@ def _log_w(draws, index, lower):
     others = np.delete(draws, index, axis=1)
     spread = others.std(axis=0)
     moving = spread > 0
-    design = np.column_stack([np.ones(len(phi)), (others[:, moving] - others[:, moving].mean(axis=0)) / spread[moving]])
+    design = np.column_stack(
+        [np.ones(len(phi)), (others[:, moving] - others[:, moving].mean(axis=0)) / spread[moving]]
+    )
     coef = np.linalg.lstsq(design, phi, rcond=None)[0]
     loc = design @ coef
     scale = max(float(np.std(phi - loc)), 1e-300)
     return stats.truncnorm.logpdf(phi, (lower - loc) / scale, np.inf, loc=loc, scale=scale)
 
 
-def savage_dickey(log_likelihood, draws, index, log_prior_density, null=0.0, lower=0.0, n_batches=20):
-    """log Bayes factor of the nested model ``draws[:, index] = null`` against the full model.
+def savage_dickey(
+    log_likelihood, draws, index, log_prior_density, null=0.0, lower=0.0, n_batches=20
+):
+    """Log Bayes factor of the nested model ``draws[:, index] = null`` against the full model.
 
     Parameters
     ----------
@@ -86,7 +93,9 @@ def savage_dickey(log_likelihood, draws, index, log_prior_density, null=0.0, low
     at_null[:, index] = null
     ll_full, ll_null = log_likelihood(draws), log_likelihood(at_null)
     if not phi.std() > 0:
-        raise ValueError("the draws of the nesting parameter do not vary; Savage–Dickey needs posterior draws")
+        raise ValueError(
+            "the draws of the nesting parameter do not vary; Savage–Dickey needs posterior draws"
+        )
     terms = _log_w(draws, index, lower) + ll_null - ll_full - log_prior_density(phi)
     terms = np.where(np.isnan(terms), -np.inf, terms)
     log_b01 = float(logsumexp(terms) - np.log(terms.size))
@@ -96,14 +105,18 @@ def savage_dickey(log_likelihood, draws, index, log_prior_density, null=0.0, low
     error = float(batches.std(ddof=1) / np.sqrt(n_batches) / batches.mean())
     weights = np.exp(terms - shift)
     ess = float(weights.sum() ** 2 / np.sum(weights**2))
-    error = max(error, float(np.sqrt(max(1.0 / ess - 1.0 / terms.size, 0.0))))  # i.i.d. floor of a mean of weights
+    error = max(
+        error, float(np.sqrt(max(1.0 / ess - 1.0 / terms.size, 0.0)))
+    )  # i.i.d. floor of a mean of weights
     return SavageDickey(log_b01, error, int(terms.size), ess)
 
 
 def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):
     """Savage–Dickey log B01 from physical-unit posterior draws (N, ndim) of a LogPosterior, in time order."""
     if parameter not in posterior.names:
-        raise ValueError(f"{parameter!r} is not a sampled parameter of this fit ({', '.join(posterior.names)})")
+        raise ValueError(
+            f"{parameter!r} is not a sampled parameter of this fit ({', '.join(posterior.names)})"
+        )
     index = posterior.names.index(parameter)
     dist = posterior.prior.dists[index]
 
@@ -112,5 +125,11 @@ def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):
             total = posterior.log_likelihood_pointwise(x).sum(axis=1)
         return np.where(np.isnan(total), -np.inf, total)
 
-    return savage_dickey(log_likelihood, draws, index, lambda v: np.asarray(dist.logpdf(v), dtype=float),
-                         null=0.0, lower=dist.support[0])
+    return savage_dickey(
+        log_likelihood,
+        draws,
+        index,
+        lambda v: np.asarray(dist.logpdf(v), dtype=float),
+        null=0.0,
+        lower=dist.support[0],
+    )

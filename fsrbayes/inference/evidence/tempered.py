@@ -40,11 +40,17 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import stats
 
+from ..samplers.ensemble import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
 from .ladder import LadderSettings
 from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
-from ..samplers.ensemble import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
 
-__all__ = ["TemperedSettings", "TEMPERED_SETTINGS", "tempered_run", "tempered_report", "reference_optima"]
+__all__ = [
+    "TemperedSettings",
+    "TEMPERED_SETTINGS",
+    "tempered_run",
+    "tempered_report",
+    "reference_optima",
+]
 
 
 @dataclass(frozen=True)
@@ -75,8 +81,11 @@ class TemperedSettings:
         Worker processes for the ladders (and the groups' searches).
     """
 
-    ladder: LadderSettings = field(default_factory=lambda: LadderSettings(
-        n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, top_draws=600))
+    ladder: LadderSettings = field(
+        default_factory=lambda: LadderSettings(
+            n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, top_draws=600
+        )
+    )
     pilot: SamplerSettings = PILOT_SETTINGS
     search: ModeSearch = MODE_SEARCH
     pilot_groups: int = 2
@@ -121,14 +130,25 @@ def tempered_run(posterior, settings=TEMPERED_SETTINGS, seed=0, names=()):
         ``settings`` list each group's reference components and their optima.
     """
     ladder = replace(settings.ladder, processes=settings.processes)
-    evidence = referenced_log_evidence(posterior, ladder, seed, dof=settings.dof, pilot=settings.pilot,
-                                       search=settings.search, pilot_groups=settings.pilot_groups,
-                                       quadratic=settings.quadratic)
+    evidence = referenced_log_evidence(
+        posterior,
+        ladder,
+        seed,
+        dof=settings.dof,
+        pilot=settings.pilot,
+        search=settings.search,
+        pilot_groups=settings.pilot_groups,
+        quadratic=settings.quadratic,
+    )
     chain = np.asarray(evidence.posterior_draws, dtype=float)
     n_ladders, n_steps, n_walk, ndim = chain.shape
     flat = chain.reshape(-1, ndim)
-    log_prob = np.concatenate([np.asarray(posterior(flat[i:i + EVAL_BLOCK]), dtype=float)
-                               for i in range(0, len(flat), EVAL_BLOCK)]).reshape(n_ladders, n_steps, n_walk)
+    log_prob = np.concatenate(
+        [
+            np.asarray(posterior(flat[i : i + EVAL_BLOCK]), dtype=float)
+            for i in range(0, len(flat), EVAL_BLOCK)
+        ]
+    ).reshape(n_ladders, n_steps, n_walk)
     moved = np.any(np.diff(chain, axis=1) != 0.0, axis=-1)
     acceptance = moved.mean(axis=1) if n_steps > 1 else np.zeros((n_ladders, n_walk))
     report = tempered_report(chain, settings, names)
@@ -150,7 +170,9 @@ def tempered_report(chain, settings=TEMPERED_SETTINGS, names=()):
 
     n_ladders, n_steps, n_walk, ndim = chain.shape
     per_ladder = chain.reshape(n_ladders, n_steps * n_walk, ndim)  # step-major: time order kept
-    rhat = np.array([az_rhat(per_ladder[..., k], method="rank", chain_axis=0, draw_axis=1) for k in range(ndim)])
+    rhat = np.array(
+        [az_rhat(per_ladder[..., k], method="rank", chain_axis=0, draw_axis=1) for k in range(ndim)]
+    )
     tau, ess = np.empty(ndim), np.empty(ndim)
     for k in range(ndim):
         z = _rank_normal(chain[..., k])
@@ -163,12 +185,19 @@ def tempered_report(chain, settings=TEMPERED_SETTINGS, names=()):
             continue
         tau[k] = n_ladders * n_steps / ess_means
         ess[k] = min(ess_means * ratio, float(z.size))
-    converged = bool(n_steps >= settings.tau_factor * tau.max() and np.all(rhat < settings.rhat_target)
-                     and np.all(ess >= settings.ess_target))
+    converged = bool(
+        n_steps >= settings.tau_factor * tau.max()
+        and np.all(rhat < settings.rhat_target)
+        and np.all(ess >= settings.ess_target)
+    )
     return ConvergenceReport(converged, n_steps, n_steps, tau, rhat, ess, tuple(names))
 
 
 def reference_optima(evidence):
     """The optima (u) the ladders' mode searches found, group after group."""
-    return [np.asarray(c["optimum"], dtype=float)
-            for group in evidence.settings.get("reference_components", []) for c in group if "optimum" in c]
+    return [
+        np.asarray(c["optimum"], dtype=float)
+        for group in evidence.settings.get("reference_components", [])
+        for c in group
+        if "optimum" in c
+    ]

@@ -11,7 +11,14 @@
 """
 
 from .model import NOISE_PARAMETERS, JointTarget, Population, TwoStageTarget
-from .predictive import BOX_QUANTILES, ForwardTemplate, NewSpecimens, drift_groups, new_specimens, optimal_voltage
+from .predictive import (
+    BOX_QUANTILES,
+    ForwardTemplate,
+    NewSpecimens,
+    drift_groups,
+    new_specimens,
+    optimal_voltage,
+)
 from .routes import (
     HierarchicalResult,
     ReweightingWarning,

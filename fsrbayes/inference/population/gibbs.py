@@ -64,7 +64,9 @@ class KernelProposal:
     def __init__(self, draws, n_centres=256, defensive=0.1, dof=5.0):
         draws = np.asarray(draws, dtype=float)
         if draws.ndim != 2 or len(draws) < draws.shape[1] + 2 or not np.all(np.isfinite(draws)):
-            raise ValueError(f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}")
+            raise ValueError(
+                f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}"
+            )
         n, d = draws.shape
         self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
         self.mean = draws.mean(axis=0)
@@ -77,25 +79,40 @@ class KernelProposal:
         self.defensive, self.dof, self.d = float(defensive), float(dof), d
 
     def sample(self, random, n):
-        """n draws, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        """N draws, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
         pick = random.randint(len(self.centres), size=n)
         kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
         chi = random.chisquare(self.dof, size=n) / self.dof
-        heavy = self.mean + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
+        heavy = (
+            self.mean
+            + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
+        )
         return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
 
     def log_density(self, u):
-        """log q(u) for u (n, d)."""
+        """Log q(u) for u (n, d)."""
         u = np.atleast_2d(u)
         white = np.linalg.solve(self.kernel_chol, u.T).T
-        dist2 = (np.sum(white**2, axis=1)[:, None] + np.sum(self.white_centres**2, axis=1)[None, :]
-                 - 2.0 * white @ self.white_centres.T)
-        log_kernel = (logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1) - np.log(len(self.centres))
-                      - np.sum(np.log(np.diag(self.kernel_chol))) - 0.5 * self.d * np.log(2 * np.pi))
+        dist2 = (
+            np.sum(white**2, axis=1)[:, None]
+            + np.sum(self.white_centres**2, axis=1)[None, :]
+            - 2.0 * white @ self.white_centres.T
+        )
+        log_kernel = (
+            logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1)
+            - np.log(len(self.centres))
+            - np.sum(np.log(np.diag(self.kernel_chol)))
+            - 0.5 * self.d * np.log(2 * np.pi)
+        )
         y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
         nu, d = self.dof, self.d
-        log_t = (gammaln((nu + d) / 2) - gammaln(nu / 2) - 0.5 * d * np.log(nu * np.pi)
-                 - np.sum(np.log(np.diag(self.t_chol))) - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu))
+        log_t = (
+            gammaln((nu + d) / 2)
+            - gammaln(nu / 2)
+            - 0.5 * d * np.log(nu * np.pi)
+            - np.sum(np.log(np.diag(self.t_chol)))
+            - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu)
+        )
         return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
 
 
@@ -123,18 +140,41 @@ class GibbsJointTarget(JointTarget):
         alone leaves the ridge and is rejected.
     """
 
-    def __init__(self, population, specimens, proposal_draws, *, hyper_rounds=5, n_centres=256, weak_ratio=None, shift_scale=1.0):
+    def __init__(
+        self,
+        population,
+        specimens,
+        proposal_draws,
+        *,
+        hyper_rounds=5,
+        n_centres=256,
+        weak_ratio=None,
+        shift_scale=1.0,
+    ):
         super().__init__(population, specimens)
         if len(proposal_draws) != len(self.specimens):
-            raise ValueError(f"proposal_draws: need one array per specimen ({len(self.specimens)}), "
-                             f"got {len(proposal_draws)}")
-        self.proposals = [KernelProposal(spec.prior.to_unconstrained(np.asarray(d, dtype=float)), n_centres=n_centres)
-                          for spec, d in zip(self.specimens, proposal_draws)]
+            raise ValueError(
+                f"proposal_draws: need one array per specimen ({len(self.specimens)}), "
+                f"got {len(proposal_draws)}"
+            )
+        self.proposals = [
+            KernelProposal(
+                spec.prior.to_unconstrained(np.asarray(d, dtype=float)), n_centres=n_centres
+            )
+            for spec, d in zip(self.specimens, proposal_draws, strict=False)
+        ]
         self.hyper_rounds = int(hyper_rounds)
-        z = [population.to_z(np.asarray(d, dtype=float)[:, population.index])[0] for d in proposal_draws]
+        z = [
+            population.to_z(np.asarray(d, dtype=float)[:, population.index])[0]
+            for d in proposal_draws
+        ]
         within = np.median([np.std(v, axis=0) for v in z], axis=0)
         between = np.std([np.median(v, axis=0) for v in z], axis=0) + 1e-12
-        self.weak = () if weak_ratio is None else tuple(int(p) for p in np.flatnonzero(within > weak_ratio * between))
+        self.weak = (
+            ()
+            if weak_ratio is None
+            else tuple(int(p) for p in np.flatnonzero(within > weak_ratio * between))
+        )
         """Population parameters the specimens' own data barely identify (posterior sd of z above
         ``weak_ratio`` × the spread of the specimens' medians): they get the shift-and-scale move."""
         self.shift_steps = shift_scale * 2.4 * between / np.sqrt(len(z))
@@ -177,7 +217,9 @@ class BlockGibbsMove(emcee.moves.Move):
         n_hyper = 2 * pop.size
         hyper, _ = pop.hyper_prior.from_unconstrained(coords[:, :n_hyper])
         self.mu, self.omega = (a.copy() for a in pop.split(hyper))
-        blocks = [self._evaluate_block(j, t.specimen_block(coords, j)) for j in range(len(t.specimens))]
+        blocks = [
+            self._evaluate_block(j, t.specimen_block(coords, j)) for j in range(len(t.specimens))
+        ]
         self.block_lp = np.stack([b[0] for b in blocks], axis=1)  # (W, J)
         self.like = np.stack([b[1] for b in blocks], axis=1)  # (W, J)
         self.x = np.stack([b[2] for b in blocks], axis=1)  # (W, J, P)
@@ -191,7 +233,9 @@ class BlockGibbsMove(emcee.moves.Move):
         _, log_jac = pop.hyper_prior.from_unconstrained(hyper_u)
         value = pop.hyper_prior.log_prob(hyper) + log_jac + self.block_lp.sum(axis=1)
         with np.errstate(invalid="ignore"):
-            value = value + np.sum(pop.log_ratio(self.x, self.mu[:, None, :], self.omega[:, None, :]), axis=1)
+            value = value + np.sum(
+                pop.log_ratio(self.x, self.mu[:, None, :], self.omega[:, None, :]), axis=1
+            )
         coords = np.concatenate([hyper_u] + self.u, axis=1)
         return np.where(np.isnan(value), -np.inf, value), coords
 
@@ -209,7 +253,9 @@ class BlockGibbsMove(emcee.moves.Move):
         new = self._conditional(j, lp_new, x_new, rows)
         with np.errstate(invalid="ignore"):
             log_alpha = new - old + log_extra
-        take = np.isfinite(new) & (np.log(random.uniform(size=len(rows))) < np.nan_to_num(log_alpha, nan=-np.inf))
+        take = np.isfinite(new) & (
+            np.log(random.uniform(size=len(rows))) < np.nan_to_num(log_alpha, nan=-np.inf)
+        )
         where = rows[take]
         self.u[j][where] = u_new[take]
         self.block_lp[where, j] = lp_new[take]
@@ -228,7 +274,7 @@ class BlockGibbsMove(emcee.moves.Move):
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
         moved = [independence]
-        for active, other in ((half[: n // 2], half[n // 2:]), (half[n // 2:], half[: n // 2])):
+        for active, other in ((half[: n // 2], half[n // 2 :]), (half[n // 2 :], half[: n // 2])):
             first = random.randint(len(other), size=len(active))
             second = random.randint(len(other) - 1, size=len(active))
             second += second >= first  # two distinct walkers of the other half
@@ -250,8 +296,13 @@ class BlockGibbsMove(emcee.moves.Move):
             self.mu = mean + random.standard_normal(mean.shape) / np.sqrt(precision)
             spread = np.sum((z - self.mu[:, None, :]) ** 2, axis=1)
 
-            def log_target(eta):
-                return -n_spec * eta - 0.5 * spread * np.exp(-2 * eta) - 0.5 * np.exp(2 * eta) / pop.scale**2 + eta
+            def log_target(eta, spread=spread):
+                return (
+                    -n_spec * eta
+                    - 0.5 * spread * np.exp(-2 * eta)
+                    - 0.5 * np.exp(2 * eta) / pop.scale**2
+                    + eta
+                )
 
             eta = np.log(self.omega)
             proposal = eta + step * random.standard_normal(eta.shape)
@@ -274,7 +325,9 @@ class BlockGibbsMove(emcee.moves.Move):
         z = pop.to_z(self.x)[0][..., p]  # (W, J)
         mu_new, omega_new = self.mu[:, p] + delta, self.omega[:, p] * np.exp(eps)
         z_new = mu_new[:, None] + np.exp(eps)[:, None] * (z - self.mu[:, p][:, None])
-        value_new = np.where(pop.log_scale[p], np.exp(np.where(pop.log_scale[p], z_new, 0.0)), z_new)
+        value_new = np.where(
+            pop.log_scale[p], np.exp(np.where(pop.log_scale[p], z_new, 0.0)), z_new
+        )
         column = pop.index[p]
         news = []
         for j, spec in enumerate(t.specimens):
@@ -289,12 +342,22 @@ class BlockGibbsMove(emcee.moves.Move):
         like_new = np.stack([v[2] for v in news], axis=1)
         m, s = pop.centre[p], pop.scale[p]
         with np.errstate(invalid="ignore", over="ignore"):
-            log_alpha = (np.sum(like_new - self.like, axis=1)
-                         - 0.5 * ((mu_new - m) ** 2 - (self.mu[:, p] - m) ** 2) / s**2
-                         - 0.5 * (omega_new**2 - self.omega[:, p] ** 2) / s**2 + eps)
-        take = np.all(np.isfinite(like_new), axis=1) & (np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf))
+            log_alpha = (
+                np.sum(like_new - self.like, axis=1)
+                - 0.5 * ((mu_new - m) ** 2 - (self.mu[:, p] - m) ** 2) / s**2
+                - 0.5 * (omega_new**2 - self.omega[:, p] ** 2) / s**2
+                + eps
+            )
+        take = np.all(np.isfinite(like_new), axis=1) & (
+            np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf)
+        )
         for j, (u_new, lp, like, x) in enumerate(news):
-            self.u[j][take], self.block_lp[take, j], self.like[take, j], self.x[take, j] = u_new[take], lp[take], like[take], x[take]
+            self.u[j][take], self.block_lp[take, j], self.like[take, j], self.x[take, j] = (
+                u_new[take],
+                lp[take],
+                like[take],
+                x[take],
+            )
         self.mu[take, p], self.omega[take, p] = mu_new[take], omega_new[take]
         return take.mean()
 
@@ -316,4 +379,6 @@ class BlockGibbsMove(emcee.moves.Move):
         self._sweeps += 1
         self.acceptance += (rates.mean(axis=0) - self.acceptance) / self._sweeps
         accepted = np.any(new_coords != coords, axis=1)
-        return emcee.State(new_coords, log_prob=log_prob, blobs=state.blobs, random_state=state.random_state), accepted
+        return emcee.State(
+            new_coords, log_prob=log_prob, blobs=state.blobs, random_state=state.random_state
+        ), accepted

@@ -27,6 +27,7 @@ Two targets use it, both vectorised over walkers and both exposing ``prior``,
 import hashlib
 
 import numpy as np
+
 from ...data.distributions import Distribution
 from ...data.prior import JointPrior
 from ...utils import HALF_LOG_2PI, logsumexp
@@ -47,7 +48,9 @@ def _coordinate(dist):
     if dist.kind == "lognormal":
         return True, float(np.log(dist.args["median"])), dist.args["sigma"]
     values = dist.ppf(_QUANTILES)
-    positive = dist.kind in ("halfnormal", "gamma", "loguniform") or dist.args.get("lower", -1.0) >= 0.0
+    positive = (
+        dist.kind in ("halfnormal", "gamma", "loguniform") or dist.args.get("lower", -1.0) >= 0.0
+    )
     z = np.log(values[values > 0]) if positive else values
     return positive, float(np.mean(z)), float(np.std(z))
 
@@ -76,10 +79,16 @@ class Population:
     """
 
     def __init__(self, prior, names=None):
-        names = tuple(n for n in prior.names if n not in NOISE_PARAMETERS) if names is None else tuple(names)
+        names = (
+            tuple(n for n in prior.names if n not in NOISE_PARAMETERS)
+            if names is None
+            else tuple(names)
+        )
         unknown = [n for n in names if n not in prior.names]
         if unknown or not names:
-            raise ValueError(f"population parameters must be among the sampled {list(prior.names)}, got {list(names)}")
+            raise ValueError(
+                f"population parameters must be among the sampled {list(prior.names)}, got {list(names)}"
+            )
         self.prior = prior
         self.names = names
         self.index = np.array([prior.names.index(n) for n in names])
@@ -88,7 +97,10 @@ class Population:
         self.log_scale = np.array([c[0] for c in coordinates])
         self.centre = np.array([c[1] for c in coordinates])
         self.scale = np.array([c[2] for c in coordinates])
-        dists = [Distribution("normal", {"mu": float(m), "sigma": float(s)}) for m, s in zip(self.centre, self.scale)]
+        dists = [
+            Distribution("normal", {"mu": float(m), "sigma": float(s)})
+            for m, s in zip(self.centre, self.scale, strict=False)
+        ]
         dists += [Distribution("halfnormal", {"scale": float(s)}) for s in self.scale]
         self.hyper_prior = JointPrior(self.hyper_names, tuple(dists))
 
@@ -104,7 +116,7 @@ class Population:
     def split(self, hyper):
         """(μ, ω), each (…, P), from hyper-parameters (…, 2P) in physical units."""
         hyper = np.asarray(hyper, dtype=float)
-        return hyper[..., :self.size], hyper[..., self.size:]
+        return hyper[..., : self.size], hyper[..., self.size :]
 
     def to_z(self, x):
         """Population coordinates z of population parameters x (…, P) and log|dz/dx| summed (…)."""
@@ -120,7 +132,7 @@ class Population:
         return np.where(self.log_scale, np.exp(np.where(self.log_scale, z, 0.0)), z)
 
     def log_density(self, x, mu, omega):
-        """log p(x | μ, ω) of population parameters x, broadcasting (…, P) → (…)."""
+        """Log p(x | μ, ω) of population parameters x, broadcasting (…, P) → (…)."""
         z, log_jac = self.to_z(x)
         with np.errstate(divide="ignore", invalid="ignore"):
             terms = -0.5 * ((z - mu) / omega) ** 2 - np.log(omega) - HALF_LOG_2PI
@@ -128,13 +140,15 @@ class Population:
         return np.where(np.isnan(total), -np.inf, total)
 
     def log_ratio(self, x, mu, omega):
-        """log p(x | μ, ω) − log π(x): what the population changes about one specimen's prior."""
+        """Log p(x | μ, ω) − log π(x): what the population changes about one specimen's prior."""
         return self.log_density(x, mu, omega) - self.interim.log_prob(x)
 
     def sample(self, rng, hyper, size=None):
         """Population parameters of new specimens: one per hyper-parameter row (…, 2P) → (…, P)."""
         mu, omega = self.split(hyper)
-        shape = np.broadcast_shapes(mu.shape, omega.shape) if size is None else tuple(size) + mu.shape
+        shape = (
+            np.broadcast_shapes(mu.shape, omega.shape) if size is None else tuple(size) + mu.shape
+        )
         return self.from_z(mu + omega * rng.standard_normal(shape))
 
     def fingerprint(self):
@@ -163,7 +177,9 @@ class TwoStageTarget(PriorScaledTarget):
         draws = [np.asarray(d, dtype=float) for d in draws]
         shapes = {d.shape for d in draws}
         if len(shapes) != 1 or len(draws[0].shape) != 2 or draws[0].shape[1] != population.size:
-            raise ValueError(f"draws must be arrays of one shape (S, {population.size}), got shapes {sorted(shapes)}")
+            raise ValueError(
+                f"draws must be arrays of one shape (S, {population.size}), got shapes {sorted(shapes)}"
+            )
         self.population = population
         self.prior = population.hyper_prior
         self.n_specimens, self.n_draws = len(draws), draws[0].shape[0]
@@ -176,7 +192,7 @@ class TwoStageTarget(PriorScaledTarget):
         self.offset = log_jac - log_interim - population.size * HALF_LOG_2PI
 
     def log_weights(self, hyper):
-        """log p(θ_js | Λ)/π(θ_js) for hyper-parameters (W, 2P): shape (W, J, S)."""
+        """Log p(θ_js | Λ)/π(θ_js) for hyper-parameters (W, 2P): shape (W, J, S)."""
         mu, omega = self.population.split(np.atleast_2d(hyper))
         precision = 1.0 / (omega * omega)
         coefficients = np.concatenate([-0.5 * precision, mu * precision], axis=1)
@@ -189,12 +205,14 @@ class TwoStageTarget(PriorScaledTarget):
         hyper, log_jac = self.prior.from_unconstrained(u2)
         log_prior = self.prior.log_prob(hyper) + log_jac
         log_like = np.full(len(u2), -np.inf)
-        ok = np.isfinite(log_prior) & np.all(hyper[:, self.population.size:] > 0, axis=1)
+        ok = np.isfinite(log_prior) & np.all(hyper[:, self.population.size :] > 0, axis=1)
         if ok.any() and with_likelihood:
             with np.errstate(all="ignore"):
                 per_specimen = logsumexp(self.log_weights(hyper[ok]), axis=2) - np.log(self.n_draws)
                 log_like[ok] = per_specimen.sum(axis=1)
-        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
+        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(
+            np.isnan(log_like), -np.inf, log_like
+        )
 
     def effective_draws(self, hyper):
         """Each specimen's effective number of draws (Σw)²/Σw² at hyper-parameters (W, 2P) → (W, J)."""
@@ -234,8 +252,10 @@ class JointTarget(PriorScaledTarget):
         specimens = list(specimens)
         for k, target in enumerate(specimens):
             if tuple(target.prior.names) != tuple(population.prior.names):
-                raise ValueError(f"specimen {k} samples {list(target.prior.names)}, the population was built "
-                                 f"for {list(population.prior.names)}")
+                raise ValueError(
+                    f"specimen {k} samples {list(target.prior.names)}, the population was built "
+                    f"for {list(population.prior.names)}"
+                )
         self.population = population
         self.specimens = specimens
         self.width = population.prior.ndim
@@ -249,7 +269,7 @@ class JointTarget(PriorScaledTarget):
     def specimen_block(self, u, j):
         """Specimen j's coordinates from joint u (…, ndim)."""
         start = 2 * self.population.size + j * self.width
-        return np.asarray(u)[..., start:start + self.width]
+        return np.asarray(u)[..., start : start + self.width]
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
@@ -260,14 +280,18 @@ class JointTarget(PriorScaledTarget):
         log_like = np.zeros(len(u2))
         for j, target in enumerate(self.specimens):
             block = self.specimen_block(u2, j)
-            prior_j, like_j = target.log_prior_and_likelihood(block, with_likelihood=with_likelihood)
+            prior_j, like_j = target.log_prior_and_likelihood(
+                block, with_likelihood=with_likelihood
+            )
             x = target.prior.from_unconstrained(block)[0][:, self.population.index]
             with np.errstate(invalid="ignore"):
                 log_prior = log_prior + prior_j + self.population.log_ratio(x, mu, omega)
             log_like = log_like + (like_j if with_likelihood else 0.0)
         if not with_likelihood:
             log_like = np.full(len(u2), -np.inf)
-        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(np.isnan(log_like), -np.inf, log_like)
+        return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(
+            np.isnan(log_like), -np.inf, log_like
+        )
 
     def fingerprint(self):
         parts = [self.population.fingerprint()]

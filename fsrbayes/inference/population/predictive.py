@@ -21,7 +21,14 @@ from ...physics.sensor import solve_current
 from ..posterior import noise_parameters
 from ..samplers.ensemble import even_index
 
-__all__ = ["ForwardTemplate", "NewSpecimens", "new_specimens", "drift_groups", "optimal_voltage", "BOX_QUANTILES"]
+__all__ = [
+    "ForwardTemplate",
+    "NewSpecimens",
+    "new_specimens",
+    "drift_groups",
+    "optimal_voltage",
+    "BOX_QUANTILES",
+]
 
 BOX_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 """The box plot's quantiles: whiskers at 5 and 95 %, box at 25–75 %, line at the median."""
@@ -57,7 +64,13 @@ class ForwardTemplate:
     @classmethod
     def from_posterior(cls, posterior):
         """Template from a fitted specimen's :class:`LogPosterior`."""
-        return cls(posterior.data.sensor, posterior.model, posterior.tunneling, posterior.prior, dict(posterior.fixed))
+        return cls(
+            posterior.data.sensor,
+            posterior.model,
+            posterior.tunneling,
+            posterior.prior,
+            dict(posterior.fixed),
+        )
 
     @property
     def ndim(self):
@@ -104,8 +117,15 @@ class NewSpecimens:
         rheology, effects = parse_model(self.template.model)
         params = {k: v[:, :, None, None, None] for k, v in self.params.items()}
         times = np.array([0.0, float(time_s)])
-        solution = solve_current(params, volts[:, None, None], stress[None, :, None], times,
-                                 rheology=rheology, tunneling=self.template.tunneling, effects=effects)
+        solution = solve_current(
+            params,
+            volts[:, None, None],
+            stress[None, :, None],
+            times,
+            rheology=rheology,
+            tunneling=self.template.tunneling,
+            effects=effects,
+        )
         current = np.where(solution.valid, solution.current, np.nan)
         ratio = current[..., 1] / current[..., 0]
         if noise_rel:
@@ -139,8 +159,10 @@ def new_specimens(population, hyper_draws, template, *, n_hyper=200, n_per_hyper
     x = np.empty((len(hyper), n_per_hyper, template.ndim))
     x[...] = [d.median() for d in template.prior.dists]
     mu, omega = population.split(hyper)
-    x[..., population.index] = population.from_z(mu[:, None, :] + omega[:, None, :] * rng.standard_normal(
-        (len(hyper), n_per_hyper, population.size)))
+    x[..., population.index] = population.from_z(
+        mu[:, None, :]
+        + omega[:, None, :] * rng.standard_normal((len(hyper), n_per_hyper, population.size))
+    )
     return NewSpecimens(template.parameters(x), template)
 
 
@@ -151,11 +173,15 @@ def _quantile_summary(values, level=0.90):
     per_draw = np.nanquantile(values, BOX_QUANTILES, axis=1)  # (5, K)
     low, high = np.nanquantile(per_draw, [tail, 1.0 - tail], axis=1)
     names = [f"q{int(round(100 * q)):02d}" for q in BOX_QUANTILES]
-    return ({n: float(v) for n, v in zip(names, pooled)},
-            {n: [float(a), float(b)] for n, a, b in zip(names, low, high)})
+    return (
+        {n: float(v) for n, v in zip(names, pooled, strict=False)},
+        {n: [float(a), float(b)] for n, a, b in zip(names, low, high, strict=False)},
+    )
 
 
-def drift_groups(specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, noise_rel=None, seed=0):
+def drift_groups(
+    specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, noise_rel=None, seed=0
+):
     """The contract's ``groups``: one entry per (voltage, stress) with the new-specimen quantiles.
 
     ``noise_rel`` (relative measurement noise, e.g. the specimens' fitted sigma_rel) makes them
@@ -175,10 +201,18 @@ def drift_groups(specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, 
         for j, stress in enumerate(np.atleast_1d(stress_Pa)):
             values = drift[:, :, i, j]
             pooled, intervals = _quantile_summary(values, level)
-            groups.append({"sensor": specimens.sensor, "voltage_V": float(volts), "stress_Pa": float(stress),
-                           "time_s": float(time_s), "as_measured": bool(noise_rel), "new_specimen": pooled,
-                           "quantile_intervals": intervals,
-                           "invalid_share": float(np.mean(np.isnan(values)))})
+            groups.append(
+                {
+                    "sensor": specimens.sensor,
+                    "voltage_V": float(volts),
+                    "stress_Pa": float(stress),
+                    "time_s": float(time_s),
+                    "as_measured": bool(noise_rel),
+                    "new_specimen": pooled,
+                    "quantile_intervals": intervals,
+                    "invalid_share": float(np.mean(np.isnan(values))),
+                }
+            )
     return groups
 
 
@@ -202,7 +236,9 @@ def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=3600.0, n_grid=161)
     drift = specimens.drift(grid, [stress_Pa], time_s)[..., 0].reshape(-1, n_grid)
     drift = drift[np.all(np.isfinite(drift), axis=1)]
     if not len(drift):
-        raise ValueError(f"no new specimen stays inside the model's domain over {v_min:g}–{v_max:g} V")
+        raise ValueError(
+            f"no new specimen stays inside the model's domain over {v_min:g}–{v_max:g} V"
+        )
     size = np.abs(drift)
     best = np.argmin(size, axis=1)
     inner = np.clip(best, 1, n_grid - 2)
@@ -221,6 +257,13 @@ def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=3600.0, n_grid=161)
     at_opt = (1 - w) * drift[left] + w * drift[left[0], left[1] + 1]
     q = np.quantile(v_opt, [0.05, 0.5, 0.95])
     d = np.quantile(at_opt, [0.05, 0.5, 0.95])
-    return {"stress_Pa": float(stress_Pa), "v_range": [v_min, v_max], "time_s": float(time_s),
-            "median": float(q[1]), "q05": float(q[0]), "q95": float(q[2]), "at_boundary": float(np.mean(edge)),
-            "drift_at_optimum": {"q05": float(d[0]), "q50": float(d[1]), "q95": float(d[2])}}
+    return {
+        "stress_Pa": float(stress_Pa),
+        "v_range": [v_min, v_max],
+        "time_s": float(time_s),
+        "median": float(q[1]),
+        "q05": float(q[0]),
+        "q95": float(q[2]),
+        "at_boundary": float(np.mean(edge)),
+        "drift_at_optimum": {"q05": float(d[0]), "q50": float(d[1]), "q95": float(d[2])},
+    }

@@ -18,17 +18,24 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...physics.models import model_components, register_components
+from ...utils import logsumexp
 from ..fit import FIT_SETTINGS, fit
 from ..optimize import find_map, laplace_start
-from ..parallel import JobFailure, map_jobs
-from .gibbs import GIBBS_WALKERS, GibbsJointTarget
-from ...utils import logsumexp
-from .model import JointTarget, Population, TwoStageTarget
+from ..parallel import JobFailure, map_jobs, single_threaded_blas
 from ..samplers.ensemble import SamplerSettings, even_index, run_ensembles
-from ..parallel import single_threaded_blas
+from .gibbs import GIBBS_WALKERS, GibbsJointTarget
+from .model import JointTarget, Population, TwoStageTarget
 
-__all__ = ["HierarchicalResult", "ReweightingWarning", "SpecimenFitWarning", "two_stage", "joint", "fit_specimens",
-           "draw_error", "MIN_EFFECTIVE_DRAWS"]
+__all__ = [
+    "HierarchicalResult",
+    "ReweightingWarning",
+    "SpecimenFitWarning",
+    "two_stage",
+    "joint",
+    "fit_specimens",
+    "draw_error",
+    "MIN_EFFECTIVE_DRAWS",
+]
 
 MIN_EFFECTIVE_DRAWS = 50
 """Below this many effective draws for a specimen the two-stage estimate is flagged."""
@@ -86,11 +93,14 @@ class HierarchicalResult:
     def draws(self, max_draws=4000):
         """Posterior draws in physical units, shape (D, ndim), thinned evenly over the kept chain."""
         chain, _ = self.run.kept()
-        return self.target.prior.from_unconstrained(_thin(chain.reshape(-1, chain.shape[-1]), max_draws))[0]
+        return self.target.prior.from_unconstrained(
+            _thin(chain.reshape(-1, chain.shape[-1]), max_draws)
+        )[0]
 
     def hyper_draws(self, max_draws=4000):
         """Draws of the hyper-parameters (μ then ω), shape (D, 2P); only their columns are converted
-        (a joint run carries every specimen's parameters too)."""
+        (a joint run carries every specimen's parameters too).
+        """
         chain, _ = self.run.kept()
         n_hyper = 2 * self.population.size
         flat = _thin(chain[..., :n_hyper].reshape(-1, n_hyper), max_draws)
@@ -119,15 +129,23 @@ class HierarchicalResult:
         for k, name in enumerate(self.population.hyper_names):
             values = chains[..., k]
             q05, q50, q95 = np.quantile(values, [0.05, 0.5, 0.95])
-            out[name] = {"median": float(q50), "q05": float(q05), "q95": float(q95), "mean": float(values.mean()),
-                         "sd": float(values.std()),
-                         "mcse_mean": float(mcse(values, method="mean", chain_axis=0, draw_axis=1)),
-                         "mcse_sd": float(mcse(values, method="sd", chain_axis=0, draw_axis=1)),
-                         "r_hat": float(report.rhat[k]), "ess_bulk": float(report.ess_bulk[k])}
+            out[name] = {
+                "median": float(q50),
+                "q05": float(q05),
+                "q95": float(q95),
+                "mean": float(values.mean()),
+                "sd": float(values.std()),
+                "mcse_mean": float(mcse(values, method="mean", chain_axis=0, draw_axis=1)),
+                "mcse_sd": float(mcse(values, method="sd", chain_axis=0, draw_axis=1)),
+                "r_hat": float(report.rhat[k]),
+                "ess_bulk": float(report.ess_bulk[k]),
+            }
             out[name]["error_mean"] = out[name]["mcse_mean"]
             if self.draw_error is not None:
                 out[name]["draw_error_mean"] = float(self.draw_error[k])
-                out[name]["error_mean"] = float(np.hypot(out[name]["mcse_mean"], self.draw_error[k]))
+                out[name]["error_mean"] = float(
+                    np.hypot(out[name]["mcse_mean"], self.draw_error[k])
+                )
         return out
 
 
@@ -137,13 +155,21 @@ def _sample(target, seed, settings, start, progress):
     if start is None:
         optima = find_map(target, rng, n_starts=settings.n_ensembles)
         start = laplace_start(target, optima[0], rng, (settings.n_ensembles, n_walk))
-    return run_ensembles(target, start, seed, settings, names=target.names, fingerprint=target.fingerprint(),
-                         progress=progress)
+    return run_ensembles(
+        target,
+        start,
+        seed,
+        settings,
+        names=target.names,
+        fingerprint=target.fingerprint(),
+        progress=progress,
+    )
 
 
 def _walkers(target, settings):
     """Walkers per ensemble: the Gibbs route's walkers are chains of their own, not bound by the
-    ensemble moves' 2·ndim."""
+    ensemble moves' 2·ndim.
+    """
     if isinstance(target, GibbsJointTarget):
         return settings.n_walkers or GIBBS_WALKERS
     return settings.walkers_for(target.ndim)
@@ -153,8 +179,16 @@ def _thin(values, n):
     return values[even_index(len(values), n)]
 
 
-def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_effective=MIN_EFFECTIVE_DRAWS,
-              progress=False):
+def two_stage(
+    fits,
+    population=None,
+    *,
+    n_draws=500,
+    settings=None,
+    seed=0,
+    min_effective=MIN_EFFECTIVE_DRAWS,
+    progress=False,
+):
     """Population posterior from independent per-specimen fits, by reweighting their draws.
 
     Parameters
@@ -179,8 +213,10 @@ def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_
         labels = list(fits)
         results = list(fits.values())
         population = population or Population(results[0].posterior.prior)
-        full = [_thin(r.draws(10 * n_draws).reshape(-1, r.posterior.ndim), n_draws) for r in results]
-        full = [d[:min(len(x) for x in full)] for d in full]
+        full = [
+            _thin(r.draws(10 * n_draws).reshape(-1, r.posterior.ndim), n_draws) for r in results
+        ]
+        full = [d[: min(len(x) for x in full)] for d in full]
         draws = [d[:, population.index] for d in full]
     else:
         full = None
@@ -191,17 +227,22 @@ def two_stage(fits, population=None, *, n_draws=500, settings=None, seed=0, min_
     target = TwoStageTarget(population, draws)
     settings = settings or SamplerSettings()
     run = _sample(target, seed, settings, None, progress)
-    result = HierarchicalResult(population, target, run, seed, "two-stage", labels, specimen_draws=full)
+    result = HierarchicalResult(
+        population, target, run, seed, "two-stage", labels, specimen_draws=full
+    )
     hyper = result.hyper_draws(400)
     result.effective_draws = np.median(target.effective_draws(hyper), axis=0)
     result.log_likelihood_mc_sd = float(np.sqrt(np.median(target.log_likelihood_variance(hyper))))
     result.draw_error = draw_error(result, seed=seed)
     worst = int(np.argmin(result.effective_draws))
     if result.effective_draws[worst] < min_effective:
-        warnings.warn(f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of {target.n_draws} "
-                      f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far from the "
-                      "population for the two-stage estimate: fit it with more draws or use the joint route",
-                      ReweightingWarning, stacklevel=2)
+        warnings.warn(
+            f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of {target.n_draws} "
+            f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far from the "
+            "population for the two-stage estimate: fit it with more draws or use the joint route",
+            ReweightingWarning,
+            stacklevel=2,
+        )
     return result
 
 
@@ -233,8 +274,19 @@ def draw_error(result, n_boot=100, max_draws=2000, seed=0):
     return np.std(means, axis=0)
 
 
-def joint(specimens, population=None, *, settings=None, seed=0, start_from=None, labels=None, progress=False,
-          method=None, proposal_draws=None, gibbs=None):
+def joint(
+    specimens,
+    population=None,
+    *,
+    settings=None,
+    seed=0,
+    start_from=None,
+    labels=None,
+    progress=False,
+    method=None,
+    proposal_draws=None,
+    gibbs=None,
+):
     """Sample the hyper-parameters and every specimen's parameters jointly.
 
     Parameters
@@ -276,11 +328,17 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
     rng = np.random.default_rng(seed)
     if method == "gibbs":
         if proposal_draws is None:
-            raise ValueError("the Gibbs route needs each specimen's posterior draws: pass start_from (a two-stage "
-                             "result from fits) or proposal_draws")
+            raise ValueError(
+                "the Gibbs route needs each specimen's posterior draws: pass start_from (a two-stage "
+                "result from fits) or proposal_draws"
+            )
         target = GibbsJointTarget(population, specimens, proposal_draws, **(gibbs or {}))
-        settings = replace(settings, transport_rounds=0, independence_fraction=0.0,
-                           n_walkers=settings.n_walkers or GIBBS_WALKERS)
+        settings = replace(
+            settings,
+            transport_rounds=0,
+            independence_fraction=0.0,
+            n_walkers=settings.n_walkers or GIBBS_WALKERS,
+        )
     else:
         target = JointTarget(population, specimens)
     start = None
@@ -289,12 +347,15 @@ def joint(specimens, population=None, *, settings=None, seed=0, start_from=None,
     elif method == "gibbs":
         start = _start_from_draws(target, proposal_draws, settings, rng)
     run = _sample(target, seed, settings, start, progress)
-    return HierarchicalResult(population, target, run, seed, "joint", list(labels or range(len(specimens))))
+    return HierarchicalResult(
+        population, target, run, seed, "joint", list(labels or range(len(specimens)))
+    )
 
 
 def _start_from_draws(target, draws, settings, rng):
     """Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at
-    those draws' mean and spread (the warm-up half of the chain is discarded anyway)."""
+    those draws' mean and spread (the warm-up half of the chain is discarded anyway).
+    """
     n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk
     population = target.population
@@ -303,7 +364,7 @@ def _start_from_draws(target, draws, settings, rng):
     mu = z.mean(axis=1)
     omega = np.maximum(z.std(axis=1), 1e-3 * population.scale)
     u = [population.hyper_prior.to_unconstrained(np.concatenate([mu, omega], axis=1))]
-    u += [spec.prior.to_unconstrained(p) for spec, p in zip(target.specimens, picks)]
+    u += [spec.prior.to_unconstrained(p) for spec, p in zip(target.specimens, picks, strict=False)]
     return np.concatenate(u, axis=1).reshape(settings.n_ensembles, n_walk, -1)
 
 
@@ -312,13 +373,15 @@ def _start_from_two_stage(target, two, settings, rng):
     n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk
     if two.specimen_draws is None or len(two.specimen_draws) != len(target.specimens):
-        raise ValueError("start_from needs a two-stage result built from fits of the same specimens")
+        raise ValueError(
+            "start_from needs a two-stage result built from fits of the same specimens"
+        )
     pool = two.hyper_draws(max(n, 400))
     hyper = pool[rng.integers(0, len(pool), n)]
     population = target.population
     u = [population.hyper_prior.to_unconstrained(hyper)]
     mu, omega = population.split(hyper)
-    for spec, full in zip(target.specimens, two.specimen_draws):
+    for spec, full in zip(target.specimens, two.specimen_draws, strict=False):
         x_pop = full[:, population.index]
         log_w = population.log_ratio(x_pop[None, :, :], mu[:, None, :], omega[:, None, :])
         p = np.exp(log_w - log_w.max(axis=1, keepdims=True))
@@ -331,15 +394,25 @@ def _start_from_two_stage(target, two, settings, rng):
 def _fit_one(args):
     """One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the
     cores (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s
-    with OMP_NUM_THREADS=1 — other fit seeds)."""
+    with OMP_NUM_THREADS=1 — other fit seeds).
+    """
     data, specimen, kwargs, components = args
     register_components(components)  # a user's own creep law or effect, in a fresh worker
     with single_threaded_blas():
         return specimen, fit(data, specimen, **kwargs)
 
 
-def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, processes=None, settings=None, errors="warn",
-                  **kwargs):
+def fit_specimens(
+    data,
+    specimens=None,
+    *,
+    executor=None,
+    scheduler=None,
+    processes=None,
+    settings=None,
+    errors="warn",
+    **kwargs,
+):
     """Fit specimens independently and in parallel; returns {specimen: FitResult} in data order.
 
     Parameters
@@ -368,14 +441,27 @@ def fit_specimens(data, specimens=None, *, executor=None, scheduler=None, proces
     kwargs["settings"] = replace(settings or FIT_SETTINGS, processes=1)
     base_seed = kwargs.pop("rng", 0)
     components = model_components(kwargs.get("model", "burgers"))
-    jobs = [(data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k), components)
-            for k, s in enumerate(specimens)]
+    jobs = [
+        (data.select(specimen=s), s, dict(kwargs, rng=int(base_seed) + k), components)
+        for k, s in enumerate(specimens)
+    ]
     if errors not in ("warn", "raise"):
         raise ValueError(f"errors must be 'warn' or 'raise', got {errors!r}")
-    results = map_jobs(_fit_one, jobs, executor=executor, scheduler=scheduler, processes=processes, labels=specimens,
-                       errors="keep" if errors == "warn" else "raise")
+    results = map_jobs(
+        _fit_one,
+        jobs,
+        executor=executor,
+        scheduler=scheduler,
+        processes=processes,
+        labels=specimens,
+        errors="keep" if errors == "warn" else "raise",
+    )
     failed = [r for r in results if isinstance(r, JobFailure)]
     if failed:
-        warnings.warn(f"{len(failed)} of {len(specimens)} specimen fits failed, the other {len(specimens) - len(failed)} "
-                      "kept: " + "; ".join(str(f) for f in failed), SpecimenFitWarning, stacklevel=2)
+        warnings.warn(
+            f"{len(failed)} of {len(specimens)} specimen fits failed, the other {len(specimens) - len(failed)} "
+            "kept: " + "; ".join(str(f) for f in failed),
+            SpecimenFitWarning,
+            stacklevel=2,
+        )
     return dict(r for r in results if not isinstance(r, JobFailure))

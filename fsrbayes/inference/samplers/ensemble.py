@@ -37,8 +37,16 @@ from ...utils import atomic_path
 from ..parallel import fork_pool, single_threaded_blas
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
-__all__ = ["SamplerSettings", "ConvergenceReport", "ConvergenceWarning", "CheckpointMismatch", "EnsembleRun",
-           "run_ensembles", "convergence_report", "check_checkpoint"]
+__all__ = [
+    "SamplerSettings",
+    "ConvergenceReport",
+    "ConvergenceWarning",
+    "CheckpointMismatch",
+    "EnsembleRun",
+    "run_ensembles",
+    "convergence_report",
+    "check_checkpoint",
+]
 
 
 def even_index(length, n):
@@ -117,7 +125,9 @@ class SamplerSettings:
         if self.transport_rounds < 0:
             raise ValueError(f"transport_rounds must be >= 0, got {self.transport_rounds}")
         if not 0.0 <= self.independence_fraction < 1.0:
-            raise ValueError(f"independence_fraction must be in [0, 1), got {self.independence_fraction}")
+            raise ValueError(
+                f"independence_fraction must be in [0, 1), got {self.independence_fraction}"
+            )
 
     @property
     def rounds(self):
@@ -169,9 +179,11 @@ class ConvergenceReport:
         else:
             i_r = int(np.nanargmax(self.rhat))
             rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
-        return (f"after {self.n_steps} steps: {rhat}, kept chain "
-                f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), "
-                f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})")
+        return (
+            f"after {self.n_steps} steps: {rhat}, kept chain "
+            f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), "
+            f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
+        )
 
     def as_dict(self):
         out = asdict(self)
@@ -190,7 +202,9 @@ class ConvergenceWarning(UserWarning):
     """
 
     def __init__(self, report):
-        super().__init__(f"not converged {report.worst()}; raise the step budget or check the model")
+        super().__init__(
+            f"not converged {report.worst()}; raise the step budget or check the model"
+        )
         self.report = report
 
 
@@ -232,24 +246,42 @@ def convergence_report(chain, settings, names=(), final=True):
     from arviz_stats import rhat as az_rhat
 
     n_ens, n_steps, n_walk, ndim = chain.shape
-    kept = chain[:, settings.warmup_steps(n_steps):]
+    kept = chain[:, settings.warmup_steps(n_steps) :]
     n_kept = kept.shape[1]
     with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
-        tau = np.max([emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)], axis=0)
-    tau = np.where(np.isfinite(tau), np.maximum(tau, 1.0), float(n_kept))  # no estimate: as long as the chain
+        tau = np.max(
+            [emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)],
+            axis=0,
+        )
+    tau = np.where(
+        np.isfinite(tau), np.maximum(tau, 1.0), float(n_kept)
+    )  # no estimate: as long as the chain
     ess_tau = n_ens * n_kept * n_walk / tau
     long_enough = n_steps >= settings.min_steps and n_kept >= settings.tau_factor * tau.max()
     if not (long_enough and np.all(ess_tau >= settings.ess_target)) and not final:
         # The cheap criteria fail: R-hat and the rank ESS are not needed to decide to go on.
         nan = np.full(ndim, np.nan)
-        return ConvergenceReport(False, n_steps, n_kept, tau, nan, np.minimum(ess_tau, np.inf), tuple(names))
+        return ConvergenceReport(
+            False, n_steps, n_kept, tau, nan, np.minimum(ess_tau, np.inf), tuple(names)
+        )
     per_ensemble = kept.reshape(n_ens, n_kept * n_walk, ndim)  # step-major: draws keep time order
-    rhat = np.array([az_rhat(per_ensemble[..., k], method="rank", chain_axis=0, draw_axis=1) for k in range(ndim)])
+    rhat = np.array(
+        [
+            az_rhat(per_ensemble[..., k], method="rank", chain_axis=0, draw_axis=1)
+            for k in range(ndim)
+        ]
+    )
     walkers_as_chains = np.moveaxis(kept, 2, 1).reshape(n_ens * n_walk, n_kept, ndim)
-    ess_rank = np.array([az_ess(walkers_as_chains[..., k], method="bulk", chain_axis=0, draw_axis=1)
-                         for k in range(ndim)])
+    ess_rank = np.array(
+        [
+            az_ess(walkers_as_chains[..., k], method="bulk", chain_axis=0, draw_axis=1)
+            for k in range(ndim)
+        ]
+    )
     ess = np.minimum(ess_tau, ess_rank)
-    converged = bool(long_enough and np.all(rhat < settings.rhat_target) and np.all(ess >= settings.ess_target))
+    converged = bool(
+        long_enough and np.all(rhat < settings.rhat_target) and np.all(ess >= settings.ess_target)
+    )
     return ConvergenceReport(converged, n_steps, n_kept, tau, rhat, ess, tuple(names))
 
 
@@ -257,12 +289,24 @@ def ensemble_moves(de_fraction, proposal=None, independence_fraction=0.0):
     if proposal is None or independence_fraction == 0.0:
         return [(emcee.moves.DEMove(), de_fraction), (emcee.moves.StretchMove(), 1.0 - de_fraction)]
     rest = 1.0 - independence_fraction
-    return [(emcee.moves.DEMove(), rest * de_fraction), (emcee.moves.StretchMove(), rest * (1.0 - de_fraction)),
-            (emcee.moves.MHMove(proposal), independence_fraction)]
+    return [
+        (emcee.moves.DEMove(), rest * de_fraction),
+        (emcee.moves.StretchMove(), rest * (1.0 - de_fraction)),
+        (emcee.moves.MHMove(proposal), independence_fraction),
+    ]
 
 
-def _advance(log_prob, position, log_prob_start, random_state, steps, de_fraction, transport=None, proposal=None,
-             independence_fraction=0.0):
+def _advance(
+    log_prob,
+    position,
+    log_prob_start,
+    random_state,
+    steps,
+    de_fraction,
+    transport=None,
+    proposal=None,
+    independence_fraction=0.0,
+):
     """Run one ensemble for ``steps`` from a position and random state; return its new pieces.
 
     With a ``transport`` map the walkers move in v = T⁻¹(u); positions and log-densities come
@@ -272,10 +316,20 @@ def _advance(log_prob, position, log_prob_start, random_state, steps, de_fractio
     target = log_prob
     own_moves = getattr(log_prob, "emcee_moves", None)
     if own_moves is not None and transport is not None:
-        raise ValueError("a target with its own emcee moves samples its own coordinates: set transport_rounds=0")
+        raise ValueError(
+            "a target with its own emcee moves samples its own coordinates: set transport_rounds=0"
+        )
     if transport is not None:
-        target, position, log_prob_start = MappedLogProb(log_prob, transport), transport.inverse(position), None
-    moves = own_moves() if own_moves is not None else ensemble_moves(de_fraction, proposal, independence_fraction)
+        target, position, log_prob_start = (
+            MappedLogProb(log_prob, transport),
+            transport.inverse(position),
+            None,
+        )
+    moves = (
+        own_moves()
+        if own_moves is not None
+        else ensemble_moves(de_fraction, proposal, independence_fraction)
+    )
     sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
     sampler.random_state = random_state
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
@@ -305,17 +359,23 @@ def _transport_maps(chains, settings, max_draws=50000):
     if rounds == 0:
         return [(None, None)] * n_ens
     end = rounds * settings.chunk
-    draws = chains[:, end // 2:end].reshape(-1, chains.shape[-1])
+    draws = chains[:, end // 2 : end].reshape(-1, chains.shape[-1])
     draws = draws[np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int)]
     try:
         transport = TriangularMap.fit(draws, quadratic=settings.quadratic_map)
     except (ValueError, np.linalg.LinAlgError):
-        return [(None, None)] * n_ens  # too few or degenerate draws: sample the target's own coordinates
+        return [
+            (None, None)
+        ] * n_ens  # too few or degenerate draws: sample the target's own coordinates
     proposal = None
     if settings.independence_fraction > 0:
-        per_ensemble = chains[:, end // 2:end].reshape(n_ens, -1, chains.shape[-1])
-        per_ensemble = per_ensemble[:, np.linspace(0, per_ensemble.shape[1] - 1,
-                                                   min(per_ensemble.shape[1], max_draws // n_ens)).astype(int)]
+        per_ensemble = chains[:, end // 2 : end].reshape(n_ens, -1, chains.shape[-1])
+        per_ensemble = per_ensemble[
+            :,
+            np.linspace(
+                0, per_ensemble.shape[1] - 1, min(per_ensemble.shape[1], max_draws // n_ens)
+            ).astype(int),
+        ]
         try:
             proposal = MixtureProposal.fit([transport.inverse(group) for group in per_ensemble])
         except np.linalg.LinAlgError:
@@ -326,20 +386,33 @@ def _transport_maps(chains, settings, max_draws=50000):
 def _progress_bar(settings, done):
     from tqdm.auto import tqdm
 
-    return tqdm(total=settings.max_steps, initial=done, unit="step", desc="sampling", dynamic_ncols=True)
+    return tqdm(
+        total=settings.max_steps, initial=done, unit="step", desc="sampling", dynamic_ncols=True
+    )
 
 
 def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
-            np.savez(handle, fingerprint=np.array(fingerprint), chain=chains, log_prob=log_probs,
-                     accepted=acceptance, settings=np.array(repr(asdict(settings))),
-                     **{f"state{e}_{k}": np.asarray(v) for e, st in enumerate(states) for k, v in enumerate(st)})
+            np.savez(
+                handle,
+                fingerprint=np.array(fingerprint),
+                chain=chains,
+                log_prob=log_probs,
+                accepted=acceptance,
+                settings=np.array(repr(asdict(settings))),
+                **{
+                    f"state{e}_{k}": np.asarray(v)
+                    for e, st in enumerate(states)
+                    for k, v in enumerate(st)
+                },
+            )
 
 
 def check_checkpoint(path, fingerprint, n_ensembles):
     """Refuse a checkpoint written for another fit (:class:`CheckpointMismatch`) before any work
-    is done; a missing file is fine (the run starts afresh)."""
+    is done; a missing file is fine (the run starts afresh).
+    """
     try:
         _load(path, fingerprint, n_ensembles)
     except FileNotFoundError:
@@ -350,29 +423,52 @@ def _load(path, fingerprint, n_ensembles):
     with np.load(path, allow_pickle=False) as saved:
         stored = str(saved["fingerprint"])
         if stored != fingerprint:
-            raise CheckpointMismatch(f"checkpoint {path} was written for {_difference(stored, fingerprint)}; "
-                                     "remove it or fit with matching settings")
+            raise CheckpointMismatch(
+                f"checkpoint {path} was written for {_difference(stored, fingerprint)}; "
+                "remove it or fit with matching settings"
+            )
         chain, log_prob, accepted = saved["chain"], saved["log_prob"], saved["accepted"]
         if chain.shape[0] != n_ensembles:
-            raise CheckpointMismatch(f"checkpoint {path} has {chain.shape[0]} ensembles, this fit asks for {n_ensembles}")
+            raise CheckpointMismatch(
+                f"checkpoint {path} has {chain.shape[0]} ensembles, this fit asks for {n_ensembles}"
+            )
         states = [tuple(saved[f"state{e}_{k}"][()] for k in range(5)) for e in range(n_ensembles)]
     states = [(str(s[0]), s[1], int(s[2]), int(s[3]), float(s[4])) for s in states]
     return chain, log_prob, accepted, states
 
 
-_PARTS = ("other data", "another model", "another tunneling law", "another likelihood",
-          "other priors or another parameter order", "other fixed parameter values")
+_PARTS = (
+    "other data",
+    "another model",
+    "another tunneling law",
+    "another likelihood",
+    "other priors or another parameter order",
+    "other fixed parameter values",
+)
 
 
 def _difference(stored, current):
     a, b = stored.split("|"), current.split("|")
     if len(a) != len(b):
         return "a different kind of fit"
-    return ", ".join(part for part, x, y in zip(_PARTS, a, b) if x != y) or "a different fit"
+    return (
+        ", ".join(part for part, x, y in zip(_PARTS, a, b, strict=False) if x != y)
+        or "a different fit"
+    )
 
 
-def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=(), checkpoint=None,
-                  fingerprint="", resume=False, progress=False):
+def run_ensembles(
+    log_prob,
+    start,
+    seed,
+    settings=SamplerSettings(),
+    *,
+    names=(),
+    checkpoint=None,
+    fingerprint="",
+    resume=False,
+    progress=False,
+):
     """Sample with ``settings.n_ensembles`` emcee ensembles until convergence or the budget.
 
     Parameters
@@ -402,7 +498,11 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
     n_ens, n_walk, ndim = start.shape
     if n_ens < 2:
         raise ValueError(f"convergence across ensembles needs n_ensembles >= 2, got {n_ens}")
-    seeds = np.random.SeedSequence(seed).spawn(n_ens) if not isinstance(seed, np.random.SeedSequence) else seed.spawn(n_ens)
+    seeds = (
+        np.random.SeedSequence(seed).spawn(n_ens)
+        if not isinstance(seed, np.random.SeedSequence)
+        else seed.spawn(n_ens)
+    )
     states = [np.random.RandomState(seeds[e].generate_state(4)).get_state() for e in range(n_ens)]
     chains = np.empty((n_ens, 0, n_walk, ndim))
     log_probs = np.empty((n_ens, 0, n_walk))
@@ -419,23 +519,44 @@ def run_ensembles(log_prob, start, seed, settings=SamplerSettings(), *, names=()
     bar = _progress_bar(settings, chains.shape[1]) if progress else None
     try:
         while True:
-            if chains.shape[1] >= settings.min_steps and chains.shape[1] > settings.warmup_steps(chains.shape[1]):
+            if chains.shape[1] >= settings.min_steps and chains.shape[1] > settings.warmup_steps(
+                chains.shape[1]
+            ):
                 at_budget = chains.shape[1] >= settings.max_steps
                 report = convergence_report(chains, settings, names, final=at_budget)
                 if bar is not None:
-                    bar.set_postfix_str(f"τ max {report.tau.max():.0f}, kept {report.n_kept} steps", refresh=True)
+                    bar.set_postfix_str(
+                        f"τ max {report.tau.max():.0f}, kept {report.n_kept} steps", refresh=True
+                    )
                 if report.converged or at_budget:
                     break
             steps = min(settings.chunk, settings.max_steps - chains.shape[1])
             maps = _transport_maps(chains, settings)
-            jobs = [(log_prob, chains[e, -1] if chains.shape[1] else start[e],
-                     log_probs[e, -1] if log_probs.shape[1] else None, states[e], steps, settings.de_fraction)
-                    for e in range(n_ens)]
-            extra = [dict(transport=t, proposal=g, independence_fraction=settings.independence_fraction) for t, g in maps]
+            jobs = [
+                (
+                    log_prob,
+                    chains[e, -1] if chains.shape[1] else start[e],
+                    log_probs[e, -1] if log_probs.shape[1] else None,
+                    states[e],
+                    steps,
+                    settings.de_fraction,
+                )
+                for e in range(n_ens)
+            ]
+            extra = [
+                dict(transport=t, proposal=g, independence_fraction=settings.independence_fraction)
+                for t, g in maps
+            ]
             if pool is None:
-                results = [_advance(*job, **kw) for job, kw in zip(jobs, extra)]
+                results = [_advance(*job, **kw) for job, kw in zip(jobs, extra, strict=False)]
             else:
-                results = [f.result() for f in [pool.submit(_advance, *job, **kw) for job, kw in zip(jobs, extra)]]
+                results = [
+                    f.result()
+                    for f in [
+                        pool.submit(_advance, *job, **kw)
+                        for job, kw in zip(jobs, extra, strict=False)
+                    ]
+                ]
             chains = np.concatenate([chains, np.array([r[0] for r in results])], axis=1)
             log_probs = np.concatenate([log_probs, np.array([r[1] for r in results])], axis=1)
             accepted += np.array([r[2] for r in results])

@@ -27,8 +27,14 @@ from scipy.special import gammaln
 
 from ...utils import logsumexp
 
-__all__ = ["TriangularMap", "MappedLogProb", "IndependenceProposal", "MixtureProposal", "student_t_log_density",
-           "student_t_draws"]
+__all__ = [
+    "TriangularMap",
+    "MappedLogProb",
+    "IndependenceProposal",
+    "MixtureProposal",
+    "student_t_log_density",
+    "student_t_draws",
+]
 
 
 QUADRATIC_MAX_DIM = 14
@@ -39,7 +45,8 @@ fit costs ~d⁵ (22-d hyper-posterior: minutes per refit) and its forward pass ~
 @lru_cache(maxsize=64)
 def _pairs(m):
     """Index pairs (j ≤ k) of m coordinates; cached: the forward pass asks for them at every stage
-    of every call (np.triu_indices took 11 % of a fit's time)."""
+    of every call (np.triu_indices took 11 % of a fit's time).
+    """
     return np.triu_indices(m)
 
 
@@ -85,14 +92,21 @@ class TriangularMap:
 
     @property
     def log_det_jacobian(self):
-        """log |du/dv| (constant)."""
+        """Log |du/dv| (constant)."""
         return float(np.sum(np.log(self.diagonal)))
 
     @classmethod
     def identity(cls, ndim):
-        """u = v."""
+        """U = v."""
         weights = tuple(np.zeros(i + i * (i + 1) // 2) for i in range(ndim))
-        return cls(tuple(range(ndim)), np.zeros(ndim), np.ones(ndim), np.zeros(ndim), weights, np.ones(ndim))
+        return cls(
+            tuple(range(ndim)),
+            np.zeros(ndim),
+            np.ones(ndim),
+            np.zeros(ndim),
+            weights,
+            np.ones(ndim),
+        )
 
     @classmethod
     def fit(cls, draws, *, ridge=1e-8, quadratic=None):
@@ -108,8 +122,10 @@ class TriangularMap:
         quadratic = ndim <= QUADRATIC_MAX_DIM if quadratic is None else bool(quadratic)
         n_features = ndim + ndim * (ndim + 1) // 2 if quadratic else ndim
         if n < 4 * n_features:
-            raise ValueError(f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions needs "
-                             f"at least {4 * n_features} draws, got {n}")
+            raise ValueError(
+                f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions needs "
+                f"at least {4 * n_features} draws, got {n}"
+            )
         if not quadratic:
             draws = draws[np.linspace(0, n - 1, min(n, 50 * ndim)).astype(int)]
             n = len(draws)
@@ -128,18 +144,30 @@ class TriangularMap:
             intercept[i] = coef[0]
             weights.append(coef[1:])
             diagonal[i] = max(residual.std(), 1e-12 * spread[i])
-        return cls(tuple(int(i) for i in order), centre, spread, intercept, tuple(weights), diagonal, quadratic)
+        return cls(
+            tuple(int(i) for i in order),
+            centre,
+            spread,
+            intercept,
+            tuple(weights),
+            diagonal,
+            quadratic,
+        )
 
     def forward(self, v):
         """u(v) for v (…, ndim); walkers proposed far out may overflow to inf/NaN (the target
-        then rejects them)."""
+        then rejects them).
+        """
         v = np.asarray(v, dtype=float)
         u = np.empty_like(v)
         z = np.empty_like(v)
         with np.errstate(over="ignore", invalid="ignore"):
             for stage, i in enumerate(self.order):
                 previous = list(self.order[:stage])
-                mean = self.intercept[i] + _features(z[..., previous], self.quadratic) @ self.weights[stage]
+                mean = (
+                    self.intercept[i]
+                    + _features(z[..., previous], self.quadratic) @ self.weights[stage]
+                )
                 u[..., i] = mean + self.diagonal[i] * v[..., i]
                 z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
         return u
@@ -150,7 +178,10 @@ class TriangularMap:
         z = (u - self.centre) / self.spread
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
-            mean = self.intercept[i] + _features(z[..., list(self.order[:stage])], self.quadratic) @ self.weights[stage]
+            mean = (
+                self.intercept[i]
+                + _features(z[..., list(self.order[:stage])], self.quadratic) @ self.weights[stage]
+            )
             v[..., i] = (u[..., i] - mean) / self.diagonal[i]
         return v
 
@@ -159,8 +190,15 @@ class TriangularMap:
         import hashlib
 
         digest = hashlib.sha256()
-        for part in (np.asarray(self.order, float), self.centre, self.spread, self.intercept, self.diagonal,
-                     np.array([float(self.quadratic)]), *self.weights):
+        for part in (
+            np.asarray(self.order, float),
+            self.centre,
+            self.spread,
+            self.intercept,
+            self.diagonal,
+            np.array([float(self.quadratic)]),
+            *self.weights,
+        ):
             digest.update(np.ascontiguousarray(part, dtype=float).tobytes())
         return digest.hexdigest()[:16]
 
@@ -180,12 +218,20 @@ def _order_by_predictability(z, max_draws=4000):
     pair_j, pair_k = _pairs(ndim)
     features = np.column_stack([np.ones(n), z, z[:, pair_j] * z[:, pair_k]])
     gram = features.T @ features
-    pair_column = {(int(a), int(b)): 1 + ndim + c for c, (a, b) in enumerate(zip(pair_j, pair_k))}
+    pair_column = {
+        (int(a), int(b)): 1 + ndim + c for c, (a, b) in enumerate(zip(pair_j, pair_k, strict=False))
+    }
 
     def residual_sd(target, predictors):
         sub_j, sub_k = _pairs(len(predictors))
-        columns = [0, *(1 + p for p in predictors),
-                   *(pair_column[predictors[a], predictors[b]] for a, b in zip(sub_j, sub_k))]
+        columns = [
+            0,
+            *(1 + p for p in predictors),
+            *(
+                pair_column[predictors[a], predictors[b]]
+                for a, b in zip(sub_j, sub_k, strict=False)
+            ),
+        ]
         rhs = gram[columns, 1 + target]
         beta = np.linalg.lstsq(gram[np.ix_(columns, columns)], rhs, rcond=None)[0]
         return float(np.sqrt(max(gram[1 + target, 1 + target] - rhs @ beta, 0.0) / n))
@@ -220,12 +266,16 @@ def student_t_log_density(w, dof):
     r2 = np.sum(w * w, axis=-1)
     if np.isinf(dof):
         return -0.5 * r2 - 0.5 * d * np.log(2.0 * np.pi)
-    return (gammaln(0.5 * (dof + d)) - gammaln(0.5 * dof) - 0.5 * d * np.log(dof * np.pi)
-            - 0.5 * (dof + d) * np.log1p(r2 / dof))
+    return (
+        gammaln(0.5 * (dof + d))
+        - gammaln(0.5 * dof)
+        - 0.5 * d * np.log(dof * np.pi)
+        - 0.5 * (dof + d) * np.log1p(r2 / dof)
+    )
 
 
 def student_t_draws(random, n, d, dof):
-    """n draws (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
+    """N draws (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
     z = random.standard_normal((n, d))
     if np.isinf(dof):
         return z
@@ -260,16 +310,16 @@ class IndependenceProposal:
         return np.linalg.solve(self.chol, (np.asarray(x, dtype=float) - self.mean).T).T
 
     def log_density(self, x):
-        """log g(x), normalised."""
+        """Log g(x), normalised."""
         log_det = float(np.sum(np.log(np.abs(np.diag(self.chol)))))
         return student_t_log_density(self.whiten(x), self.dof) - log_det
 
     def draw(self, random, n):
-        """n draws (n, d) of g."""
+        """N draws (n, d) of g."""
         return self.mean + student_t_draws(random, n, self.mean.size, self.dof) @ self.chol.T
 
     def __call__(self, coords, random):
-        """emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
+        """Emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
         coords = np.asarray(coords, dtype=float)
         new = self.draw(random, coords.shape[0])
         return new, self.log_density(coords) - self.log_density(new)
@@ -295,7 +345,8 @@ class MixtureProposal:
     @classmethod
     def fit(cls, groups, dof=10.0):
         """One component per array of draws in ``groups``; groups too small or degenerate for a
-        covariance are left out, and all of them pooled when none is usable."""
+        covariance are left out, and all of them pooled when none is usable.
+        """
         components = []
         for draws in groups:
             draws = np.asarray(draws, dtype=float)
@@ -306,21 +357,29 @@ class MixtureProposal:
             except np.linalg.LinAlgError:
                 continue
         if not components:
-            components = [IndependenceProposal.fit(np.concatenate([np.asarray(g, dtype=float) for g in groups]), dof)]
+            components = [
+                IndependenceProposal.fit(
+                    np.concatenate([np.asarray(g, dtype=float) for g in groups]), dof
+                )
+            ]
         return cls(tuple(components))
 
     def log_density(self, x):
-        """log g(x), normalised."""
+        """Log g(x), normalised."""
         parts = np.stack([c.log_density(x) for c in self.components])
         if len(parts) == 1:
             return parts[0]
         return logsumexp(parts, axis=0) - np.log(len(self.components))
 
     def __call__(self, coords, random):
-        """emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
+        """Emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
         coords = np.asarray(coords, dtype=float)
         n = coords.shape[0]
-        which = random.randint(len(self.components), size=n) if len(self.components) > 1 else np.zeros(n, int)
+        which = (
+            random.randint(len(self.components), size=n)
+            if len(self.components) > 1
+            else np.zeros(n, int)
+        )
         new = np.empty_like(coords)
         for k, component in enumerate(self.components):
             chosen = which == k
