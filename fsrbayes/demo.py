@@ -125,7 +125,7 @@ QUICK = DemoPlan(
 
 
 def _subset(data, plan):
-    """The demo's share of the default data: the plan's specimens and voltages per sensor."""
+    """Return the demo's share of the default data: the plan's specimens and voltages per sensor."""
     tests = []
     for sensor in data.sensors:
         part = data.select(sensor=sensor)
@@ -272,7 +272,7 @@ def _figures(sensor, pop, fits, folder):
 
 
 def _narrative(results, figures, plan):
-    """The report's Markdown (figures referenced by path; embedded when converted to HTML)."""
+    """Return the report's Markdown (figures referenced by path; embedded when converted to HTML)."""
     lines = [
         "# fsrbayes demo: FSR creep, the Bayesian way",
         "",

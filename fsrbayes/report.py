@@ -21,7 +21,7 @@ code{background:#f3f3f3;padding:0 0.2em}h1{font-size:1.6em}h2{font-size:1.25em;m
 
 
 def _where_worst(rows, attribute, unit, scale=1.0):
-    """A phrase for the level with the largest mean |z| (over- or under-prediction)."""
+    """Return a phrase for the level with the largest mean |z| (over- or under-prediction)."""
     if not rows:
         return ""
     worst = max(rows, key=lambda r: abs(r["mean_z"]))
@@ -138,7 +138,9 @@ def _inline(text):
 
 
 def markdown_to_html(markdown, title="fsrbayes report"):
-    """The small Markdown subset the reports use (#/## headings, paragraphs, lists, tables,
+    """Convert the Markdown subset the reports use to HTML.
+
+    Convert the small Markdown subset the reports use (#/## headings, paragraphs, lists, tables,
     images with data URIs or files, `code`, **bold**) → a standalone HTML page.
     """
     body, in_list = [], False
@@ -187,8 +189,10 @@ def markdown_to_html(markdown, title="fsrbayes report"):
 
 
 def embed_figure(line, folder):
-    """A Markdown image line ``![caption](file.png)`` with the PNG (relative to ``folder``) inlined
-    as a data URI, so the HTML page stands alone.
+    """Return a Markdown image line with the PNG inlined as a data URI.
+
+    Return a Markdown image line ``![caption](file.png)`` with the PNG (relative to ``folder``)
+    inlined as a data URI, so the HTML page stands alone.
     """
     caption, _, name = line[2:].rstrip(")").partition("](")
     encoded = base64.b64encode((Path(folder) / name).read_bytes()).decode("ascii")

@@ -15,7 +15,7 @@ HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
 def logsumexp(values, axis=0):
-    """Log Σ exp(values) along ``axis`` (−inf where every term is −inf).
+    """Return log Σ exp(values) along ``axis`` (−inf where every term is −inf).
 
     Written out rather than :func:`scipy.special.logsumexp`, whose argument checks cost more than
     the sum on the small arrays of the samplers' inner loops (BENCHMARKS.md, "logsumexp").
@@ -55,7 +55,9 @@ def write_json_atomic(path, payload):
 
 
 def json_ready(value):
-    """A copy of nested dicts/lists with NaN and inf as None and numpy scalars as Python numbers
+    """Return a JSON-ready copy of nested dicts and lists.
+
+    Return a copy of nested dicts/lists with NaN and inf as None and numpy scalars as Python numbers
     (JSON has no NaN).
     """
     import math

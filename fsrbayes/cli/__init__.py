@@ -20,7 +20,7 @@ __all__ = ["main", "build_parser", "UsageError"]
 
 
 def build_parser():
-    """The ``fsrbayes`` argument parser with every subcommand."""
+    """Return the ``fsrbayes`` argument parser with every subcommand."""
     parser = argparse.ArgumentParser(prog="fsrbayes", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"fsrbayes {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)

@@ -256,7 +256,7 @@ def _population_folders(fit_dir):
 
 
 def cmd_drift(args):
-    """Population predictive drift(t) of a new specimen per (voltage, stress); optimal voltage."""
+    """Write the population predictive drift(t) of a new specimen per (voltage, stress)."""
     import xarray as xr
 
     from ..data.sensors import load_sensor

@@ -38,7 +38,9 @@ def _format_table(table, voltages, stresses):
 
 
 def cmd_demo(args):
-    """The main job: the paper's Figure 7 from Table 1, then the Bayesian study of the default data
+    """Run the main job: Figure 7, then the Bayesian study of the default data.
+
+    Run the main job: the paper's Figure 7 from Table 1, then the Bayesian study of the default data
     (:func:`fsrbayes.demo.run_demo`); one HTML report, JSON and netCDF results in ``--out``.
     """
     if args.time < 0:
@@ -87,7 +89,9 @@ def cmd_demo(args):
 
 
 def _figure7(time_s, out):
-    """Figure 7 of the paper from Table 1: drift(3600 s) over stress × voltage (A201), printed and
+    """Print and write the paper's Figure 7 from Table 1.
+
+    Figure 7 of the paper from Table 1: drift(3600 s) over stress × voltage (A201), printed and
     written to ``figure7_drift.json``.
     """
     sensor = load_sensor("a201")
@@ -189,7 +193,7 @@ def cmd_forward(args):
 
 
 def cmd_simulate(args):
-    """The virtual test bench: simulated creep tests with known truth."""
+    """Simulate creep tests on the virtual test bench, with known truth."""
     sensors = [s.strip() for s in args.sensor.split(",") if s.strip()]
     out = Path(args.output)
     if not out.parent.is_dir():

@@ -130,7 +130,7 @@ class CreepData:
         return list(dict.fromkeys(t.sensor for t in self.tests))
 
     def select(self, specimen=None, sensor=None):
-        """The tests of one specimen and/or one sensor, as a new :class:`CreepData`."""
+        """Return the tests of one specimen and/or one sensor, as a new :class:`CreepData`."""
         if specimen is not None and specimen not in self.specimens:
             raise ValueError(
                 f"specimen {specimen!r} is not in {self.source}; it has {self.specimens[:10]}"
@@ -145,7 +145,7 @@ class CreepData:
         return CreepData(tests, self.source)
 
     def columns(self):
-        """The data as flat columns (dict of arrays), one entry per sample, test by test."""
+        """Return the data as flat columns (dict of arrays), one entry per sample, test by test."""
         sizes = [t.time_s.size for t in self.tests]
 
         def rep(values):
@@ -163,7 +163,7 @@ class CreepData:
         }
 
     def summary(self):
-        """A few lines describing the data set."""
+        """Return a few lines describing the data set."""
         n_spec = len(self.specimens)
         lines = [
             f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "

@@ -145,8 +145,10 @@ class Distribution:
         return self._frozen().rvs(size=size, random_state=rng)
 
     def ppf(self, q):
-        """Quantile function; closed forms (nested sampling's prior transform calls it per point,
-        where building a frozen scipy distribution cost ~1 ms), scipy for the gamma.
+        """Return the quantile function at ``q``, in closed form.
+
+        Quantile function; closed forms (nested sampling's prior transform calls it per point, where
+        building a frozen scipy distribution cost ~1 ms), scipy for the gamma.
         """
         q = np.asarray(q, dtype=float)
         a = self.args
@@ -177,7 +179,7 @@ class Distribution:
         return self._frozen().ppf(q)  # gamma
 
     def median(self):
-        """The distribution's median."""
+        """Return the distribution's median."""
         return float(self.ppf(0.5))
 
     def __repr__(self):

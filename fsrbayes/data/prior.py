@@ -148,5 +148,5 @@ class JointPrior:
         return "\n".join(f"{n:>14s} ~ {d!r}" for n, d in zip(self.names, self.dists, strict=False))
 
     def fingerprint(self):
-        """A string that changes whenever the names, their order or any prior changes."""
+        """Return a string that changes whenever the names, their order or any prior changes."""
         return ";".join(f"{n}={d!r}" for n, d in zip(self.names, self.dists, strict=False))

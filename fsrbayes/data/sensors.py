@@ -23,7 +23,7 @@ REQUIRED_SENSOR_KEYS = ("name", "description", "area_m2")
 
 
 def models_directory():
-    """The folder holding the bundled sensor TOML files.
+    """Return the folder holding the bundled sensor TOML files.
 
     Returns
     -------
@@ -90,7 +90,7 @@ class Sensor:
         return tuple(n for n in names if n in self.priors and not self.priors[n].is_fixed)
 
     def prior_for(self, model="burgers", noise=("sigma_rel",)):
-        """The joint prior over what ``model`` samples (:meth:`free_parameters`).
+        """Return the joint prior over what ``model`` samples (:meth:`free_parameters`).
 
         Returns
         -------

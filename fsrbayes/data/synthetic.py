@@ -330,7 +330,7 @@ def simulate(
 def paper_protocol(
     sensors=("a201", "fsr402"), *, samples=361, spacing="linear", tunneling="smooth", **kwargs
 ):
-    """The paper's section 4.2 protocol: 16 specimens, 1.96/4.9/9.8 N, its voltage lists, 1 h.
+    """Return the paper's section 4.2 protocol: 16 specimens, 1.96/4.9/9.8 N, its voltage lists, 1 h.
 
     With the smooth law every listed voltage is inside the model's domain. With
     ``tunneling="paper"`` voltages whose root would lie past eq. 11's peak for the nominal
@@ -431,7 +431,7 @@ def _default_path(name):
 
 
 def default_data():
-    """The embedded default data set: :func:`paper_protocol` for both sensors, seed 2017.
+    """Return the embedded default data set: :func:`paper_protocol` for both sensors, seed 2017.
 
     Both sensors, 16 specimens each, the paper's forces and voltage lists, an hour sampled at
     25 log-spaced times, current readout, 0.5 % noise, no hidden effect; stored to 6
@@ -443,7 +443,7 @@ def default_data():
 
 
 def default_truth():
-    """The truth of :func:`default_data`."""
+    """Return the truth of :func:`default_data`."""
     with resources.as_file(_default_path(DEFAULT_TRUTH)) as path:
         return load_truth(path)
 

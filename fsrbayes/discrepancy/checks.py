@@ -102,7 +102,9 @@ def _interpolation(time_s, mask, at_s):
 
 
 def _quarter_weights(mask, parts=N_QUARTERS):
-    """Weights (C, T, parts) that average each test's valid samples over ``parts`` consecutive blocks
+    """Return weights that average each test's samples over consecutive blocks.
+
+    Weights (C, T, parts) that average each test's valid samples over ``parts`` consecutive blocks
     (NaN for a test with fewer than 2 samples per block).
     """
     weights = np.zeros((*mask.shape, parts))
@@ -254,10 +256,12 @@ class SpecimenChecks:
 
     @property
     def quarter_distance(self):
-        """Per test, the squared Mahalanobis distance of the observed quarter means from their
-        replicates, over the number of quarters: (T_obs − m)ᵀ Σ⁻¹ (T_obs − m) / 4, with m and Σ
-        the mean and covariance of the replicated quarter means; ~χ²₄/4 (mean 1) under an
-        adequate model with a known truth. Shape (C,); NaN for tests too short to cut.
+        """Return each test's quarter-mean distance.
+
+        Per test, the squared Mahalanobis distance of the observed quarter means from their
+        replicates, over the number of quarters: (T_obs − m)ᵀ Σ⁻¹ (T_obs − m) / 4, with m and Σ the
+        mean and covariance of the replicated quarter means; ~χ²₄/4 (mean 1) under an adequate model
+        with a known truth. Shape (C,); NaN for tests too short to cut.
         """
         observed, replicated = self.observed["quarter_means"][0], self.replicated["quarter_means"]
         out = np.full(observed.shape[0], np.nan)
@@ -385,7 +389,9 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
 
 
 def gap(checks):
-    """The headline gap over specimens: √(mean over tests of the quarter-mean distance
+    """Return the headline gap over specimens.
+
+    Return the headline gap over specimens: √(mean over tests of the quarter-mean distance
     :attr:`SpecimenChecks.quarter_distance`) (see the module docstring).
 
     Parameters

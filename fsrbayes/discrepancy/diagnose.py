@@ -103,8 +103,10 @@ def _diagnose_one(job):
 
 
 def _effect_parameters(per_specimen, effect):
-    """Per effect parameter: median of the per-specimen posterior medians, and the 5–95 % range of
-    the pooled posterior draws.
+    """Summarise each effect parameter over specimens.
+
+    Per effect parameter: median of the per-specimen posterior medians, and the 5–95 % range of the
+    pooled posterior draws.
     """
     out = {}
     draws = {}
@@ -126,7 +128,7 @@ def _effect_parameters(per_specimen, effect):
 
 
 def _findings(checks, alpha=0.01):
-    """Checks that fail at ``alpha`` after a Bonferroni correction over every check made."""
+    """Return the checks that fail at ``alpha`` after a Bonferroni correction over every check made."""
     n_checks = sum(np.isfinite(c.p_values[name]).sum() for c in checks for name in c.p_values)
     level = alpha / max(1, n_checks)
     found = []
@@ -227,14 +229,16 @@ class Diagnosis:
     seconds: float = float("nan")
 
     def checks(self, effect=None):
-        """The SpecimenChecks of the base model (``effect=None``) or of base + ``effect``."""
+        """Return the SpecimenChecks of the base model (``effect=None``) or of base + ``effect``."""
         if effect is None:
             return [d.base_checks for d in self.specimens]
         return [d.candidates[effect][1] for d in self.specimens]
 
     def as_dict(self):
-        """JSON-ready: the keys of DESIGN.md §4 (verdict, effect, gap_before, gap_after,
-        gap_metric, candidates) and the findings, per-level misfits and settings.
+        """Return the diagnosis as a JSON-ready dict.
+
+        JSON-ready: the keys of DESIGN.md §4 (verdict, effect, gap_before, gap_after, gap_metric,
+        candidates) and the findings, per-level misfits and settings.
         """
         before = self.checks()
         out = {

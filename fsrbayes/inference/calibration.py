@@ -117,7 +117,7 @@ class SBCDesign:
     duration: float = 3600.0
 
     def template(self):
-        """A LogPosterior on this design (its measured currents are placeholders)."""
+        """Return a LogPosterior on this design (its measured currents are placeholders)."""
         sim = synthetic.simulate(
             self.sensor,
             n_specimens=1,
@@ -179,10 +179,11 @@ class SBCResult:
 
     @property
     def n_reps(self):
+        """Number of replications."""
         return int(self.ranks.shape[0])
 
     def histogram(self, bins=10):
-        """Counts per rank bin, shape (B, Q); B must divide L + 1."""
+        """Return the counts per rank bin, shape (B, Q); B must divide L + 1."""
         if (self.n_draws + 1) % bins:
             raise ValueError(f"bins must divide L + 1 = {self.n_draws + 1}, got {bins}")
         index = self.ranks * bins // (self.n_draws + 1)
@@ -205,8 +206,10 @@ class SBCResult:
         return {"chi2": chi2, "ks": ks}
 
     def coverage(self, levels=LEVELS, mass=0.99):
-        """Per level: share of replications whose central interval holds the truth, per quantity,
-        the expected share p_ℓ and the ``mass`` binomial range of the share under calibration.
+        """Return the coverage of the central intervals per level.
+
+        Per level: share of replications whose central interval holds the truth, per quantity, the
+        expected share p_ℓ and the ``mass`` binomial range of the share under calibration.
         """
         q = (self.ranks + 0.5) / (self.n_draws + 1)
         out = {}
@@ -225,7 +228,9 @@ class SBCResult:
         return out
 
     def verdict(self, alpha=0.01, bins=10):
-        """(calibrated, failures): no uniformity p-value below alpha/(2·Q) (Bonferroni), and every
+        """Return the verdict: (calibrated, failures).
+
+        (calibrated, failures): no uniformity p-value below alpha/(2·Q) (Bonferroni), and every
         coverage share inside its binomial range at 1 − alpha/(3·Q).
         """
         n_q = len(self.names)
@@ -276,8 +281,11 @@ class SBCResult:
 
 
 def _replicate(job):
-    """One SBC replication (module level: picklable for worker processes), BLAS on one thread:
-    replications run side by side (two on two cores took 40 s each with threaded BLAS, 10 s without).
+    """Run one SBC replication.
+
+    One SBC replication (module level: picklable for worker processes), BLAS on one thread:
+    replications run side by side (two on two cores took 40 s each with threaded BLAS, 10 s
+    without).
     """
     with single_threaded_blas():
         return _replicate_here(*job)
@@ -401,7 +409,7 @@ def calibrate_specimen(
 
 
 def format_sbc(result, bins=10, alpha=0.01):
-    """A table: uniformity p-values and coverage at 50/80/90 % per quantity, and the verdict."""
+    """Return a table: uniformity p-values and coverage at 50/80/90 % per quantity, and the verdict."""
     p = result.uniformity(bins)
     coverage = result.coverage()
     header = f"{'quantity':30s} {'p chi2':>8s} {'p KS':>8s} " + " ".join(
@@ -431,7 +439,7 @@ def format_sbc(result, bins=10, alpha=0.01):
 
 
 def load_sbc(record):
-    """An :class:`SBCResult` back from :meth:`SBCResult.as_dict` (a dict, or a JSON file's path)."""
+    """Return an :class:`SBCResult` back from :meth:`SBCResult.as_dict` (a dict, or a JSON file's path)."""
     if not isinstance(record, dict):
         import json
         from pathlib import Path

@@ -207,10 +207,12 @@ def compare(
 
 
 def _savage_dickey_check(out, burgers_draws, max_draws=8000):
-    """Savage–Dickey ln B(zener over burgers) per specimen from the Burgers β = 1 draws, beside
-    the evidence difference (both ± error); ``reliable`` is False when the posterior of the
-    fluidity lies so far from 0 (mean > 3.5 sd) that the density at 0 is a far-tail estimate, or
-    when fewer than 200 effective draws carry the estimate.
+    """Cross-check Zener against Burgers by Savage–Dickey.
+
+    Savage–Dickey ln B(zener over burgers) per specimen from the Burgers β = 1 draws, beside the
+    evidence difference (both ± error); ``reliable`` is False when the posterior of the fluidity
+    lies so far from 0 (mean > 3.5 sd) that the density at 0 is a far-tail estimate, or when fewer
+    than 200 effective draws carry the estimate.
     """
     per = {}
     for specimen, (posterior, draws_u) in burgers_draws.items():

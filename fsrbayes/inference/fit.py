@@ -139,6 +139,7 @@ class FitResult:
 
     @property
     def converged(self):
+        """Whether the convergence criteria held at the last check."""
         return self.run.report.converged
 
     def draws(self, max_draws=2000):

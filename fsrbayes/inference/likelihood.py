@@ -113,10 +113,12 @@ class SpecimenData:
 
     @property
     def n_tests(self):
+        """Number of creep tests."""
         return self.voltage_V.size
 
     @property
     def n_obs(self):
+        """Number of observed samples."""
         return int(self.mask.sum())
 
     def fingerprint(self):

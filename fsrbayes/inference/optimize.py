@@ -50,6 +50,7 @@ class NegativeLogPosterior:
         self.step = step
 
     def __call__(self, w):
+        """Return −log p and its gradient at whitened coordinates ``w``."""
         values = -self.posterior(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
         n = self.posterior.ndim
         if not np.all(np.isfinite(values)):
@@ -183,7 +184,7 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
 
 
 def root_covariance(posterior, u_map, step=1e-3):
-    """A square root of the Laplace covariance at ``u_map`` (columns scaled by 1/sqrt(precision)).
+    """Return a square root of the Laplace covariance at ``u_map`` (columns scaled by 1/sqrt(precision)).
 
     The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
     vectorised call. Directions where it is not negative definite get the prior's scale
@@ -211,7 +212,9 @@ def root_covariance(posterior, u_map, step=1e-3):
 
 
 def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3, root_cov=None):
-    """Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance
+    """Return walker starts around a MAP point, overdispersed.
+
+    Walker starts around a MAP point, dispersed by ``overdispersion`` × the Laplace covariance
     (``root_cov``, its square root, if already computed).
 
     Returns
@@ -223,8 +226,10 @@ def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3
 
 
 def ensemble_start(posterior, u_map, rng, shape, root_cov=None):
-    """:func:`laplace_start`, with walkers that landed outside the posterior's support moved to
-    a tight ball around ``u_map``; shape (E, W) → (E, W, ndim).
+    """Return walker starts around a mode, inside the posterior's support.
+
+    :func:`laplace_start`, with walkers that landed outside the posterior's support moved to a tight
+    ball around ``u_map``; shape (E, W) → (E, W, ndim).
     """
     start = laplace_start(posterior, u_map, rng, shape, root_cov=root_cov)
     bad = ~np.isfinite(posterior(start.reshape(-1, posterior.ndim))).reshape(start.shape[:-1])
@@ -278,10 +283,12 @@ def _regions(posterior, optima, separation=2.0, max_regions=None, max_log_mass_g
 
 
 def start_regions(posterior, optima, tails, n_ensembles, max_log_mass_gap=10.0):
-    """Where the ensembles start: the optima's separate regions, and up to ``n_ensembles − 1``
-    nested-model starts (:func:`nested_starts`) whose Laplace mass is within
-    ``max_log_mass_gap`` of the best region's — these take the places of the weakest regions,
-    because no optimiser start reaches a tail and the sampler reaches it slowly.
+    """Return where the ensembles start: separate regions and nested-model tails.
+
+    Where the ensembles start: the optima's separate regions, and up to ``n_ensembles − 1``
+    nested-model starts (:func:`nested_starts`) whose Laplace mass is within ``max_log_mass_gap`` of
+    the best region's — these take the places of the weakest regions, because no optimiser start
+    reaches a tail and the sampler reaches it slowly.
     """
     found = _regions(posterior, optima, max_log_mass_gap=max_log_mass_gap)
     if len(tails):

@@ -135,7 +135,7 @@ def _finite(value):
 
 
 def summary(result, tree):
-    """The DESIGN.md §4 summary dict of one fitted specimen."""
+    """Return the summary of one fitted specimen (summary.json's content)."""
     posterior = result.posterior
     report = result.run.report
     parameters = {}
@@ -186,7 +186,7 @@ def summary(result, tree):
 
 
 def _evidence(result):
-    """The tempered sampler's log Z with its error budget (None for other samplers)."""
+    """Return the tempered sampler's log Z with its error budget (None for other samplers)."""
     evidence = getattr(result, "evidence", None)
     if evidence is None:
         return None

@@ -53,9 +53,11 @@ def _exit_with_parent(parent_pid):
 
 
 def fork_pool(workers):
-    """A process pool of forked workers (they inherit the targets without pickling them) that
-    exit when this process dies — the pool behind ensembles, ladders and region searches run
-    side by side.
+    """Return a pool of forked worker processes that die with this one.
+
+    Return a process pool of forked workers (they inherit the targets without pickling them) that
+    exit when this process dies — the pool behind ensembles, ladders and region searches run side by
+    side.
     """
     return concurrent.futures.ProcessPoolExecutor(
         workers,

@@ -24,8 +24,10 @@ def noise_parameters(likelihood):
 
 
 class PriorScaledTarget:
-    """What every target sampled in prior-scaled u-space offers the MAP search, the ensemble
-    engine and the evidence ladder. Subclasses set ``prior`` (a JointPrior) and define
+    """A target sampled in prior-scaled u-space.
+
+    What every target sampled in prior-scaled u-space offers the MAP search, the ensemble engine and
+    the evidence ladder. Subclasses set ``prior`` (a JointPrior) and define
     ``log_prior_and_likelihood(u, with_likelihood=True)``; ``beta`` tempers the likelihood.
     """
 
@@ -34,10 +36,12 @@ class PriorScaledTarget:
 
     @property
     def ndim(self):
+        """Number of sampled parameters."""
         return self.prior.ndim
 
     @property
     def names(self):
+        """Names of the sampled parameters, in the order of u."""
         return self.prior.names
 
     def log_likelihood(self, u):
@@ -45,7 +49,7 @@ class PriorScaledTarget:
         return self.log_prior_and_likelihood(u)[1]
 
     def sample_prior(self, rng, n):
-        """N independent prior draws in u-space, shape (n, ndim)."""
+        """Draw n independent prior draws in u-space, shape (n, ndim)."""
         return self.prior.to_unconstrained(self.prior.sample(rng, n))
 
     def __call__(self, u):
@@ -128,7 +132,7 @@ class LogPosterior(PriorScaledTarget):
         )
 
     def fingerprint(self):
-        """Changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
+        """Return a fingerprint that changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
         fixed = ";".join(f"{k}={v!r}" for k, v in sorted(self.fixed.items()))
         return "|".join(
             [
@@ -149,7 +153,7 @@ class LogPosterior(PriorScaledTarget):
         return params
 
     def log_model_current(self, x, time_s=None):
-        """Log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
+        """Return log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
 
         −inf where the parameters leave the model's validity domain.
         """
@@ -191,8 +195,10 @@ class LogPosterior(PriorScaledTarget):
         return self.prior.log_prob_unconstrained(u)
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
-        """(log prior of u incl. Jacobian, total log-likelihood), each (W,); the likelihood is −inf
-        off the prior's support or the model's domain, never NaN. One transform for both.
+        """(log prior of u incl.
+
+        Jacobian, total log-likelihood), each (W,); the likelihood is −inf off the prior's support
+        or the model's domain, never NaN. One transform for both.
         """
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
         with np.errstate(all="ignore"):  # inf or nan in u: −inf below, not a warning in the sampler

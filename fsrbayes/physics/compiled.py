@@ -63,7 +63,9 @@ def _log_prefactor_10(log_a, s):
 
 @numba.njit(**_JIT)
 def _log_ohmic_conductance(opacity, log_pre10):
-    """Eq. 9's log conductance, log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)
+    """Return eq. 9's log conductance.
+
+    Eq. 9's log conductance, log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)
     (``tunneling.log_ohmic_conductance``).
     """
     return math.log(0.75 * opacity) + log_pre10 - opacity
@@ -71,8 +73,10 @@ def _log_ohmic_conductance(opacity, log_pre10):
 
 @numba.njit(**_JIT)
 def _forward_constants(ks, va, sqrt_va, log_va, log_pre10):
-    """``tunneling.prepare_forward`` from row constants: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2,
-    the log-w offset and ρ.
+    """Return ``tunneling.prepare_forward``'s constants from row constants.
+
+    ``tunneling.prepare_forward`` from row constants: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2, the
+    log-w offset and ρ.
     """
     g = ks * va * sqrt_va * _SQRT_HALF
     rho = 3.0 * math.exp(-ks * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))

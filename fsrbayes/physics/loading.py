@@ -44,7 +44,7 @@ class StressHistory:
         object.__setattr__(self, "stress", stress)
 
     def pieces(self):
-        """The history as jumps and linear ramps.
+        """Return the history as jumps and linear ramps.
 
         Returns
         -------
@@ -77,7 +77,7 @@ class StressHistory:
 
 
 def step(amplitude, t_on=0.0, t_off=None):
-    """A stress step of ``amplitude`` Pa at ``t_on`` (eq. 16), removed at ``t_off`` if given."""
+    """Return a stress step of ``amplitude`` Pa at ``t_on`` (eq. 16), removed at ``t_off`` if given."""
     if t_off is None:
         return StressHistory([t_on], [amplitude])
     if t_off <= t_on:
@@ -86,7 +86,7 @@ def step(amplitude, t_on=0.0, t_off=None):
 
 
 def ramp(amplitude, duration, t_on=0.0, hold=None):
-    """A linear ramp from 0 to ``amplitude`` Pa over ``duration`` s, then held.
+    """Return a linear ramp from 0 to ``amplitude`` Pa over ``duration`` s, then held.
 
     With ``hold`` (s), the stress is released as a step after the hold.
     """

@@ -95,7 +95,7 @@ def model_families():
 
 
 def model_family(family):
-    """The :class:`CreepLaw` or :class:`PeerModel` named ``family`` (or ``family`` itself)."""
+    """Return the :class:`CreepLaw` or :class:`PeerModel` named ``family`` (or ``family`` itself)."""
     if isinstance(family, (CreepLaw, PeerModel)):
         return family
     if family in PEER_MODELS:
@@ -156,7 +156,7 @@ def model_parameters(model="burgers"):
 
 
 def model_components(model):
-    """The registry entries a model name resolves to, as objects that can travel to workers.
+    """Return the registry entries a model name resolves to, as objects that can travel to workers.
 
     A job sent to another process or a dask worker names its model by a string; a worker whose
     registries lack a law or effect registered in the parent (a user's own) could not resolve

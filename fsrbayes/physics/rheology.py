@@ -47,7 +47,7 @@ __all__ = [
 
 
 def fluidity(params):
-    """The Burgers fluidity 1/b1 from a parameter mapping (``inv_b1`` or ``b1``).
+    """Return the Burgers fluidity 1/b1 from a parameter mapping (``inv_b1`` or ``b1``).
 
     ``b1 = inf`` (or a missing b1 with no ``inv_b1``) gives 0, i.e. the Zener limit.
     """
@@ -243,7 +243,7 @@ NUTTING = register_creep_law(
 
 
 def creep_law(rheology):
-    """The :class:`CreepLaw` named ``rheology`` (or ``rheology`` itself if it is one)."""
+    """Return the :class:`CreepLaw` named ``rheology`` (or ``rheology`` itself if it is one)."""
     if isinstance(rheology, CreepLaw):
         return rheology
     law = CREEP_LAWS.get(rheology)

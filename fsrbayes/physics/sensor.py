@@ -83,7 +83,7 @@ def sensor_state(params, stress, strain):
 
 
 def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
-    """The paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect` objects)."""
+    """Solve the paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect` objects)."""
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     s, area, series = sensor_state(params, stress, strain)
     if effects:
@@ -107,7 +107,7 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
 def _solve_model(
     params, voltage, stress, strain, family, tunneling, effects=(), time=0.0, extra_series=0.0
 ):
-    """The circuit of the model family: a peer model's own, or the paper's implicit one."""
+    """Solve the circuit of the model family: a peer model's own, or the paper's implicit one."""
     if isinstance(family, PeerModel):
         _check_choice(
             "tunneling", tunneling, TUNNELING_LAWS

@@ -270,7 +270,7 @@ def solve_bulk(
 
 
 def _solve_blocks(flat, law, finish, max_iter):
-    """The numpy solver over flat arrays, CHUNK points at a time: (current, v_bulk, regime, its)."""
+    """Solve with numpy over flat arrays, CHUNK points at a time: (current, v_bulk, regime, its)."""
     n = flat[0].size
     current = np.empty(n)
     v_bulk = np.empty(n)

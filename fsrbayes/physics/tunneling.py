@@ -59,7 +59,7 @@ TUNNELING_LAWS = ("paper", "smooth")
 
 
 def log_ohmic_conductance(gap, barrier, area):
-    """Log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
+    """Return the log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
     opacity = KAPPA * gap * np.sqrt(barrier)
     return np.log(0.75 * opacity / gap**2 * CURRENT_SCALE * area) - opacity
 
@@ -318,7 +318,7 @@ def smooth_law_is_valid(gap, barrier):
 
 
 def _eq11_slope_sign(u, b):
-    """Derivative of u²[e^{−b/u} − (1+2u)e^{−b·sqrt(1+2u)/u}] in u, divided by e^{−b/u}.
+    """Return the derivative of u²[e^{−b/u} − (1+2u)e^{−b·sqrt(1+2u)/u}] in u, divided by e^{−b/u}.
 
     Dividing by the forward exponential keeps the sign computable where both terms
     underflow.

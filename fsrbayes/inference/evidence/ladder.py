@@ -104,6 +104,7 @@ class LadderSettings:
             raise ValueError(f"top_draws must be >= 1, got {self.top_draws}")
 
     def walkers_for(self, ndim):
+        """Walkers per rung for a target of ``ndim`` dimensions."""
         return walkers_for(self.n_walkers, ndim)
 
 
@@ -232,10 +233,12 @@ class _Rungs:
 
 
 def _replace_dead_walkers(rung, rng):
-    """Walkers whose tempered density is −inf (a prior or reference draw outside the model's
-    domain) take the place of randomly chosen live ones: a walker at −inf accepts any proposal
-    but may never be offered one during a short burn-in, and its −inf would then reach the
-    production rungs (the bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC.
+    """Replace walkers whose tempered density is −inf.
+
+    Walkers whose tempered density is −inf (a prior or reference draw outside the model's domain)
+    take the place of randomly chosen live ones: a walker at −inf accepts any proposal but may never
+    be offered one during a short burn-in, and its −inf would then reach the production rungs (the
+    bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC.
     """
     dead = ~np.isfinite(_tempered(rung.lp[0], rung.ll[0], rung.betas[0]))
     live = np.flatnonzero(~dead)
@@ -249,8 +252,11 @@ def _replace_dead_walkers(rung, rng):
 
 
 def _run_ladder(target, betas, settings, seed):
-    """One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and
-    ``settings.top_draws`` evenly thinned ensembles of the β = 1 rung (posterior draws, (top_draws, W, ndim)).
+    """Run one ladder of tempered ensembles.
+
+    One ladder: ll (K, steps, W), the swap acceptance per neighbouring pair, and
+    ``settings.top_draws`` evenly thinned ensembles of the β = 1 rung (posterior draws, (top_draws,
+    W, ndim)).
     """
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     rng = np.random.default_rng(seed)
@@ -461,6 +467,7 @@ class EvidenceResult:
         return EvidenceEstimate(self.log_z, self.error, self.method, details, draws)
 
     def as_dict(self):
+        """Return the result as a JSON-ready dict (without the draws)."""
         out = asdict(self)
         out.pop("posterior_draws")
         out["betas"] = [float(b) for b in self.betas]
@@ -516,7 +523,9 @@ def log_evidence(target, settings=LadderSettings(), seed=0):
 
 
 def run_ladders(jobs, processes=1):
-    """Run ladder jobs ``(target, betas, settings, seed)`` side by side on ``processes`` worker
+    """Run ladder jobs side by side on worker processes.
+
+    Run ladder jobs ``(target, betas, settings, seed)`` side by side on ``processes`` worker
     processes; returns, per job, (:func:`combine_ladder` dict, swap acceptance, β = 1 draws).
     """
     if processes > 1 and len(jobs) > 1:
@@ -538,7 +547,7 @@ def ladder_evaluations(settings, ndim, n_ladders):
 def summarise_ladders(
     parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None
 ):
-    """The :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder` dicts).
+    """Return the :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder` dicts).
 
     ``groups`` (one label per ladder) marks ladders that share a reference density; the spread
     of the group means, SD/√G, is then a further Monte-Carlo term (``sigma_pilot``): ladders of

@@ -60,8 +60,11 @@ class LaplaceFit:
         return float(self.log_post_map + self.posterior.ndim * HALF_LOG_2PI + 0.5 * log_det)
 
     def estimate(self):
-        """The Laplace log Z as an :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate`
-        (no error bar: the approximation's error is not a Monte-Carlo one and is not estimated).
+        """Return the Laplace log Z as an EvidenceEstimate.
+
+        Return the Laplace log Z as an
+        :class:`~fsrbayes.inference.evidence.estimate.EvidenceEstimate` (no error bar: the
+        approximation's error is not a Monte-Carlo one and is not estimated).
         """
         return EvidenceEstimate(
             self.log_evidence, float("nan"), "laplace", {"log_post_map": float(self.log_post_map)}
@@ -74,11 +77,11 @@ class LaplaceFit:
         return dict(zip(self.posterior.names, x[0], strict=False))
 
     def draws_u(self, rng, n):
-        """N draws of the Gaussian approximation in u-space, shape (n, ndim)."""
+        """Draw n samples of the Gaussian approximation in u-space, shape (n, ndim)."""
         return self.u_map + rng.standard_normal((n, self.posterior.ndim)) @ self.root_cov.T
 
     def local_draws(self, rng, n, *, steps=400, n_walkers=None):
-        """N posterior draws (physical units) from a short ensemble run started at the mode.
+        """Draw n posterior draws (physical units) from a short ensemble run started at the mode.
 
         The Gaussian of :meth:`draws` is a poor posterior where the creep posterior bends or is
         bounded only by its prior: on a 9-test specimen its draws put the model current 0.7 σ
@@ -112,7 +115,7 @@ class LaplaceFit:
         return x
 
     def draws(self, rng, n):
-        """N draws in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
+        """Draw n samples in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
         out = np.empty((0, self.posterior.ndim))
         for _ in range(20):
             u = self.draws_u(rng, n)
@@ -128,7 +131,9 @@ class LaplaceFit:
 
 
 def _nested_starts(posterior, base, null, rng, n_extra=32):
-    """U of ``posterior`` at the base fit's optimum, the extra parameters at ``null`` and at
+    """Return starts for an extended model around its base model's fit.
+
+    u of ``posterior`` at the base fit's optimum, the extra parameters at ``null`` and at
     ``n_extra`` prior draws, shape (n_extra + 1, ndim).
 
     The prior draws matter where the extension is flat at its null value (an onset voltage
@@ -188,7 +193,9 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
 
 @dataclass
 class LocalDraws:
-    """Posterior draws from :meth:`LaplaceFit.local_draws`, shaped like a fit's output for
+    """Posterior draws from a short run at the mode, shaped like a fit's.
+
+    Posterior draws from :meth:`LaplaceFit.local_draws`, shaped like a fit's output for
     :func:`fsrbayes.inference.output.to_datatree` (one "ensemble", no convergence report).
 
     Attributes

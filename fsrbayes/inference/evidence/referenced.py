@@ -110,6 +110,7 @@ class ReferenceDensity:
 
     @property
     def ndim(self):
+        """Number of dimensions."""
         return self.transport.ndim
 
     @property
@@ -131,7 +132,7 @@ class ReferenceDensity:
         return student_t_log_density(w, self.dof)
 
     def sample_w(self, rng, n):
-        """N i.i.d. draws of w."""
+        """Draw n i.i.d. draws of w."""
         return student_t_draws(rng, n, self.ndim, self.dof)
 
 
@@ -151,6 +152,7 @@ class MixtureReference:
 
     @classmethod
     def of(cls, components, weights=None):
+        """Return the mixture of ``components`` with ``weights`` (default: equal)."""
         components = tuple(components)
         weights = np.ones(len(components)) if weights is None else np.asarray(weights, dtype=float)
         if len(weights) != len(components) or np.any(weights <= 0):
@@ -161,6 +163,7 @@ class MixtureReference:
 
     @property
     def ndim(self):
+        """Number of dimensions."""
         return self.components[0].ndim
 
     def component_log_densities(self, u):
@@ -200,6 +203,7 @@ class ReferencedTarget:
 
     @property
     def ndim(self):
+        """Number of dimensions."""
         return self.reference.ndim
 
     def _split(self, state):
@@ -209,7 +213,7 @@ class ReferencedTarget:
         return state[..., :-1], np.nan_to_num(state[..., -1]).astype(int)
 
     def to_target(self, state):
-        """U of states (…, ndim + 1)."""
+        """Map states (…, ndim + 1) to u."""
         w, labels = self._split(state)
         u = np.empty_like(w)
         for j, component in enumerate(self.reference.components):
@@ -218,21 +222,25 @@ class ReferencedTarget:
         return u
 
     def sample_prior(self, rng, n):
+        """Draw ``n`` states from the reference (the ladder's β = 0 end)."""
         log_a = self.reference.log_weights
         labels = rng.choice(len(log_a), size=n, p=np.exp(log_a))
         w = self.reference.components[0].sample_w(rng, n)
         return np.column_stack([w, labels])
 
     def log_prior(self, state):
+        """Return the log reference density of each state."""
         w, labels = self._split(state)
         return self.reference.log_weights[labels] + student_t_log_density(
             w, self.reference.components[0].dof
         )
 
     def log_likelihood(self, state):
+        """Return the log-likelihood ratio of each state against the reference."""
         return self.log_prior_and_likelihood(state)[1]
 
     def log_prior_and_likelihood(self, state):
+        """Return (log reference density, log target − log reference) of each state."""
         log_chart = self.log_prior(state)
         u = self.to_target(state)
         lp, ll = evaluate_target(self.target, u)
@@ -280,9 +288,11 @@ REFERENCED_LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600,
 def pilot_draws(
     posterior, seed=0, settings=PILOT_SETTINGS, processes=1, max_draws=20000, start=None
 ):
-    """Posterior draws in u (n, ndim) from a short run started at ``start`` (default: the MAP of
-    two optimiser starts). ConvergenceWarnings of the pilot are silenced: its quality only
-    affects the evidence's precision.
+    """Return posterior draws of a short pilot run.
+
+    Posterior draws in u (n, ndim) from a short run started at ``start`` (default: the MAP of two
+    optimiser starts). ConvergenceWarnings of the pilot are silenced: its quality only affects the
+    evidence's precision.
     """
     rng = np.random.default_rng(seed)
     optimum = (
@@ -353,7 +363,7 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
 
 
 def _importance_log_z(posterior, component, rng, n):
-    """Log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
+    """Return log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
     log_ratio = ReferencedTarget(posterior, component).log_likelihood(component.sample_w(rng, n))
     return float(logsumexp(log_ratio) - np.log(n))
 
@@ -364,7 +374,7 @@ def _search_job(posterior, seed, search):
 
 
 def minor_pilot(settings):
-    """The pilot of a region other than the best: half the chunk and half the steps."""
+    """Return the pilot of a region other than the best: half the chunk and half the steps."""
     return replace(
         settings,
         chunk=max(50, settings.chunk // 2),
@@ -383,7 +393,7 @@ def pilot_reference(
     modes=None,
     quadratic=None,
 ):
-    """The reference g for the evidence: one pilot run and one t component per separate region.
+    """Return the reference g for the evidence: one pilot run and one t component per separate region.
 
     Separate regions come from :func:`distinct_optima`; the weights a_j are proportional to each
     component's importance-sampling estimate of its region's mass, floored at a tenth of the
@@ -447,7 +457,7 @@ def referenced_log_evidence(
     pilot_groups=4,
     quadratic=None,
 ):
-    """Log Z = log ∫ L·π along the referenced path (module docstring).
+    """Estimate log Z = log ∫ L·π along the referenced path (module docstring).
 
     Parameters
     ----------

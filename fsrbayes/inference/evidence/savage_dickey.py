@@ -29,8 +29,10 @@ __all__ = ["SavageDickey", "savage_dickey", "savage_dickey_posterior"]
 
 @dataclass(frozen=True)
 class SavageDickey:
-    """log B01 (null over full model) with its Monte-Carlo error: the larger of batch means over
-    the draws in time order and the i.i.d. error of a mean of weights, sqrt(1/ESS − 1/N).
+    """log B01 (null over full model) with its Monte-Carlo error.
+
+    log B01 (null over full model) with its Monte-Carlo error: the larger of batch means over the
+    draws in time order and the i.i.d. error of a mean of weights, sqrt(1/ESS − 1/N).
     """
 
     log_b01: float
@@ -47,8 +49,10 @@ class SavageDickey:
 
 
 def _log_w(draws, index, lower):
-    """Log w(φ | ψ) at every draw: a normal whose mean is linear in the other parameters ψ
-    (least squares on the draws, ψ standardised), truncated to φ ≥ ``lower``.
+    """Return log w(φ | ψ), a conditional density of φ, at every draw.
+
+    Log w(φ | ψ) at every draw: a normal whose mean is linear in the other parameters ψ (least
+    squares on the draws, ψ standardised), truncated to φ ≥ ``lower``.
 
     Chen's identity holds for any conditional density w(φ | ψ); the closer it is to
     p(φ | ψ, y), the fewer draws dominate. With a w fitted to the marginal of φ, a Burgers

@@ -194,7 +194,7 @@ def tempered_report(chain, settings=TEMPERED_SETTINGS, names=()):
 
 
 def reference_optima(evidence):
-    """The optima (u) the ladders' mode searches found, group after group."""
+    """Return the optima (u) the ladders' mode searches found, group after group."""
     return [
         np.asarray(c["optimum"], dtype=float)
         for group in evidence.settings.get("reference_components", [])

@@ -47,8 +47,10 @@ only feeds the DE step), so the 4·ndim rule of the ensemble moves does not appl
 
 
 class KernelProposal:
-    """Independence proposal for one block: a Gaussian kernel mixture over draws, plus a
-    defensive multivariate Student-t.
+    """Independence proposal for one block of the Gibbs sweep.
+
+    Independence proposal for one block: a Gaussian kernel mixture over draws, plus a defensive
+    multivariate Student-t.
 
     Parameters
     ----------
@@ -79,7 +81,7 @@ class KernelProposal:
         self.defensive, self.dof, self.d = float(defensive), float(dof), d
 
     def sample(self, random, n):
-        """N draws, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
         pick = random.randint(len(self.centres), size=n)
         kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
         chi = random.chisquare(self.dof, size=n) / self.dof
@@ -181,10 +183,11 @@ class GibbsJointTarget(JointTarget):
         self.scale_step = shift_scale * 2.4 / np.sqrt(2.0 * len(z))
 
     def emcee_moves(self):
-        """The moves :func:`~fsrbayes.inference.samplers.ensemble.run_ensembles` gives emcee for this target."""
+        """Return the moves :func:`~fsrbayes.inference.samplers.ensemble.run_ensembles` gives emcee for this target."""
         return [(BlockGibbsMove(self), 1.0)]
 
     def fingerprint(self):
+        """Return a string that changes with the target (checkpoints)."""
         return "gibbs-" + super().fingerprint()
 
 
@@ -310,9 +313,11 @@ class BlockGibbsMove(emcee.moves.Move):
             self.omega = np.exp(np.where(take, proposal, eta))
 
     def _shift_and_scale(self, p, random):
-        """Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε,
-        z'_j = μ' + e^ε (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take
-        when the data barely identify p per specimen (ω_p then mixes over hundreds of sweeps).
+        """Propose a joint shift-and-scale of one population parameter.
+
+        Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε, z'_j = μ' + e^ε
+        (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take when the data
+        barely identify p per specimen (ω_p then mixes over hundreds of sweeps).
 
         In (μ, log ω, z) coordinates the map has Jacobian e^{Jε} and leaves every population
         density term N(z_j; μ, ω) but its −J·log ω unchanged, so the Metropolis ratio is
@@ -363,6 +368,7 @@ class BlockGibbsMove(emcee.moves.Move):
 
     # -- emcee's interface -------------------------------------------------------------------
     def propose(self, model, state):
+        """Propose new coordinates for emcee's ``MHMove``: (coordinates, log proposal ratio)."""
         coords = np.asarray(state.coords, dtype=float)
         if self._coords is None or not np.array_equal(coords, self._coords):
             self._rebuild(coords)

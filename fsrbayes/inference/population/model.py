@@ -111,6 +111,7 @@ class Population:
 
     @property
     def hyper_names(self):
+        """Names of the hyper-parameters: ``mu_<name>`` then ``omega_<name>``."""
         return tuple(f"mu_{n}" for n in self.names) + tuple(f"omega_{n}" for n in self.names)
 
     def split(self, hyper):
@@ -119,7 +120,7 @@ class Population:
         return hyper[..., : self.size], hyper[..., self.size :]
 
     def to_z(self, x):
-        """Population coordinates z of population parameters x (…, P) and log|dz/dx| summed (…)."""
+        """Return the population coordinates z of population parameters x (…, P) and log|dz/dx| summed (…)."""
         x = np.asarray(x, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
             logs = np.log(x)
@@ -127,7 +128,7 @@ class Population:
         return z, -np.sum(np.where(self.log_scale, logs, 0.0), axis=-1)
 
     def from_z(self, z):
-        """Population parameters from population coordinates (…, P)."""
+        """Return the population parameters from population coordinates (…, P)."""
         z = np.asarray(z, dtype=float)
         return np.where(self.log_scale, np.exp(np.where(self.log_scale, z, 0.0)), z)
 
@@ -144,7 +145,7 @@ class Population:
         return self.log_density(x, mu, omega) - self.interim.log_prob(x)
 
     def sample(self, rng, hyper, size=None):
-        """Population parameters of new specimens: one per hyper-parameter row (…, 2P) → (…, P)."""
+        """Return the population parameters of new specimens: one per hyper-parameter row (…, 2P) → (…, P)."""
         mu, omega = self.split(hyper)
         shape = (
             np.broadcast_shapes(mu.shape, omega.shape) if size is None else tuple(size) + mu.shape
@@ -152,6 +153,7 @@ class Population:
         return self.from_z(mu + omega * rng.standard_normal(shape))
 
     def fingerprint(self):
+        """Return a string that changes with the population's names and interim priors."""
         text = repr((self.names, self.interim.dists))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -201,6 +203,7 @@ class TwoStageTarget(PriorScaledTarget):
         return values.reshape(len(mu), self.n_specimens, self.n_draws)
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
+        """Return (log hyper-prior incl. Jacobian, log marginal likelihood) per row of u."""
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
         hyper, log_jac = self.prior.from_unconstrained(u2)
         log_prior = self.prior.log_prob(hyper) + log_jac
@@ -224,6 +227,7 @@ class TwoStageTarget(PriorScaledTarget):
         return np.sum(1.0 / self.effective_draws(hyper) - 1.0 / self.n_draws, axis=-1)
 
     def fingerprint(self):
+        """Return a string that changes with the target (checkpoints)."""
         digest = hashlib.sha256(self.features.tobytes() + self.offset.tobytes())
         digest.update(self.population.fingerprint().encode())
         return "two-stage:" + digest.hexdigest()[:16]
@@ -272,6 +276,7 @@ class JointTarget(PriorScaledTarget):
         return np.asarray(u)[..., start : start + self.width]
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
+        """Return (log prior incl. Jacobian, log-likelihood) per row of u."""
         u2 = np.atleast_2d(np.asarray(u, dtype=float))
         n_hyper = 2 * self.population.size
         hyper, log_jac = self.population.hyper_prior.from_unconstrained(u2[:, :n_hyper])
@@ -294,6 +299,7 @@ class JointTarget(PriorScaledTarget):
         )
 
     def fingerprint(self):
+        """Return a string that changes with the target (checkpoints)."""
         parts = [self.population.fingerprint()]
         parts += [t.fingerprint() if hasattr(t, "fingerprint") else repr(t) for t in self.specimens]
         return "joint:" + hashlib.sha256("|".join(parts).encode()).hexdigest()[:16]

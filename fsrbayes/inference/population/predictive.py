@@ -74,6 +74,7 @@ class ForwardTemplate:
 
     @property
     def ndim(self):
+        """Number of sampled parameters."""
         return self.prior.ndim
 
     def parameters(self, x):
@@ -102,6 +103,7 @@ class NewSpecimens:
 
     @property
     def shape(self):
+        """Shape of the specimens' parameter arrays."""
         return next(iter(self.params.values())).shape
 
     def drift(self, voltage_V, stress_Pa, time_s=3600.0, *, noise_rel=None, seed=0):
@@ -182,7 +184,7 @@ def _quantile_summary(values, level=0.90):
 def drift_groups(
     specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, noise_rel=None, seed=0
 ):
-    """The contract's ``groups``: one entry per (voltage, stress) with the new-specimen quantiles.
+    """Return the contract's ``groups``: one entry per (voltage, stress) with the new-specimen quantiles.
 
     ``noise_rel`` (relative measurement noise, e.g. the specimens' fitted sigma_rel) makes them
     the quantiles of a new specimen's drift *as measured* — the like-for-like comparison with
@@ -217,7 +219,7 @@ def drift_groups(
 
 
 def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=3600.0, n_grid=161):
-    """The sourcing voltage minimising |drift(time)| of a new specimen at one stress.
+    """Return the sourcing voltage minimising |drift(time)| of a new specimen at one stress.
 
     Each specimen's |drift| is evaluated on ``n_grid`` log-spaced voltages in ``v_range`` and
     the minimum refined by a parabola through it and its neighbours (in log V).

@@ -88,6 +88,7 @@ class HierarchicalResult:
 
     @property
     def converged(self):
+        """Whether the convergence criteria held at the last check."""
         return self.run.report.converged
 
     def draws(self, max_draws=4000):
@@ -98,8 +99,10 @@ class HierarchicalResult:
         )[0]
 
     def hyper_draws(self, max_draws=4000):
-        """Draws of the hyper-parameters (μ then ω), shape (D, 2P); only their columns are converted
-        (a joint run carries every specimen's parameters too).
+        """Return draws of the hyper-parameters (μ then ω).
+
+        Draws of the hyper-parameters (μ then ω), shape (D, 2P); only their columns are converted (a
+        joint run carries every specimen's parameters too).
         """
         chain, _ = self.run.kept()
         n_hyper = 2 * self.population.size
@@ -167,7 +170,9 @@ def _sample(target, seed, settings, start, progress):
 
 
 def _walkers(target, settings):
-    """Walkers per ensemble: the Gibbs route's walkers are chains of their own, not bound by the
+    """Return the walkers per ensemble.
+
+    Walkers per ensemble: the Gibbs route's walkers are chains of their own, not bound by the
     ensemble moves' 2·ndim.
     """
     if isinstance(target, GibbsJointTarget):
@@ -189,7 +194,7 @@ def two_stage(
     min_effective=MIN_EFFECTIVE_DRAWS,
     progress=False,
 ):
-    """Population posterior from independent per-specimen fits, by reweighting their draws.
+    """Compute the population posterior from independent per-specimen fits, by reweighting their draws.
 
     Parameters
     ----------
@@ -247,8 +252,10 @@ def two_stage(
 
 
 def draw_error(result, n_boot=100, max_draws=2000, seed=0):
-    """Monte-Carlo error of a two-stage result's hyper-parameter means due to the finite
-    per-specimen draws.
+    """Return the Monte-Carlo error of a two-stage result's hyper-parameter means.
+
+    Monte-Carlo error of a two-stage result's hyper-parameter means due to the finite per-specimen
+    draws.
 
     Each specimen's S draws are resampled with replacement (``n_boot`` times); the hyper-posterior
     under each resampled likelihood is the sampled one importance-reweighted by L_b(Λ)/L(Λ)
@@ -353,8 +360,10 @@ def joint(
 
 
 def _start_from_draws(target, draws, settings, rng):
-    """Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at
-    those draws' mean and spread (the warm-up half of the chain is discarded anyway).
+    """Return walkers started from per-specimen draws.
+
+    Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at those
+    draws' mean and spread (the warm-up half of the chain is discarded anyway).
     """
     n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk
@@ -392,9 +401,11 @@ def _start_from_two_stage(target, two, settings, rng):
 
 
 def _fit_one(args):
-    """One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the
-    cores (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s
-    with OMP_NUM_THREADS=1 — other fit seeds).
+    """Fit one specimen with BLAS on one thread.
+
+    One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the cores
+    (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s with
+    OMP_NUM_THREADS=1 — other fit seeds).
     """
     data, specimen, kwargs, components = args
     register_components(components)  # a user's own creep law or effect, in a fresh worker

@@ -135,12 +135,13 @@ class SamplerSettings:
         return min(self.transport_rounds, self.max_steps // (2 * self.chunk))
 
     def warmup_steps(self, n_steps):
-        """Steps discarded as warm-up out of ``n_steps``."""
+        """Return the steps discarded as warm-up out of ``n_steps``."""
         if self.rounds:
             return min(n_steps, self.rounds * self.chunk)
         return n_steps // 2
 
     def walkers_for(self, ndim):
+        """Walkers per ensemble for a target of ``ndim`` dimensions."""
         return walkers_for(self.n_walkers, ndim)
 
 
@@ -186,6 +187,7 @@ class ConvergenceReport:
         )
 
     def as_dict(self):
+        """Return the report as a JSON-ready dict."""
         out = asdict(self)
         for key in ("tau", "rhat", "ess_bulk"):
             out[key] = [float(v) for v in out[key]]
@@ -342,7 +344,9 @@ def _advance(
 
 
 def _transport_maps(chains, settings, max_draws=50000):
-    """The ensembles' map (and independence proposal) for the next chunk: refitted after every
+    """Return the ensembles' transport map and proposal for the next chunk.
+
+    Return the ensembles' map (and independence proposal) for the next chunk: refitted after every
     warm-up chunk, then frozen.
 
     Both are fitted to the later half of all warm-up steps so far, pooled over the ensembles (a
@@ -410,8 +414,10 @@ def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
 
 
 def check_checkpoint(path, fingerprint, n_ensembles):
-    """Refuse a checkpoint written for another fit (:class:`CheckpointMismatch`) before any work
-    is done; a missing file is fine (the run starts afresh).
+    """Refuse a checkpoint written for another fit.
+
+    Refuse a checkpoint written for another fit (:class:`CheckpointMismatch`) before any work is
+    done; a missing file is fine (the run starts afresh).
     """
     try:
         _load(path, fingerprint, n_ensembles)

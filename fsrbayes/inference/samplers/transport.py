@@ -44,8 +44,10 @@ fit costs ~d⁵ (22-d hyper-posterior: minutes per refit) and its forward pass ~
 
 @lru_cache(maxsize=64)
 def _pairs(m):
-    """Index pairs (j ≤ k) of m coordinates; cached: the forward pass asks for them at every stage
-    of every call (np.triu_indices took 11 % of a fit's time).
+    """Return the index pairs (j ≤ k) of m coordinates (cached).
+
+    Index pairs (j ≤ k) of m coordinates; cached: the forward pass asks for them at every stage of
+    every call (np.triu_indices took 11 % of a fit's time).
     """
     return np.triu_indices(m)
 
@@ -88,6 +90,7 @@ class TriangularMap:
 
     @property
     def ndim(self):
+        """Number of dimensions."""
         return len(self.order)
 
     @property
@@ -97,7 +100,7 @@ class TriangularMap:
 
     @classmethod
     def identity(cls, ndim):
-        """U = v."""
+        """Return u = v (the identity map)."""
         weights = tuple(np.zeros(i + i * (i + 1) // 2) for i in range(ndim))
         return cls(
             tuple(range(ndim)),
@@ -155,8 +158,10 @@ class TriangularMap:
         )
 
     def forward(self, v):
-        """u(v) for v (…, ndim); walkers proposed far out may overflow to inf/NaN (the target
-        then rejects them).
+        """Map v (…, ndim) back to u.
+
+        u(v) for v (…, ndim); walkers proposed far out may overflow to inf/NaN (the target then
+        rejects them).
         """
         v = np.asarray(v, dtype=float)
         u = np.empty_like(v)
@@ -186,7 +191,7 @@ class TriangularMap:
         return v
 
     def fingerprint(self):
-        """A short hash of the map (for checkpoints)."""
+        """Return a short hash of the map (for checkpoints)."""
         import hashlib
 
         digest = hashlib.sha256()
@@ -204,7 +209,9 @@ class TriangularMap:
 
 
 def _order_by_predictability(z, max_draws=4000):
-    """Greedy order, filled from the back: the coordinate best predicted by a quadratic in the
+    """Return a coordinate order for the triangular map.
+
+    Greedy order, filled from the back: the coordinate best predicted by a quadratic in the
     remaining ones is placed last, then the next among those left, and so on.
 
     Every score is the residual sd of a least-squares fit of z_i on [1, z_S, z_j·z_k (j ≤ k in
@@ -253,9 +260,11 @@ class MappedLogProb:
 
     @property
     def ndim(self):
+        """Number of dimensions."""
         return self.transport.ndim
 
     def __call__(self, v):
+        """Return the target's log-density at v, with the map's log-Jacobian."""
         return self.log_prob(self.transport.forward(v)) + self.transport.log_det_jacobian
 
 
@@ -275,7 +284,7 @@ def student_t_log_density(w, dof):
 
 
 def student_t_draws(random, n, d, dof):
-    """N draws (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
+    """Draw n samples (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
     z = random.standard_normal((n, d))
     if np.isinf(dof):
         return z
@@ -284,7 +293,9 @@ def student_t_draws(random, n, d, dof):
 
 @dataclass(frozen=True)
 class IndependenceProposal:
-    """Independence Metropolis–Hastings proposal for emcee's ``MHMove``: x' ~ g, a multivariate
+    """Independence Metropolis–Hastings proposal for emcee's ``MHMove``.
+
+    Independence Metropolis–Hastings proposal for emcee's ``MHMove``: x' ~ g, a multivariate
     Student-t with the mean and covariance of warm-up draws, whatever the current x.
 
     The acceptance ratio is p(x')·g(x) / (p(x)·g(x')), so the move is exact for any fixed g;
@@ -307,19 +318,20 @@ class IndependenceProposal:
         return cls(draws.mean(axis=0), np.linalg.cholesky(cov), float(dof))
 
     def whiten(self, x):
+        """Return x in the proposal's whitened coordinates."""
         return np.linalg.solve(self.chol, (np.asarray(x, dtype=float) - self.mean).T).T
 
     def log_density(self, x):
-        """Log g(x), normalised."""
+        """Return log g(x), normalised."""
         log_det = float(np.sum(np.log(np.abs(np.diag(self.chol)))))
         return student_t_log_density(self.whiten(x), self.dof) - log_det
 
     def draw(self, random, n):
-        """N draws (n, d) of g."""
+        """Draw n samples (n, d) of g."""
         return self.mean + student_t_draws(random, n, self.mean.size, self.dof) @ self.chol.T
 
     def __call__(self, coords, random):
-        """Emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
+        """Propose for emcee: (new coordinates, ln g(x) − ln g(x'))."""
         coords = np.asarray(coords, dtype=float)
         new = self.draw(random, coords.shape[0])
         return new, self.log_density(coords) - self.log_density(new)
@@ -327,8 +339,10 @@ class IndependenceProposal:
 
 @dataclass(frozen=True)
 class MixtureProposal:
-    """Independence proposal g = (1/K) Σ_k g_k: an equal-weight mixture of Student-t components,
-    one fitted to each ensemble's warm-up draws.
+    """Independence proposal from an equal-weight mixture of Student-t's.
+
+    Independence proposal g = (1/K) Σ_k g_k: an equal-weight mixture of Student-t components, one
+    fitted to each ensemble's warm-up draws.
 
     Ensembles started in separate posterior regions (:func:`~fsrbayes.inference.fit.fit` starts
     them at distinct optima) each describe their own region; with the mixture a walker in one
@@ -344,7 +358,9 @@ class MixtureProposal:
 
     @classmethod
     def fit(cls, groups, dof=10.0):
-        """One component per array of draws in ``groups``; groups too small or degenerate for a
+        """Fit one Student-t component per array of draws.
+
+        One component per array of draws in ``groups``; groups too small or degenerate for a
         covariance are left out, and all of them pooled when none is usable.
         """
         components = []
@@ -365,14 +381,14 @@ class MixtureProposal:
         return cls(tuple(components))
 
     def log_density(self, x):
-        """Log g(x), normalised."""
+        """Return log g(x), normalised."""
         parts = np.stack([c.log_density(x) for c in self.components])
         if len(parts) == 1:
             return parts[0]
         return logsumexp(parts, axis=0) - np.log(len(self.components))
 
     def __call__(self, coords, random):
-        """Emcee's proposal interface: (new coordinates, ln g(x) − ln g(x'))."""
+        """Propose for emcee: (new coordinates, ln g(x) − ln g(x'))."""
         coords = np.asarray(coords, dtype=float)
         n = coords.shape[0]
         which = (
