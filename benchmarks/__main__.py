@@ -1,8 +1,9 @@
-"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood] [fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
+"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [likelihood]
+[fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
 
-Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs
-``pip install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds), ``evidence``, ``hierarchical``,
-``diagnose`` and ``demo`` take minutes.
+Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
+install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds), ``evidence``,
+``hierarchical``, ``diagnose`` and ``demo`` take minutes.
 """
 
 import os
@@ -46,7 +47,8 @@ def main(names):
         print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
         return 2
     print(
-        f"machine: {platform.machine()}, {os.cpu_count()} cores, {platform.processor() or 'cpu n/a'}; "
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, "
+        f"{platform.processor() or 'cpu n/a'}; "
         f"python {platform.python_version()}, numpy {np.__version__}"
     )
     for name in names or [n for n in BENCHMARKS if n != "dynesty"]:

@@ -1,4 +1,5 @@
-"""Wall time of ``fsrbayes demo``: the full plan (target <= 10 minutes) and ``--quick`` (<= 1 minute).
+"""Wall time of ``fsrbayes demo``: the full plan (target <= 10 minutes) and ``--quick`` (<= 1
+minute).
 
 Both run on the embedded default data with 2 worker processes into temporary folders; the
 stages' times come from the demo's own progress lines.
@@ -38,7 +39,8 @@ def report(runs):
     for r in runs:
         target = 60 if r["plan"] == "quick" else 600
         out.append(
-            f"demo ({r['plan']}): {r['seconds']:.0f} s (target <= {target} s), {r['n_specimens']} specimens, "
+            f"demo ({r['plan']}): {r['seconds']:.0f} s (target <= {target} s), {r['n_specimens']} "
+            "specimens, "
             f"{r['n_tests']} creep tests, {r['warnings']} warnings"
         )
         out += [f"    {line}" for line in r["stages"]]

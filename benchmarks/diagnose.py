@@ -1,4 +1,5 @@
-"""Wall time of ``fsrbayes.diagnose`` on the issue's design: 6 specimens x 9 creep tests x 61 samples.
+"""Wall time of ``fsrbayes.diagnose`` on the issue's design: 6 specimens x 9 creep tests x 61
+samples.
 
 Six A201 specimens from the virtual bench (3 forces x 0.5/2/4.5 V, 61 log-spaced samples over
 the hour) with a contact-creep hidden (contact_creep = 40); the base Burgers model and the five
@@ -37,7 +38,8 @@ def run(processes=2):
 
 def report(r):
     return (
-        f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: {r['seconds']:.0f} s "
+        f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: "
+        f"{r['seconds']:.0f} s "
         f"(target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap {r['gap_before']:.2f} -> "
         f"{r['gap_after']:.2f}; ln B " + ", ".join(f"{k} {v:.0f}" for k, v in r["log_bf"].items())
     )

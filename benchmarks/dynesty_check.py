@@ -1,12 +1,13 @@
 """Cross-check of the emcee log-evidence against dynesty's nested sampling on one specimen.
 
-The same simulated A201 specimen as ``benchmarks/evidence.py`` (9 creep tests × 21 samples),
-the same likelihood and the same normalised prior: dynesty's ``prior_transform`` maps the unit
-cube through each parameter's quantile function (``Distribution.ppf``), so its log Z and ours
-are the same number (../shared/EVIDENCE.md §4). Settings: multi-ellipsoid bounds, dlogz = 0.1,
-slice sampling (see :func:`run_dynesty` for why not dynesty's FAQ setting of 25-step random walks). dynesty's own
-logzerr covers only the prior-volume statistics, so several independent runs are made and
-their spread is reported beside it. dynesty is an optional dev dependency (``pip install dynesty``).
+The same simulated A201 specimen as ``benchmarks/evidence.py`` (9 creep tests × 21 samples), the
+same likelihood and the same normalised prior: dynesty's ``prior_transform`` maps the unit cube
+through each parameter's quantile function (``Distribution.ppf``), so its log Z and ours are the
+same number (../shared/EVIDENCE.md §4). Settings: multi-ellipsoid bounds, dlogz = 0.1, slice
+sampling (see :func:`run_dynesty` for why not dynesty's FAQ setting of 25-step random walks).
+dynesty's own logzerr covers only the prior-volume statistics, so several independent runs are made
+and their spread is reported beside it. dynesty is an optional dev dependency (``pip install
+dynesty``).
 
 Two ways of handing dynesty the same integral Z = ∫ L·π du:
 
@@ -50,7 +51,8 @@ class _UnitCube:
 
 
 class _Repartitioned:
-    """dynesty's view of Z with base measure h(w) = Π t_ν(w_i) in whitened map coordinates (module docstring)."""
+    """dynesty's view of Z with base measure h(w) = Π t_ν(w_i) in whitened map coordinates (module
+    docstring)."""
 
     def __init__(self, posterior, reference, dof=10.0):
         self.posterior, self.reference, self.dof = posterior, reference, float(dof)
@@ -82,7 +84,7 @@ def run_dynesty(posterior, seed, nlive=250, sample="rslice", dlogz=0.1, walks=25
     start = time.perf_counter()
     if base == "prior":
         cube = _UnitCube(posterior)
-    else:  # pilot from its own seed: h is independent of the ladder's reference and of dynesty's draws
+    else:  # a pilot from its own seed: h independent of the ladder's reference and dynesty's draws
         cube = _Repartitioned(
             posterior, ReferenceDensity.fit(pilot_draws(posterior, seed=1000 + seed))
         )
@@ -138,9 +140,13 @@ def report(results):
         log_z = np.array([r[0] for r in entry["runs"]])
         spread = log_z.std(ddof=1) / np.sqrt(len(log_z)) if len(log_z) > 1 else float("nan")
         lines.append(
-            f"dynesty ({entry['base']} base, {entry['nlive']} live) log Z {model}: {log_z.mean():.3f} ± {spread:.3f} "
+            f"dynesty ({entry['base']} base, {entry['nlive']} live) log Z {model}: "
+            f"{log_z.mean():.3f} ± {spread:.3f} "
             f"(spread of {len(log_z)} runs: {', '.join(f'{v:.3f}' for v in log_z)}; logzerr "
-            f"{np.mean([r[1] for r in entry['runs']]):.3f}; {np.mean([r[2] for r in entry['runs']]):.0f} "
-            f"calls and {np.mean([r[3] for r in entry['runs']]):.0f} s per run; {entry['wall']:.0f} s wall)"
+            f"{np.mean([r[1] for r in entry['runs']]):.3f}; "
+            f"{np.mean([r[2] for r in entry['runs']]):.0f} "
+            f"calls and {np.mean([r[3] for r in entry['runs']]):.0f} s per run; "
+            f"{entry['wall']:.0f} "
+            "s wall)"
         )
     return "\n".join(lines)

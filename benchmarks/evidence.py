@@ -1,4 +1,5 @@
-"""Wall time and accuracy of log Z for one specimen's Burgers and Zener models (target ±0.3 in ≤ 5 min).
+"""Wall time and accuracy of log Z for one specimen's Burgers and Zener models (target ±0.3 in ≤ 5
+min).
 
 Default: the referenced path (pilot run, Student-t reference in transport-map coordinates, 8
 evenly spaced rungs; :mod:`fsrbayes.inference.evidence.referenced`). ``path="prior"`` runs the old
@@ -49,7 +50,8 @@ def run(path="reference", samples=21, seed=1):
 
 def report(results):
     return "\n".join(
-        f"log Z {model} (9 tests x 21 samples): {r}; {r.seconds:.0f} s, {r.n_evals} ladder likelihood "
+        f"log Z {model} (9 tests x 21 samples): {r}; {r.seconds:.0f} s, {r.n_evals} ladder "
+        "likelihood "
         f"calls, min swap acceptance {r.swap_acceptance.min():.2f}"
         for model, r in results.items()
     )

@@ -1,4 +1,5 @@
-"""Wall time to a converged Burgers fit of one specimen (9 creep tests × 61 samples); target ≤ 2 min.
+"""Wall time to a converged Burgers fit of one specimen (9 creep tests × 61 samples); target ≤ 2
+min.
 
 One seed is not a measurement of the fit's wall time: the steps to convergence depend on where
 the warm-up's transport map and proposal settle (4,000–8,500 steps over eight seeds, BENCHMARKS.md).
@@ -53,7 +54,8 @@ def run_seeds(seeds=SEEDS, **kwargs):
 def report(r):
     state = "converged" if r["converged"] else "NOT converged"
     return (
-        f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: {r['seconds']:.0f} s, "
+        f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: "
+        f"{r['seconds']:.0f} s, "
         f"{r['steps']} steps, {state} "
         f"({r['report']}); target <= {TARGET_S:.0f} s"
     )
@@ -63,7 +65,8 @@ def report_seeds(rows):
     seconds = np.array([r["seconds"] for r in rows])
     lines = [report(r) for r in rows]
     lines.append(
-        f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range {seconds.min():.0f}-{seconds.max():.0f} s, "
+        f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range "
+        f"{seconds.min():.0f}-{seconds.max():.0f} s, "
         f"{int(np.sum(seconds <= TARGET_S))} within {TARGET_S:.0f} s, "
         f"{sum(r['converged'] for r in rows)} converged"
     )

@@ -1,14 +1,13 @@
 """Hierarchical fits of 16 simulated specimens: wall time of the two-stage and joint routes.
 
-The virtual bench: 16 A201 specimens drawn from the population, 3 forces x 4 voltages, 21
-log-spaced samples per test. The two-stage route fits the specimens independently with
-``FIT_SETTINGS`` (two ensembles, a short budget: the reweighting needs a few hundred draws per
-specimen, not a converged-to-the-last-digit chain), then samples the 22 hyper-parameters. The
-speed-up from 1 to 2 worker processes is measured side by side on the first 4 specimens. The
-joint route (16 x 12 + 22 = 214 parameters) runs blocked Gibbs sweeps inside emcee
-(``fsrbayes.inference.population.gibbs``) from the two-stage start, with proposals from the same fits, to
-convergence; the two routes' hyper-parameter means are compared in units of their combined
-Monte-Carlo error.
+The virtual bench: 16 A201 specimens drawn from the population, 3 forces x 4 voltages, 21 log-spaced
+samples per test. The two-stage route fits the specimens independently with ``FIT_SETTINGS`` (two
+ensembles, a short budget: the reweighting needs a few hundred draws per specimen, not a
+converged-to-the-last-digit chain), then samples the 22 hyper-parameters. The speed-up from 1 to 2
+worker processes is measured side by side on the first 4 specimens. The joint route (16 x 12 + 22 =
+214 parameters) runs blocked Gibbs sweeps inside emcee (``fsrbayes.inference.population.gibbs``)
+from the two-stage start, with proposals from the same fits, to convergence; the two routes'
+hyper-parameter means are compared in units of their combined Monte-Carlo error.
 """
 
 import time
@@ -97,11 +96,15 @@ def report(r):
     in_sd = np.array([v["in_sd"] for v in r["agreement"].values()])
     return (
         f"hierarchical, 16 specimens x 12 tests x 21 samples: two-stage {r['two_stage_s']:.0f} s "
-        f"(fits {r['fits_16_s']:.0f} s on 2 processes, hyper-posterior {r['hyper_s']:.0f} s: {r['hyper_report']}; "
+        f"(fits {r['fits_16_s']:.0f} s on 2 processes, hyper-posterior {r['hyper_s']:.0f} s: "
+        f"{r['hyper_report']}; "
         f"min effective draws {r['min_effective_draws']:.0f}); target <= 600 s. "
         f"Fits of 4 specimens: 1 process {r['fits_4_specimens_1_processes_s']:.0f} s, 2 processes "
         f"{r['fits_4_specimens_2_processes_s']:.0f} s, speed-up {speedup:.2f}x. "
-        f"Joint (214 parameters, blocked Gibbs in emcee, 4 x 32 walkers, from the two-stage start): "
-        f"{r['joint_s']:.0f} s, {r['joint_report']}; routes' means differ by |z| <= {np.abs(z).max():.1f} combined "
-        f"Monte-Carlo error ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= {np.abs(in_sd).max():.2f} posterior sd"
+        "Joint (214 parameters, blocked Gibbs in emcee, 4 x 32 walkers, from the two-stage start): "
+        ""
+        f"{r['joint_s']:.0f} s, {r['joint_report']}; routes' means differ by |z| <= "
+        f"{np.abs(z).max():.1f} combined "
+        f"Monte-Carlo error ({np.sum(np.abs(z) > 3)} of {len(z)} beyond 3), <= "
+        f"{np.abs(in_sd).max():.2f} posterior sd"
     )

@@ -272,7 +272,7 @@ def _figures(sensor, pop, fits, folder):
 
 
 def _narrative(results, figures, plan):
-    """Return the report's Markdown (figures referenced by path; embedded when converted to HTML)."""
+    """Return the report's Markdown (figures by path; embedded when converted to HTML)."""
     lines = [
         "# fsrbayes demo: FSR creep, the Bayesian way",
         "",
@@ -286,7 +286,8 @@ def _narrative(results, figures, plan):
     ]
     for sensor, e in results["evidence"].items():
         lines.append(
-            f"| {sensor} | {e['log_bf_burgers_over_zener']:.1f} | {e['specimens_preferring_burgers']}/"
+            f"| {sensor} | {e['log_bf_burgers_over_zener']:.1f} | "
+            f"{e['specimens_preferring_burgers']}/"
             f"{len(e['per_specimen'])} | {e['preferred']}: {e['strength']} |"
         )
     lines += [
@@ -300,14 +301,19 @@ def _narrative(results, figures, plan):
     for sensor, pop in results["population"].items():
         for opt in pop["optimal_voltage"]:
             edge = (
-                f"; for {100 * opt['at_boundary']:.0f} % of new specimens the optimum is an end of the "
-                f"range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling with voltage there)"
+                f"; for {100 * opt['at_boundary']:.0f} % of new specimens the optimum is an end of "
+                "the "
+                f"range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling with "
+                "voltage there)"
                 if opt["at_boundary"] > 0.05
                 else ""
             )
             lines.append(
-                f"- {sensor} at {opt['stress_Pa'] / 1e3:.0f} kPa: |drift(3600 s)| of a new specimen is "
-                f"smallest at **{opt['median']:.2g} V** (90 %: {opt['q05']:.2g}–{opt['q95']:.2g} V), "
+                f"- {sensor} at {opt['stress_Pa'] / 1e3:.0f} kPa: |drift(3600 s)| of a new "
+                "specimen "
+                "is "
+                f"smallest at **{opt['median']:.2g} V** (90 %: {opt['q05']:.2g}–{opt['q95']:.2g} "
+                "V), "
                 f"where it drifts {opt['drift_at_optimum']['q50']:+.2f} % (median){edge}"
             )
         lines.append(
@@ -321,8 +327,11 @@ def _narrative(results, figures, plan):
         "## What the model misses",
         "",
         f"`diagnose` on {', '.join(d['specimens'])}: verdict **{d['verdict']}**"
-        f"{' (' + d['effect'] + ')' if d['effect'] else ''}; gap {d['gap_before']:.2f} (an adequate model "
-        f"gives about 0.75–1); best candidate {best['effect']} with ln B = {best['log_bf']:.1f} over the base "
+        f"{' (' + d['effect'] + ')' if d['effect'] else ''}; gap {d['gap_before']:.2f} (an "
+        "adequate "
+        "model "
+        f"gives about 0.75–1); best candidate {best['effect']} with ln B = {best['log_bf']:.1f} "
+        "over the base "
         f"model (an effect is named from ln B = 10). Full report: `{d['report']}`",
     ]
     lines += ["", "## Figures", ""]
@@ -369,7 +378,8 @@ def _run(out, plan, processes, seed, echo):
     data = _subset(default_data(), plan)
     specimens = list(data.specimens)
     echo(
-        f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} creep tests "
+        f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} "
+        "creep tests "
         f"({plan.name} plan): Burgers and Zener fits"
     )
     jobs = [(data.select(specimen=s), s, plan, [seed, k]) for k, s in enumerate(specimens)]
@@ -379,7 +389,8 @@ def _run(out, plan, processes, seed, echo):
         processes=processes,
         on_result=lambda k, r: echo(
             f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): "
-            f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} ({r['seconds']:.0f} s)"
+            f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} "
+            f"({r['seconds']:.0f} s)"
         ),
     )
     results = {
@@ -396,7 +407,8 @@ def _run(out, plan, processes, seed, echo):
         folder.mkdir(exist_ok=True)
         sensor_fits = [f for f in fits if f["sensor"] == sensor]
         echo(
-            f"[{time.perf_counter() - started:5.0f} s] {sensor}: population posterior (two-stage), new specimens, "
+            f"[{time.perf_counter() - started:5.0f} s] {sensor}: population posterior (two-stage), "
+            "new specimens, "
             "optimal voltage"
         )
         pop = _population(sensor, sensor_fits, data, plan, seed, folder)

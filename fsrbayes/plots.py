@@ -94,7 +94,7 @@ def band_plot(tree, kind="drift", max_tests=12):
 
 
 def drift_3600_plot(tree):
-    """Posterior predictive drift(3600 s) per test (median, 50 % and 90 %) with the observed value."""
+    """Plot the predictive drift(3600 s) per test (median, 50 % and 90 %) with the observed one."""
     drift = tree.posterior_predictive["drift_3600"].values.reshape(
         -1, tree.constant_data["voltage_V"].size
     )

@@ -69,7 +69,8 @@ def test_unknown_subcommand_is_a_usage_error():
 
 
 def test_help_of_every_command_prints_without_a_traceback(capsys):
-    """argparse %-formats help strings only when --help asks; a stray '%' once crashed 'fsrbayes --help'."""
+    """argparse %-formats help strings only when --help asks; a stray '%' once crashed 'fsrbayes
+    --help'."""
     from fsrbayes.cli import build_parser
 
     parser = build_parser()

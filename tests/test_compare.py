@@ -117,8 +117,8 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
 # slow (~60 s): a model-choice validation on simulated data.
 @pytest.mark.slow
 def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
-    """Eq. 14 is ohmic (I ∝ V): on its own data across 0.2–3 V the paper's tunneling law cannot follow, and
-    on the paper's model's data the ohmic law cannot follow the voltage dependence."""
+    """Eq. 14 is ohmic (I ∝ V): on its own data across 0.2–3 V the paper's tunneling law cannot
+    follow, and on the paper's model's data the ohmic law cannot follow the voltage dependence."""
     verdicts = {}
     for truth in ("kalantari", "zener"):
         sim = syn.simulate(

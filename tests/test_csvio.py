@@ -110,7 +110,8 @@ BAD = {
     ),
     "unknown sensor": (
         replace_row(4, "s1,a301,2.0,100000,10,5.01e-5"),
-        r"data.csv line 6, column sensor: unknown sensor 'a301': expected one of \['a201', 'fsr402'\]",
+        r"data.csv line 6, column sensor: unknown sensor 'a301': expected one of \['a201', "
+        r"'fsr402'\]",
     ),
     "non-numeric": (
         replace_row(1, "s1,a201,1.0,100000,10,1.01e-6A"),
@@ -146,17 +147,22 @@ BAD = {
     ),
     "time not increasing": (
         replace_row(2, "s1,a201,1.0,100000,5,1.02e-6"),
-        r"line 4, column time_s: time must increase within test \(specimen 's1', 1 V, 100000 Pa\): 5 s follows 10 s \(line 3\)",
+        r"line 4, column time_s: time must increase within test \(specimen 's1', 1 V, 100000 Pa\): "
+        r"5 s follows 10 s \(line 3\)",
     ),
     "duplicate rows": (replace_row(2, ROWS[1]), r"data.csv line 4: duplicate of line 3"),
     "too few samples": (
         "\n".join([HEADER, *ROWS, "s3,a201,1.0,100000,0,1e-6", "s3,a201,1.0,100000,10,1e-6"]),
-        r"line 11: test \(specimen 's3', 1 V, 100000 Pa\) has 2 sample\(s\); a creep test needs at least 3",
+        r"line 11: test \(specimen 's3', 1 V, 100000 Pa\) has 2 sample\(s\); a creep test needs at "
+        r"least 3",
     ),
     "not starting at 0": (
         "\n".join([HEADER] + [f"s1,a201,1,1e5,{t},1e-6" for t in (5, 15, 25)]),
-        r"line 2, column time_s: test \(specimen 's1', 1 V, 100000 Pa\) starts at t = 5 s, expected 0 "
-        r"\(the stress step\); shift its times to start at 0 \(read_csv\(..., shift_time=True\), CLI --shift-time\)",
+        r"line 2, column time_s: test \(specimen 's1', 1 V, 100000 Pa\) starts at t = 5 s, "
+        r"expected "
+        r"0 "
+        r"\(the stress step\); shift its times to start at 0 \(read_csv\(..., shift_time=True\), "
+        r"CLI --shift-time\)",
     ),
     "stress in kPa": (
         "\n".join([HEADER] + [f"s1,a201,1,100,{t},1e-6" for t in (0, 1, 2)]),

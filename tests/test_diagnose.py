@@ -27,8 +27,8 @@ def test_two_sided_p_is_uniform_when_observed_and_replicated_share_a_distributio
 
 
 def test_checks_at_the_true_parameters_give_a_gap_near_one():
-    """With the posterior a point mass at the truth, each z (drift(3600 s), quarter means) is N(0, 1)
-    and each test's quarter distance is chi²_4 / 4."""
+    """With the posterior a point mass at the truth, each z (drift(3600 s), quarter means) is N(0,
+    1) and each test's quarter distance is chi²_4 / 4."""
     sim = simulate("a201", n_specimens=6, voltages=A201_VOLTAGES, samples=21, seed=11)
     sensor = load_sensor("a201")
     checks = []

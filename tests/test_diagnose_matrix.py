@@ -1,9 +1,10 @@
 """The acceptance matrix of the discrepancy workflow (slow: ~32 min on 2 cores).
 
 Every catalogue effect hidden at two magnitudes on each sensor is named, with gap_after ≤ 0.5 ×
-gap_before where the base model's misfit is significant (``Case.gap_check``); Burgers and Zener truths are called adequate; the paper's own mismatch (drift nearly
-independent of stress, from a negative area creep) is diagnosed as area-creep. Results are
-printed as a table (``pytest -m slow -s``).
+gap_before where the base model's misfit is significant (``Case.gap_check``); Burgers and Zener
+truths are called adequate; the paper's own mismatch (drift nearly independent of stress, from a
+negative area creep) is diagnosed as area-creep. Results are printed as a table (``pytest -m slow
+-s``).
 """
 
 import pytest

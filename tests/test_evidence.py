@@ -99,7 +99,8 @@ def test_reported_error_matches_the_seed_to_seed_scatter():
     reported = np.mean([max(r.sigma_batch, r.sigma_replicates) for r in results])
     observed = errors.std(ddof=1)
     print(
-        f"observed scatter {observed:.3f}, mean reported Monte-Carlo sigma {reported:.3f}, mean error {errors.mean():+.3f}"
+        f"observed scatter {observed:.3f}, mean reported Monte-Carlo sigma {reported:.3f}, mean "
+        f"error {errors.mean():+.3f}"
     )
     assert 0.5 <= reported / observed <= 2.0
 

@@ -1,4 +1,5 @@
-"""Faults: a job that raises or whose worker process dies is named, and the others' results are kept."""
+"""Faults: a job that raises or whose worker process dies is named, and the others' results are
+kept."""
 
 import os
 import signal
@@ -14,7 +15,7 @@ from fsrbayes.inference.samplers.ensemble import SamplerSettings
 
 
 def square_or_fail(job):
-    """Module level (picklable): 'kill' kills its own worker, 'raise' raises, a number is squared."""
+    """Module level (picklable): 'kill' kills its worker, 'raise' raises, a number is squared."""
     if job == "kill":
         os.kill(os.getpid(), signal.SIGKILL)
     if job == "raise":

@@ -1,4 +1,4 @@
-"""fsrbayes.fit and 'fsrbayes fit': outputs, summary keys, kill-and-resume, mismatched checkpoints."""
+"""fsrbayes.fit and 'fsrbayes fit': outputs, summary keys, kill-and-resume, checkpoints."""
 
 import json
 import os
@@ -104,7 +104,7 @@ def csv_file(small, tmp_path_factory):
 
 
 def _children_of(pid):
-    """Processes whose command line names the killed fit's output folder and whose parent was pid."""
+    """Processes whose command line names the killed fit's output folder, with parent pid."""
     found = []
     for entry in os.listdir("/proc"):
         if entry.isdigit():

@@ -44,7 +44,7 @@ class GaussianSpecimen:
 
 
 def analytic_moments(y=Y, sigma=SIGMA):
-    """Posterior means and sds of μ and τ (μ ~ N(0, 10²), τ ~ HalfNormal(10)), by quadrature over τ."""
+    """Posterior means and sds of μ and τ (μ ~ N(0, 10²), τ ~ HalfNormal(10)), by quadrature."""
 
     def log_tau_density(tau):
         v = sigma**2 + tau**2
@@ -83,7 +83,7 @@ def exact_specimen_draws(n, rng):
 
 
 def assert_matches(result, exact):
-    """Posterior mean and sd of μ and τ within 3 Monte-Carlo errors (ArviZ's, from the run itself)."""
+    """Posterior mean and sd of μ and τ within 3 Monte-Carlo errors (ArviZ's, from the run)."""
     assert result.converged, result.run.report.worst()
     summary = result.summary()
     for name, (mean, sd) in exact.items():
@@ -155,9 +155,9 @@ def test_joint_matches_the_analytic_hyper_posterior():
 # slow (~40 s): a calibration study of the reported draw error over 8 independent draw sets.
 @pytest.mark.slow
 def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
-    """With 40 draws per specimen the finite draws, not the chain, dominate the two-stage error:
-    the sd of the posterior means over 8 independent draw sets must match the reported error
-    (draw error and chain MCSE combined) within a factor of 2 (the chain MCSE alone is ~3x too small)."""
+    """With 40 draws per specimen the finite draws, not the chain, dominate the two-stage error: the
+    sd of the posterior means over 8 independent draw sets must match the reported error (draw error
+    and chain MCSE combined) within a factor of 2 (the chain MCSE alone is ~3x too small)."""
     population = Population(INTERIM)
     settings = SamplerSettings(n_ensembles=2, chunk=250, max_steps=3000, min_steps=500, processes=1)
     means, errors = [], []

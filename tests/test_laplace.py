@@ -10,7 +10,8 @@ from fsrbayes.inference.posterior import PriorScaledTarget
 
 
 class LinearGaussianTarget(PriorScaledTarget):
-    """y = X w + e, e ~ N(0, s²), w_i ~ N(0, tau²) on the first ``ndim`` columns of X: Laplace is exact."""
+    """y = X w + e, e ~ N(0, s²), w_i ~ N(0, tau²) on the first ``ndim`` columns of X: Laplace is
+    exact."""
 
     def __init__(self, X, y, s=0.5, tau=3.0):
         self.X, self.y, self.s = X, y, s

@@ -1,4 +1,5 @@
-"""Imports flow upwards only: physics ← data ← inference ← discrepancy ← plots ← report ← demo ← cli."""
+"""Imports flow upwards only: physics ← data ← inference ← discrepancy ← plots ← report ← demo ←
+cli."""
 
 import ast
 import subprocess

@@ -85,7 +85,8 @@ def test_single_step_history_equals_the_step_response():
 
 
 def _burgers_ode(history, t_end, t_eval):
-    """Burgers as spring k1 + dashpot b1 + Kelvin–Voigt (k2, b2) in series: the system behind eq. 15."""
+    """Burgers as spring k1 + dashpot b1 + Kelvin–Voigt (k2, b2) in series: the system behind eq.
+    15."""
 
     def rhs(t, y):
         sigma = history.at(t)

@@ -146,7 +146,8 @@ def test_prior_only_posterior_recovers_the_prior(model):
     )
     rng = np.random.default_rng(0)
     start = posterior.prior.to_unconstrained(posterior.prior.sample(rng, (2, 40)))
-    # Two ensembles and 20 tau are enough for a 12-d KS check (ESS ~ 2,000 per parameter), at a third of the cost.
+    # Two ensembles and 20 tau are enough for a 12-d KS check (ESS ~ 2,000 per parameter), at a
+    # third of the cost.
     settings = SamplerSettings(n_ensembles=2, chunk=500, max_steps=10000, tau_factor=20)
     run = run_ensembles(posterior, start, seed=1, settings=settings)
     assert run.report.converged, run.report.worst()

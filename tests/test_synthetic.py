@@ -1,4 +1,4 @@
-"""The virtual test bench: round trips, exact truth, determinism, and what each hidden effect does."""
+"""The virtual test bench: round trips, exact truth, determinism, what each hidden effect does."""
 
 import subprocess
 import sys

@@ -19,7 +19,8 @@ BEND, WIDTH = 1.0, 0.05
 
 
 class Banana:
-    """x0 ~ N(0, 1), x1 | x0 ~ N(BEND·(x0² − 1), WIDTH²), x2 ~ N(0, 1): E x1 = 0, Var x1 = 2·BEND² + WIDTH²."""
+    """x0 ~ N(0, 1), x1 | x0 ~ N(BEND·(x0² − 1), WIDTH²), x2 ~ N(0, 1): E x1 = 0, Var x1 = 2·BEND² +
+    WIDTH²."""
 
     def __call__(self, x):
         x = np.atleast_2d(x)
@@ -163,7 +164,8 @@ def test_independence_proposal_ratio_is_exact():
         x = draws[:50]
         new, log_ratio = g(x, np.random.RandomState(1))
         assert new.shape == x.shape and np.all(np.isfinite(log_ratio))
-        # with the target equal to g the Metropolis–Hastings ratio is exactly 1: every proposal is accepted
+        # with the target equal to g the Metropolis–Hastings ratio is exactly 1: every proposal is
+        # accepted
         assert np.allclose(g.log_density(new) - g.log_density(x) + log_ratio, 0.0, atol=1e-10)
         w = g.whiten(new)
         log_det = np.sum(np.log(np.diag(g.chol)))
@@ -236,5 +238,6 @@ def test_linear_map_whitens_a_correlated_gaussian_in_many_dimensions():
     assert np.allclose(np.cov(v.T), np.eye(ndim), atol=0.1)
     assert np.allclose(transport.forward(v), draws)
     sign, logdet = np.linalg.slogdet(np.cov(draws.T))
-    # the map uses 50·ndim = 1500 of the draws: sd of a log-determinant from them ≈ sqrt(2·30/1500) = 0.2
+    # the map uses 50·ndim = 1500 of the draws: sd of a log-determinant from them ≈ sqrt(2·30/1500)
+    # = 0.2
     assert transport.log_det_jacobian == pytest.approx(0.5 * logdet, abs=0.6)

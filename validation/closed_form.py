@@ -33,7 +33,8 @@ NOMINAL = {1.0: 0.6827, 2.0: 0.9545}
 
 
 class LinearGaussian:
-    """y = X w + e, e ~ N(0, s² I), prior w ~ N(m0, tau² I); log Z = log N(y; X m0, s² I + tau² X Xᵀ)."""
+    """y = X w + e, e ~ N(0, s² I), prior w ~ N(m0, tau² I); log Z = log N(y; X m0, s² I + tau² X
+    Xᵀ)."""
 
     def __init__(self, ndim, n=100, s=1.0, tau=10.0, seed=0):
         rng = np.random.default_rng(seed)
@@ -170,7 +171,8 @@ def evidence_coverage(make_problem, n_runs, settings, *, seed=0, estimator=log_e
     Parameters
     ----------
     make_problem : callable
-        ``make_problem(k)`` → the k-th problem instance (e.g. ``lambda k: LinearGaussian(10, seed=k)``).
+        ``make_problem(k)`` → the k-th problem instance (e.g. ``lambda k: LinearGaussian(10,
+        seed=k)``).
     n_runs : int
     settings : LadderSettings
     seed : int

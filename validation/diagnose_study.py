@@ -1,4 +1,5 @@
-"""The discrepancy workflow on the virtual test bench: is each hidden effect named, does the gap shrink?
+"""The discrepancy workflow on the virtual test bench: is each hidden effect named, does the gap
+shrink?
 
 Each case simulates specimens of one sensor type with one catalogue effect hidden at a given
 magnitude (or none, with Burgers or Zener truth), runs :func:`fsrbayes.diagnose` on all five
@@ -98,7 +99,8 @@ MATRIX = (
     Case("fsr402", "offset-stress=sigma0=3e4", gap_check=False),
     Case("fsr402", "offset-stress=sigma0=1e5", gap_check=False),
 )
-"""The acceptance matrix: 4 effect-free cases, the paper's mismatch, 5 effects × 2 magnitudes × 2 sensors.
+"""The acceptance matrix: 4 effect-free cases, the paper's mismatch, 5 effects × 2 magnitudes × 2
+sensors.
 
 A preload on FSR 402 (``offset-stress``, σ0 = 3·10⁴ and 10⁵ Pa) is decisive in evidence (ln B
 ≈ 250 and 30) but moves the creep curves by no more than the noise (gap 0.99–1.02 against
@@ -124,7 +126,7 @@ SCAN = tuple(
 
 
 def stress_flatness(sensor="a201", area_creep=-9.0, voltage=0.5, time_s=3600.0):
-    """Range of the nominal drift(3600 s) over the paper's forces, with and without area creep (pp)."""
+    """Range of the nominal drift(3600 s) over the paper's forces, with and without area creep."""
     params = dict(load_sensor(sensor).params)
     stresses = load_sensor(sensor).stress(np.array(synthetic.PAPER_FORCES_N))
     base = model_drift(params, voltage, stresses, time_s)
@@ -184,7 +186,8 @@ def diagnose_study(cases=MATRIX, *, n_specimens=2, samples=31, seed=0, processes
 def format_study(rows):
     """A Markdown table of study results."""
     lines = [
-        "| case | verdict | named | ln B of the hidden effect | best rival ln B | gap before | gap after | "
+        "| case | verdict | named | ln B of the hidden effect | best rival ln B | gap before | gap "
+        "after | "
         "after/before | s |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -192,8 +195,11 @@ def format_study(rows):
         rivals = [v for k, v in r["log_bf"].items() if k != r["expected"]]
         truth = "–" if r["log_bf_truth"] is None else f"{r['log_bf_truth']:.1f}"
         lines.append(
-            f"| {r['case']} | {r['verdict']} | {r['effect'] or '–'} | {truth} | {max(rivals):.1f} | "
-            f"{r['gap_before']:.2f} | {r['gap_after']:.2f} | {r['gap_ratio']:.2f}{'' if r['gap_check'] else ' (not asked)'} | "
+            f"| {r['case']} | {r['verdict']} | {r['effect'] or '–'} | {truth} | {max(rivals):.1f} "
+            "| "
+            ""
+            f"{r['gap_before']:.2f} | {r['gap_after']:.2f} | "
+            f"{r['gap_ratio']:.2f}{'' if r['gap_check'] else ' (not asked)'} | "
             f"{r['drift_gap_before']:.2f} → {r['drift_gap_after']:.2f} | {r['seconds']:.0f} |"
         )
     return "\n".join(lines)

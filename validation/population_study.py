@@ -1,16 +1,16 @@
 """The hierarchical model on the virtual test bench: is the simulated population recovered?
 
-16 A201 specimens are drawn from the bench's population (log-normal around the sensor defaults
-with the log-sds of :data:`fsrbayes.data.synthetic.POPULATION_SCATTER`), each tested at 3 forces
-× 4 voltages. The two-stage route fits them and samples the hyper-parameters; we record whether
-each 90 % interval holds the simulation's value (μ_p = log of the default, ω_p = its scatter)
-— beside the *realised* values, the mean and sd of the 16 drawn specimens' log-values, which is
-all the data can show: a well-identified μ_p's posterior sits at the realised mean ± ω_p/4, so
-it misses the simulation's μ_p exactly when the draw of 16 specimens fell more than 1.64 ω_p/4
-away (10 % of the time) — and whether the new-specimen predictive drift(3600 s) per (voltage, stress) covers the observed
-specimens (the share of observed drifts inside the predictive 5–95 % range of a new specimen's drift *as
-measured*, i.e. with the fitted measurement noise on both readings; 90 % expected), and whether
-the noise-free predictive covers each specimen's noiseless true drift.
+16 A201 specimens are drawn from the bench's population (log-normal around the sensor defaults with
+the log-sds of :data:`fsrbayes.data.synthetic.POPULATION_SCATTER`), each tested at 3 forces × 4
+voltages. The two-stage route fits them and samples the hyper-parameters; we record whether each 90
+% interval holds the simulation's value (μ_p = log of the default, ω_p = its scatter) — beside the
+*realised* values, the mean and sd of the 16 drawn specimens' log-values, which is all the data can
+show: a well-identified μ_p's posterior sits at the realised mean ± ω_p/4, so it misses the
+simulation's μ_p exactly when the draw of 16 specimens fell more than 1.64 ω_p/4 away (10 % of the
+time) — and whether the new-specimen predictive drift(3600 s) per (voltage, stress) covers the
+observed specimens (the share of observed drifts inside the predictive 5–95 % range of a new
+specimen's drift *as measured*, i.e. with the fitted measurement noise on both readings; 90 %
+expected), and whether the noise-free predictive covers each specimen's noiseless true drift.
 
 Run ``python -m validation.population_study [16] [--joint]`` for the table; the slow test
 runs it with the joint route, which must agree with the two-stage one.
@@ -215,35 +215,42 @@ def format_population_study(study):
     for row in study["hyper"]:
         z = "" if row["realised_z"] is None else f"{row['realised_z']:6.2f}"
         lines.append(
-            f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} {row['q95']:9.4f}"
+            f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} "
+            f"{row['q95']:9.4f}"
             f"  {'yes' if row['inside'] else 'NO ':3s}  {row['realised']:9.4f} {z:>6s}"
         )
     inside = sum(r["inside"] for r in study["hyper"])
     lines.append(
-        f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value (realised: mean and sd "
+        f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value (realised: "
+        "mean and sd "
         "of the drawn specimens' log-values; z: their mean's distance from μ in units of ω/√n)"
     )
     lines.append(
         f"observed drift(3600 s) inside the new-specimen 5-95 % range as measured (noise "
-        f"{study['noise_rel']:.4f}): {study['observed_covered']:.2f} of {study['n_observed']} tests (0.90 expected)"
+        f"{study['noise_rel']:.4f}): {study['observed_covered']:.2f} of {study['n_observed']} "
+        "tests "
+        "(0.90 expected)"
     )
     lines.append(
         f"noiseless true drift(3600 s) of each specimen inside the noise-free 5-95 % range: "
         f"{study['noiseless_covered']:.2f} (0.90 expected)"
     )
     lines.append(
-        f"hyper-posterior: {study['hyper_report']}; min effective draws {study['min_effective_draws']:.0f}; "
+        f"hyper-posterior: {study['hyper_report']}; min effective draws "
+        f"{study['min_effective_draws']:.0f}; "
         f"log L MC sd {study['log_likelihood_mc_sd']:.2f}"
     )
     lines.append(
-        f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; fits "
+        f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; "
+        "fits "
         f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s"
     )
     routes = study.get("routes")
     if routes:
         lines.append(f"joint route (blocked Gibbs): {routes['seconds']:.0f} s, {routes['report']}")
         lines.append(
-            f"{'hyper-parameter':18s} {'two-stage':>10s} {'joint':>10s} {'z':>6s} {'in sd':>6s}  joint inside"
+            f"{'hyper-parameter':18s} {'two-stage':>10s} {'joint':>10s} {'z':>6s} {'in sd':>6s}  "
+            "joint inside"
         )
         for row in routes["rows"]:
             lines.append(

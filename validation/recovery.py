@@ -107,10 +107,12 @@ def coverage_at(study, levels=(0.5, 0.8, 0.9)):
 
 
 def format_recovery(study):
-    """A table: coverage at 50/80/90 % and posterior/prior sd ratio per parameter, drift coverage, timing."""
+    """A table: coverage at 50/80/90 % and posterior/prior sd ratio per parameter, drift coverage,
+    timing."""
     coverage = coverage_at(study)
     lines = [
-        f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} {'misses low/high':>16s} "
+        f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} "
+        f"{'misses low/high':>16s} "
         f"{'sd post/prior':>14s}  identified"
     ]
     for i, name in enumerate(study["names"]):
@@ -122,7 +124,8 @@ def format_recovery(study):
         lines.append(f"{name:10s} {cover} {misses:>16s} {ratio:14.3f}  {verdict}")
     drift = np.array(study["drift_inside"])
     lines.append(
-        f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of {drift.size} tests"
+        f"drift(3600 s) 90% interval covers the noiseless truth in {drift.mean():.2f} of "
+        f"{drift.size} tests"
     )
     lines.append(
         f"converged {sum(study['converged'])}/{len(study['converged'])}; "

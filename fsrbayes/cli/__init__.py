@@ -128,8 +128,10 @@ def build_parser():
         "--effect",
         action="append",
         metavar="NAME[=params]",
-        help=f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets its "
-        "main parameter, NAME=key=value,key=value any of them",
+        help=(
+            f"hide an effect in the data, repeatable: one of {sorted(EFFECTS)}; NAME=VALUE sets "
+            "its main parameter, NAME=key=value,key=value any of them"
+        ),
     )
     sim.add_argument("--seed", type=int, default=0, help="random seed (same seed, same bytes)")
     sim.add_argument(
@@ -165,8 +167,11 @@ def build_parser():
         "--sampler",
         choices=("ensemble", "tempered"),
         default="ensemble",
-        help="emcee ensembles until convergence (default), or the top rung of tempered ladders started "
-        "from a fitted reference: mixes between the arms of a bent ridge and gives log Z too",
+        help=(
+            "emcee ensembles until convergence (default), or the top rung of tempered ladders "
+            "started from a fitted reference: mixes between the arms of a bent ridge and gives "
+            "log Z too"
+        ),
     )
     fit_.add_argument(
         "--ladder-steps",
@@ -275,7 +280,7 @@ def build_parser():
         "--threshold",
         type=float,
         default=10.0,
-        help="ln B over the base model (summed over specimens) needed to name an effect (default 10)",
+        help="ln B over the base model (summed over specimens) to name an effect (default 10)",
     )
     dia.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     dia.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
@@ -360,7 +365,7 @@ def build_parser():
     drf.add_argument(
         "--optimal-voltage",
         metavar="VMIN,VMAX",
-        help="the sourcing voltage minimising |drift| of a new specimen per stress, within VMIN..VMAX",
+        help="the sourcing voltage minimising a new specimen's |drift| per stress, in VMIN..VMAX",
     )
     drf.add_argument(
         "--as-measured",

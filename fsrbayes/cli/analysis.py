@@ -66,7 +66,8 @@ def cmd_compare(args):
         print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
     for name, bf in result["bayes_factors"].items():
         print(
-            f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± {bf['err']:.2f} "
+            f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± "
+            f"{bf['err']:.2f} "
             f"({bf['strength']})"
         )
     if args.json:
@@ -75,7 +76,10 @@ def cmd_compare(args):
 
 
 def cmd_diagnose(args):
-    """Find what the base model misses, name the missing effect, show the gap shrink (JSON + report)."""
+    """Find what the base model misses and name the missing effect.
+
+    Find what the base model misses, name the missing effect, show the gap shrink (JSON + report).
+    """
     from ..discrepancy import diagnose
     from ..report import write_diagnosis_report
 
@@ -115,7 +119,8 @@ def cmd_diagnose(args):
     print(f"gap before ({args.base}): {result.gap_before:.2f}")
     for c in result.candidates:
         print(
-            f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = {c['gap_after']:.2f}"
+            f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = "
+            f"{c['gap_after']:.2f}"
         )
     named = (
         f": {result.effect} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
@@ -131,7 +136,7 @@ def cmd_diagnose(args):
 
 
 def cmd_calibrate(args):
-    """Simulation-based calibration of the per-specimen fit: sbc.json, rank_histograms.png, a table."""
+    """Run simulation-based calibration of the per-specimen fit: sbc.json, histograms, a table."""
     from dataclasses import replace
 
     from ..data.sensors import load_sensor
@@ -168,7 +173,8 @@ def cmd_calibrate(args):
         ladder = SBC_TEMPERED_SETTINGS.ladder
         if args.steps < 10 * ladder.n_batches:
             raise UsageError(
-                f"--steps must be >= {10 * ladder.n_batches} with --sampler tempered, got {args.steps}"
+                f"--steps must be >= {10 * ladder.n_batches} with --sampler tempered, got "
+                f"{args.steps}"
             )
         settings = replace(
             SBC_TEMPERED_SETTINGS, ladder=replace(ladder, steps=args.steps, top_draws=args.steps)
@@ -188,7 +194,8 @@ def cmd_calibrate(args):
     def progress(index, rep):
         done.append(index)
         print(
-            f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS {rep['ess_min']:.0f}, "
+            f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS "
+            f"{rep['ess_min']:.0f}, "
             f"max R-hat {rep['rhat_max']:.3f}",
             flush=True,
         )

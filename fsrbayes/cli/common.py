@@ -21,11 +21,19 @@ class UsageError(Exception):
 
 
 class FitFailed(Exception):
-    """A computation that failed after the input was accepted (e.g. a worker died): one line, exit code 1."""
+    """A computation that failed after the input was accepted: exit code 1.
+
+    A computation that failed after the input was accepted (e.g. a worker died): one line, exit code
+    1.
+    """
 
 
 def floats(text, name):
-    """Comma-separated numbers of option ``--name`` as an array; UsageError if there are none or one is not a number."""
+    """Return the comma-separated numbers of option ``--name`` as an array.
+
+    Comma-separated numbers of option ``--name`` as an array; UsageError if there are none or one is
+    not a number.
+    """
     try:
         values = [float(part) for part in text.split(",") if part.strip()]
     except ValueError:
@@ -70,11 +78,15 @@ def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_gr
 
 
 def enough_space(folder, need_bytes, what):
-    """UsageError before any sampling when ``folder``'s disk has less than 1.2 × ``need_bytes`` free."""
+    """Refuse before any sampling when the output disk is nearly full.
+
+    UsageError before any sampling when ``folder``'s disk has less than 1.2 × ``need_bytes`` free.
+    """
     free = shutil.disk_usage(folder).free
     if free < 1.2 * need_bytes:
         raise UsageError(
-            f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to {need_bytes / 1e6:.0f} MB "
+            f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to "
+            f"{need_bytes / 1e6:.0f} MB "
             "(checkpoint and posterior); free some space or choose another folder"
         )
 
@@ -84,5 +96,5 @@ def stop_on_sigterm(signum, frame):
 
 
 def install_sigterm_handler():
-    """Turn SIGTERM into KeyboardInterrupt, so a killed fit stops at a checkpoint boundary cleanly."""
+    """Turn SIGTERM into KeyboardInterrupt: a killed fit stops cleanly at a checkpoint boundary."""
     signal.signal(signal.SIGTERM, stop_on_sigterm)

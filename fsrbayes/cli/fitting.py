@@ -1,4 +1,8 @@
-"""Commands that sample posteriors: fit (per specimen or hierarchical) and drift (population predictive)."""
+"""Commands that sample posteriors: fit and drift.
+
+Commands that sample posteriors: fit (per specimen or hierarchical) and drift (population
+predictive).
+"""
 
 import json
 import os
@@ -24,7 +28,10 @@ CHECKPOINT = "checkpoint.npz"
 
 
 def cmd_fit(args):
-    """Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen."""
+    """Fit each specimen (or the one named) with emcee.
+
+    Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen.
+    """
     from ..inference.fit import DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
@@ -99,7 +106,9 @@ def _tempered_settings(args):
     for flag, bad in (("--hierarchical", args.hierarchical), ("--resume", args.resume)):
         if bad:
             raise UsageError(
-                f"{flag} works with --sampler ensemble only; the tempered sampler runs fixed-length "
+                f"{flag} works with --sampler ensemble only; the tempered sampler runs "
+                "fixed-length "
+                ""
                 "ladders without checkpoints"
             )
     ladder = TEMPERED_SETTINGS.ladder
@@ -115,7 +124,10 @@ def _tempered_settings(args):
 
 
 def _check_space(args, data, specimens, settings, out):
-    """Refuse before sampling when the output folder's disk cannot hold the checkpoints and posteriors."""
+    """Refuse before sampling when the output disk cannot hold the fit.
+
+    Refuse before sampling when the output folder's disk cannot hold the checkpoints and posteriors.
+    """
     from ..data.sensors import load_sensor
     from ..inference import LogPosterior, SpecimenData
 
@@ -137,7 +149,7 @@ def _check_space(args, data, specimens, settings, out):
 
 
 def _fit_hierarchical(args, data, settings, out):
-    """Per-specimen fits in parallel, then the population posterior (two-stage, optionally joint)."""
+    """Fit specimens in parallel, then the population posterior (two-stage, optionally joint)."""
     from dataclasses import replace
 
     from ..inference.output import save_fit, save_population
@@ -158,7 +170,9 @@ def _fit_hierarchical(args, data, settings, out):
         folder = out if len(data.sensors) == 1 else out / sensor
         folder.mkdir(parents=True, exist_ok=True)
         print(
-            f"{sensor}: fitting {len(part.specimens)} specimens ({args.processes or os.cpu_count()} processes)",
+            f"{sensor}: fitting {len(part.specimens)} specimens "
+            f"({args.processes or os.cpu_count()} "
+            "processes)",
             flush=True,
         )
         with warnings.catch_warnings(record=True) as caught:
@@ -179,7 +193,8 @@ def _fit_hierarchical(args, data, settings, out):
                     str(w.message) for w in caught if issubclass(w.category, SpecimenFitWarning)
                 )
                 raise FitFailed(
-                    f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a population "
+                    f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a "
+                    "population "
                     f"needs 2 ({why})"
                 )
             summaries = {}
@@ -231,12 +246,14 @@ def _fit_hierarchical(args, data, settings, out):
         overall["sensors"][sensor] = str(folder)
         overall.setdefault("failed", []).extend(failed)
         print(
-            f"{sensor}: population posterior ({result.route}) {'converged' if info['converged'] else 'NOT converged'}; "
+            f"{sensor}: population posterior ({result.route}) "
+            f"{'converged' if info['converged'] else 'NOT converged'}; "
             f"{result.run.report.worst()}; wrote {folder / 'population.nc'}"
         )
     if overall.get("failed"):
         raise FitFailed(
-            f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning above); "
+            f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning "
+            "above); "
             "the population was built from the other specimens"
         )
     return 0
@@ -249,7 +266,8 @@ def _population_folders(fit_dir):
     found = sorted(p.parent for p in folder.glob("*/population.nc"))
     if not found:
         raise UsageError(
-            f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out {fit_dir}' "
+            f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out "
+            f"{fit_dir}' "
             "first"
         )
     return found
@@ -318,14 +336,19 @@ def cmd_drift(args):
                 best = optimal_voltage(specimens, stress, v_range, time_s=args.time)
                 payload["optimal_voltage"].append({"sensor": sensor.name, **best})
                 print(
-                    f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} V "
-                    f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there {best['drift_at_optimum']['q50']:.2f} %"
+                    f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} "
+                    "V "
+                    ""
+                    f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there "
+                    f"{best['drift_at_optimum']['q50']:.2f} %"
                 )
         for g in groups:
             q = g["new_specimen"]
             print(
-                f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen drift "
-                f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % {q['q05']:.2f}..{q['q95']:.2f}"
+                f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen "
+                "drift "
+                f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % "
+                f"{q['q05']:.2f}..{q['q95']:.2f}"
             )
         figures.append((groups, constant))
     if args.json:

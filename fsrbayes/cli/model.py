@@ -1,4 +1,8 @@
-"""Commands on the forward model and data: demo (which goes on to the Bayesian study), forward, simulate, check."""
+"""Commands on the forward model and data: demo, forward, simulate, check.
+
+Commands on the forward model and data: demo (which goes on to the Bayesian study), forward,
+simulate, check.
+"""
 
 from pathlib import Path
 
@@ -68,7 +72,8 @@ def cmd_demo(args):
     print("\nSummary")
     for sensor, e in results["evidence"].items():
         print(
-            f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, summed over "
+            f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, "
+            "summed over "
             f"{len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}"
         )
     for sensor, pop in results["population"].items():
@@ -113,7 +118,8 @@ def _figure7(time_s, out):
     strain0 = 200e3 / params["k1"]
     peak = float(paper_peak_voltage(params["s0"] * (1 - strain0), params["Va"]))
     print(
-        f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the bulk "
+        f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the "
+        "bulk "
         f"at 200 kPa); the smooth law holds at any voltage."
     )
     observed = _default_data_drift(time_s)
@@ -133,11 +139,12 @@ def _figure7(time_s, out):
 
 
 def _default_data_drift(time_s):
-    """Print and return the observed drift spread of the embedded data set (Figures 10/11 preview)."""
+    """Print and return the observed drift spread of the embedded data (Figures 10/11 preview)."""
     data = synthetic.default_data()
     print(f"\n{data.summary()}")
     print(
-        f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per voltage"
+        f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per "
+        "voltage"
     )
     summary = []
     for sensor in data.sensors:
@@ -182,12 +189,14 @@ def cmd_forward(args):
         raise UsageError(f"stresses must be > 0 Pa, got {stresses.min():g}")
     table = _drift_table(dict(sensor.params), voltages, stresses, args.time, args.tunneling)
     print(
-        f"{sensor.description}: drift({args.time:g} s) in %, rheology burgers, tunneling {args.tunneling}"
+        f"{sensor.description}: drift({args.time:g} s) in %, rheology burgers, tunneling "
+        f"{args.tunneling}"
     )
     print(_format_table(table, voltages, stresses))
     if not np.all(np.isfinite(table)):
         print(
-            "'invalid': outside the paper law's validity domain (eq. 11 past its peak); try --tunneling smooth"
+            "'invalid': outside the paper law's validity domain (eq. 11 past its peak); try "
+            "--tunneling smooth"
         )
     return 0
 

@@ -53,7 +53,7 @@ class DataError(ValueError):
 
 
 def observed_drift(time_s, current_A, at_s=3600.0):
-    """Measured drift in % (eq. 22) at ``at_s`` by linear interpolation; NaN past the last sample."""
+    """Return the measured drift in % (eq. 22) at ``at_s``, interpolated; NaN past the end."""
     if at_s > time_s[-1]:
         return float("nan")
     return float(100.0 * (np.interp(at_s, time_s, current_A) / current_A[0] - 1.0))
@@ -175,7 +175,9 @@ class CreepData:
             stresses = sorted({t.stress_Pa for t in sub})
             longest = max(t.time_s[-1] for t in sub)
             lines.append(
-                f"  {sensor}: {len(sub.specimens)} specimen{'s' if len(sub.specimens) != 1 else ''}, voltages {', '.join(f'{v:g}' for v in volts)} V, "
+                f"  {sensor}: {len(sub.specimens)} "
+                f"specimen{'s' if len(sub.specimens) != 1 else ''}, voltages "
+                f"{', '.join(f'{v:g}' for v in volts)} V, "
                 f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
             )
         return "\n".join(lines)
@@ -191,7 +193,8 @@ def _decode(path):
         size = Path(path).stat().st_size
         if size > MAX_TEXT_BYTES:
             raise DataError(
-                f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in memory; "
+                f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in "
+                "memory; "
                 "split it (per sensor or specimen)",
                 path,
             )
@@ -218,7 +221,8 @@ def _decode(path):
             ) from None
         if len(raw) > MAX_TEXT_BYTES:
             raise DataError(
-                f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too large to read "
+                f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too "
+                "large to read "
                 "in memory); split it (per sensor or specimen)",
                 path,
             )
@@ -375,7 +379,8 @@ def _validate(names, body, line_no, path, decimal_comma, shift_time):
         if bad.any():
             i = int(np.argmax(bad))
             raise DataError(
-                f"the inverting amplifier's output must be negative for a positive current (eq. 23), "
+                "the inverting amplifier's output must be negative for a positive current (eq. "
+                "23), "
                 f"got vo_V = {vo[i]:g}",
                 path,
                 int(line_no[i]),
@@ -462,7 +467,8 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
         i = int(np.argmax(clash))
         j = int(np.argmax(spec_code == spec_code[i]))
         raise DataError(
-            f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} here",
+            f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} "
+            "here",
             path,
             int(line_no[i]),
             "sensor",
@@ -495,7 +501,8 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
             j = int(np.argmax(steps <= 0)) + 1
             _report_duplicate(body, idx, j, lines, path)
             raise DataError(
-                f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line {lines[j - 1]})",
+                f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line "
+                f"{lines[j - 1]})",
                 path,
                 int(lines[j]),
                 "time_s",
@@ -503,7 +510,8 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
         if t[0] != 0:
             if not shift_time:
                 raise DataError(
-                    f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its times "
+                    f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its "
+                    "times "
                     "to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
                     path,
                     int(lines[0]),

@@ -188,7 +188,10 @@ class Distribution:
 
 
 def make_distribution(spec, where="prior"):
-    """Build a :class:`Distribution` from a TOML table such as ``{dist = "normal", mu = 0, sigma = 1}``.
+    """Build a :class:`Distribution` from a TOML table.
+
+    Build a :class:`Distribution` from a TOML table such as ``{dist = "normal", mu = 0, sigma =
+    1}``.
 
     Parameters
     ----------
@@ -204,7 +207,8 @@ def make_distribution(spec, where="prior"):
     """
     if not isinstance(spec, dict):
         raise ValueError(
-            f'{where}: expected a table like {{dist = "lognormal", median = 1, sigma = 1}}, got {spec!r}'
+            f'{where}: expected a table like {{dist = "lognormal", median = 1, sigma = 1}}, got '
+            f"{spec!r}"
         )
     kind = spec.get("dist")
     if kind not in VOCABULARY:

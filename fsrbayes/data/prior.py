@@ -3,13 +3,17 @@
 Samplers move in u-space: every parameter is mapped to the real line and scaled by its prior,
 so that u ≈ N(0, 1)-sized under the prior whatever the physical unit (s0 ~ 1e-9 m, Rc0 ~ 1e6):
 
-| prior | x(u) | log |dx/du| |
-|---|---|---|
-| normal(mu, sigma) | mu + sigma·u | log sigma |
-| lognormal(median, sigma) | median·exp(sigma·u) | log x + log sigma |
-| halfnormal(scale), gamma | c·exp(u) (c = scale, or the mean) | log x |
-| uniform, truncnormal on [a, b] | a + (b − a)·logistic(u) | log(b − a) + log p + log(1 − p) |
-| loguniform on [a, b] | exp(log a + (log b − log a)·logistic(u)) | log x + log(log b − log a) + log p + log(1 − p) |
+normal(mu, sigma)
+    x = mu + sigma·u; log |dx/du| = log sigma.
+lognormal(median, sigma)
+    x = median·exp(sigma·u); log |dx/du| = log x + log sigma.
+halfnormal(scale), gamma
+    x = c·exp(u) (c = scale, or the mean); log |dx/du| = log x.
+uniform, truncnormal on [a, b]
+    x = a + (b − a)·p, p = logistic(u); log |dx/du| = log(b − a) + log p + log(1 − p).
+loguniform on [a, b]
+    x = exp(log a + (log b − log a)·p); log |dx/du| = log x + log(log b − log a) + log p +
+    log(1 − p).
 
 so the density of u is p(x(u))·|dx/du|, proper whenever p is.
 """

@@ -77,7 +77,8 @@ class Sensor:
         Parameters
         ----------
         model : str
-            ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
+            ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or
+            ``"kalantari"`` (eq. 14).
         noise : tuple of str
             Likelihood parameters to append (``sigma_rel``; ``nu`` for Student-t).
 
@@ -110,7 +111,10 @@ class Sensor:
         return force_N / self.area_m2
 
     def __repr__(self):
-        return f"Sensor({self.name!r}, {self.description!r}, area={self.area_m2:g} m², source={str(self.source)!r})"
+        return (
+            f"Sensor({self.name!r}, {self.description!r}, area={self.area_m2:g} m², "
+            f"source={str(self.source)!r})"
+        )
 
 
 def _read(path):
@@ -140,7 +144,8 @@ def _parse(path, raw):
         unknown = sorted(set(values) - set(PARAMETERS))
         if unknown:
             raise ValueError(
-                f"{where}: [{table}] has unknown parameter(s) {unknown}; known: {sorted(PARAMETERS)}"
+                f"{where}: [{table}] has unknown parameter(s) {unknown}; known: "
+                f"{sorted(PARAMETERS)}"
             )
     for name, value in params.items():
         if (
@@ -160,7 +165,8 @@ def _parse(path, raw):
         lo, hi = dist.support
         if name in params and not (lo <= params[name] <= hi):
             raise ValueError(
-                f"{where}: params.{name} = {params[name]:g} lies outside its prior's support [{lo:g}, {hi:g}]"
+                f"{where}: params.{name} = {params[name]:g} lies outside its prior's support "
+                f"[{lo:g}, {hi:g}]"
             )
     return Sensor(
         name=str(sensor["name"]),

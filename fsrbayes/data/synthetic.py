@@ -330,7 +330,9 @@ def simulate(
 def paper_protocol(
     sensors=("a201", "fsr402"), *, samples=361, spacing="linear", tunneling="smooth", **kwargs
 ):
-    """Return the paper's section 4.2 protocol: 16 specimens, 1.96/4.9/9.8 N, its voltage lists, 1 h.
+    """Return the paper's section 4.2 protocol.
+
+    Return the paper's section 4.2 protocol: 16 specimens, 1.96/4.9/9.8 N, its voltage lists, 1 h.
 
     With the smooth law every listed voltage is inside the model's domain. With
     ``tunneling="paper"`` voltages whose root would lie past eq. 11's peak for the nominal

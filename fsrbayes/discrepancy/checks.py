@@ -5,15 +5,24 @@ from the likelihood, and each statistic T is computed on the observed and on the
 data. The statistics (Gelman, Meng & Stern 1996 call those that also depend on θ "realised
 discrepancies"):
 
-| name | per | what it measures |
-|---|---|---|
-| ``drift_3600`` | test | drift(3600 s) in % (eq. 22), by the same interpolation as the observed one |
-| ``early_late`` | test | mean standardised residual of the later half of the samples minus that of the earlier half: a creep curve of the wrong shape |
-| ``logtime_trend`` | test | slope of the standardised residuals over ln t: kinetics that are not Burgers-like |
-| ``quarter_means`` | test × 4 | mean log-current in each quarter of the test's samples (in time order): level and shape of the creep curve |
-| ``loo_pit`` | test | Kolmogorov–Smirnov test of the uniformity of the test's LOO-PIT values (calibrated: each sample is predicted from a posterior without it, by PSIS) |
-| ``stress_trend`` | specimen | slope of the drift(3600 s) misfit over ln σ: drift that grows with stress differently than the model says (the paper's area-creep puzzle) |
-| ``voltage_trend`` | specimen | slope of the drift(3600 s) misfit over ln V_FSR: voltage-activated effects |
+``drift_3600`` (per test)
+    drift(3600 s) in % (eq. 22), by the same interpolation as the observed one.
+``early_late`` (per test)
+    mean standardised residual of the later half of the samples minus that of the earlier half:
+    a creep curve of the wrong shape.
+``logtime_trend`` (per test)
+    slope of the standardised residuals over ln t: kinetics that are not Burgers-like.
+``quarter_means`` (per test, 4 values)
+    mean log-current in each quarter of the test's samples (in time order): level and shape of
+    the creep curve.
+``loo_pit`` (per test)
+    Kolmogorov–Smirnov test of the uniformity of the test's LOO-PIT values (calibrated: each
+    sample is predicted from a posterior without it, by PSIS).
+``stress_trend`` (per specimen)
+    slope of the drift(3600 s) misfit over ln σ: drift that grows with stress differently than
+    the model says (the paper's area-creep puzzle).
+``voltage_trend`` (per specimen)
+    slope of the drift(3600 s) misfit over ln V_FSR: voltage-activated effects.
 
 Two-sided posterior predictive p-values, p ≈ 2·min(P(T_rep ≥ T_obs), P(T_rep ≤ T_obs)) (with a
 normal tail, see :func:`two_sided_p`). They are conservative (under an adequate model they
@@ -88,7 +97,11 @@ def two_sided_p(observed, replicated):
 
 
 def _interpolation(time_s, mask, at_s):
-    """Index j and weight w per test so that f(at) ≈ (1 − w)·f[j] + w·f[j + 1]; at = min(at_s, last time)."""
+    """Return per-test interpolation indices and weights at a time.
+
+    Index j and weight w per test so that f(at) ≈ (1 − w)·f[j] + w·f[j + 1]; at = min(at_s, last
+    time).
+    """
     n_tests = time_s.shape[0]
     j = np.zeros(n_tests, dtype=int)
     w = np.zeros(n_tests)
@@ -119,7 +132,11 @@ def _quarter_weights(mask, parts=N_QUARTERS):
 
 
 def _residual_weights(time_s, mask):
-    """Per test, weight vectors a (C, T) so that a·r gives the early/late difference and the ln t slope."""
+    """Return per-test weights for the early/late difference and the ln t slope.
+
+    Per test, weight vectors a (C, T) so that a·r gives the early/late difference and the ln t
+    slope.
+    """
     early_late = np.zeros(time_s.shape)
     slope = np.zeros(time_s.shape)
     for i in range(time_s.shape[0]):
@@ -187,7 +204,11 @@ def loo_pit(y, log_mu, sigma, mask, nu=None):
 
 
 def _slope_over(values, covariate):
-    """OLS slope of values (S, C) over a covariate (C,) with intercept; NaN if the covariate is constant."""
+    """Return the OLS slope of values over a covariate.
+
+    OLS slope of values (S, C) over a covariate (C,) with intercept; NaN if the covariate is
+    constant.
+    """
     centred = covariate - covariate.mean()
     denominator = np.sum(centred**2)
     if denominator <= 1e-12 * max(1.0, np.sum(covariate**2)):
@@ -307,7 +328,9 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     keep = np.all(np.isfinite(log_mu[:, data.mask]), axis=1)
     if keep.sum() < 20:
         raise ValueError(
-            f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside the "
+            f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside "
+            "the "
+            ""
             f"model's domain; need at least 20 for predictive checks"
         )
     draws, log_mu = draws[keep], log_mu[keep]

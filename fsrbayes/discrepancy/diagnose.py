@@ -3,8 +3,9 @@
 ``diagnose(data)`` automates the reasoning of the paper's section 4:
 
 1. fit the base model (default Burgers) to every specimen — a Laplace approximation around the
-   maximum a posteriori point (:mod:`fsrbayes.inference.evidence.laplace`), and posterior draws from a
-   short ensemble run started there (:meth:`~fsrbayes.inference.evidence.laplace.LaplaceFit.local_draws`);
+   maximum a posteriori point (:mod:`fsrbayes.inference.evidence.laplace`), and posterior draws from
+   a short ensemble run started there
+   (:meth:`~fsrbayes.inference.evidence.laplace.LaplaceFit.local_draws`);
 2. posterior predictive checks per creep test and per specimen
    (:mod:`fsrbayes.discrepancy.checks`): drift(3600 s), early- vs late-time residuals, trends
    over ln t, over stress and over voltage;
@@ -49,9 +50,13 @@ __all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
 DEFAULT_THRESHOLD = 10.0
 """ln B of an effect over the base model (summed over specimens) needed to name it."""
 GAP_METRIC = (
-    "rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's samples "
-    "(level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 = (observed - "
-    "predictive mean)' inverse(predictive covariance) (observed - predictive mean); ~1 or below for an "
+    "rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's "
+    "samples "
+    "(level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 = "
+    "(observed - "
+    "predictive mean)' inverse(predictive covariance) (observed - predictive mean); ~1 or below "
+    "for "
+    "an "
     "adequate model (about 0.75 on fitted virtual-bench data)"
 )
 
@@ -128,7 +133,7 @@ def _effect_parameters(per_specimen, effect):
 
 
 def _findings(checks, alpha=0.01):
-    """Return the checks that fail at ``alpha`` after a Bonferroni correction over every check made."""
+    """Return the checks that fail at ``alpha``, Bonferroni-corrected over every check made."""
     n_checks = sum(np.isfinite(c.p_values[name]).sum() for c in checks for name in c.p_values)
     level = alpha / max(1, n_checks)
     found = []
@@ -254,7 +259,10 @@ class Diagnosis:
             "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
             "base": self.base,
             "threshold_log_bf": self.threshold,
-            "evidence_method": "laplace (MAP + finite-difference Hessian in the sampler's u-space), per specimen, summed",
+            "evidence_method": (
+                "laplace (MAP + finite-difference Hessian in the sampler's u-space), per "
+                "specimen, summed"
+            ),
             "drift_time_s": DRIFT_TIME_S,
             "specimens": [d.specimen for d in self.specimens],
             "n_tests": int(sum(len(c.test_keys) for c in before)),
@@ -324,7 +332,8 @@ def diagnose(
     family, had = parse_model(base)
     if family == "kalantari":
         raise ValueError(
-            "diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) takes "
+            "diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) "
+            "takes "
             "none: use burgers, zener or nutting"
         )
     effects = check_effects(

@@ -190,7 +190,7 @@ class SBCResult:
         return np.stack([np.sum(index == b, axis=0) for b in range(bins)])
 
     def band(self, bins=10, mass=0.99):
-        """(low, high) counts a calibrated histogram's bin stays within with probability ``mass``."""
+        """Return the (low, high) counts a calibrated bin stays within with probability ``mass``."""
         tail = (1 - mass) / 2
         law = stats.binom(self.n_reps, 1.0 / bins)
         return int(law.ppf(tail)), int(law.ppf(1 - tail))
@@ -244,7 +244,9 @@ class SBCResult:
         for level, entry in self.coverage(mass=1 - alpha / (len(LEVELS) * n_q)).items():
             low, high = entry["range"]
             failures += [
-                f"{self.names[q]}: {level:.0%} coverage {entry['share'][q]:.2f} outside [{low:.2f}, {high:.2f}]"
+                f"{self.names[q]}: {level:.0%} coverage {entry['share'][q]:.2f} outside "
+                f"[{low:.2f}, "
+                f"{high:.2f}]"
                 for q in range(n_q)
                 if not low <= entry["share"][q] <= high
             ]
@@ -366,8 +368,8 @@ def calibrate_specimen(
     design : SBCDesign
     settings : SamplerSettings or TemperedSettings
         Sampler settings of every fit (fixed length recommended: ``min_steps = max_steps``);
-        :class:`~fsrbayes.inference.evidence.tempered.TemperedSettings` (e.g. :data:`SBC_TEMPERED_SETTINGS`)
-        fit with the tempered sampler.
+        :class:`~fsrbayes.inference.evidence.tempered.TemperedSettings` (e.g.
+        :data:`SBC_TEMPERED_SETTINGS`) fit with the tempered sampler.
     n_draws : int
         L, draws per replication, thinned evenly over the kept chains of all ensembles (keep it
         below the runs' effective sample size: correlated draws widen the rank histogram's ends).
@@ -409,7 +411,7 @@ def calibrate_specimen(
 
 
 def format_sbc(result, bins=10, alpha=0.01):
-    """Return a table: uniformity p-values and coverage at 50/80/90 % per quantity, and the verdict."""
+    """Return a table: uniformity p-values and 50/80/90 % coverage per quantity, and the verdict."""
     p = result.uniformity(bins)
     coverage = result.coverage()
     header = f"{'quantity':30s} {'p chi2':>8s} {'p KS':>8s} " + " ".join(
@@ -427,7 +429,8 @@ def format_sbc(result, bins=10, alpha=0.01):
         lines.append(
             f"{result.n_reps} replications, L = {result.n_draws} draws each; fits: "
             f"{np.mean([r['seconds'] for r in reps]):.0f} s each, min ESS "
-            f"{min(r['ess_min'] for r in reps):.0f}, max R-hat {max(r['rhat_max'] for r in reps):.3f}; "
+            f"{min(r['ess_min'] for r in reps):.0f}, max R-hat "
+            f"{max(r['rhat_max'] for r in reps):.3f}; "
             f"{sum(r['redrawn'] for r in reps)} prior draws redrawn (no valid current)"
         )
     lines.append(
@@ -439,7 +442,11 @@ def format_sbc(result, bins=10, alpha=0.01):
 
 
 def load_sbc(record):
-    """Return an :class:`SBCResult` back from :meth:`SBCResult.as_dict` (a dict, or a JSON file's path)."""
+    """Return an :class:`SBCResult` from its dict or JSON file.
+
+    Return an :class:`SBCResult` back from :meth:`SBCResult.as_dict` (a dict, or a JSON file's
+    path).
+    """
     if not isinstance(record, dict):
         import json
         from pathlib import Path

@@ -105,17 +105,18 @@ def compare(
     specimens : sequence of str, optional
         Default: all specimens in the data.
     settings : LadderSettings, optional
-        Default: :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER` on the reference path,
-        ``LadderSettings()`` on the prior path.
+        Default: :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER` on the reference
+        path, ``LadderSettings()`` on the prior path.
     seed : int
     path : {"reference", "prior"}
         The ladder's β = 0 end: a Student-t reference in transport-map coordinates fitted to a
         pilot run (:mod:`~fsrbayes.inference.evidence.referenced`), or the prior.
     pilot : SamplerSettings, optional
-        The reference path's pilot run (default :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
+        The reference path's pilot run (default
+        :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
     search : ModeSearch, optional
-        The reference path's search for separate posterior regions, run once per replicate
-        ladder (default :data:`~fsrbayes.inference.evidence.referenced.MODE_SEARCH`, 12 optimiser starts).
+        The reference path's search for separate posterior regions, run once per replicate ladder
+        (default :data:`~fsrbayes.inference.evidence.referenced.MODE_SEARCH`, 12 optimiser starts).
     estimator : callable, optional
         ``estimator(posterior, seed)`` → :class:`~fsrbayes.inference.evidence.EvidenceEstimate`,
         any evidence estimator; replaces the ladder chosen by ``path``/``settings``. LOO and the
@@ -124,9 +125,10 @@ def compare(
     Returns
     -------
     dict
-        JSON-ready (non-finite numbers as None): ``models.<name>`` with ``log_evidence``, ``log_evidence_err`` (summed over
-        specimens), ``per_specimen`` and ``loo``; ``preferred``; ``bayes_factors`` (ln B of the
-        preferred model over each other, with error); ``strength``; ``scale``.
+        JSON-ready (non-finite numbers as None): ``models.<name>`` with ``log_evidence``,
+        ``log_evidence_err`` (summed over specimens), ``per_specimen`` and ``loo``; ``preferred``;
+        ``bayes_factors`` (ln B of the preferred model over each other, with error); ``strength``;
+        ``scale``.
     """
     models = list(dict.fromkeys(models))
     if len(models) < 2:

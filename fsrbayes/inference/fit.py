@@ -1,13 +1,13 @@
 """Per-specimen Bayesian fits: maximum a posteriori start, emcee ensembles, posterior draws.
 
-``fit(data, specimen=...)`` builds the :class:`~fsrbayes.inference.posterior.LogPosterior` of
-one specimen from all its creep tests, finds maximum-a-posteriori points with scipy from the
-best of many prior draws (:data:`MAP_STARTS` optimisations), sorts the optima into separate
-regions (:func:`separate_regions`) and starts the ensembles around them in turn — the best
-region first, each overdispersed by twice its Laplace covariance — then samples until
-convergence (:mod:`fsrbayes.inference.samplers.ensemble`), where the independence moves propose from a
-mixture of the ensembles' warm-up fits so that walkers cross between regions. The log-posterior
-of every optimum is kept in the result.
+``fit(data, specimen=...)`` builds the :class:`~fsrbayes.inference.posterior.LogPosterior` of one
+specimen from all its creep tests, finds maximum-a-posteriori points with scipy from the best of
+many prior draws (:data:`MAP_STARTS` optimisations), sorts the optima into separate regions
+(:func:`separate_regions`) and starts the ensembles around them in turn — the best region first,
+each overdispersed by twice its Laplace covariance — then samples until convergence
+(:mod:`fsrbayes.inference.samplers.ensemble`), where the independence moves propose from a mixture
+of the ensembles' warm-up fits so that walkers cross between regions. The log-posterior of every
+optimum is kept in the result.
 
 Why several regions: the creep posterior's s0–Va ridge can bend into two arms (where V_bulk
 crosses Va/e Simmons' law has a slope kink; VALIDATION.md §1) or hold separate local maxima. In
@@ -76,7 +76,7 @@ AREA_COEFFICIENTS = ("A0", "A1", "A2")
 
 
 def _distinct_levels(values, rtol=0.01):
-    """How many distinct levels ``values`` hold, levels within ``rtol`` of each other counting once."""
+    """Count the distinct levels in ``values``; levels within ``rtol`` of each other count once."""
     ordered = np.sort(np.asarray(values, dtype=float))
     return int(1 + np.sum(ordered[1:] > ordered[:-1] * (1 + rtol))) if ordered.size else 0
 
@@ -99,8 +99,10 @@ def design_warnings(posterior):
     levels = _distinct_levels(posterior.data.stress_Pa)
     if len(sampled) > levels:
         return [
-            f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law A(σ) "
-            f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A only at the "
+            f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law "
+            "A(σ) "
+            f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A "
+            "only at the "
             f"tested stresses, the rest is prior along a curved ridge that mixes slowly; test at "
             f">= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"
         ]
@@ -206,7 +208,8 @@ def fit(
     specimen : str, optional
         Which specimen (needed when the data hold several).
     model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"``
+        (eq. 14).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     sensor : Sensor or str, optional
@@ -221,11 +224,11 @@ def fit(
     progress : bool
         Show a progress bar (ensemble sampler).
     sampler : {"ensemble", "tempered"}, optional
-        ``"ensemble"``: emcee ensembles until convergence (module docstring). ``"tempered"``:
-        the β = 1 rung of referenced tempered ladders (:mod:`~fsrbayes.inference.evidence.tempered`),
+        ``"ensemble"``: emcee ensembles until convergence (module docstring). ``"tempered"``: the β
+        = 1 rung of referenced tempered ladders (:mod:`~fsrbayes.inference.evidence.tempered`),
         which mixes between the arms of a bent ridge and returns the log-evidence too; a fixed
-        length run (~3 min on 2 cores for 4 tests × 12 samples with the defaults, which are
-        too short to converge on creep posteriors: see that module). Default: from the type of
+        length run (~3 min on 2 cores for 4 tests × 12 samples with the defaults, which are too
+        short to converge on creep posteriors: see that module). Default: from the type of
         ``settings``, else ``"ensemble"``.
 
     Returns

@@ -102,7 +102,10 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, proc
 
 
 def _optimise_starts(posterior, starts, maxiter, processes):
-    """:func:`_optimise_start` for every start, in ``processes`` forked workers; a list of (value, u)."""
+    """Optimise every start, in forked workers.
+
+    :func:`_optimise_start` for every start, in ``processes`` forked workers; a list of (value, u).
+    """
     workers = min(processes, len(starts))
     if workers <= 1:
         return [_optimise_start(posterior, u, maxiter) for u in starts]
@@ -184,7 +187,10 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
 
 
 def root_covariance(posterior, u_map, step=1e-3):
-    """Return a square root of the Laplace covariance at ``u_map`` (columns scaled by 1/sqrt(precision)).
+    """Return a square root of the Laplace covariance at ``u_map``.
+
+    Return a square root of the Laplace covariance at ``u_map`` (columns scaled by
+    1/sqrt(precision)).
 
     The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
     vectorised call. Directions where it is not negative definite get the prior's scale

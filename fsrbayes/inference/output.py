@@ -202,7 +202,11 @@ def _evidence(result):
 
 
 def save_fit(result, folder, *, stem="posterior"):
-    """Write ``<stem>.nc`` (DataTree) and ``summary.json`` into ``folder`` atomically; return the summary."""
+    """Write a fit's posterior and summary into ``folder`` atomically.
+
+    Write ``<stem>.nc`` (DataTree) and ``summary.json`` into ``folder`` atomically; return the
+    summary.
+    """
     tree = to_datatree(result, seed=result.seed)
     with atomic_path(folder / f"{stem}.nc") as tmp:
         tree.to_netcdf(tmp, engine="h5netcdf")

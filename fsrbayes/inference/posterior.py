@@ -45,7 +45,11 @@ class PriorScaledTarget:
         return self.prior.names
 
     def log_likelihood(self, u):
-        """Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's domain."""
+        """Return the total log-likelihood at u (W, ndim) → (W,).
+
+        Total log-likelihood at u (W, ndim) → (W,); −inf off the prior's support or the model's
+        domain.
+        """
         return self.log_prior_and_likelihood(u)[1]
 
     def sample_prior(self, rng, n):
@@ -76,7 +80,8 @@ class LogPosterior(PriorScaledTarget):
     fixed : mapping
         Values of the model's other parameters (not sampled).
     model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
+        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"``
+        (eq. 14).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     beta : float
@@ -124,7 +129,11 @@ class LogPosterior(PriorScaledTarget):
     def for_sensor(
         cls, data, sensor, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0
     ):
-        """Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at defaults."""
+        """Build the posterior of a specimen from a sensor file's priors.
+
+        Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at
+        defaults.
+        """
         prior = sensor.prior_for(model, noise_parameters(likelihood))
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
         return cls(
@@ -132,7 +141,11 @@ class LogPosterior(PriorScaledTarget):
         )
 
     def fingerprint(self):
-        """Return a fingerprint that changes with the data, model, tunneling law, likelihood, priors, parameter order or fixed values."""
+        """Return a fingerprint of the target (checkpoints).
+
+        Return a fingerprint that changes with the data, model, tunneling law, likelihood, priors,
+        parameter order or fixed values.
+        """
         fixed = ";".join(f"{k}={v!r}" for k, v in sorted(self.fixed.items()))
         return "|".join(
             [
@@ -153,7 +166,10 @@ class LogPosterior(PriorScaledTarget):
         return params
 
     def log_model_current(self, x, time_s=None):
-        """Return log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or (C, T)).
+        """Return log I of the model, shape (W, C, T).
+
+        Return log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or
+        (C, T)).
 
         −inf where the parameters leave the model's validity domain.
         """
@@ -173,7 +189,10 @@ class LogPosterior(PriorScaledTarget):
         return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
 
     def drift_percent(self, x, time_s=3600.0):
-        """Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C)."""
+        """Return the model drift(t) of every test at ``time_s`` (eq. 22).
+
+        Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C).
+        """
         times = np.broadcast_to(np.array([0.0, float(time_s)]), (self.data.n_tests, 2))
         log_current = self.log_model_current(x, times)
         with np.errstate(invalid="ignore"):
@@ -213,7 +232,8 @@ class LogPosterior(PriorScaledTarget):
                     log_like[ok] = self.log_likelihood_pointwise(x[ok]).sum(axis=1)
             except Exception as exc:
                 exc.add_note(
-                    f"fsrbayes LogPosterior: at parameters {dict(zip(self.names, x[ok][0], strict=False))}"
+                    "fsrbayes LogPosterior: at parameters "
+                    f"{dict(zip(self.names, x[ok][0], strict=False))}"
                 )
                 raise
         return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(

@@ -50,7 +50,8 @@ def _log(x):
 
 
 _intermediate = numba.njit(**_JIT)(tl.evaluate_intermediate)
-"""Eq. 10: (log I, d log I/dV) at V_bulk — :func:`~fsrbayes.physics.tunneling.evaluate_intermediate` compiled."""
+"""Eq. 10: (log I, d log I/dV) at V_bulk — :func:`~fsrbayes.physics.tunneling.evaluate_intermediate`
+compiled."""
 _forward = numba.njit(**_JIT)(tl.evaluate_forward)
 """The smooth law above Va — :func:`~fsrbayes.physics.tunneling.evaluate_forward` compiled."""
 

@@ -14,13 +14,17 @@ model is nested inside every extension (needed for evidence and Savage–Dickey)
 strain beyond the elastic step, Δε(t) = ε(t) − σ/k1, drives the two creep effects, so they
 share the polymer's kinetics and scale with the load like the gap creep does.
 
-| name | parameters (null value) | what changes |
-|---|---|---|
-| ``area-creep`` | ``area_creep`` (0) | A(t) = A(σ)·exp(area_creep·Δε(t)); sign free, the paper expects < 0 (section 4.3) |
-| ``contact-creep`` | ``contact_creep`` (0) | Rc(t) = Rc(σ)·exp(−contact_creep·Δε(t)); > 0: more contact paths form under load |
-| ``power-law-creep`` | ``plc_psi`` (0), ``plc_n`` | ε(t) gains ψ·σ·tⁿ (Nutting/Findley kinetics, eq. 13) |
-| ``voltage-degradation`` | ``deg_amp`` (0), ``deg_onset``, ``deg_tau``, ``deg_width`` | I(t)·exp(−deg_amp·S(V)·(1 − e^(−t/τ))), S = clip((V − deg_onset)/deg_width, 0, 1): exactly 0 below the onset |
-| ``offset-stress`` | ``sigma0`` (0) | Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark) |
+``area-creep`` — ``area_creep`` (null 0)
+    A(t) = A(σ)·exp(area_creep·Δε(t)); sign free, the paper expects < 0 (section 4.3).
+``contact-creep`` — ``contact_creep`` (null 0)
+    Rc(t) = Rc(σ)·exp(−contact_creep·Δε(t)); > 0: more contact paths form under load.
+``power-law-creep`` — ``plc_psi`` (null 0), ``plc_n``
+    ε(t) gains ψ·σ·tⁿ (Nutting/Findley kinetics, eq. 13).
+``voltage-degradation`` — ``deg_amp`` (null 0), ``deg_onset``, ``deg_tau``, ``deg_width``
+    I(t)·exp(−deg_amp·S(V)·(1 − e^(−t/τ))), S = clip((V − deg_onset)/deg_width, 0, 1): exactly
+    0 below the onset.
+``offset-stress`` — ``sigma0`` (null 0)
+    Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
 
 ``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
 bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
@@ -70,7 +74,7 @@ class Effect:
         return None
 
     def extra_strain_history(self, params, history, time):
-        """Creep strain added under a :class:`~fsrbayes.physics.loading.StressHistory` (None: none)."""
+        """Return the creep strain added under a stress history (None: none)."""
         return None
 
     def adjust_state(self, params, area, series, creep_strain):
@@ -226,7 +230,8 @@ def resolve_effects(effects):
             resolved.append(EFFECTS[effect])
         else:
             raise ValueError(
-                f"unknown effect(s) {[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
+                "unknown effect(s) "
+                f"{[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
                 f" expected names from {sorted(EFFECTS)}"
             )
     names = [e.name for e in resolved]

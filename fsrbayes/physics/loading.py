@@ -34,7 +34,8 @@ class StressHistory:
         stress = np.asarray(self.stress, dtype=float).ravel()
         if times.shape != stress.shape or times.size == 0:
             raise ValueError(
-                f"a stress history needs equal, non-empty times and stress, got {times.size} and {stress.size}"
+                f"a stress history needs equal, non-empty times and stress, got {times.size} and "
+                f"{stress.size}"
             )
         if not (np.all(np.isfinite(times)) and np.all(np.isfinite(stress))):
             raise ValueError("stress history times and stresses must be finite")
@@ -77,7 +78,7 @@ class StressHistory:
 
 
 def step(amplitude, t_on=0.0, t_off=None):
-    """Return a stress step of ``amplitude`` Pa at ``t_on`` (eq. 16), removed at ``t_off`` if given."""
+    """Return a stress step of ``amplitude`` Pa at ``t_on`` (eq. 16), removed at ``t_off``."""
     if t_off is None:
         return StressHistory([t_on], [amplitude])
     if t_off <= t_on:

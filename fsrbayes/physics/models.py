@@ -30,7 +30,8 @@ __all__ = [
 ]
 
 BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0")
-"""Parameters of the tunneling and contact laws every paper-circuit model uses (Vth: paper law only)."""
+"""Parameters of the tunneling and contact laws every paper-circuit model uses (Vth: paper law
+only)."""
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,8 @@ class PeerModel:
         ``solve(params, voltage, stress, strain, extra_series)`` →
         :class:`~fsrbayes.physics.solver.BulkSolution`.
     contact_alpha : float
-        Exponent of its contact resistance Rc0·σ^−alpha (for :func:`~fsrbayes.physics.sensor.resistances`).
+        Exponent of its contact resistance Rc0·σ^−alpha (for
+        :func:`~fsrbayes.physics.sensor.resistances`).
     summary : str
     """
 
@@ -81,7 +83,8 @@ KALANTARI = register_peer_model(
         ZENER,
         kalantari_solution,
         0.5,
-        "Kalantari et al. (eq. 14): ohmic bulk R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε), Zener creep, Hertzian contact",
+        "Kalantari et al. (eq. 14): ohmic bulk R0·(1 − ε)·exp(−κ·sqrt(Va)·s0·ε), Zener creep, "
+        "Hertzian contact",
     )
 )
 """Kalantari et al.'s eq. 14 in the canonical names: bulk resistance at rest R0, rest gap s0
@@ -95,7 +98,7 @@ def model_families():
 
 
 def model_family(family):
-    """Return the :class:`CreepLaw` or :class:`PeerModel` named ``family`` (or ``family`` itself)."""
+    """Return the :class:`CreepLaw` or :class:`PeerModel` named ``family`` (or ``family``)."""
     if isinstance(family, (CreepLaw, PeerModel)):
         return family
     if family in PEER_MODELS:

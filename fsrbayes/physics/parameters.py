@@ -51,7 +51,8 @@ class Parameter:
             )
         if self.population_log_sd is not None and not self.population_log_sd >= 0:
             raise ValueError(
-                f"parameter {self.name!r}: population_log_sd must be >= 0, got {self.population_log_sd}"
+                f"parameter {self.name!r}: population_log_sd must be >= 0, got "
+                f"{self.population_log_sd}"
             )
 
 
@@ -66,7 +67,8 @@ def register_parameter(parameter, *, replace=False):
     known = PARAMETERS.get(parameter.name)
     if known is not None and known != parameter and not replace:
         raise ValueError(
-            f"parameter {parameter.name!r} is already in the table as {known} (replace=True to replace)"
+            f"parameter {parameter.name!r} is already in the table as {known} (replace=True to "
+            "replace)"
         )
     PARAMETERS[parameter.name] = parameter
     return parameter

@@ -137,7 +137,10 @@ def kalantari_resistance(
 
 
 def kalantari_current(voltage, t, force, sensor_area, **kwargs):
-    """Return the current V/R(t) in A for the Kalantari et al. model (ohmic: drift independent of V)."""
+    """Return the current V/R(t) in A of the Kalantari et al. model.
+
+    Return the current V/R(t) in A for the Kalantari et al. model (ohmic: drift independent of V).
+    """
     return np.asarray(voltage, dtype=float) / kalantari_resistance(t, force, sensor_area, **kwargs)
 
 

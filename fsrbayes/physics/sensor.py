@@ -83,7 +83,11 @@ def sensor_state(params, stress, strain):
 
 
 def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
-    """Solve the paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect` objects)."""
+    """Solve the paper's circuit with the effects' hooks.
+
+    Solve the paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect`
+    objects).
+    """
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     s, area, series = sensor_state(params, stress, strain)
     if effects:
@@ -327,7 +331,8 @@ def current_history(
     stress = history.at(time)
     if np.any(stress <= 0):
         raise ValueError(
-            f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} Pa"
+            f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} "
+            "Pa"
         )
     strain = _creep_law(family).strain_history(history, time, params)
     for effect in effects:

@@ -59,7 +59,11 @@ TUNNELING_LAWS = ("paper", "smooth")
 
 
 def log_ohmic_conductance(gap, barrier, area):
-    """Return the log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick barriers."""
+    """Return the log of the conductance of eq. 9, free of underflow.
+
+    Return the log of the conductance of eq. 9 / Simmons eq. 25 (S), free of underflow for thick
+    barriers.
+    """
     opacity = KAPPA * gap * np.sqrt(barrier)
     return np.log(0.75 * opacity / gap**2 * CURRENT_SCALE * area) - opacity
 

@@ -1,13 +1,13 @@
 """Log-evidence from power posteriors sampled with emcee: stepping-stone, bridge, TI.
 
-The power posterior p_β(u) ∝ L(u)^β·π(u) is sampled on a ladder 0 = β_0 < … < β_{K−1} = 1,
-β_k = (k/(K−1))^5 (rungs crowd near β = 0, where E_β[log L] changes fastest; Calderhead &
-Girolami 2009; Xie et al. 2011). Rung 0 is the prior itself, drawn i.i.d. at every iteration;
-every other rung is an ensemble moved by the affine-invariant stretch move (emcee's
-``StretchMove``), all rungs evaluated in one vectorised likelihood call per half-step. During burn-in the rungs are annealed in
-turn — rung k starts from rung k−1's final ensemble — and during production every step is
-followed by swaps between neighbouring rungs (parallel tempering, Vousden et al. 2016), which
-cost no likelihood calls and let mode weights mix.
+The power posterior p_β(u) ∝ L(u)^β·π(u) is sampled on a ladder 0 = β_0 < … < β_{K−1} = 1, β_k =
+(k/(K−1))^5 (rungs crowd near β = 0, where E_β[log L] changes fastest; Calderhead & Girolami 2009;
+Xie et al. 2011). Rung 0 is the prior itself, drawn i.i.d. at every iteration; every other rung is
+an ensemble moved by the affine-invariant stretch move (emcee's ``StretchMove``), all rungs
+evaluated in one vectorised likelihood call per half-step. During burn-in the rungs are annealed in
+turn — rung k starts from rung k−1's final ensemble — and during production every step is followed
+by swaps between neighbouring rungs (parallel tempering, Vousden et al. 2016), which cost no
+likelihood calls and let mode weights mix.
 
 Estimators, from the pooled log-likelihoods ll_{k,t,j} (rung, iteration, walker):
 
@@ -94,7 +94,8 @@ class LadderSettings:
             raise ValueError(f"n_temps must be >= 3, got {self.n_temps}")
         if self.replicates < 2:
             raise ValueError(
-                f"replicates must be >= 2 (their spread is part of the error bar), got {self.replicates}"
+                "replicates must be >= 2 (their spread is part of the error bar), got "
+                f"{self.replicates}"
             )
         if self.steps < 10 * self.n_batches:
             raise ValueError(
@@ -136,13 +137,16 @@ def check_priors_for_evidence(prior):
             )
         if dist.kind == "loguniform" and np.log10(args["upper"] / args["lower"]) > MAX_DECADES:
             raise ValueError(
-                f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} decades "
+                f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} "
+                "decades "
                 f"is too wide for an evidence (limit {MAX_DECADES:g})"
             )
         for key, value in args.items():
             if not np.isfinite(value):
                 raise ValueError(
-                    f"prior of {name}: {key} = {value} makes the prior improper; the evidence needs a "
+                    f"prior of {name}: {key} = {value} makes the prior improper; the evidence "
+                    "needs "
+                    "a "
                     "proper prior"
                 )
 
@@ -161,7 +165,11 @@ def evaluate_target(target, u):
 
 
 def _tempered(lp, ll, beta):
-    """Log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of the model)."""
+    """Return log π + β·log L, −inf off the support.
+
+    Log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of
+    the model).
+    """
     beta = np.broadcast_to(beta, np.shape(lp))
     with np.errstate(invalid="ignore"):
         value = lp + beta * ll
@@ -177,8 +185,8 @@ class _Rungs:
     likelihood in *one* vectorised call; acceptance is per rung at its own β.
 
     A state may carry columns beyond the target's ``ndim`` continuous ones (a chart label, see
-    :class:`~fsrbayes.inference.evidence.referenced.ReferencedTarget`): the stretch move keeps them, and a
-    target with ``relabel(states, log_prior, random)`` gets a Gibbs update of them after each
+    :class:`~fsrbayes.inference.evidence.referenced.ReferencedTarget`): the stretch move keeps them,
+    and a target with ``relabel(states, log_prior, random)`` gets a Gibbs update of them after each
     step — one that leaves log L unchanged and returns the new states and log priors.
     """
 
@@ -482,8 +490,10 @@ class EvidenceResult:
             "" if self.settings.get("path") == "reference" else f", TI+corr {self.ti_corrected:.3f}"
         )
         return (
-            f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, replicates "
-            f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge {self.bridge:.3f}"
+            f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, "
+            "replicates "
+            f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge "
+            f"{self.bridge:.3f}"
             f"{ti})"
         )
 
@@ -495,7 +505,10 @@ def _ladder_job(target, betas, settings, seed):
 
 
 def log_evidence(target, settings=LadderSettings(), seed=0):
-    """Log Z of a target with ``ndim``, ``log_prior(u)``, ``log_likelihood(u)`` and ``sample_prior(rng, n)``.
+    """Estimate log Z of a target by stepping-stone ladders from its prior.
+
+    Log Z of a target with ``ndim``, ``log_prior(u)``, ``log_likelihood(u)`` and ``sample_prior(rng,
+    n)``.
 
     ``log_prior`` must be a normalised density of u (the creep posteriors' prior-scaled u-space
     density includes the Jacobian), vectorised over rows like ``log_likelihood``.
@@ -547,7 +560,10 @@ def ladder_evaluations(settings, ndim, n_ladders):
 def summarise_ladders(
     parts, betas, swap_acceptance, n_evals, seconds, settings, posterior_draws, groups=None
 ):
-    """Return the :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder` dicts).
+    """Return the :class:`EvidenceResult` of replicate ladders.
+
+    Return the :class:`EvidenceResult` of replicate ladders (``parts``: :func:`combine_ladder`
+    dicts).
 
     ``groups`` (one label per ladder) marks ladders that share a reference density; the spread
     of the group means, SD/√G, is then a further Monte-Carlo term (``sigma_pilot``): ladders of

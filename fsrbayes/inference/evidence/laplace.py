@@ -115,7 +115,11 @@ class LaplaceFit:
         return x
 
     def draws(self, rng, n):
-        """Draw n samples in physical units, shape (n, ndim); draws off the prior's support are redrawn."""
+        """Draw n samples in physical units, inside the prior's support.
+
+        Draw n samples in physical units, shape (n, ndim); draws off the prior's support are
+        redrawn.
+        """
         out = np.empty((0, self.posterior.ndim))
         for _ in range(20):
             u = self.draws_u(rng, n)

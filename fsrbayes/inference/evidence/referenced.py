@@ -24,23 +24,23 @@ samples in w, where the stretch move sees a nearly round target at every β.
 Implemented as a target for :func:`~fsrbayes.inference.evidence.ladder.log_evidence`: its "prior" is
 the t density in w and its "log-likelihood" is log[L·π/g] — the ladder code is unchanged.
 
-Separate regions. "Exact for any g" holds only if the ladder's walkers reach every region of
-the posterior, and they start from g. The creep posterior's s0–Va ridge has several local
-maxima (on the benchmark Burgers specimen at Va ≈ −0.10, −0.68, −0.75, −1.02 and −1.15 in
-prior-scaled units, the first holding ~90–95 % of the mass); a pilot that started in a minor one gave log Z
-3.2 nats low with an error bar of ±0.03. So the pilot first looks for separate optima
-(:func:`distinct_optima`, several optimiser starts), runs one pilot per region and makes g a
-mixture Σ a_j·g_j (:class:`MixtureReference`); the ladder's state carries the component label
-j, each walker moves in the chart w_j of its own component, and a Gibbs step re-draws j given u
-(:class:`ReferencedTarget`). Independent searches (``pilot_groups``, by default one per
-replicate ladder) each build their own reference and feed their own ladder; the spread of the
-group means enters the error bar as ``sigma_pilot``, so a region one search missed shows as
-error rather than hiding as bias. One ladder per group makes that spread the whole story: the
-ladders' share of a minor region differs between references *and* between ladders on one
-reference (on the benchmark Burgers specimen two ladders on one reference gave 3748.209 and
-3748.278 while batch means said ±0.006), and with two groups of two ladders the spread of two
-group means — one degree of freedom — was often small by chance: over six seeds the error bar
-was up to ~3× smaller than the scatter (BENCHMARKS.md). Four groups give it three.
+Separate regions. "Exact for any g" holds only if the ladder's walkers reach every region of the
+posterior, and they start from g. The creep posterior's s0–Va ridge has several local maxima (on the
+benchmark Burgers specimen at Va ≈ −0.10, −0.68, −0.75, −1.02 and −1.15 in prior-scaled units, the
+first holding ~90–95 % of the mass); a pilot that started in a minor one gave log Z 3.2 nats low
+with an error bar of ±0.03. So the pilot first looks for separate optima (:func:`distinct_optima`,
+several optimiser starts), runs one pilot per region and makes g a mixture Σ a_j·g_j
+(:class:`MixtureReference`); the ladder's state carries the component label j, each walker moves in
+the chart w_j of its own component, and a Gibbs step re-draws j given u (:class:`ReferencedTarget`).
+Independent searches (``pilot_groups``, by default one per replicate ladder) each build their own
+reference and feed their own ladder; the spread of the group means enters the error bar as
+``sigma_pilot``, so a region one search missed shows as error rather than hiding as bias. One ladder
+per group makes that spread the whole story: the ladders' share of a minor region differs between
+references *and* between ladders on one reference (on the benchmark Burgers specimen two ladders on
+one reference gave 3748.209 and 3748.278 while batch means said ±0.006), and with two groups of two
+ladders the spread of two group means — one degree of freedom — was often small by chance: over six
+seeds the error bar was up to ~3× smaller than the scatter (BENCHMARKS.md). Four groups give it
+three.
 """
 
 import time
@@ -363,7 +363,10 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
 
 
 def _importance_log_z(posterior, component, rng, n):
-    """Return log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights)."""
+    """Return a rough log mass of component j's region.
+
+    Return log mean L·π/g_j over n draws of component j: its region's mass, roughly (for weights).
+    """
     log_ratio = ReferencedTarget(posterior, component).log_likelihood(component.sample_w(rng, n))
     return float(logsumexp(log_ratio) - np.log(n))
 
@@ -393,7 +396,9 @@ def pilot_reference(
     modes=None,
     quadratic=None,
 ):
-    """Return the reference g for the evidence: one pilot run and one t component per separate region.
+    """Return the reference density g for the evidence.
+
+    Return the reference g for the evidence: one pilot run and one t component per separate region.
 
     Separate regions come from :func:`distinct_optima`; the weights a_j are proportional to each
     component's importance-sampling estimate of its region's mass, floored at a tenth of the
@@ -408,7 +413,8 @@ def pilot_reference(
     Returns
     -------
     (MixtureReference, list of dict)
-        The reference and, per component, its optimum, Laplace log mass, importance log Z and weight.
+        The reference and, per component, its optimum, Laplace log mass, importance log Z and
+        weight.
     """
     seed = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     seeds = seed.spawn(2 + search.max_modes)
@@ -477,11 +483,12 @@ def referenced_log_evidence(
         missed and another found makes the group means differ; that spread is ``sigma_pilot``
         in the error bar. All ladders run side by side on ``settings.processes``.
     quadratic : bool, optional
-        The reference's map T: quadratic (default up to :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM`
-        dimensions) or affine (``False``). The quadratic map makes a curved ridge round, but a
-        parabola fitted to a *kinked* ridge bends the arms' far ends in the chart, where the
-        ladder's walkers then rarely go: on :class:`~fsrbayes.inference.evidence.tempered` 's bent-ridge
-        test the β = 1 draws' 99.9 % quantile was 2.8 instead of 3.09 with it, 3.06–3.11 without.
+        The reference's map T: quadratic (default up to
+        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
+        (``False``). The quadratic map makes a curved ridge round, but a parabola fitted to a
+        *kinked* ridge bends the arms' far ends in the chart, where the ladder's walkers then rarely
+        go: on :class:`~fsrbayes.inference.evidence.tempered` 's bent-ridge test the β = 1 draws'
+        99.9 % quantile was 2.8 instead of 3.09 with it, 3.06–3.11 without.
 
     Returns
     -------

@@ -10,9 +10,10 @@ on φ ≥ 0 — possibly conditional on ψ —
 
     B01 = E_post[ w(φ | ψ) · L(φ0, ψ) / (L(φ, ψ) · p(φ)) ],
 
-which costs one extra likelihood call per draw. Here w is a normal whose mean is a linear
-regression of φ on ψ over the draws, truncated to the prior's support (:func:`_log_w`). The Monte-Carlo error is from batch means over the
-draws in time order (never over the walkers of one ensemble as if independent).
+which costs one extra likelihood call per draw. Here w is a normal whose mean is a linear regression
+of φ on ψ over the draws, truncated to the prior's support (:func:`_log_w`). The Monte-Carlo error
+is from batch means over the draws in time order (never over the walkers of one ensemble as if
+independent).
 
 References: Dickey, Ann. Math. Stat. 42, 204 (1971); Chen, JASA 89, 818 (1994);
 ../shared/EVIDENCE.md section 5.
@@ -43,7 +44,9 @@ class SavageDickey:
 
     def __str__(self):
         return (
-            f"log B01 = {self.log_b01:.3f} ± {self.error:.3f} (Savage–Dickey, {self.n_draws} draws, "
+            f"log B01 = {self.log_b01:.3f} ± {self.error:.3f} (Savage–Dickey, {self.n_draws} "
+            "draws, "
+            ""
             f"ESS {self.ess:.0f})"
         )
 
@@ -116,7 +119,11 @@ def savage_dickey(
 
 
 def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):
-    """Savage–Dickey log B01 from physical-unit posterior draws (N, ndim) of a LogPosterior, in time order."""
+    """Return the Savage–Dickey log B01 from posterior draws of a LogPosterior.
+
+    Savage–Dickey log B01 from physical-unit posterior draws (N, ndim) of a LogPosterior, in time
+    order.
+    """
     if parameter not in posterior.names:
         raise ValueError(
             f"{parameter!r} is not a sampled parameter of this fit ({', '.join(posterior.names)})"

@@ -1,19 +1,20 @@
 """Posterior draws from the β = 1 rung of tempered ladders that start at a fitted reference.
 
-The ensemble sampler (:mod:`~fsrbayes.inference.samplers.ensemble`) moves walkers along the posterior; a
-walker must *walk* to every part of it. The creep posterior's s0–Va ridge can bend into two arms
-(Simmons' law has a slope kink where V_bulk crosses Va/e; VALIDATION.md §1), and an ensemble in
-one arm rarely reaches the other arm's far end: in the simulation-based calibration (SBC) s0's
-truth ranked at an extreme in 19 of 100 replications, every ensemble fit reporting R-hat ≤ 1.01.
+The ensemble sampler (:mod:`~fsrbayes.inference.samplers.ensemble`) moves walkers along the
+posterior; a walker must *walk* to every part of it. The creep posterior's s0–Va ridge can bend into
+two arms (Simmons' law has a slope kink where V_bulk crosses Va/e; VALIDATION.md §1), and an
+ensemble in one arm rarely reaches the other arm's far end: in the simulation-based calibration
+(SBC) s0's truth ranked at an extreme in 19 of 100 replications, every ensemble fit reporting R-hat
+≤ 1.01.
 
 Here the draws come instead from the referenced ladders of
-:func:`~fsrbayes.inference.evidence.referenced.referenced_log_evidence`: a mixture reference g with one
-Student-t per posterior region the optimiser starts found (fitted to a short pilot run in each),
-K power posteriors q_β ∝ (L·π)^β·g^(1−β) sampled side by side, fresh i.i.d. draws of g at β = 0
-in every step, and swaps between neighbouring rungs. A draw of g that lands in a part of the
-posterior no walker has reached climbs the ladder by swaps instead of by walking, so the β = 1
-rung mixes between regions and arms. Its ensembles are the posterior draws; the ladders'
-log-evidence comes free with them.
+:func:`~fsrbayes.inference.evidence.referenced.referenced_log_evidence`: a mixture reference g with
+one Student-t per posterior region the optimiser starts found (fitted to a short pilot run in each),
+K power posteriors q_β ∝ (L·π)^β·g^(1−β) sampled side by side, fresh i.i.d. draws of g at β = 0 in
+every step, and swaps between neighbouring rungs. A draw of g that lands in a part of the posterior
+no walker has reached climbs the ladder by swaps instead of by walking, so the β = 1 rung mixes
+between regions and arms. Its ensembles are the posterior draws; the ladders' log-evidence comes
+free with them.
 
 Convergence is checked as for the ensembles, with the independent ladders in their place:
 rank-normalised split R-hat across ladders (each ladder's β = 1 draws in time order; ladders of

@@ -178,12 +178,17 @@ class GibbsJointTarget(JointTarget):
             else tuple(int(p) for p in np.flatnonzero(within > weak_ratio * between))
         )
         """Population parameters the specimens' own data barely identify (posterior sd of z above
-        ``weak_ratio`` × the spread of the specimens' medians): they get the shift-and-scale move."""
+        ``weak_ratio`` × the spread of the specimens' medians): they get the shift-and-scale move.
+        """
         self.shift_steps = shift_scale * 2.4 * between / np.sqrt(len(z))
         self.scale_step = shift_scale * 2.4 / np.sqrt(2.0 * len(z))
 
     def emcee_moves(self):
-        """Return the moves :func:`~fsrbayes.inference.samplers.ensemble.run_ensembles` gives emcee for this target."""
+        """Return the emcee moves for this target.
+
+        Return the moves :func:`~fsrbayes.inference.samplers.ensemble.run_ensembles` gives emcee for
+        this target.
+        """
         return [(BlockGibbsMove(self), 1.0)]
 
     def fingerprint(self):
@@ -250,7 +255,7 @@ class BlockGibbsMove(emcee.moves.Move):
         return np.where(np.isnan(value), -np.inf, value)
 
     def _accept(self, j, rows, u_new, log_extra, random):
-        """Metropolis–Hastings for walkers ``rows`` of block j; log_extra = log q(old) − log q(new)."""
+        """Update walkers ``rows`` of block j, log_extra = log q(old) − log q(new)."""
         lp_new, like_new, x_new = self._evaluate_block(j, u_new)
         old = self._conditional(j, self.block_lp[rows, j], self.x[rows, j], rows)
         new = self._conditional(j, lp_new, x_new, rows)

@@ -13,8 +13,9 @@ under π — the population centre is as uncertain as one specimen was a priori,
 is at most of that size. Noise parameters (``sigma_rel``, ``nu``) stay per specimen under π.
 
 Two targets use it, both vectorised over walkers and both exposing ``prior``,
-``log_prior_and_likelihood`` and ``__call__`` like :class:`~fsrbayes.inference.posterior.LogPosterior`
-(so the MAP search, the ensemble engine and the evidence ladder apply unchanged):
+``log_prior_and_likelihood`` and ``__call__`` like
+:class:`~fsrbayes.inference.posterior.LogPosterior` (so the MAP search, the ensemble engine and the
+evidence ladder apply unchanged):
 
 * :class:`TwoStageTarget` — the hyper-posterior from per-specimen posterior draws taken under π
   (Hogg, Myers & Bovy 2010; the method of bilby's ``hyper`` module):
@@ -42,7 +43,7 @@ _QUANTILES = (np.arange(4000) + 0.5) / 4000
 
 
 def _coordinate(dist):
-    """(log scale?, m, s): the population coordinate of a per-specimen prior and its centre/scale."""
+    """Return (log scale?, m, s): a per-specimen prior's population coordinate, centre, scale."""
     if dist.kind == "normal":
         return False, dist.args["mu"], dist.args["sigma"]
     if dist.kind == "lognormal":
@@ -87,7 +88,8 @@ class Population:
         unknown = [n for n in names if n not in prior.names]
         if unknown or not names:
             raise ValueError(
-                f"population parameters must be among the sampled {list(prior.names)}, got {list(names)}"
+                f"population parameters must be among the sampled {list(prior.names)}, got "
+                f"{list(names)}"
             )
         self.prior = prior
         self.names = names
@@ -120,7 +122,11 @@ class Population:
         return hyper[..., : self.size], hyper[..., self.size :]
 
     def to_z(self, x):
-        """Return the population coordinates z of population parameters x (…, P) and log|dz/dx| summed (…)."""
+        """Return the population coordinates z of population parameters x.
+
+        Return the population coordinates z of population parameters x (…, P) and log|dz/dx| summed
+        (…).
+        """
         x = np.asarray(x, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
             logs = np.log(x)
@@ -145,7 +151,11 @@ class Population:
         return self.log_density(x, mu, omega) - self.interim.log_prob(x)
 
     def sample(self, rng, hyper, size=None):
-        """Return the population parameters of new specimens: one per hyper-parameter row (…, 2P) → (…, P)."""
+        """Return the population parameters of new specimens.
+
+        Return the population parameters of new specimens: one per hyper-parameter row (…, 2P) → (…,
+        P).
+        """
         mu, omega = self.split(hyper)
         shape = (
             np.broadcast_shapes(mu.shape, omega.shape) if size is None else tuple(size) + mu.shape
@@ -180,7 +190,8 @@ class TwoStageTarget(PriorScaledTarget):
         shapes = {d.shape for d in draws}
         if len(shapes) != 1 or len(draws[0].shape) != 2 or draws[0].shape[1] != population.size:
             raise ValueError(
-                f"draws must be arrays of one shape (S, {population.size}), got shapes {sorted(shapes)}"
+                f"draws must be arrays of one shape (S, {population.size}), got shapes "
+                f"{sorted(shapes)}"
             )
         self.population = population
         self.prior = population.hyper_prior
@@ -218,7 +229,7 @@ class TwoStageTarget(PriorScaledTarget):
         )
 
     def effective_draws(self, hyper):
-        """Each specimen's effective number of draws (Σw)²/Σw² at hyper-parameters (W, 2P) → (W, J)."""
+        """Return each specimen's effective draws (Σw)²/Σw² at hyper-parameters (W, 2P) → (W, J)."""
         log_w = self.log_weights(hyper)
         return np.exp(2 * logsumexp(log_w, axis=2) - logsumexp(2 * log_w, axis=2))
 

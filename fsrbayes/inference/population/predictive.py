@@ -1,4 +1,6 @@
-"""Population predictive for a new specimen: drift(t) distributions and the optimal sourcing voltage.
+"""Population predictive for a new specimen: drift distributions and the optimal voltage.
+
+Population predictive for a new specimen: drift(t) distributions and the optimal sourcing voltage.
 
 For each hyper-posterior draw Λ_k a batch of new specimens θ ~ p(θ | Λ_k) is drawn and their
 noise-free drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) computed on a (voltage, stress) grid. Pooled
@@ -184,7 +186,10 @@ def _quantile_summary(values, level=0.90):
 def drift_groups(
     specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, noise_rel=None, seed=0
 ):
-    """Return the contract's ``groups``: one entry per (voltage, stress) with the new-specimen quantiles.
+    """Return the contract's ``groups`` with the new-specimen quantiles.
+
+    Return the contract's ``groups``: one entry per (voltage, stress) with the new-specimen
+    quantiles.
 
     ``noise_rel`` (relative measurement noise, e.g. the specimens' fitted sigma_rel) makes them
     the quantiles of a new specimen's drift *as measured* — the like-for-like comparison with

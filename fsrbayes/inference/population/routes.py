@@ -42,7 +42,7 @@ MIN_EFFECTIVE_DRAWS = 50
 
 
 class SpecimenFitWarning(UserWarning):
-    """Some specimens' fits failed (an error, or a worker process that died); the others were kept."""
+    """Some specimens' fits failed (an error, or a worker that died); the others were kept."""
 
 
 class ReweightingWarning(UserWarning):
@@ -92,7 +92,7 @@ class HierarchicalResult:
         return self.run.report.converged
 
     def draws(self, max_draws=4000):
-        """Posterior draws in physical units, shape (D, ndim), thinned evenly over the kept chain."""
+        """Return posterior draws in physical units, (D, ndim), thinned evenly over the chain."""
         chain, _ = self.run.kept()
         return self.target.prior.from_unconstrained(
             _thin(chain.reshape(-1, chain.shape[-1]), max_draws)
@@ -110,7 +110,11 @@ class HierarchicalResult:
         return self.population.hyper_prior.from_unconstrained(flat)[0]
 
     def hyper_chains(self):
-        """Kept hyper-parameter chains in physical units with every walker as a chain, (E·W, steps, 2P)."""
+        """Return the kept hyper-parameter chains in physical units.
+
+        Kept hyper-parameter chains in physical units with every walker as a chain, (E·W, steps,
+        2P).
+        """
         chain, _ = self.run.kept()
         n_hyper = 2 * self.population.size
         values = self.population.hyper_prior.from_unconstrained(chain[..., :n_hyper])[0]
@@ -194,7 +198,9 @@ def two_stage(
     min_effective=MIN_EFFECTIVE_DRAWS,
     progress=False,
 ):
-    """Compute the population posterior from independent per-specimen fits, by reweighting their draws.
+    """Compute the population posterior from independent per-specimen fits.
+
+    Compute the population posterior from independent per-specimen fits, by reweighting their draws.
 
     Parameters
     ----------
@@ -242,8 +248,10 @@ def two_stage(
     worst = int(np.argmin(result.effective_draws))
     if result.effective_draws[worst] < min_effective:
         warnings.warn(
-            f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of {target.n_draws} "
-            f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far from the "
+            f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of "
+            f"{target.n_draws} "
+            f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far "
+            "from the "
             "population for the two-stage estimate: fit it with more draws or use the joint route",
             ReweightingWarning,
             stacklevel=2,
@@ -310,10 +318,10 @@ def joint(
     labels : sequence of str, optional
     method : {"gibbs", "ensemble"}, optional
         ``"gibbs"`` (the default when specimen draws are at hand, from ``start_from`` or
-        ``proposal_draws``): emcee runs blocked Gibbs sweeps (:mod:`~fsrbayes.inference.population.gibbs`),
-        the route that works at 16 specimens. ``"ensemble"``: emcee's stretch/DE moves over all
-        parameters at once — fine for a handful of low-dimensional specimens, hopeless at 16
-        creep specimens (BENCHMARKS.md).
+        ``proposal_draws``): emcee runs blocked Gibbs sweeps
+        (:mod:`~fsrbayes.inference.population.gibbs`), the route that works at 16 specimens.
+        ``"ensemble"``: emcee's stretch/DE moves over all parameters at once — fine for a handful of
+        low-dimensional specimens, hopeless at 16 creep specimens (BENCHMARKS.md).
     proposal_draws : sequence of ndarray (N_j, D), optional
         Each specimen's posterior draws under its own prior, physical units (Gibbs proposals).
     gibbs : dict, optional
@@ -336,7 +344,8 @@ def joint(
     if method == "gibbs":
         if proposal_draws is None:
             raise ValueError(
-                "the Gibbs route needs each specimen's posterior draws: pass start_from (a two-stage "
+                "the Gibbs route needs each specimen's posterior draws: pass start_from (a "
+                "two-stage "
                 "result from fits) or proposal_draws"
             )
         target = GibbsJointTarget(population, specimens, proposal_draws, **(gibbs or {}))
@@ -378,7 +387,7 @@ def _start_from_draws(target, draws, settings, rng):
 
 
 def _start_from_two_stage(target, two, settings, rng):
-    """Walkers from a two-stage result: hyper draws, and per specimen a reweighted draw of its fit."""
+    """Return walkers from a two-stage result: hyper draws and a reweighted draw per specimen."""
     n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk
     if two.specimen_draws is None or len(two.specimen_draws) != len(target.specimens):
@@ -470,7 +479,8 @@ def fit_specimens(
     failed = [r for r in results if isinstance(r, JobFailure)]
     if failed:
         warnings.warn(
-            f"{len(failed)} of {len(specimens)} specimen fits failed, the other {len(specimens) - len(failed)} "
+            f"{len(failed)} of {len(specimens)} specimen fits failed, the other "
+            f"{len(specimens) - len(failed)} "
             "kept: " + "; ".join(str(f) for f in failed),
             SpecimenFitWarning,
             stacklevel=2,

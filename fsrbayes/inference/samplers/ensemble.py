@@ -10,21 +10,20 @@ judged *across* ensembles started apart:
 * the bulk effective sample size must reach ``ess_target`` for every parameter; it is the
   smaller of Σ_ensembles steps·walkers/τ and ArviZ's rank-normalised bulk ESS.
 
-Warm-up. With ``transport_rounds`` = k > 0 (the default) the first k chunks are warm-up: after
-each, a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the later half of the
-warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from
-then on; the map is frozen after the k-th chunk and only the later steps are kept. On the 9-test creep posterior this cut
-τ from ≈ 210 to ≈ 130 steps (a 12-D Gaussian gives ≈ 40). A share of independence
-Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an equal
-mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
-straightened coordinates (ensembles started in separate regions each describe their own),
-frozen with the map: a walker
-can cross the whole posterior in one accepted step, and τ fell to ≈ 50. The stored chains are always in the
-target's own coordinates. With k = 0 the first half of the chain is the warm-up, at every check.
-Sampling goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
-:class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded random state, so the same
-seed gives the same chains, and a checkpoint (written atomically after every chunk) resumes a
-run exactly where it stopped.
+Warm-up. With ``transport_rounds`` = k > 0 (the default) the first k chunks are warm-up: after each,
+a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the later half of the
+warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from then
+on; the map is frozen after the k-th chunk and only the later steps are kept. On the 9-test creep
+posterior this cut τ from ≈ 210 to ≈ 130 steps (a 12-D Gaussian gives ≈ 40). A share of independence
+Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an equal mixture of
+Student-t's, one fitted to each ensemble's share of the same warm-up draws in the straightened
+coordinates (ensembles started in separate regions each describe their own), frozen with the map: a
+walker can cross the whole posterior in one accepted step, and τ fell to ≈ 50. The stored chains are
+always in the target's own coordinates. With k = 0 the first half of the chain is the warm-up, at
+every check. Sampling goes on in chunks until all three criteria hold or ``max_steps`` is spent;
+then a :class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded
+random state, so the same seed gives the same chains, and a checkpoint (written atomically after
+every chunk) resumes a run exactly where it stopped.
 """
 
 import warnings
@@ -50,7 +49,7 @@ __all__ = [
 
 
 def even_index(length, n):
-    """At most ``n`` evenly spaced, distinct indices into a sequence of ``length`` (both ends kept)."""
+    """Return at most ``n`` evenly spaced, distinct indices into ``length`` items (ends kept)."""
     return np.unique(np.linspace(0, length - 1, min(n, length)).round().astype(int))
 
 
@@ -100,11 +99,11 @@ class SamplerSettings:
         an accepted jump, and only the ensemble moves carry them on.
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
-        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine (False).
-        A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
+        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
+        (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
         coordinates: on the bent-ridge test of ``tests/test_tempered.py`` (x ~ N(0, 1)) the
-        quadratic map with independence moves gave sd(x) 0.966 and a 99.9 % quantile of
-        2.56–2.69 (exact 3.09) while reporting convergence; the affine map 1.007 and 3.01–3.07.
+        quadratic map with independence moves gave sd(x) 0.966 and a 99.9 % quantile of 2.56–2.69
+        (exact 3.09) while reporting convergence; the affine map 1.007 and 3.01–3.07.
     """
 
     n_ensembles: int = 4
@@ -182,7 +181,8 @@ class ConvergenceReport:
             rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
         return (
             f"after {self.n_steps} steps: {rhat}, kept chain "
-            f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), "
+            f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, "
+            f"{name(i_t)}), "
             f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
         )
 
@@ -239,7 +239,9 @@ class EnsembleRun:
 
 
 def convergence_report(chain, settings, names=(), final=True):
-    """Convergence numbers of chains (E, steps, W, ndim) after the warm-up (``settings.warmup_steps``).
+    """Return the convergence numbers of chains after the warm-up.
+
+    Convergence numbers of chains (E, steps, W, ndim) after the warm-up (``settings.warmup_steps``).
 
     With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
     chain is long enough by its autocorrelation time; otherwise they are reported as NaN.

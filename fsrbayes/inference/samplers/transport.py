@@ -126,7 +126,9 @@ class TriangularMap:
         n_features = ndim + ndim * (ndim + 1) // 2 if quadratic else ndim
         if n < 4 * n_features:
             raise ValueError(
-                f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions needs "
+                f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions "
+                "needs "
+                ""
                 f"at least {4 * n_features} draws, got {n}"
             )
         if not quadratic:
@@ -269,7 +271,11 @@ class MappedLogProb:
 
 
 def student_t_log_density(w, dof):
-    """Normalised log density of a standard multivariate Student-t (``dof = inf``: Gaussian) at w (…, d)."""
+    """Return the normalised log density of a standard multivariate Student-t.
+
+    Normalised log density of a standard multivariate Student-t (``dof = inf``: Gaussian) at w (…,
+    d).
+    """
     w = np.asarray(w, dtype=float)
     d = w.shape[-1]
     r2 = np.sum(w * w, axis=-1)
@@ -284,7 +290,11 @@ def student_t_log_density(w, dof):
 
 
 def student_t_draws(random, n, d, dof):
-    """Draw n samples (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or RandomState."""
+    """Draw n samples of the standard multivariate Student-t.
+
+    Draw n samples (n, d) of the standard multivariate Student-t; ``random`` a numpy Generator or
+    RandomState.
+    """
     z = random.standard_normal((n, d))
     if np.isinf(dof):
         return z
@@ -344,14 +354,14 @@ class MixtureProposal:
     Independence proposal g = (1/K) Σ_k g_k: an equal-weight mixture of Student-t components, one
     fitted to each ensemble's warm-up draws.
 
-    Ensembles started in separate posterior regions (:func:`~fsrbayes.inference.fit.fit` starts
-    them at distinct optima) each describe their own region; with the mixture a walker in one
-    region proposes into another with probability (K − 1)/K and is accepted with the usual
-    ratio p(x')·g(x) / (p(x)·g(x')), so the regions exchange walkers and every ensemble settles
-    on their true proportions — the ensemble moves alone do not get from one arm of a bent
-    ridge to the other (SBC replication 2 of VALIDATION.md: two runs, each with R-hat 1.00,
-    centred on s0 = −0.93 and +0.55). When all ensembles share one region the components nearly coincide
-    and the mixture is the single fit. Exact for any fixed components (Tierney 1994).
+    Ensembles started in separate posterior regions (:func:`~fsrbayes.inference.fit.fit` starts them
+    at distinct optima) each describe their own region; with the mixture a walker in one region
+    proposes into another with probability (K − 1)/K and is accepted with the usual ratio p(x')·g(x)
+    / (p(x)·g(x')), so the regions exchange walkers and every ensemble settles on their true
+    proportions — the ensemble moves alone do not get from one arm of a bent ridge to the other (SBC
+    replication 2 of VALIDATION.md: two runs, each with R-hat 1.00, centred on s0 = −0.93 and
+    +0.55). When all ensembles share one region the components nearly coincide and the mixture is
+    the single fit. Exact for any fixed components (Tierney 1994).
     """
 
     components: tuple
