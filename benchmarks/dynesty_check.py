@@ -3,7 +3,7 @@
 The same simulated A201 specimen as ``benchmarks/evidence.py`` (9 creep tests × 21 samples), the
 same likelihood and the same normalised prior: dynesty's ``prior_transform`` maps the unit cube
 through each parameter's quantile function (``Distribution.ppf``), so its log Z and ours are the
-same number (../shared/EVIDENCE.md §4). Settings: multi-ellipsoid bounds, dlogz = 0.1, slice
+same number (docs/evidence.md, "Cross-check"). Settings: multi-ellipsoid bounds, dlogz = 0.1, slice
 sampling (see :func:`run_dynesty` for why not dynesty's FAQ setting of 25-step random walks).
 dynesty's own logzerr covers only the prior-volume statistics, so several independent runs are made
 and their spread is reported beside it. dynesty is an optional dev dependency (``pip install
@@ -31,7 +31,8 @@ from scipy import special
 
 from benchmarks.evidence import specimen_posterior
 from fsrbayes.inference.evidence.ladder import evaluate_target
-from fsrbayes.inference.evidence.referenced import ReferenceDensity, pilot_draws
+from fsrbayes.inference.evidence.reference_density import ReferenceDensity
+from fsrbayes.inference.evidence.referenced import pilot_draws
 from fsrbayes.inference.samplers.transport import student_t_log_density
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from fsrbayes.data import synthetic
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
 HYPER_SETTINGS = SamplerSettings(processes=2)

@@ -52,7 +52,7 @@ from .inference.population.predictive import (
 )
 from .inference.population.routes import two_stage
 from .inference.posterior import LogPosterior
-from .inference.samplers.ensemble import SamplerSettings
+from .inference.samplers import SamplerSettings
 from .report import embed_figure, markdown_to_html, write_diagnosis_report
 from .utils import atomic_path, json_ready, write_json_atomic
 

@@ -12,7 +12,7 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.compare import strength
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import ModeSearch
-from fsrbayes.inference.samplers.ensemble import SamplerSettings
+from fsrbayes.inference.samplers import SamplerSettings
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
 TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=40, min_steps=200, max_steps=200)

@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from fsrbayes.data.csvio import CreepData, DataError, read_csv, write_csv
+from fsrbayes.data import CreepData, DataError, read_csv, write_csv
 
 HEADER = "specimen,sensor,voltage_V,stress_Pa,time_s,current_A"
 ROWS = [

@@ -1,4 +1,4 @@
-"""``fsrbayes diagnose``: JSON with the DESIGN §4 keys, a report folder, one-line errors."""
+"""``fsrbayes diagnose``: JSON with the documented keys, a report folder, one-line errors."""
 
 import json
 import subprocess

@@ -1,4 +1,4 @@
-"""Log-evidence against closed forms (../shared/EVIDENCE.md section 3)."""
+"""Log-evidence against closed forms (docs/evidence.md, "Known answers")."""
 
 import numpy as np
 import pytest
@@ -7,9 +7,9 @@ from fsrbayes.inference.evidence.ladder import (
     LadderSettings,
     _Rungs,
     beta_ladder,
-    combine_ladder,
     log_evidence,
 )
+from fsrbayes.inference.evidence.stepping_stone import combine_ladder
 from validation.closed_form import LinearGaussian, TwoModes
 
 CHEAP = LadderSettings(n_temps=16, burn=300, steps=1000, replicates=4, n_walkers=40, processes=2)
@@ -152,7 +152,7 @@ def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
 def test_the_printed_result_leaves_out_ti_on_the_referenced_path(path, shows_ti):
     """TI integrates log(L·π/g) on the referenced path, whose β = 0 variance is huge in the
     reference's tails (nan on creep posteriors): the one-line summary must not show it there."""
-    from fsrbayes.inference.evidence.ladder import EvidenceResult
+    from fsrbayes.inference.evidence import EvidenceResult
 
     result = EvidenceResult(
         log_z=-3.0,

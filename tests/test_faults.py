@@ -11,7 +11,7 @@ from fsrbayes.data import synthetic
 from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
 from fsrbayes.inference.population import routes as hierarchical
 from fsrbayes.inference.population.routes import SpecimenFitWarning, fit_specimens
-from fsrbayes.inference.samplers.ensemble import SamplerSettings
+from fsrbayes.inference.samplers import SamplerSettings
 
 
 def square_or_fail(job):

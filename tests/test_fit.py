@@ -15,7 +15,7 @@ import xarray as xr
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.samplers.ensemble import (
+from fsrbayes.inference.samplers import (
     CheckpointMismatch,
     ConvergenceWarning,
     SamplerSettings,
@@ -213,11 +213,11 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
 
 def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_path, monkeypatch):
     from fsrbayes.inference import fit as fit_module
-    from fsrbayes.inference.samplers import ensemble as sampling
+    from fsrbayes.inference.samplers.checkpoint import save_checkpoint
 
     path = tmp_path / "checkpoint.npz"
     state = np.random.RandomState(0).get_state()
-    sampling._save(
+    save_checkpoint(
         path,
         "other|data",
         np.zeros((2, 1, 32, 11)),

@@ -14,8 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import fsrbayes
-from fsrbayes.data import synthetic
-from fsrbayes.data.csvio import CreepData, DataError, read_csv
+from fsrbayes.data import CreepData, DataError, read_csv, synthetic
 from fsrbayes.inference import LogPosterior, SpecimenData
 
 HEADER = "specimen,sensor,voltage_V,stress_Pa,time_s,current_A\n"

@@ -13,7 +13,7 @@ from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget, KernelProposal
 from fsrbayes.inference.population.model import Population, TwoStageTarget
 from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
 SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])

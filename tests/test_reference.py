@@ -7,12 +7,12 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.evidence.ladder import LadderSettings
-from fsrbayes.inference.evidence.referenced import (
+from fsrbayes.inference.evidence.reference_density import (
     MixtureReference,
     ReferenceDensity,
     ReferencedTarget,
-    referenced_log_evidence,
 )
+from fsrbayes.inference.evidence.referenced import referenced_log_evidence
 from validation.closed_form import LinearGaussian, TwoModes
 
 LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=40)

@@ -9,7 +9,7 @@ from scipy import stats
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import LogPosterior, SpecimenData
-from fsrbayes.inference.samplers.ensemble import (
+from fsrbayes.inference.samplers import (
     CheckpointMismatch,
     ConvergenceWarning,
     SamplerSettings,

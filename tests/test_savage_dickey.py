@@ -1,4 +1,4 @@
-"""Savage–Dickey with Chen's estimator against the closed-form nested pair (EVIDENCE.md test C)."""
+"""Savage–Dickey with Chen's estimator against the closed-form nested pair (docs/evidence.md)."""
 
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ from fsrbayes.physics import tunneling as tl
 from fsrbayes.physics.rheology import creep_strain
 from fsrbayes.physics.sensor import sensor_state
 
-# DESIGN.md §1: paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
+# docs/physics.md, "Reference numbers": paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
 
 

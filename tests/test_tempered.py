@@ -15,7 +15,7 @@ from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
 from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from validation.closed_form import BentRidge
 
 SMALL = TemperedSettings(

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from fsrbayes.inference.samplers.transport import (
     IndependenceProposal,
     MappedLogProb,

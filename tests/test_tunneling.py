@@ -1,4 +1,4 @@
-"""Simmons' laws against closed forms, limits and the facts of DESIGN.md §1."""
+"""Simmons' laws against closed forms, limits and the facts in docs/physics.md."""
 
 import numpy as np
 import pytest

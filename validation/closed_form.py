@@ -1,4 +1,4 @@
-"""Test problems whose evidence is known in closed form (../shared/EVIDENCE.md §3), and the
+"""Test problems whose evidence is known in closed form (docs/evidence.md, "Known answers"), and the
 coverage of the reported log-evidence error bars on them.
 
 :class:`LinearGaussian` (problem A: y = Xw + e, conjugate Gaussian prior) and

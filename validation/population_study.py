@@ -28,7 +28,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.output import DRIFT_TIME_S
 from fsrbayes.inference.population.predictive import ForwardTemplate, drift_groups, new_specimens
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 
 __all__ = [
     "population_study",

@@ -20,7 +20,7 @@ import numpy as np
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
-from fsrbayes.inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 
 __all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
 

@@ -380,7 +380,7 @@ def build_parser():
     drf.set_defaults(func=cmd_drift)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
-    chk.add_argument("data", help="CSV file (DESIGN format)")
+    chk.add_argument("data", help="CSV file (docs/data-format.md)")
     chk.add_argument(
         "--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)"
     )

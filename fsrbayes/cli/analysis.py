@@ -12,11 +12,11 @@ from .common import UsageError, writable
 
 
 def cmd_compare(args):
-    """Log-evidence per model and specimen, Bayes factors, PSIS-LOO; JSON with DESIGN §4 keys."""
+    """Compare models by log-evidence per specimen, Bayes factors and PSIS-LOO (JSON)."""
     from ..inference.compare import compare
     from ..inference.evidence.ladder import LadderSettings
     from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
-    from ..inference.samplers.ensemble import SamplerSettings
+    from ..inference.samplers import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     models = [m.strip() for m in args.models.split(",") if m.strip()]

@@ -34,7 +34,7 @@ def cmd_fit(args):
     """
     from ..inference.fit import DesignWarning, fit
     from ..inference.output import save_fit
-    from ..inference.samplers.ensemble import ConvergenceWarning, SamplerSettings
+    from ..inference.samplers import ConvergenceWarning, SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     if args.specimen is not None and args.specimen not in data.specimens:

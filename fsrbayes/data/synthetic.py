@@ -31,7 +31,8 @@ from ..physics import effects as fx
 from ..physics.parameters import population_scatter
 from ..physics.sensor import current as model_current
 from ..utils import atomic_path
-from .csvio import CreepData, CreepTest, read_csv, write_csv
+from .creep import CreepData, CreepTest
+from .csvio import read_csv, write_csv
 from .sensors import load_sensor
 
 __all__ = [

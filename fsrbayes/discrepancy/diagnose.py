@@ -12,7 +12,7 @@
 3. the headline gap (``gap_metric``): the Mahalanobis misfit of the mean log-current in the
    four quarters of every test against the posterior predictive (level, shape and drift of the
    creep curves; the drift(3600 s) misfit alone is reported as ``drift_gap_before``/``after``);
-4. every effect of the catalogue (DESIGN.md §1, :mod:`fsrbayes.physics.effects`) is added to
+4. every effect of the catalogue (:mod:`fsrbayes.physics.effects`, docs/physics.md) is added to
    the model in turn and refitted on every specimen (each specimen its own effect parameters);
    candidates are ranked by the log Bayes factor over the base model, summed over specimens
    (Laplace evidences), and by how much of the gap they close;
@@ -242,7 +242,7 @@ class Diagnosis:
     def as_dict(self):
         """Return the diagnosis as a JSON-ready dict.
 
-        JSON-ready: the keys of DESIGN.md §4 (verdict, effect, gap_before, gap_after, gap_metric,
+        JSON-ready: the keys of docs/outputs.md (verdict, effect, gap_before, gap_after, gap_metric,
         candidates) and the findings, per-level misfits and settings.
         """
         before = self.checks()

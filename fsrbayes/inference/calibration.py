@@ -46,7 +46,7 @@ from .fit import fit
 from .likelihood import SpecimenData
 from .parallel import map_jobs, single_threaded_blas
 from .posterior import LogPosterior
-from .samplers.ensemble import ConvergenceWarning, SamplerSettings
+from .samplers import ConvergenceWarning, SamplerSettings
 
 __all__ = [
     "SBCDesign",

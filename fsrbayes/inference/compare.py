@@ -1,7 +1,7 @@
 """Model comparison by evidence: log Z ± error per specimen and model, Bayes factors, LOO.
 
 Specimens share no parameters in the per-specimen model and have independent priors, so
-log Z_total = Σ_specimens log Z_j with the errors added in quadrature (../shared/EVIDENCE.md).
+log Z_total = Σ_specimens log Z_j with the errors added in quadrature (docs/evidence.md).
 The strength of a preference is stated on Kass & Raftery's (1995) scale of 2·ln B:
 < 2 "not worth more than a bare mention", 2–6 "positive", 6–10 "strong", > 10 "very strong" —
 and called "inconclusive" when |ln B| is within two of its own error bars. PSIS-LOO (ArviZ)

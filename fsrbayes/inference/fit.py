@@ -30,7 +30,7 @@ from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
 from .optimize import ensemble_start, find_map, nested_starts, start_regions
 from .posterior import LogPosterior
-from .samplers.ensemble import (
+from .samplers import (
     EnsembleRun,
     SamplerSettings,
     check_checkpoint,

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special
 
-from ..data.csvio import CreepData
+from ..data.creep import CreepData
 from ..utils import HALF_LOG_2PI
 
 __all__ = ["LIKELIHOODS", "SpecimenData", "log_likelihood_pointwise"]
@@ -54,7 +54,7 @@ class SpecimenData:
 
     @classmethod
     def from_tests(cls, tests):
-        """Pack a sequence of :class:`fsrbayes.data.csvio.CreepTest` of one specimen."""
+        """Pack a sequence of :class:`fsrbayes.data.creep.CreepTest` of one specimen."""
         tests = list(tests)
         if not tests:
             raise ValueError("no creep tests to fit")

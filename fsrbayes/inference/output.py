@@ -1,4 +1,4 @@
-"""Fit results as an ArviZ DataTree (netCDF) and the JSON summary of DESIGN.md §4.
+"""Fit results as an ArviZ DataTree (netCDF) and the JSON summary of docs/outputs.md.
 
 Groups: ``posterior`` (sampled parameters, chain = ensemble), ``log_likelihood`` (pointwise,
 for LOO), ``posterior_predictive`` (replicated current per sample, model drift(t) per test on
@@ -11,9 +11,9 @@ import json
 
 import numpy as np
 
-from ..data.csvio import observed_drift
+from ..data.creep import observed_drift
 from ..utils import atomic_path, write_json_atomic
-from .samplers.ensemble import even_index
+from .samplers import even_index
 
 __all__ = [
     "to_datatree",

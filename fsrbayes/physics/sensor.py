@@ -1,6 +1,6 @@
 """The FSR as a circuit element: current, drift, amplifier readout, voltage divider.
 
-``params`` is a mapping with the canonical names of DESIGN.md §1 (A0, A1, A2, Va, Vth, s0,
+``params`` is a mapping with the canonical names of docs/physics.md (A0, A1, A2, Va, Vth, s0,
 Rpar, alpha, Rc0, k1 and the rheology's keys: k2, b2 and b1 or inv_b1 for Burgers/Zener;
 psi, n for Nutting; optional sigma0 for the offset stress). Every value may be an array;
 everything broadcasts with ``voltage``, ``stress`` and ``time`` (put a walker axis first,

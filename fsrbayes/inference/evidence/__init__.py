@@ -14,7 +14,7 @@ Every log Z reaches its callers as an :class:`EvidenceEstimate`.
 """
 
 from .estimate import EvidenceEstimate
-from .ladder import EvidenceResult, LadderSettings, log_evidence
+from .ladder import LadderSettings, log_evidence
 from .laplace import LaplaceFit, LocalDraws, laplace_fit
 from .referenced import (
     MODE_SEARCH,
@@ -24,6 +24,7 @@ from .referenced import (
     referenced_log_evidence,
 )
 from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
+from .stepping_stone import EvidenceResult
 from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_run
 
 __all__ = [

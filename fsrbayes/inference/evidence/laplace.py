@@ -97,7 +97,7 @@ class LaplaceFit:
         """
         import emcee
 
-        from ..samplers.ensemble import ensemble_moves
+        from ..samplers import ensemble_moves
 
         d = self.posterior.ndim
         n_walkers = n_walkers or max(32, 2 * d + 2)

@@ -16,7 +16,7 @@ is from batch means over the draws in time order (never over the walkers of one 
 independent).
 
 References: Dickey, Ann. Math. Stat. 42, 204 (1971); Chen, JASA 89, 818 (1994);
-../shared/EVIDENCE.md section 5.
+docs/evidence.md, "Nested models".
 """
 
 from dataclasses import dataclass

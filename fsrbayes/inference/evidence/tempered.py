@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import stats
 
-from ..samplers.ensemble import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
+from ..samplers import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
 from .ladder import LadderSettings
 from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
 

@@ -21,7 +21,7 @@ import numpy as np
 from ...physics.models import parse_model
 from ...physics.sensor import solve_current
 from ..posterior import noise_parameters
-from ..samplers.ensemble import even_index
+from ..samplers import even_index
 
 __all__ = [
     "ForwardTemplate",

@@ -22,7 +22,7 @@ from ...utils import logsumexp
 from ..fit import FIT_SETTINGS, fit
 from ..optimize import find_map, laplace_start
 from ..parallel import JobFailure, map_jobs, single_threaded_blas
-from ..samplers.ensemble import SamplerSettings, even_index, run_ensembles
+from ..samplers import SamplerSettings, even_index, run_ensembles
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .model import JointTarget, Population, TwoStageTarget
 

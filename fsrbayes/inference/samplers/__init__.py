@@ -2,18 +2,16 @@
 
 :func:`run_ensembles` runs several independent emcee ensembles in chunks until the split
 R-hat across ensembles, the kept chain's length in autocorrelation times and the bulk ESS all
-hold (:class:`SamplerSettings`), with checkpoints; :mod:`.transport` straightens the posterior
-during warm-up and supplies the independence proposals.
+hold (:mod:`.convergence`, :class:`SamplerSettings`), with checkpoints (:mod:`.checkpoint`);
+:mod:`.transport` straightens the posterior during warm-up and supplies the independence
+proposals.
 """
 
+from .checkpoint import CheckpointMismatch, check_checkpoint
+from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .ensemble import (
-    CheckpointMismatch,
-    ConvergenceReport,
-    ConvergenceWarning,
     EnsembleRun,
     SamplerSettings,
-    check_checkpoint,
-    convergence_report,
     ensemble_moves,
     even_index,
     run_ensembles,

@@ -1,50 +1,44 @@
 """Several independent emcee ensembles, run until convergence is shown, with checkpoints.
 
 The walkers of one affine-invariant ensemble are not independent chains, so convergence is
-judged *across* ensembles started apart:
-
-* rank-normalised split R-hat (Vehtari et al. 2021) with each ensemble as one chain — its
-  draws taken step by step over all walkers — must be below ``rhat_target``;
-* the integrated autocorrelation time τ of each ensemble (emcee's walker-averaged estimate)
-  must be short: the kept chain is at least ``tau_factor``·τ steps long;
-* the bulk effective sample size must reach ``ess_target`` for every parameter; it is the
-  smaller of Σ_ensembles steps·walkers/τ and ArviZ's rank-normalised bulk ESS.
+judged *across* ensembles started apart (:mod:`.convergence`): split R-hat below
+``rhat_target``, a kept chain of at least ``tau_factor``·τ steps, bulk ESS of ``ess_target``.
 
 Warm-up. With ``transport_rounds`` = k > 0 (the default) the first k chunks are warm-up: after each,
 a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the later half of the
 warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from then
-on; the map is frozen after the k-th chunk and only the later steps are kept. On the 9-test creep
-posterior this cut τ from ≈ 210 to ≈ 130 steps (a 12-D Gaussian gives ≈ 40). A share of independence
-Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an equal mixture of
-Student-t's, one fitted to each ensemble's share of the same warm-up draws in the straightened
-coordinates (ensembles started in separate regions each describe their own), frozen with the map: a
-walker can cross the whole posterior in one accepted step, and τ fell to ≈ 50. The stored chains are
-always in the target's own coordinates. With k = 0 the first half of the chain is the warm-up, at
-every check. Sampling goes on in chunks until all three criteria hold or ``max_steps`` is spent;
-then a :class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded
-random state, so the same seed gives the same chains, and a checkpoint (written atomically after
-every chunk) resumes a run exactly where it stopped.
+on; the map is frozen after the k-th chunk and only the later steps are kept: affine-invariant moves
+undo only linear correlations, and the map straightens the creep posterior's curved ridge. A share
+of independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an
+equal mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
+straightened coordinates (ensembles started in separate regions each describe their own), frozen
+with the map: a walker can cross the whole posterior in one accepted step (the autocorrelation times
+this buys are in BENCHMARKS.md). The stored chains are always in the target's own coordinates. With
+k = 0 the first half of the chain is the warm-up, at every check. Sampling goes on in chunks until
+all three criteria hold or ``max_steps`` is spent; then a :class:`ConvergenceWarning` carrying the
+numbers is issued. Each ensemble has its own seeded random state, so the same seed gives the same
+chains, and a checkpoint (written atomically after every chunk) resumes a run exactly where it
+stopped.
 """
 
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import emcee
 import numpy as np
 
-from ...utils import atomic_path
 from ..parallel import fork_pool, single_threaded_blas
+from .checkpoint import load_checkpoint, save_checkpoint
+from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = [
-    "SamplerSettings",
-    "ConvergenceReport",
-    "ConvergenceWarning",
-    "CheckpointMismatch",
     "EnsembleRun",
+    "SamplerSettings",
+    "ensemble_moves",
+    "even_index",
     "run_ensembles",
-    "convergence_report",
-    "check_checkpoint",
+    "walkers_for",
 ]
 
 
@@ -145,76 +139,6 @@ class SamplerSettings:
 
 
 @dataclass
-class ConvergenceReport:
-    """Convergence numbers at the last check.
-
-    Attributes
-    ----------
-    converged : bool
-    n_steps : int
-        Steps per ensemble so far.
-    n_kept : int
-        Steps per ensemble kept after warm-up.
-    tau : ndarray, shape (ndim,)
-        Largest integrated autocorrelation time over ensembles, in steps.
-    rhat : ndarray, shape (ndim,)
-    ess_bulk : ndarray, shape (ndim,)
-    names : tuple of str
-    """
-
-    converged: bool
-    n_steps: int
-    n_kept: int
-    tau: np.ndarray
-    rhat: np.ndarray
-    ess_bulk: np.ndarray
-    names: tuple = field(default=())
-
-    def worst(self):
-        """One line with the limiting numbers."""
-        name = lambda i: self.names[i] if self.names else str(i)  # noqa: E731
-        i_t, i_e = int(np.argmax(self.tau)), int(np.argmin(self.ess_bulk))
-        if np.all(np.isnan(self.rhat)):
-            rhat = "max R-hat not computed yet"
-        else:
-            i_r = int(np.nanargmax(self.rhat))
-            rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
-        return (
-            f"after {self.n_steps} steps: {rhat}, kept chain "
-            f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, "
-            f"{name(i_t)}), "
-            f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
-        )
-
-    def as_dict(self):
-        """Return the report as a JSON-ready dict."""
-        out = asdict(self)
-        for key in ("tau", "rhat", "ess_bulk"):
-            out[key] = [float(v) for v in out[key]]
-        out["names"] = list(self.names)
-        return out
-
-
-class ConvergenceWarning(UserWarning):
-    """Sampling stopped at its budget before the convergence criteria held.
-
-    Attributes
-    ----------
-    report : ConvergenceReport
-    """
-
-    def __init__(self, report):
-        super().__init__(
-            f"not converged {report.worst()}; raise the step budget or check the model"
-        )
-        self.report = report
-
-
-class CheckpointMismatch(ValueError):
-    """A checkpoint was written for other data, model, priors or parameter order."""
-
-
-@dataclass
 class EnsembleRun:
     """Chains of all ensembles.
 
@@ -238,58 +162,8 @@ class EnsembleRun:
         return self.chain[:, start:], self.log_prob[:, start:]
 
 
-def convergence_report(chain, settings, names=(), final=True):
-    """Return the convergence numbers of chains after the warm-up.
-
-    Convergence numbers of chains (E, steps, W, ndim) after the warm-up (``settings.warmup_steps``).
-
-    With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
-    chain is long enough by its autocorrelation time; otherwise they are reported as NaN.
-    """
-    from arviz_stats import ess as az_ess
-    from arviz_stats import rhat as az_rhat
-
-    n_ens, n_steps, n_walk, ndim = chain.shape
-    kept = chain[:, settings.warmup_steps(n_steps) :]
-    n_kept = kept.shape[1]
-    with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
-        tau = np.max(
-            [emcee.autocorr.integrated_time(kept[e], c=5, tol=0, quiet=True) for e in range(n_ens)],
-            axis=0,
-        )
-    tau = np.where(
-        np.isfinite(tau), np.maximum(tau, 1.0), float(n_kept)
-    )  # no estimate: as long as the chain
-    ess_tau = n_ens * n_kept * n_walk / tau
-    long_enough = n_steps >= settings.min_steps and n_kept >= settings.tau_factor * tau.max()
-    if not (long_enough and np.all(ess_tau >= settings.ess_target)) and not final:
-        # The cheap criteria fail: R-hat and the rank ESS are not needed to decide to go on.
-        nan = np.full(ndim, np.nan)
-        return ConvergenceReport(
-            False, n_steps, n_kept, tau, nan, np.minimum(ess_tau, np.inf), tuple(names)
-        )
-    per_ensemble = kept.reshape(n_ens, n_kept * n_walk, ndim)  # step-major: draws keep time order
-    rhat = np.array(
-        [
-            az_rhat(per_ensemble[..., k], method="rank", chain_axis=0, draw_axis=1)
-            for k in range(ndim)
-        ]
-    )
-    walkers_as_chains = np.moveaxis(kept, 2, 1).reshape(n_ens * n_walk, n_kept, ndim)
-    ess_rank = np.array(
-        [
-            az_ess(walkers_as_chains[..., k], method="bulk", chain_axis=0, draw_axis=1)
-            for k in range(ndim)
-        ]
-    )
-    ess = np.minimum(ess_tau, ess_rank)
-    converged = bool(
-        long_enough and np.all(rhat < settings.rhat_target) and np.all(ess >= settings.ess_target)
-    )
-    return ConvergenceReport(converged, n_steps, n_kept, tau, rhat, ess, tuple(names))
-
-
 def ensemble_moves(de_fraction, proposal=None, independence_fraction=0.0):
+    """Return emcee's weighted moves: DE and stretch, plus independence MH with a proposal."""
     if proposal is None or independence_fraction == 0.0:
         return [(emcee.moves.DEMove(), de_fraction), (emcee.moves.StretchMove(), 1.0 - de_fraction)]
     rest = 1.0 - independence_fraction
@@ -397,74 +271,6 @@ def _progress_bar(settings, done):
     )
 
 
-def _save(path, fingerprint, chains, log_probs, acceptance, states, settings):
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as handle:
-            np.savez(
-                handle,
-                fingerprint=np.array(fingerprint),
-                chain=chains,
-                log_prob=log_probs,
-                accepted=acceptance,
-                settings=np.array(repr(asdict(settings))),
-                **{
-                    f"state{e}_{k}": np.asarray(v)
-                    for e, st in enumerate(states)
-                    for k, v in enumerate(st)
-                },
-            )
-
-
-def check_checkpoint(path, fingerprint, n_ensembles):
-    """Refuse a checkpoint written for another fit.
-
-    Refuse a checkpoint written for another fit (:class:`CheckpointMismatch`) before any work is
-    done; a missing file is fine (the run starts afresh).
-    """
-    try:
-        _load(path, fingerprint, n_ensembles)
-    except FileNotFoundError:
-        pass
-
-
-def _load(path, fingerprint, n_ensembles):
-    with np.load(path, allow_pickle=False) as saved:
-        stored = str(saved["fingerprint"])
-        if stored != fingerprint:
-            raise CheckpointMismatch(
-                f"checkpoint {path} was written for {_difference(stored, fingerprint)}; "
-                "remove it or fit with matching settings"
-            )
-        chain, log_prob, accepted = saved["chain"], saved["log_prob"], saved["accepted"]
-        if chain.shape[0] != n_ensembles:
-            raise CheckpointMismatch(
-                f"checkpoint {path} has {chain.shape[0]} ensembles, this fit asks for {n_ensembles}"
-            )
-        states = [tuple(saved[f"state{e}_{k}"][()] for k in range(5)) for e in range(n_ensembles)]
-    states = [(str(s[0]), s[1], int(s[2]), int(s[3]), float(s[4])) for s in states]
-    return chain, log_prob, accepted, states
-
-
-_PARTS = (
-    "other data",
-    "another model",
-    "another tunneling law",
-    "another likelihood",
-    "other priors or another parameter order",
-    "other fixed parameter values",
-)
-
-
-def _difference(stored, current):
-    a, b = stored.split("|"), current.split("|")
-    if len(a) != len(b):
-        return "a different kind of fit"
-    return (
-        ", ".join(part for part, x, y in zip(_PARTS, a, b, strict=False) if x != y)
-        or "a different fit"
-    )
-
-
 def run_ensembles(
     log_prob,
     start,
@@ -517,7 +323,7 @@ def run_ensembles(
     accepted = np.zeros((n_ens, n_walk))
     if resume and checkpoint is not None:
         try:
-            chains, log_probs, accepted, states = _load(checkpoint, fingerprint, n_ens)
+            chains, log_probs, accepted, states = load_checkpoint(checkpoint, fingerprint, n_ens)
         except FileNotFoundError:
             pass
     pool = None
@@ -570,7 +376,9 @@ def run_ensembles(
             accepted += np.array([r[2] for r in results])
             states = [r[3] for r in results]
             if checkpoint is not None:
-                _save(checkpoint, fingerprint, chains, log_probs, accepted, states, settings)
+                save_checkpoint(
+                    checkpoint, fingerprint, chains, log_probs, accepted, states, settings
+                )
             if bar is not None:
                 bar.update(steps)
     finally:

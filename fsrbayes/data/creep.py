@@ -1,0 +1,166 @@
+"""Creep tests in memory: one test's samples, a data set of tests, and the errors bad data raise.
+
+A creep test is one (specimen, voltage, stress, test) group: the stress stepped at t = 0 and
+held, the current sampled from then on. :class:`CreepData` holds many and selects among them;
+:mod:`.csvio` reads and writes them as CSV (docs/data-format.md).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["CreepData", "CreepTest", "DataError", "observed_drift"]
+
+
+class DataError(ValueError):
+    """Bad input data: one line, naming where and what was expected.
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    line : int or None
+        1-based line number in the file (the header is line 1).
+    column : str or None
+        The column concerned.
+    """
+
+    def __init__(self, message, path="<data>", line=None, column=None):
+        where = (
+            str(path)
+            + (f" line {line}" if line is not None else "")
+            + (f", column {column}" if column else "")
+        )
+        super().__init__(f"{where}: {message}")
+        self.path, self.line, self.column = str(path), line, column
+
+
+def observed_drift(time_s, current_A, at_s=3600.0):
+    """Return the measured drift in % (eq. 22) at ``at_s``, interpolated; NaN past the end."""
+    if at_s > time_s[-1]:
+        return float("nan")
+    return float(100.0 * (np.interp(at_s, time_s, current_A) / current_A[0] - 1.0))
+
+
+@dataclass(frozen=True)
+class CreepTest:
+    """One creep test: a stress step held at a constant sourcing voltage.
+
+    Attributes
+    ----------
+    specimen, sensor, test : str
+        Specimen id, canonical sensor name, repeat label ("" without a ``test`` column).
+    voltage_V, stress_Pa : float
+        Sourcing voltage and held stress.
+    time_s, current_A : ndarray
+        Samples, time strictly increasing from 0.
+    lines : ndarray of int
+        The file line of each sample (for messages).
+    """
+
+    specimen: str
+    sensor: str
+    voltage_V: float
+    stress_Pa: float
+    test: str
+    time_s: np.ndarray = field(repr=False)
+    current_A: np.ndarray = field(repr=False)
+    lines: np.ndarray = field(repr=False, compare=False, default=None)
+
+    @property
+    def key(self):
+        """(specimen, voltage_V, stress_Pa, test): what identifies the test."""
+        return (self.specimen, self.voltage_V, self.stress_Pa, self.test)
+
+    def observed_drift(self, time_s=3600.0):
+        """Measured drift in % (eq. 22) at ``time_s`` by linear interpolation; NaN past the data."""
+        return observed_drift(self.time_s, self.current_A, time_s)
+
+
+@dataclass(frozen=True)
+class CreepData:
+    """A set of creep tests, in the order they first appear in the file.
+
+    Attributes
+    ----------
+    tests : tuple of CreepTest
+    source : str
+        Where the data came from.
+    """
+
+    tests: tuple
+    source: str = "<memory>"
+
+    def __len__(self):
+        return len(self.tests)
+
+    def __iter__(self):
+        return iter(self.tests)
+
+    @property
+    def n_rows(self):
+        """Number of samples over all tests."""
+        return int(sum(t.time_s.size for t in self.tests))
+
+    @property
+    def specimens(self):
+        """Specimen ids in order of first appearance."""
+        return list(dict.fromkeys(t.specimen for t in self.tests))
+
+    @property
+    def sensors(self):
+        """Canonical sensor names in order of first appearance."""
+        return list(dict.fromkeys(t.sensor for t in self.tests))
+
+    def select(self, specimen=None, sensor=None):
+        """Return the tests of one specimen and/or one sensor, as a new :class:`CreepData`."""
+        if specimen is not None and specimen not in self.specimens:
+            raise ValueError(
+                f"specimen {specimen!r} is not in {self.source}; it has {self.specimens[:10]}"
+                + (" …" if len(self.specimens) > 10 else "")
+            )
+        tests = tuple(
+            t
+            for t in self.tests
+            if (specimen is None or t.specimen == specimen)
+            and (sensor is None or t.sensor == sensor)
+        )
+        return CreepData(tests, self.source)
+
+    def columns(self):
+        """Return the data as flat columns (dict of arrays), one entry per sample, test by test."""
+        sizes = [t.time_s.size for t in self.tests]
+
+        def rep(values):
+            kind = object if isinstance(values[0], str) else float
+            return np.repeat(np.array(values, dtype=kind), sizes)
+
+        return {
+            "specimen": rep([t.specimen for t in self.tests]),
+            "sensor": rep([t.sensor for t in self.tests]),
+            "voltage_V": rep([t.voltage_V for t in self.tests]),
+            "stress_Pa": rep([t.stress_Pa for t in self.tests]),
+            "test": rep([t.test for t in self.tests]),
+            "time_s": np.concatenate([t.time_s for t in self.tests]),
+            "current_A": np.concatenate([t.current_A for t in self.tests]),
+        }
+
+    def summary(self):
+        """Return a few lines describing the data set."""
+        n_spec = len(self.specimens)
+        lines = [
+            f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "
+            f"{n_spec} specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"
+        ]
+        for sensor in self.sensors:
+            sub = self.select(sensor=sensor)
+            volts = sorted({t.voltage_V for t in sub})
+            stresses = sorted({t.stress_Pa for t in sub})
+            longest = max(t.time_s[-1] for t in sub)
+            lines.append(
+                f"  {sensor}: {len(sub.specimens)} "
+                f"specimen{'s' if len(sub.specimens) != 1 else ''}, voltages "
+                f"{', '.join(f'{v:g}' for v in volts)} V, "
+                f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
+            )
+        return "\n".join(lines)
