@@ -146,3 +146,28 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
     for truth, (preferred, bf) in verdicts.items():
         assert preferred == truth, verdicts
         assert bf["log_bf_preferred_over"] > 20 and bf["strength"] == "very strong", verdicts
+
+
+def test_compare_takes_any_evidence_estimator(small):
+    """An estimator from outside the ladder code (here Laplace) plugs in through EvidenceEstimate:
+    per-specimen values are its log Z, the totals their sums, and LOO/Savage–Dickey are left out
+    because it draws no posterior samples."""
+    from fsrbayes.inference.evidence import EvidenceEstimate, laplace_fit
+
+    calls = []
+
+    def laplace(posterior, seed):
+        estimate = laplace_fit(posterior, np.random.default_rng(seed)).estimate()
+        calls.append((posterior.model, estimate))
+        return estimate
+
+    out = fsrbayes.compare(small.data, ["zener", "burgers"], estimator=laplace, seed=1)
+    assert len(calls) == 4 and all(isinstance(e, EvidenceEstimate) for _, e in calls)
+    assert all(e.method == "laplace" and np.isnan(e.error) for _, e in calls)
+    for model, entry in out["models"].items():
+        mine = [e.log_z for m, e in calls if m == model]
+        assert [v["log_evidence"] for v in entry["per_specimen"].values()] == mine
+        assert entry["log_evidence"] == pytest.approx(sum(mine))
+        assert entry["log_evidence_err"] is None and entry["loo"] == {}  # NaN: no error bar
+    assert "savage_dickey" not in out
+    assert out["preferred"] == max(out["models"], key=lambda m: out["models"][m]["log_evidence"])

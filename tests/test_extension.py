@@ -83,6 +83,18 @@ def toy_sensor(registered, tmp_path):
     return str(path)
 
 
+def _toy_data(sensor, **kwargs):
+    """Creep tests simulated with the toy law and a hidden toy leak."""
+    return synthetic.simulate(
+        sensor,
+        voltages=[0.5, 2.0],
+        forces=[1.96, 4.9, 9.8],
+        rheology=LAW,
+        effects=[f"{EFFECT}=leak=0.05"],
+        **kwargs,
+    )
+
+
 def test_a_registered_law_and_effect_join_every_list(registered):
     assert LAW in models.model_families()
     assert models.model_parameters(f"{LAW}+{EFFECT}")[-2:] == ("logc_rate", "leak")
@@ -109,16 +121,7 @@ def test_the_toy_law_follows_superposition_and_the_effect_its_hook(registered, a
 
 
 def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
-    sim = synthetic.simulate(
-        toy_sensor,
-        n_specimens=1,
-        voltages=[0.5, 2.0],
-        forces=[1.96, 4.9, 9.8],
-        samples=11,
-        rheology=LAW,
-        effects=[f"{EFFECT}=leak=0.05"],
-        seed=3,
-    )
+    sim = _toy_data(toy_sensor, n_specimens=1, samples=11, seed=3)
     model = f"{LAW}+{EFFECT}"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -138,16 +141,7 @@ def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
 
 def test_fits_with_the_toy_model_on_a_dask_cluster(toy_sensor):
     distributed = pytest.importorskip("dask.distributed")
-    sim = synthetic.simulate(
-        toy_sensor,
-        n_specimens=2,
-        voltages=[0.5, 2.0],
-        forces=[1.96, 4.9, 9.8],
-        samples=9,
-        rheology=LAW,
-        effects=[f"{EFFECT}=leak=0.05"],
-        seed=4,
-    )
+    sim = _toy_data(toy_sensor, n_specimens=2, samples=9, seed=4)
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster:

@@ -71,9 +71,14 @@ class SpecimenDiagnosis:
     candidates: dict = field(default_factory=dict)
     """effect → (LaplaceFit, SpecimenChecks)."""
 
+    def evidence(self, effect=None):
+        """Return the evidence estimate of the base model (``effect=None``) or base + effect."""
+        fitted = self.base if effect is None else self.candidates[effect][0]
+        return fitted.estimate()
+
     def log_bf(self, effect):
-        """Laplace ln B of base + effect over the base model."""
-        return self.candidates[effect][0].log_evidence - self.base.log_evidence
+        """Return ln B of base + effect over the base model (from :meth:`evidence`)."""
+        return self.evidence(effect).log_z - self.evidence().log_z
 
 
 def _diagnose_one(job):

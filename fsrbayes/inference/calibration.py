@@ -66,9 +66,9 @@ SBC_SETTINGS = SamplerSettings(
     n_ensembles=2, chunk=250, min_steps=1500, max_steps=1500, transport_rounds=3, processes=1
 )
 """Fixed-length runs (every replication costs the same): two ensembles of max(32, 4·ndim)
-walkers, 750 warm-up steps with transport-map refits, 750 kept steps — on the default
-:class:`SBCDesign` the fits' largest τ is ~10–55 steps (VALIDATION.md §1). Replications run
-side by side, so each fit uses one process."""
+walkers, 750 warm-up steps with transport-map refits, 750 kept steps — many autocorrelation
+times on the default :class:`SBCDesign` (VALIDATION.md). Replications run side by side, so each
+fit uses one process."""
 
 SBC_TEMPERED_SETTINGS = TemperedSettings(
     ladder=LadderSettings(
@@ -78,10 +78,9 @@ SBC_TEMPERED_SETTINGS = TemperedSettings(
     search=ModeSearch(n_starts=8),
     pilot_groups=1,
 )
-"""The tempered sampler cut to ~30 s per replication of the reduced design on one core: one mode
-search (8 optimiser starts), 750-step pilots, two ladders of 6 rungs × 300 steps. Too short to
-converge (the top rung's ensemble mean has τ ≈ 200 steps on these posteriors): with it the SBC
-is further from calibrated than with the ensembles (VALIDATION.md §1)."""
+"""The tempered sampler cut short for SBC: one mode search (8 optimiser starts), 750-step
+pilots, two ladders of 6 rungs × 300 steps. Too short to converge on creep posteriors, so the
+SBC with it is further from calibrated than with the ensembles (VALIDATION.md)."""
 
 
 @dataclass(frozen=True)
@@ -92,9 +91,9 @@ class SBCDesign:
     that identifies the tunneling and contact parameters: with 2 forces the area law
     A(σ) = A0 + A1·σ^A2 (eq. 6) is fixed at two stresses only and its coefficients lie on a
     curved prior ridge; with 2 voltages so do s0 and Va (eq. 11). Either ridge mixes so slowly
-    (τ ≈ 1,800 steps measured) that a budget-limited fit is over-confident and the SBC fails
-    from the design, not the sampler. All three voltages keep V_bulk clear of Va/e, the join of
-    Simmons' two regimes (0.2 V would not; VALIDATION.md §1).
+    that a budget-limited fit is over-confident and the SBC fails from the design, not the
+    sampler. All three voltages keep V_bulk clear of Va/e, the join of Simmons' two regimes
+    (0.2 V would not).
 
     Attributes
     ----------

@@ -10,11 +10,10 @@ of the ensembles' warm-up fits so that walkers cross between regions. The log-po
 optimum is kept in the result.
 
 Why several regions: the creep posterior's s0–Va ridge can bend into two arms (where V_bulk
-crosses Va/e Simmons' law has a slope kink; VALIDATION.md §1) or hold separate local maxima. In
-SBC replication 2 a fit started at the best of 4 optima sat in one arm, s0 = −0.93 ± 0.63
-(prior-scaled), one started at the best of 2 in the other, +0.55 ± 0.65, each with R-hat 1.00
-over 4,000–12,000 steps: ensembles started in one region neither leave it nor notice the other.
-With the region starts and the mixture both arms are visited, but not yet their far ends.
+crosses Va/e Simmons' law has a slope kink) or hold separate local maxima. Ensembles started in
+one region neither leave it nor notice the other, while each reports R-hat 1.00 on its own, so
+every region found gets an ensemble and the mixture proposal carries walkers between them. The
+far ends of a bent ridge's arms stay under-sampled (VALIDATION.md, "bent ridges").
 
 Nested-model tails: a half-normal parameter (inv_b1; an effect's amplitude) can have a long
 tail toward 0 that holds no maximum (:func:`nested_starts`); a profile optimum with it held
@@ -53,19 +52,17 @@ MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
 
 MAP_ITERATIONS = 200
-"""L-BFGS-B iterations per start in :func:`fit` before the whitened polish. The 2,000 of before
-found the same optima (to 1e-3 nats) in 40.1 s against 26.3 s on the benchmark specimen (9 tests
-× 61 samples, 8 starts) and 12.0 s against 10.0 s on a 4-test one: in prior-scaled coordinates
-L-BFGS-B crawls along the ridges; the polish walks them. :func:`fit` runs the starts in its
-worker processes with BLAS on one thread (a first try with BLAS's own threads in each was
-slower, 38 s; single-threaded: 8.7–9.7 s against 15.9–18.4 s in one process)."""
+"""L-BFGS-B iterations per start in :func:`fit` before the whitened polish.
+
+In prior-scaled coordinates L-BFGS-B crawls along the ridges and the polish walks them, so a
+short first phase finds the same optima sooner (BENCHMARKS.md, "MAP search"). :func:`fit` runs
+the starts in its worker processes with BLAS on one thread."""
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2)
 """The per-specimen fit's default: two ensembles (one per core on a 2-core machine), the default
-criteria and budget. On the benchmark specimen (9 tests × 61 samples, a bent s0–Va ridge) two
-ensembles converged for 8 of 8 seeds in 5,000–11,500 steps (τ 62–198), while four — at twice the
-cost per step on 2 cores — converged for 1 of 3 (τ 390–690 after 20,000 steps for the others;
-BENCHMARKS.md). Every validation (SBC, recovery, the population study) runs two ensembles too."""
+criteria and budget. More ensembles cost more per step on 2 cores and, on bent ridges, converged
+less often within the budget (BENCHMARKS.md). The validations (SBC, recovery, the population
+study) run two ensembles too."""
 
 
 class DesignWarning(UserWarning):
@@ -87,9 +84,8 @@ def design_warnings(posterior):
     The tunneling area A(σ) = A0 + A1·σ^A2 (eq. 6) depends on the held stress only: tests at
     fewer distinct stresses than it has sampled coefficients fix A at those stresses and leave
     a curve of (A0, A1, A2) along which only the prior decides. Its posterior is then a curved
-    ridge that the ensembles explore slowly (VALIDATION.md §1: on a 2-force design τ reached
-    ~1,800 steps; with a third force ~15–40), and drift predictions at other stresses rest on
-    the prior.
+    ridge that the ensembles explore slowly (autocorrelation times in VALIDATION.md), and drift
+    predictions at other stresses rest on the prior.
 
     Returns
     -------
@@ -283,9 +279,8 @@ def fit(
         processes=settings.processes,
     )
     n_walk = settings.walkers_for(posterior.ndim)
-    # Ensembles start in the separate regions in turn (module docstring). Started in a lower
-    # region, an ensemble used to stay there (R-hat 1.94 after 3,000 steps, 9 tests x 61
-    # samples); the mixture independence proposal now carries its walkers across.
+    # Ensembles start in the separate regions in turn (module docstring); the mixture
+    # independence proposal carries walkers between regions.
     regions = start_regions(
         posterior, optima, nested_starts(posterior, optima[0]), settings.n_ensembles
     )

@@ -159,7 +159,7 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
     toward 0, in log coordinates an exponential one, often bent through the other parameters
     (inv_b1 → 0 with a slower Kelvin element taking over the linear creep). It holds no local
     maximum, so no optimiser start finds it, and ensembles started at the MAP explore it slowly
-    (VALIDATION.md §1: τ ≈ 350 steps, SBC ranks of inv_b1 piled at 0). Each start here holds
+    (without these starts the SBC ranks of inv_b1 piled at 0; VALIDATION.md). Each start here holds
     one such parameter at ``depth`` and optimises the others from ``u_best``; :func:`fit` offers
     them to the region sorting, which keeps those within reach of the best region's Laplace mass.
 

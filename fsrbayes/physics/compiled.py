@@ -5,9 +5,9 @@ The same algorithm as :mod:`fsrbayes.physics.solver` (bracketed Newton in the lo
 law above it, bisection when a step leaves the bracket, the last step below ``finish`` taken
 without another evaluation), written as one loop over points instead of chains of numpy
 operations on masked arrays. Each point stops at its own convergence, nothing is allocated
-per iteration, and the transcendental functions run back to back: on the benchmark workload
-(48 walkers × 549 points) the solve is several times faster than the numpy version, which
-stays the reference (``solve_bulk(..., engine="numpy")``) and the paper law's solver.
+per iteration, and the transcendental functions run back to back, so it is several times faster
+than the numpy version (BENCHMARKS.md), which stays the reference
+(``solve_bulk(..., engine="numpy")``) and the paper law's solver.
 
 The results agree with the numpy solver to rounding (the tests compare both on random and
 edge-case inputs); regimes and validity are decided by the same comparisons, so they agree

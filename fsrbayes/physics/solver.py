@@ -295,8 +295,8 @@ def _classify_paper(rest, v, vth, peak, log_rs, s, phi, a, regime, x):
     Tests run from the top: if eq. 10 is still below the circuit line at Va (h < 0), no root
     and no jump lie in [Vth, Va] (h rises within a branch), so only the eq.-11 tests remain.
     Sets ``regime`` (and ``x`` at jump points). Points whose root would lie past the eq.-11
-    peak stay INVALID. (For eq. 11 the ohmic start beats a Newton step from Va: 4.2 against
-    5.0 evaluations per point on the benchmark workload.)
+    peak stay INVALID. (For eq. 11 the ohmic start needs fewer evaluations than a Newton step
+    from Va.)
     """
     n = v.size
     h10_va = np.full(n, np.inf)

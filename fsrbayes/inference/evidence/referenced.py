@@ -25,10 +25,9 @@ Implemented as a target for :func:`~fsrbayes.inference.evidence.ladder.log_evide
 the t density in w and its "log-likelihood" is log[L·π/g] — the ladder code is unchanged.
 
 Separate regions. "Exact for any g" holds only if the ladder's walkers reach every region of the
-posterior, and they start from g. The creep posterior's s0–Va ridge has several local maxima (on the
-benchmark Burgers specimen at Va ≈ −0.10, −0.68, −0.75, −1.02 and −1.15 in prior-scaled units, the
-first holding ~90–95 % of the mass); a pilot that started in a minor one gave log Z 3.2 nats low
-with an error bar of ±0.03. So the pilot first looks for separate optima (:func:`distinct_optima`,
+posterior, and they start from g. The creep posterior's s0–Va ridge can hold several local maxima,
+and a reference fitted in a minor one gives a log Z nats low with a tiny error bar. So the pilot
+first looks for separate optima (:func:`distinct_optima`,
 several optimiser starts), runs one pilot per region and makes g a mixture Σ a_j·g_j
 (:class:`MixtureReference`); the ladder's state carries the component label j, each walker moves in
 the chart w_j of its own component, and a Gibbs step re-draws j given u (:class:`ReferencedTarget`).
@@ -36,11 +35,9 @@ Independent searches (``pilot_groups``, by default one per replicate ladder) eac
 reference and feed their own ladder; the spread of the group means enters the error bar as
 ``sigma_pilot``, so a region one search missed shows as error rather than hiding as bias. One ladder
 per group makes that spread the whole story: the ladders' share of a minor region differs between
-references *and* between ladders on one reference (on the benchmark Burgers specimen two ladders on
-one reference gave 3748.209 and 3748.278 while batch means said ±0.006), and with two groups of two
-ladders the spread of two group means — one degree of freedom — was often small by chance: over six
-seeds the error bar was up to ~3× smaller than the scatter (BENCHMARKS.md). Four groups give it
-three.
+references *and* between ladders on one reference, far beyond what batch means see, and a spread of
+only two group means (one degree of freedom) is often small by chance. Four groups give it three
+(the scatter of seeds against the reported errors is in BENCHMARKS.md).
 """
 
 import time
@@ -117,10 +114,8 @@ class ModeSearch:
     ----------
     n_starts : int
         Optimiser starts (:func:`~fsrbayes.inference.fit.find_map`, from the best prior draws).
-        Each replicate ladder has its own search, so four ladders make 48 starts in all. With 8
-        per search the benchmark Burgers specimen's searches found fewer minor regions (2.2
-        against 2.5 per search) and seven seeds averaged 3748.127 against 3748.155 (six seeds,
-        12 starts): 0.03 nats lower, about one reported error.
+        Each replicate ladder has its own search, so four ladders make 48 starts in all. Fewer
+        starts find fewer minor regions and bias log Z low (BENCHMARKS.md).
     max_modes : int
         At most this many regions get a pilot and a reference component.
     separation : float
@@ -287,8 +282,7 @@ def referenced_log_evidence(
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
         (``False``). The quadratic map makes a curved ridge round, but a parabola fitted to a
         *kinked* ridge bends the arms' far ends in the chart, where the ladder's walkers then rarely
-        go: on :class:`~fsrbayes.inference.evidence.tempered` 's bent-ridge test the β = 1 draws'
-        99.9 % quantile was 2.8 instead of 3.09 with it, 3.06–3.11 without.
+        go (the closed-form bent ridge, VALIDATION.md).
 
     Returns
     -------

@@ -2,10 +2,9 @@
 
 The ensemble sampler (:mod:`~fsrbayes.inference.samplers.ensemble`) moves walkers along the
 posterior; a walker must *walk* to every part of it. The creep posterior's s0–Va ridge can bend into
-two arms (Simmons' law has a slope kink where V_bulk crosses Va/e; VALIDATION.md §1), and an
-ensemble in one arm rarely reaches the other arm's far end: in the simulation-based calibration
-(SBC) s0's truth ranked at an extreme in 19 of 100 replications, every ensemble fit reporting R-hat
-≤ 1.01.
+two arms (Simmons' law has a slope kink where V_bulk crosses Va/e), and an ensemble in one arm
+rarely reaches the other arm's far end while every convergence criterion holds — simulation-based
+calibration shows it as truths ranked at the extremes (VALIDATION.md).
 
 Here the draws come instead from the referenced ladders of
 :func:`~fsrbayes.inference.evidence.referenced.referenced_log_evidence`: a mixture reference g with
@@ -21,18 +20,15 @@ rank-normalised split R-hat across ladders (each ladder's β = 1 draws in time o
 different pilot groups have independent references), kept steps ≥ ``tau_factor``·τ and a bulk
 ESS ≥ ``ess_target``. τ and the ESS are those of the *ensemble mean* of the rank-normalised
 draws, step by step: swaps move states between walker slots, so one slot's history is not one
-walker's, and per-slot autocorrelations called the bent-ridge test's 76,800 draws worth 61,000
-while the four ladders' standard deviations of x spread from 0.94 to 0.99. The ensemble-mean
-series keeps every correlation between slots: ESS = ESS(means)·Var(draws)/Var(means). A ladder
+walker's, and per-slot autocorrelations overstate the ESS by far. The ensemble-mean series keeps
+every correlation between slots: ESS = ESS(means)·Var(draws)/Var(means). A ladder
 has a fixed length: when the criteria fail the fit warns with the numbers (raise
 ``ladder.steps``).
 
-Measured: on the closed-form bent ridge (:class:`~validation.closed_form.BentRidge`)
-the draws match the exact marginals within their error bars where the ensemble sampler with
-quadratic maps does not. On the creep posteriors of the SBC design the rungs themselves mix
-slowly — τ ≈ 180–200 steps of the top rung's ensemble mean — so the default 600-step ladders
-are not converged (the fit says so) and a 300-step SBC was far from calibrated
-(VALIDATION.md §1). Converged creep fits need ~10,000 steps per ladder.
+On the closed-form bent ridge the draws match the exact marginals where the ensemble sampler with
+quadratic maps does not. On creep posteriors the rungs themselves mix slowly, so the default
+600-step ladders are not converged (the fit says so); converged creep fits need ladders of about
+10,000 steps (VALIDATION.md).
 """
 
 import warnings

@@ -1,8 +1,8 @@
 """The joint hierarchical posterior by blocked Gibbs sweeps inside emcee.
 
-Plain ensemble moves over all 214 parameters of 16 specimens barely move (0.86 s per step,
-τ not estimable in 200 steps; BENCHMARKS.md): a stretch or differential-evolution proposal in
-214 dimensions is almost always rejected by one of the 16 likelihoods. The joint posterior has
+Plain ensemble moves over all 214 parameters of 16 specimens barely move: a stretch or
+differential-evolution proposal in 214 dimensions is almost always rejected by one of the 16
+likelihoods. The joint posterior has
 a structure they ignore — given the hyper-parameters Λ the specimens are independent 12-d
 problems, and given the specimens Λ splits into P independent (μ_p, ω_p) pairs of a normal
 model. :class:`GibbsJointTarget` hands emcee one move, :class:`BlockGibbsMove`, that sweeps
@@ -23,9 +23,9 @@ those blocks for every walker:
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
    shift-and-scale move of (μ_p, ω_p, every z_jp) — the non-centred direction.
 
-On the 16-specimen bench (214 parameters) a sweep of 4 × 32 walkers costs 0.27 s on 2 cores
-and τ ≈ 250 sweeps (ω_A0: each specimen's A0–A1–A2 ridge of the area law, eq. 6, mixes slowly
-inside its block), against 0.86 s per step and no measurable progress for plain ensemble moves.
+The slowest direction is ω of the area law's coefficients: each specimen's A0–A1–A2 ridge
+(eq. 6) mixes slowly inside its block. Costs and autocorrelation times on the 16-specimen bench
+are in BENCHMARKS.md.
 
 Each sweep costs two likelihood evaluations per specimen and walker (the same as two steps of a
 single-specimen fit of every specimen); the joint log-density emcee stores is assembled from the

@@ -412,9 +412,9 @@ def _start_from_two_stage(target, two, settings, rng):
 def _fit_one(args):
     """Fit one specimen with BLAS on one thread.
 
-    One specimen's fit, BLAS on one thread: workers side by side must not oversubscribe the cores
-    (16 fits of the same bench on 2 processes: 741 s with OpenBLAS's default threads, 390 s with
-    OMP_NUM_THREADS=1 — other fit seeds).
+    Workers side by side must not oversubscribe the cores: BLAS's own threads roughly doubled the
+    wall time of parallel specimen fits (BENCHMARKS.md). The model's registry entries come with
+    the job and are registered first, so a fresh worker knows a user's own law or effect.
     """
     data, specimen, kwargs, components = args
     register_components(components)  # a user's own creep law or effect, in a fresh worker

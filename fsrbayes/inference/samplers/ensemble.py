@@ -87,17 +87,16 @@ class SamplerSettings:
         Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
         fitted to each ensemble's warm-up draws in the map's coordinates,
         :class:`~fsrbayes.inference.samplers.transport.MixtureProposal`);
-        needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. On the
-        9-test creep posterior 0.3 halved the steps to convergence (τ 132 → 49–57); 0.2 gave
-        τ 67, 0.6 τ 155: walkers that reach a region the proposal under-covers wait there for
-        an accepted jump, and only the ensemble moves carry them on.
+        needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. Too large
+        a share slows mixing again: walkers that reach a region the proposal under-covers wait
+        there for an accepted jump, and only the ensemble moves carry them on (the share was
+        chosen by the autocorrelation times in BENCHMARKS.md).
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
         (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
-        coordinates: on the bent-ridge test of ``tests/test_tempered.py`` (x ~ N(0, 1)) the
-        quadratic map with independence moves gave sd(x) 0.966 and a 99.9 % quantile of 2.56–2.69
-        (exact 3.09) while reporting convergence; the affine map 1.007 and 3.01–3.07.
+        coordinates, which the chain then under-samples while reporting convergence; the affine
+        map does not (the closed-form bent ridge, VALIDATION.md).
     """
 
     n_ensembles: int = 4
