@@ -48,8 +48,8 @@ def main(names):
         return 2
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, "
-        f"{platform.processor() or 'cpu n/a'}; "
-        f"python {platform.python_version()}, numpy {np.__version__}"
+        f"{platform.processor() or 'cpu n/a'}; python {platform.python_version()}, numpy "
+        f"{np.__version__}"
     )
     for name in names or [n for n in BENCHMARKS if n != "dynesty"]:
         print(BENCHMARKS[name](), flush=True)

@@ -29,8 +29,6 @@ def run(rows_target=200_000, repeats=3):
 def report(result):
     return (
         f"csv read: {result['rows']:,} rows ({result['megabytes']:.1f} MB, {result['tests']} "
-        "tests) "
-        ""
-        f"in {result['seconds']:.2f} s = {result['rows'] / result['seconds']:,.0f} rows/s (target: "
-        "< 2 s)"
+        f"tests) in {result['seconds']:.2f} s = {result['rows'] / result['seconds']:,.0f} rows/s "
+        "(target: < 2 s)"
     )

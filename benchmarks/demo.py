@@ -40,8 +40,7 @@ def report(runs):
         target = 60 if r["plan"] == "quick" else 600
         out.append(
             f"demo ({r['plan']}): {r['seconds']:.0f} s (target <= {target} s), {r['n_specimens']} "
-            "specimens, "
-            f"{r['n_tests']} creep tests, {r['warnings']} warnings"
+            f"specimens, {r['n_tests']} creep tests, {r['warnings']} warnings"
         )
         out += [f"    {line}" for line in r["stages"]]
     return "\n".join(out)

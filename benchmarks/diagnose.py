@@ -39,7 +39,7 @@ def run(processes=2):
 def report(r):
     return (
         f"diagnose, 6 specimens x 9 tests x 61 samples, {r['processes']} processes: "
-        f"{r['seconds']:.0f} s "
-        f"(target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap {r['gap_before']:.2f} -> "
+        f"{r['seconds']:.0f} s (target <= 900 s); verdict {r['verdict']} ({r['effect']}), gap "
+        f"{r['gap_before']:.2f} -> "
         f"{r['gap_after']:.2f}; ln B " + ", ".join(f"{k} {v:.0f}" for k, v in r["log_bf"].items())
     )

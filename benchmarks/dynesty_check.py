@@ -142,12 +142,10 @@ def report(results):
         spread = log_z.std(ddof=1) / np.sqrt(len(log_z)) if len(log_z) > 1 else float("nan")
         lines.append(
             f"dynesty ({entry['base']} base, {entry['nlive']} live) log Z {model}: "
-            f"{log_z.mean():.3f} ± {spread:.3f} "
-            f"(spread of {len(log_z)} runs: {', '.join(f'{v:.3f}' for v in log_z)}; logzerr "
+            f"{log_z.mean():.3f} ± {spread:.3f} (spread of {len(log_z)} runs: "
+            f"{', '.join(f'{v:.3f}' for v in log_z)}; logzerr "
             f"{np.mean([r[1] for r in entry['runs']]):.3f}; "
-            f"{np.mean([r[2] for r in entry['runs']]):.0f} "
-            f"calls and {np.mean([r[3] for r in entry['runs']]):.0f} s per run; "
-            f"{entry['wall']:.0f} "
-            "s wall)"
+            f"{np.mean([r[2] for r in entry['runs']]):.0f} calls and "
+            f"{np.mean([r[3] for r in entry['runs']]):.0f} s per run; {entry['wall']:.0f} s wall)"
         )
     return "\n".join(lines)

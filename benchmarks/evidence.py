@@ -51,7 +51,6 @@ def run(path="reference", samples=21, seed=1):
 def report(results):
     return "\n".join(
         f"log Z {model} (9 tests x 21 samples): {r}; {r.seconds:.0f} s, {r.n_evals} ladder "
-        "likelihood "
-        f"calls, min swap acceptance {r.swap_acceptance.min():.2f}"
+        f"likelihood calls, min swap acceptance {r.swap_acceptance.min():.2f}"
         for model, r in results.items()
     )

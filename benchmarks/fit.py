@@ -55,9 +55,8 @@ def report(r):
     state = "converged" if r["converged"] else "NOT converged"
     return (
         f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: "
-        f"{r['seconds']:.0f} s, "
-        f"{r['steps']} steps, {state} "
-        f"({r['report']}); target <= {TARGET_S:.0f} s"
+        f"{r['seconds']:.0f} s, {r['steps']} steps, {state} ({r['report']}); target <= "
+        f"{TARGET_S:.0f} s"
     )
 
 
@@ -66,8 +65,7 @@ def report_seeds(rows):
     lines = [report(r) for r in rows]
     lines.append(
         f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range "
-        f"{seconds.min():.0f}-{seconds.max():.0f} s, "
-        f"{int(np.sum(seconds <= TARGET_S))} within {TARGET_S:.0f} s, "
-        f"{sum(r['converged'] for r in rows)} converged"
+        f"{seconds.min():.0f}-{seconds.max():.0f} s, {int(np.sum(seconds <= TARGET_S))} within "
+        f"{TARGET_S:.0f} s, {sum(r['converged'] for r in rows)} converged"
     )
     return "\n".join(lines)

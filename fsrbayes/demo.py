@@ -53,12 +53,11 @@ from .inference.population.predictive import (
 from .inference.population.routes import two_stage
 from .inference.posterior import LogPosterior
 from .inference.samplers import SamplerSettings
+from .physics.constants import DRIFT_TIME_S
 from .report import embed_figure, markdown_to_html, write_diagnosis_report
 from .utils import atomic_path, json_ready, write_json_atomic
 
 __all__ = ["DemoPlan", "FULL", "QUICK", "run_demo"]
-
-DRIFT_TIME_S = 3600.0
 
 
 @dataclass(frozen=True)
@@ -243,13 +242,13 @@ def _figures(sensor, pop, fits, folder):
     for by, caption in (
         (
             "voltage",
-            "drift(3600 s) of a new specimen against the sourcing voltage, per stress "
-            "(the stand-in for the paper's Figures 10 and 11)",
+            "drift(3600 s) of a new specimen against the sourcing voltage, per stress (the "
+            "stand-in for the paper's Figures 10 and 11)",
         ),
         (
             "stress",
-            "drift(3600 s) of a new specimen against stress, per sourcing voltage "
-            "(Figures 13 and 14)",
+            "drift(3600 s) of a new specimen against stress, per sourcing voltage (Figures 13 "
+            "and 14)",
         ),
     ):
         path = folder / f"population_drift_by_{by}.png"
@@ -287,8 +286,8 @@ def _narrative(results, figures, plan):
     for sensor, e in results["evidence"].items():
         lines.append(
             f"| {sensor} | {e['log_bf_burgers_over_zener']:.1f} | "
-            f"{e['specimens_preferring_burgers']}/"
-            f"{len(e['per_specimen'])} | {e['preferred']}: {e['strength']} |"
+            f"{e['specimens_preferring_burgers']}/{len(e['per_specimen'])} | {e['preferred']}: "
+            f"{e['strength']} |"
         )
     lines += [
         "",
@@ -302,19 +301,16 @@ def _narrative(results, figures, plan):
         for opt in pop["optimal_voltage"]:
             edge = (
                 f"; for {100 * opt['at_boundary']:.0f} % of new specimens the optimum is an end of "
-                "the "
-                f"range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling with "
-                "voltage there)"
+                f"the range {opt['v_range'][0]:g}–{opt['v_range'][1]:g} V (drift keeps falling "
+                "with voltage there)"
                 if opt["at_boundary"] > 0.05
                 else ""
             )
             lines.append(
                 f"- {sensor} at {opt['stress_Pa'] / 1e3:.0f} kPa: |drift(3600 s)| of a new "
-                "specimen "
-                "is "
-                f"smallest at **{opt['median']:.2g} V** (90 %: {opt['q05']:.2g}–{opt['q95']:.2g} "
-                "V), "
-                f"where it drifts {opt['drift_at_optimum']['q50']:+.2f} % (median){edge}"
+                f"specimen is smallest at **{opt['median']:.2g} V** (90 %: "
+                f"{opt['q05']:.2g}–{opt['q95']:.2g} V), where it drifts "
+                f"{opt['drift_at_optimum']['q50']:+.2f} % (median){edge}"
             )
         lines.append(
             f"- {sensor}: two-stage population posterior, fewest effective draws of a specimen "
@@ -326,13 +322,11 @@ def _narrative(results, figures, plan):
         "",
         "## What the model misses",
         "",
-        f"`diagnose` on {', '.join(d['specimens'])}: verdict **{d['verdict']}**"
-        f"{' (' + d['effect'] + ')' if d['effect'] else ''}; gap {d['gap_before']:.2f} (an "
-        "adequate "
-        "model "
-        f"gives about 0.75–1); best candidate {best['effect']} with ln B = {best['log_bf']:.1f} "
-        "over the base "
-        f"model (an effect is named from ln B = 10). Full report: `{d['report']}`",
+        f"`diagnose` on {', '.join(d['specimens'])}: verdict "
+        f"**{d['verdict']}**{' (' + d['effect'] + ')' if d['effect'] else ''}; gap "
+        f"{d['gap_before']:.2f} (an adequate model gives about 0.75–1); best candidate "
+        f"{best['effect']} with ln B = {best['log_bf']:.1f} over the base model (an effect is "
+        f"named from ln B = 10). Full report: `{d['report']}`",
     ]
     lines += ["", "## Figures", ""]
     lines += [f"![{caption}]({path})" for path, caption in figures]
@@ -379,8 +373,7 @@ def _run(out, plan, processes, seed, echo):
     specimens = list(data.specimens)
     echo(
         f"[{time.perf_counter() - started:5.0f} s] {len(specimens)} specimens, {len(data.tests)} "
-        "creep tests "
-        f"({plan.name} plan): Burgers and Zener fits"
+        f"creep tests ({plan.name} plan): Burgers and Zener fits"
     )
     jobs = [(data.select(specimen=s), s, plan, [seed, k]) for k, s in enumerate(specimens)]
     fits = map_jobs(
@@ -388,9 +381,9 @@ def _run(out, plan, processes, seed, echo):
         jobs,
         processes=processes,
         on_result=lambda k, r: echo(
-            f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): "
-            f"ln B Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} "
-            f"({r['seconds']:.0f} s)"
+            f"[{time.perf_counter() - started:5.0f} s]   {r['specimen']} ({r['sensor']}): ln B "
+            f"Burgers/Zener {r['log_z']['burgers'] - r['log_z']['zener']:+.1f} ({r['seconds']:.0f} "
+            "s)"
         ),
     )
     results = {
@@ -408,8 +401,7 @@ def _run(out, plan, processes, seed, echo):
         sensor_fits = [f for f in fits if f["sensor"] == sensor]
         echo(
             f"[{time.perf_counter() - started:5.0f} s] {sensor}: population posterior (two-stage), "
-            "new specimens, "
-            "optimal voltage"
+            "new specimens, optimal voltage"
         )
         pop = _population(sensor, sensor_fits, data, plan, seed, folder)
         figures += _figures(sensor, pop, sensor_fits, folder)

@@ -371,8 +371,8 @@ def sbc_rank_plot(result, bins=10, per_row=4):
     for ax in axes[-1]:
         ax.set_xlabel("rank of the truth", fontsize=8)
     fig.suptitle(
-        f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; "
-        f"grey: 99 % band of a calibrated bin",
+        f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; grey: 99 % "
+        "band of a calibrated bin",
         fontsize=9,
     )
     fig.tight_layout()

@@ -17,12 +17,12 @@ __all__ = ["diagnosis_narrative", "write_diagnosis_report", "markdown_to_html", 
 _CSS = (
     "body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;"
     "line-height:1.45;color:#222}\n"
-    "table{border-collapse:collapse;margin:1em 0;font-size:0.92em}td,th{border:1px solid #bbb;"
-    "padding:0.25em 0.6em;text-align:right}\n"
-    "th{background:#eee}td:first-child,th:first-child{text-align:left}img{max-width:100%;"
-    "border:1px solid #ddd}\n"
-    "code{background:#f3f3f3;padding:0 0.2em}h1{font-size:1.6em}h2{font-size:1.25em;"
-    "margin-top:1.6em}"
+    "table{border-collapse:collapse;margin:1em 0;font-size:0.92em}"
+    "td,th{border:1px solid #bbb;padding:0.25em 0.6em;text-align:right}\n"
+    "th{background:#eee}td:first-child,th:first-child{text-align:left}"
+    "img{max-width:100%;border:1px solid #ddd}\n"
+    "code{background:#f3f3f3;padding:0 0.2em}h1{font-size:1.6em}"
+    "h2{font-size:1.25em;margin-top:1.6em}"
 )
 
 
@@ -62,20 +62,18 @@ def diagnosis_narrative(result):
     stress = _where_worst(result["misfit_by_stress_before"], "stress_Pa", "kPa", 1e-3)
     lines.append(
         f"The base model (`{result['base']}`), fitted to {n_spec} specimen(s) and "
-        f"{result['n_tests']} creep "
-        f"tests, misses the measured creep curves by **gap_before = {result['gap_before']:.2f}** "
-        f"({result['gap_metric']}); drift(3600 s) alone by {result['drift_gap_before']:.2f}. "
-        f"Across voltages it {voltage}; across stresses it {stress}."
+        f"{result['n_tests']} creep tests, misses the measured creep curves by **gap_before = "
+        f"{result['gap_before']:.2f}** ({result['gap_metric']}); drift(3600 s) alone by "
+        f"{result['drift_gap_before']:.2f}. Across voltages it {voltage}; across stresses it "
+        f"{stress}."
     )
     failed = result["findings_before"]["failed"]
     lines += [
         "",
         (
             "Posterior predictive checks failing at p < "
-            f"{result['findings_before']['bonferroni_level']:.2g} "
-            f"(0.01 after a Bonferroni correction over {result['findings_before']['n_checks']} "
-            "checks): "
-            f"{len(failed)}."
+            f"{result['findings_before']['bonferroni_level']:.2g} (0.01 after a Bonferroni "
+            f"correction over {result['findings_before']['n_checks']} checks): {len(failed)}."
         ),
     ]
     for f in sorted(failed, key=lambda f: f["p_value"])[:8]:
@@ -95,40 +93,35 @@ def diagnosis_narrative(result):
     if result["effect"]:
         lines.append(
             f"Adding **{best['effect']}** ({best['summary']}) with "
-            f"{_parameter_text(best['parameters'])} "
-            f"raises the evidence by ln B = {best['log_bf']:.1f} summed over {n_spec} specimen(s) "
-            f"({best['specimens_favouring']} of {n_spec} favour it; the runner-up is "
+            f"{_parameter_text(best['parameters'])} raises the evidence by ln B = "
+            f"{best['log_bf']:.1f} summed over {n_spec} specimen(s) ({best['specimens_favouring']} "
+            f"of {n_spec} favour it; the runner-up is "
             f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
             f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
             f"({100 * best['gap_closed']:.0f} % closed; drift(3600 s) misfit "
-            f"{result['drift_gap_before']:.2f} → "
-            f"{result['drift_gap_after']:.2f})."
+            f"{result['drift_gap_before']:.2f} → {result['drift_gap_after']:.2f})."
         )
     else:
         lines.append(
             f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base "
-            "model "
-            f"(best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is "
-            "**adequate** "
-            "for "
-            f"these data."
+            f"model (best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is "
+            "**adequate** for these data."
         )
     lines += [
         "",
         "## Candidates",
         "",
         (
-            "| rank | effect | ln B over base | specimens favouring | gap after | "
-            "gap closed | parameters |"
+            "| rank | effect | ln B over base | specimens favouring | gap after | gap closed | "
+            "parameters |"
         ),
         "|---|---|---|---|---|---|---|",
     ]
     for c in result["candidates"]:
         lines.append(
             f"| {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | "
-            f"{c['specimens_favouring']}/{n_spec} | "
-            f"{c['gap_after']:.2f} | {100 * c['gap_closed']:.0f} % | "
-            f"{_parameter_text(c['parameters'])} |"
+            f"{c['specimens_favouring']}/{n_spec} | {c['gap_after']:.2f} | "
+            f"{100 * c['gap_closed']:.0f} % | {_parameter_text(c['parameters'])} |"
         )
     lines += [
         "",

@@ -80,8 +80,8 @@ def test_specimen_fits_keep_the_others_when_one_worker_dies(monkeypatch):
     assert list(fits) == ["a201-01", "a201-03"]
     messages = [str(w.message) for w in caught if w.category is SpecimenFitWarning]
     assert messages == [
-        "1 of 3 specimen fits failed, the other 2 kept: a201-02: its worker process died "
-        "(killed by a signal or out of memory)"
+        "1 of 3 specimen fits failed, the other 2 kept: a201-02: its worker process died (killed "
+        "by a signal or out of memory)"
     ]
 
 
@@ -125,8 +125,8 @@ def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(
     assert code == 1
     assert "a201-02: its worker process died" in err
     assert err.strip().splitlines()[-1] == (
-        "fsrbayes fit: error: the fits of a201-02 failed (the reasons are in the "
-        "warning above); the population was built from the other specimens"
+        "fsrbayes fit: error: the fits of a201-02 failed (the reasons are in the warning above); "
+        "the population was built from the other specimens"
     )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["failed_specimens"] == ["a201-02"] and sorted(summary["specimens"]) == [
@@ -155,8 +155,8 @@ def test_a_full_disk_is_refused_before_sampling(monkeypatch, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert err[0].startswith(
-        f"fsrbayes fit: error: --out {tmp_path / 'fit'} has 20 MB free; fitting 2 specimens "
-        "writes up to "
+        f"fsrbayes fit: error: --out {tmp_path / 'fit'} has 20 MB free; fitting 2 specimens writes "
+        "up to "
     )
     assert time.perf_counter() - started < 10 and not list((tmp_path / "fit").iterdir())
 

@@ -54,8 +54,8 @@ def test_each_layer_imports_only_itself_and_the_layers_below():
 
 def test_importing_physics_loads_no_sampler_or_plotting_library():
     code = (
-        "import sys, fsrbayes.physics, fsrbayes; "
-        f"print(','.join(sorted(m for m in {sorted(HEAVY)!r} if m in sys.modules)))"
+        "import sys, fsrbayes.physics, fsrbayes; print(','.join(sorted(m for m in "
+        f"{sorted(HEAVY)!r} if m in sys.modules)))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""

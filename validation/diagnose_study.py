@@ -186,9 +186,8 @@ def diagnose_study(cases=MATRIX, *, n_specimens=2, samples=31, seed=0, processes
 def format_study(rows):
     """A Markdown table of study results."""
     lines = [
-        "| case | verdict | named | ln B of the hidden effect | best rival ln B | gap before | gap "
-        "after | "
-        "after/before | s |",
+        "| case | verdict | named | ln B of the hidden effect | best rival ln B | gap before | "
+        "gap after | after/before | s |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
@@ -196,9 +195,7 @@ def format_study(rows):
         truth = "–" if r["log_bf_truth"] is None else f"{r['log_bf_truth']:.1f}"
         lines.append(
             f"| {r['case']} | {r['verdict']} | {r['effect'] or '–'} | {truth} | {max(rivals):.1f} "
-            "| "
-            ""
-            f"{r['gap_before']:.2f} | {r['gap_after']:.2f} | "
+            f"| {r['gap_before']:.2f} | {r['gap_after']:.2f} | "
             f"{r['gap_ratio']:.2f}{'' if r['gap_check'] else ' (not asked)'} | "
             f"{r['drift_gap_before']:.2f} → {r['drift_gap_after']:.2f} | {r['seconds']:.0f} |"
         )

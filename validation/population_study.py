@@ -25,10 +25,10 @@ import numpy as np
 
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.output import DRIFT_TIME_S
 from fsrbayes.inference.population.predictive import ForwardTemplate, drift_groups, new_specimens
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.physics.constants import DRIFT_TIME_S
 
 __all__ = [
     "population_study",
@@ -216,34 +216,31 @@ def format_population_study(study):
         z = "" if row["realised_z"] is None else f"{row['realised_z']:6.2f}"
         lines.append(
             f"{row['name']:18s} {row['truth']:9.4f} {row['q05']:9.4f} {row['median']:9.4f} "
-            f"{row['q95']:9.4f}"
-            f"  {'yes' if row['inside'] else 'NO ':3s}  {row['realised']:9.4f} {z:>6s}"
+            f"{row['q95']:9.4f}  {'yes' if row['inside'] else 'NO ':3s}  {row['realised']:9.4f} "
+            f"{z:>6s}"
         )
     inside = sum(r["inside"] for r in study["hyper"])
     lines.append(
         f"{inside} of {len(study['hyper'])} 90 % intervals hold the simulation's value (realised: "
-        "mean and sd "
-        "of the drawn specimens' log-values; z: their mean's distance from μ in units of ω/√n)"
+        "mean and sd of the drawn specimens' log-values; z: their mean's distance from μ in units "
+        "of ω/√n)"
     )
     lines.append(
-        f"observed drift(3600 s) inside the new-specimen 5-95 % range as measured (noise "
+        "observed drift(3600 s) inside the new-specimen 5-95 % range as measured (noise "
         f"{study['noise_rel']:.4f}): {study['observed_covered']:.2f} of {study['n_observed']} "
-        "tests "
-        "(0.90 expected)"
+        "tests (0.90 expected)"
     )
     lines.append(
-        f"noiseless true drift(3600 s) of each specimen inside the noise-free 5-95 % range: "
+        "noiseless true drift(3600 s) of each specimen inside the noise-free 5-95 % range: "
         f"{study['noiseless_covered']:.2f} (0.90 expected)"
     )
     lines.append(
         f"hyper-posterior: {study['hyper_report']}; min effective draws "
-        f"{study['min_effective_draws']:.0f}; "
-        f"log L MC sd {study['log_likelihood_mc_sd']:.2f}"
+        f"{study['min_effective_draws']:.0f}; log L MC sd {study['log_likelihood_mc_sd']:.2f}"
     )
     lines.append(
         f"{study['fits_converged']}/{study['n_specimens']} specimen fits met the full criteria; "
-        "fits "
-        f"{study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s"
+        f"fits {study['fit_seconds']:.0f} s, total {study['seconds']:.0f} s"
     )
     routes = study.get("routes")
     if routes:

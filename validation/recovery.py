@@ -21,6 +21,7 @@ from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.physics.constants import DRIFT_TIME_S
 
 __all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
 
@@ -28,8 +29,6 @@ RECOVERY_SETTINGS = SamplerSettings(
     n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2
 )
 """Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
-
-DRIFT_TIME_S = 3600.0
 
 
 def recovery_study(
@@ -112,8 +111,7 @@ def format_recovery(study):
     coverage = coverage_at(study)
     lines = [
         f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} "
-        f"{'misses low/high':>16s} "
-        f"{'sd post/prior':>14s}  identified"
+        f"{'misses low/high':>16s} {'sd post/prior':>14s}  identified"
     ]
     for i, name in enumerate(study["names"]):
         ratio = float(np.median(study["sd_ratio"][:, i]))

@@ -67,8 +67,7 @@ def cmd_compare(args):
     for name, bf in result["bayes_factors"].items():
         print(
             f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± "
-            f"{bf['err']:.2f} "
-            f"({bf['strength']})"
+            f"{bf['err']:.2f} ({bf['strength']})"
         )
     if args.json:
         write_json_atomic(Path(args.json), result)
@@ -195,8 +194,7 @@ def cmd_calibrate(args):
         done.append(index)
         print(
             f"replication {len(done)}/{args.reps}: {rep['seconds']:.0f} s, min ESS "
-            f"{rep['ess_min']:.0f}, "
-            f"max R-hat {rep['rhat_max']:.3f}",
+            f"{rep['ess_min']:.0f}, max R-hat {rep['rhat_max']:.3f}",
             flush=True,
         )
 

@@ -86,8 +86,8 @@ def enough_space(folder, need_bytes, what):
     if free < 1.2 * need_bytes:
         raise UsageError(
             f"--out {folder} has {free / 1e6:.0f} MB free; {what} writes up to "
-            f"{need_bytes / 1e6:.0f} MB "
-            "(checkpoint and posterior); free some space or choose another folder"
+            f"{need_bytes / 1e6:.0f} MB (checkpoint and posterior); free some space or choose "
+            "another folder"
         )
 
 

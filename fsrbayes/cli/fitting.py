@@ -107,9 +107,7 @@ def _tempered_settings(args):
         if bad:
             raise UsageError(
                 f"{flag} works with --sampler ensemble only; the tempered sampler runs "
-                "fixed-length "
-                ""
-                "ladders without checkpoints"
+                "fixed-length ladders without checkpoints"
             )
     ladder = TEMPERED_SETTINGS.ladder
     steps = args.ladder_steps if args.ladder_steps is not None else ladder.steps
@@ -171,8 +169,7 @@ def _fit_hierarchical(args, data, settings, out):
         folder.mkdir(parents=True, exist_ok=True)
         print(
             f"{sensor}: fitting {len(part.specimens)} specimens "
-            f"({args.processes or os.cpu_count()} "
-            "processes)",
+            f"({args.processes or os.cpu_count()} processes)",
             flush=True,
         )
         with warnings.catch_warnings(record=True) as caught:
@@ -194,8 +191,7 @@ def _fit_hierarchical(args, data, settings, out):
                 )
                 raise FitFailed(
                     f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a "
-                    "population "
-                    f"needs 2 ({why})"
+                    f"population needs 2 ({why})"
                 )
             summaries = {}
             for specimen, result in fits.items():
@@ -253,8 +249,7 @@ def _fit_hierarchical(args, data, settings, out):
     if overall.get("failed"):
         raise FitFailed(
             f"the fits of {', '.join(overall['failed'])} failed (the reasons are in the warning "
-            "above); "
-            "the population was built from the other specimens"
+            "above); the population was built from the other specimens"
         )
     return 0
 
@@ -267,8 +262,7 @@ def _population_folders(fit_dir):
     if not found:
         raise UsageError(
             f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out "
-            f"{fit_dir}' "
-            "first"
+            f"{fit_dir}' first"
         )
     return found
 
@@ -337,17 +331,14 @@ def cmd_drift(args):
                 payload["optimal_voltage"].append({"sensor": sensor.name, **best})
                 print(
                     f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} "
-                    "V "
-                    ""
-                    f"(90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there "
+                    f"V (90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there "
                     f"{best['drift_at_optimum']['q50']:.2f} %"
                 )
         for g in groups:
             q = g["new_specimen"]
             print(
                 f"{sensor.name} {g['voltage_V']:g} V {g['stress_Pa'] / 1e3:.0f} kPa: new specimen "
-                "drift "
-                f"median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % "
+                f"drift median {q['q50']:.2f} %, 50 % {q['q25']:.2f}..{q['q75']:.2f}, 90 % "
                 f"{q['q05']:.2f}..{q['q95']:.2f}"
             )
         figures.append((groups, constant))

@@ -73,8 +73,7 @@ def cmd_demo(args):
     for sensor, e in results["evidence"].items():
         print(
             f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, "
-            "summed over "
-            f"{len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}"
+            f"summed over {len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}"
         )
     for sensor, pop in results["population"].items():
         best = ", ".join(
@@ -119,8 +118,7 @@ def _figure7(time_s, out):
     peak = float(paper_peak_voltage(params["s0"] * (1 - strain0), params["Va"]))
     print(
         f"The paper law is valid while V_bulk stays below its eq.-11 peak ({peak:.2f} V across the "
-        "bulk "
-        f"at 200 kPa); the smooth law holds at any voltage."
+        "bulk at 200 kPa); the smooth law holds at any voltage."
     )
     observed = _default_data_drift(time_s)
     payload = {

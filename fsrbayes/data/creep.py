@@ -149,8 +149,8 @@ class CreepData:
         """Return a few lines describing the data set."""
         n_spec = len(self.specimens)
         lines = [
-            f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of "
-            f"{n_spec} specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"
+            f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of {n_spec} "
+            f"specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"
         ]
         for sensor in self.sensors:
             sub = self.select(sensor=sensor)
@@ -160,7 +160,7 @@ class CreepData:
             lines.append(
                 f"  {sensor}: {len(sub.specimens)} "
                 f"specimen{'s' if len(sub.specimens) != 1 else ''}, voltages "
-                f"{', '.join(f'{v:g}' for v in volts)} V, "
-                f"stresses {', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
+                f"{', '.join(f'{v:g}' for v in volts)} V, stresses "
+                f"{', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
             )
         return "\n".join(lines)

@@ -40,8 +40,7 @@ def _decode(path):
         if size > MAX_TEXT_BYTES:
             raise DataError(
                 f"is {size / 2**30:.1f} GiB, more than the {MAX_TEXT_BYTES / 2**30:g} GiB read in "
-                "memory; "
-                "split it (per sensor or specimen)",
+                "memory; split it (per sensor or specimen)",
                 path,
             )
         raw = Path(path).read_bytes()
@@ -61,15 +60,14 @@ def _decode(path):
                 )  # never more than the cap in memory, however it unpacks
         except (OSError, EOFError, zlib.error) as exc:
             raise DataError(
-                f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or a "
-                "whole .csv.gz",
+                f"starts like a gzip file but cannot be decompressed ({exc}); expected a .csv or "
+                "a whole .csv.gz",
                 path,
             ) from None
         if len(raw) > MAX_TEXT_BYTES:
             raise DataError(
                 f"decompresses to more than {MAX_TEXT_BYTES / 2**30:g} GiB (a gzip bomb, or too "
-                "large to read "
-                "in memory); split it (per sensor or specimen)",
+                "large to read in memory); split it (per sensor or specimen)",
                 path,
             )
     try:
@@ -160,8 +158,8 @@ def read_csv(path, *, sep=",", shift_time=False):
     lines = text.splitlines()
     if sep == "," and ";" in lines[0] and "," not in lines[0]:
         raise DataError(
-            "fields are separated by ';', expected ','; re-export as comma-separated "
-            "or read with sep=';' (CLI: --sep ';')",
+            "fields are separated by ';', expected ','; re-export as comma-separated or read "
+            "with sep=';' (CLI: --sep ';')",
             path,
             1,
         )
@@ -226,8 +224,7 @@ def _validate(names, body, line_no, path, decimal_comma, shift_time):
             i = int(np.argmax(bad))
             raise DataError(
                 "the inverting amplifier's output must be negative for a positive current (eq. "
-                "23), "
-                f"got vo_V = {vo[i]:g}",
+                f"23), got vo_V = {vo[i]:g}",
                 path,
                 int(line_no[i]),
                 "vo_V",
@@ -271,8 +268,8 @@ def _check_units(stress, voltage, current, line_no, path, stress_given):
     if stress_given and np.any(stress < STRESS_PLAUSIBLE_MIN_PA):
         i = int(np.argmax(stress < STRESS_PLAUSIBLE_MIN_PA))
         raise DataError(
-            f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); "
-            "stress_Pa must be in pascals: multiply by 1000",
+            f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); stress_Pa "
+            "must be in pascals: multiply by 1000",
             path,
             int(line_no[i]),
             "stress_Pa",
@@ -357,8 +354,7 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
             if not shift_time:
                 raise DataError(
                     f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its "
-                    "times "
-                    "to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
+                    "times to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
                     path,
                     int(lines[0]),
                     "time_s",

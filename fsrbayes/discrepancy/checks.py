@@ -51,6 +51,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
+from ..physics.constants import DRIFT_TIME_S
+
 __all__ = [
     "DRIFT_TIME_S",
     "TEST_STATISTICS",
@@ -62,7 +64,6 @@ __all__ = [
     "two_sided_p",
 ]
 
-DRIFT_TIME_S = 3600.0
 """The time of the headline drift (the paper's one-hour creep tests)."""
 TEST_STATISTICS = ("drift_3600", "early_late", "logtime_trend", "quarter_means")
 """Per-test statistics with replicates (``loo_pit`` is per test too, but has no replicates);
@@ -329,9 +330,7 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if keep.sum() < 20:
         raise ValueError(
             f"specimen {data.specimen}: only {int(keep.sum())} of {len(draws)} draws are inside "
-            "the "
-            ""
-            f"model's domain; need at least 20 for predictive checks"
+            "the model's domain; need at least 20 for predictive checks"
         )
     draws, log_mu = draws[keep], log_mu[keep]
     params = posterior.parameters(draws)

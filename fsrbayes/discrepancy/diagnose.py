@@ -51,13 +51,9 @@ DEFAULT_THRESHOLD = 10.0
 """ln B of an effect over the base model (summed over specimens) needed to name it."""
 GAP_METRIC = (
     "rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's "
-    "samples "
-    "(level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 = "
-    "(observed - "
-    "predictive mean)' inverse(predictive covariance) (observed - predictive mean); ~1 or below "
-    "for "
-    "an "
-    "adequate model (about 0.75 on fitted virtual-bench data)"
+    "samples (level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 "
+    "= (observed - predictive mean)' inverse(predictive covariance) (observed - predictive mean); "
+    "~1 or below for an adequate model (about 0.75 on fitted virtual-bench data)"
 )
 
 
@@ -338,8 +334,7 @@ def diagnose(
     if family == "kalantari":
         raise ValueError(
             "diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) "
-            "takes "
-            "none: use burgers, zener or nutting"
+            "takes none: use burgers, zener or nutting"
         )
     effects = check_effects(
         effects if effects is not None else [e for e in EFFECTS if e not in had]

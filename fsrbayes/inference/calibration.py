@@ -39,6 +39,7 @@ from scipy import stats
 
 from ..data import synthetic
 from ..data.sensors import load_sensor
+from ..physics.constants import DRIFT_TIME_S
 from .evidence.ladder import LadderSettings
 from .evidence.referenced import PILOT_SETTINGS, ModeSearch
 from .evidence.tempered import TemperedSettings
@@ -59,7 +60,6 @@ __all__ = [
     "load_sbc",
 ]
 
-DRIFT_TIME_S = 3600.0
 LEVELS = (0.5, 0.8, 0.9)
 
 SBC_SETTINGS = SamplerSettings(
@@ -244,8 +244,7 @@ class SBCResult:
             low, high = entry["range"]
             failures += [
                 f"{self.names[q]}: {level:.0%} coverage {entry['share'][q]:.2f} outside "
-                f"[{low:.2f}, "
-                f"{high:.2f}]"
+                f"[{low:.2f}, {high:.2f}]"
                 for q in range(n_q)
                 if not low <= entry["share"][q] <= high
             ]
@@ -429,8 +428,8 @@ def format_sbc(result, bins=10, alpha=0.01):
             f"{result.n_reps} replications, L = {result.n_draws} draws each; fits: "
             f"{np.mean([r['seconds'] for r in reps]):.0f} s each, min ESS "
             f"{min(r['ess_min'] for r in reps):.0f}, max R-hat "
-            f"{max(r['rhat_max'] for r in reps):.3f}; "
-            f"{sum(r['redrawn'] for r in reps)} prior draws redrawn (no valid current)"
+            f"{max(r['rhat_max'] for r in reps):.3f}; {sum(r['redrawn'] for r in reps)} prior "
+            "draws redrawn (no valid current)"
         )
     lines.append(
         "calibrated: no uniformity test below alpha/(2Q) and coverage within binomial error"
@@ -469,8 +468,8 @@ if __name__ == "__main__":
         n,
         processes=2,
         on_result=lambda i, r: print(
-            f"replication {len(done.append(i) or done)}/{n}: "
-            f"{r['seconds']:.0f} s, min ESS {r['ess_min']:.0f}",
+            f"replication {len(done.append(i) or done)}/{n}: {r['seconds']:.0f} s, min ESS "
+            f"{r['ess_min']:.0f}",
             flush=True,
         ),
     )

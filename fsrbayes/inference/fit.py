@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.sensors import load_sensor
+from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
 from .optimize import ensemble_start, find_map, nested_starts, start_regions
 from .posterior import LogPosterior
@@ -96,11 +97,9 @@ def design_warnings(posterior):
     if len(sampled) > levels:
         return [
             f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law "
-            "A(σ) "
-            f"(eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data fix A "
-            "only at the "
-            f"tested stresses, the rest is prior along a curved ridge that mixes slowly; test at "
-            f">= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"
+            f"A(σ) (eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data "
+            "fix A only at the tested stresses, the rest is prior along a curved ridge that mixes "
+            f"slowly; test at >= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"
         ]
     return []
 
@@ -156,8 +155,6 @@ class FitResult:
 
 
 def _sampler_and_settings(sampler, settings):
-    from .evidence.tempered import TemperedSettings
-
     if sampler is None:
         sampler = "tempered" if isinstance(settings, TemperedSettings) else "ensemble"
     if sampler not in SAMPLERS:
@@ -167,8 +164,8 @@ def _sampler_and_settings(sampler, settings):
         settings = TemperedSettings() if sampler == "tempered" else FIT_SETTINGS
     if not isinstance(settings, expected):
         raise TypeError(
-            f"sampler={sampler!r} needs settings of type {expected.__name__}, "
-            f"got {type(settings).__name__}"
+            f"sampler={sampler!r} needs settings of type {expected.__name__}, got "
+            f"{type(settings).__name__}"
         )
     return sampler, settings
 
@@ -250,8 +247,6 @@ def fit(
                 "checkpoint/resume work with sampler='ensemble' only; the tempered sampler runs "
                 "fixed-length ladders"
             )
-        from .evidence.tempered import reference_optima, tempered_run
-
         run, evidence = tempered_run(posterior, settings, seed, names=posterior.names)
         optima = np.array(reference_optima(evidence))
         if not len(optima):  # references fitted to given draws: no search ran

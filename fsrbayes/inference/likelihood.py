@@ -99,8 +99,8 @@ class SpecimenData:
             return data
         if not isinstance(data, CreepData):
             raise TypeError(
-                f"data must be CreepData (from read_csv or simulate) or SpecimenData, "
-                f"got {type(data).__name__}"
+                "data must be CreepData (from read_csv or simulate) or SpecimenData, got "
+                f"{type(data).__name__}"
             )
         if specimen is None:
             if len(data.specimens) != 1:

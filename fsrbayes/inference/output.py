@@ -12,6 +12,7 @@ import json
 import numpy as np
 
 from ..data.creep import observed_drift
+from ..physics.constants import DRIFT_TIME_S
 from ..utils import atomic_path, write_json_atomic
 from .samplers import even_index
 
@@ -21,10 +22,7 @@ __all__ = [
     "save_fit",
     "population_datatree",
     "save_population",
-    "DRIFT_TIME_S",
 ]
-
-DRIFT_TIME_S = 3600.0
 
 
 def _predictive(result, draws, rng, n_grid=61):

@@ -8,6 +8,7 @@ parameters of shape (W, 1, 1) against tests × times of shape (C, T).
 import numpy as np
 
 from ..data.prior import JointPrior
+from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import resolve_effects
 from ..physics.models import model_family, model_parameters, parse_model
 from ..physics.sensor import solve_current
@@ -188,7 +189,7 @@ class LogPosterior(PriorScaledTarget):
             log_current = np.log(solution.current)
         return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
 
-    def drift_percent(self, x, time_s=3600.0):
+    def drift_percent(self, x, time_s=DRIFT_TIME_S):
         """Return the model drift(t) of every test at ``time_s`` (eq. 22).
 
         Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C).

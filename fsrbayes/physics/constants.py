@@ -23,4 +23,14 @@ is ``exp(-KAPPA * s * sqrt(phi))`` (Simmons 1963; the paper's eq. 9 exponent).
 CURRENT_SCALE = ELEMENTARY_CHARGE**2 / (2.0 * math.pi * PLANCK_H)
 """e²/(2πh) in A/(V·... ) — Simmons' prefactor e/(2πh) times e to turn eV into J."""
 
-__all__ = ["PLANCK_H", "ELEMENTARY_CHARGE", "ELECTRON_MASS", "KAPPA", "CURRENT_SCALE"]
+DRIFT_TIME_S = 3600.0
+"""The time of the paper's headline drift, drift(3600 s) (eq. 22; Figures 7, 10–14), in s."""
+
+__all__ = [
+    "PLANCK_H",
+    "ELEMENTARY_CHARGE",
+    "ELECTRON_MASS",
+    "KAPPA",
+    "CURRENT_SCALE",
+    "DRIFT_TIME_S",
+]

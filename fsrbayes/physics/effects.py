@@ -231,8 +231,8 @@ def resolve_effects(effects):
         else:
             raise ValueError(
                 "unknown effect(s) "
-                f"{[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}:"
-                f" expected names from {sorted(EFFECTS)}"
+                f"{[e for e in effects if not isinstance(e, Effect) and e not in EFFECTS]}: "
+                f"expected names from {sorted(EFFECTS)}"
             )
     names = [e.name for e in resolved]
     if len(set(names)) != len(names):

@@ -131,8 +131,8 @@ def parse_model(model):
         )
     if family in PEER_MODELS and effects:
         raise ValueError(
-            f"model {model!r}: the peer model {family!r} takes no +effect terms; "
-            f"the effect catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
+            f"model {model!r}: the peer model {family!r} takes no +effect terms; the effect "
+            f"catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
         )
     return family, tuple(e.name for e in resolve_effects(effects))
 

@@ -187,11 +187,11 @@ def _apply_policy(solution, on_invalid, voltage, stress, time):
         for name, arr in (("voltage_V", voltage), ("stress_Pa", stress), ("time_s", time))
     }
     message = (
-        f"{n_bad} of {bad.size} points are outside the validity domain of the model "
-        f"(first at V_FSR={where['voltage_V']:g} V, stress={where['stress_Pa']:g} Pa, "
-        f"t={where['time_s']:g} s): the paper law stops increasing above its eq.-11 peak "
-        f"(~3.6-3.9 V across the bulk for A201) or the gap closed; use tunneling='smooth', "
-        f"lower voltages, or on_invalid='mask'/'nan'"
+        f"{n_bad} of {bad.size} points are outside the validity domain of the model (first at "
+        f"V_FSR={where['voltage_V']:g} V, stress={where['stress_Pa']:g} Pa, t={where['time_s']:g} "
+        "s): the paper law stops increasing above its eq.-11 peak (~3.6-3.9 V across the bulk for "
+        "A201) or the gap closed; use tunneling='smooth', lower voltages, or "
+        "on_invalid='mask'/'nan'"
     )
     if on_invalid == "raise":
         raise DomainError(message, n_bad, where)

@@ -125,16 +125,13 @@ def check_priors_for_evidence(prior):
         if dist.kind == "loguniform" and np.log10(args["upper"] / args["lower"]) > MAX_DECADES:
             raise ValueError(
                 f"prior of {name}: loguniform over {np.log10(args['upper'] / args['lower']):.0f} "
-                "decades "
-                f"is too wide for an evidence (limit {MAX_DECADES:g})"
+                f"decades is too wide for an evidence (limit {MAX_DECADES:g})"
             )
         for key, value in args.items():
             if not np.isfinite(value):
                 raise ValueError(
                     f"prior of {name}: {key} = {value} makes the prior improper; the evidence "
-                    "needs "
-                    "a "
-                    "proper prior"
+                    "needs a proper prior"
                 )
 
 

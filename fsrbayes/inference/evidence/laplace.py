@@ -25,6 +25,7 @@ import numpy as np
 
 from ...utils import HALF_LOG_2PI
 from ..optimize import find_map, polish, root_covariance
+from ..samplers import ensemble_moves
 from .estimate import EvidenceEstimate
 
 __all__ = ["LocalDraws", "LaplaceFit", "laplace_fit"]
@@ -97,8 +98,6 @@ class LaplaceFit:
         """
         import emcee
 
-        from ..samplers import ensemble_moves
-
         d = self.posterior.ndim
         n_walkers = n_walkers or max(32, 2 * d + 2)
         start = self.u_map + 0.1 * rng.standard_normal((n_walkers, d)) @ self.root_cov.T
@@ -130,7 +129,7 @@ class LaplaceFit:
                 return out[:n]
         raise RuntimeError(
             f"the Laplace approximation of {getattr(self.posterior, 'model', 'the model')} puts "
-            f"almost no mass on the prior's support"
+            "almost no mass on the prior's support"
         )
 
 

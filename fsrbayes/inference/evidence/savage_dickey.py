@@ -45,9 +45,7 @@ class SavageDickey:
     def __str__(self):
         return (
             f"log B01 = {self.log_b01:.3f} ± {self.error:.3f} (Savage–Dickey, {self.n_draws} "
-            "draws, "
-            ""
-            f"ESS {self.ess:.0f})"
+            f"draws, ESS {self.ess:.0f})"
         )
 
 

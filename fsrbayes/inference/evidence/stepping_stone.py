@@ -203,10 +203,8 @@ class EvidenceResult:
         )
         return (
             f"log Z = {self.log_z:.3f} ± {self.error:.3f} (SS; batch {self.sigma_batch:.3f}, "
-            "replicates "
-            f"{self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; bridge "
-            f"{self.bridge:.3f}"
-            f"{ti})"
+            f"replicates {self.sigma_replicates:.3f}{pilot}, discretisation {self.sigma_disc:.3f}; "
+            f"bridge {self.bridge:.3f}{ti})"
         )
 
 

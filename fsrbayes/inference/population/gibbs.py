@@ -156,8 +156,8 @@ class GibbsJointTarget(JointTarget):
         super().__init__(population, specimens)
         if len(proposal_draws) != len(self.specimens):
             raise ValueError(
-                f"proposal_draws: need one array per specimen ({len(self.specimens)}), "
-                f"got {len(proposal_draws)}"
+                f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
+                f"{len(proposal_draws)}"
             )
         self.proposals = [
             KernelProposal(

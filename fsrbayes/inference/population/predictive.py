@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...physics.constants import DRIFT_TIME_S
 from ...physics.models import parse_model
 from ...physics.sensor import solve_current
 from ..posterior import noise_parameters
@@ -108,7 +109,7 @@ class NewSpecimens:
         """Shape of the specimens' parameter arrays."""
         return next(iter(self.params.values())).shape
 
-    def drift(self, voltage_V, stress_Pa, time_s=3600.0, *, noise_rel=None, seed=0):
+    def drift(self, voltage_V, stress_Pa, time_s=DRIFT_TIME_S, *, noise_rel=None, seed=0):
         """drift(time) in % for each specimen at voltages (V,) × stresses (S,): shape (K, M, V, S).
 
         NaN where a specimen's parameters leave the model's validity domain. With ``noise_rel``
@@ -184,7 +185,7 @@ def _quantile_summary(values, level=0.90):
 
 
 def drift_groups(
-    specimens, voltage_V, stress_Pa, *, time_s=3600.0, level=0.90, noise_rel=None, seed=0
+    specimens, voltage_V, stress_Pa, *, time_s=DRIFT_TIME_S, level=0.90, noise_rel=None, seed=0
 ):
     """Return the contract's ``groups`` with the new-specimen quantiles.
 
@@ -223,7 +224,7 @@ def drift_groups(
     return groups
 
 
-def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=3600.0, n_grid=161):
+def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_grid=161):
     """Return the sourcing voltage minimising |drift(time)| of a new specimen at one stress.
 
     Each specimen's |drift| is evaluated on ``n_grid`` log-spaced voltages in ``v_range`` and

@@ -249,10 +249,9 @@ def two_stage(
     if result.effective_draws[worst] < min_effective:
         warnings.warn(
             f"specimen {labels[worst]} keeps only {result.effective_draws[worst]:.0f} of "
-            f"{target.n_draws} "
-            f"draws after reweighting (< {min_effective}); its posterior is too narrow or too far "
-            "from the "
-            "population for the two-stage estimate: fit it with more draws or use the joint route",
+            f"{target.n_draws} draws after reweighting (< {min_effective}); its posterior is too "
+            "narrow or too far from the population for the two-stage estimate: fit it with more "
+            "draws or use the joint route",
             ReweightingWarning,
             stacklevel=2,
         )
@@ -345,8 +344,7 @@ def joint(
         if proposal_draws is None:
             raise ValueError(
                 "the Gibbs route needs each specimen's posterior draws: pass start_from (a "
-                "two-stage "
-                "result from fits) or proposal_draws"
+                "two-stage result from fits) or proposal_draws"
             )
         target = GibbsJointTarget(population, specimens, proposal_draws, **(gibbs or {}))
         settings = replace(

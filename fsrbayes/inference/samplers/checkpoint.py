@@ -56,8 +56,8 @@ def load_checkpoint(path, fingerprint, n_ensembles):
         stored = str(saved["fingerprint"])
         if stored != fingerprint:
             raise CheckpointMismatch(
-                f"checkpoint {path} was written for {_difference(stored, fingerprint)}; "
-                "remove it or fit with matching settings"
+                f"checkpoint {path} was written for {_difference(stored, fingerprint)}; remove it "
+                "or fit with matching settings"
             )
         chain, log_prob, accepted = saved["chain"], saved["log_prob"], saved["accepted"]
         if chain.shape[0] != n_ensembles:

@@ -51,10 +51,9 @@ class ConvergenceReport:
             i_r = int(np.nanargmax(self.rhat))
             rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
         return (
-            f"after {self.n_steps} steps: {rhat}, kept chain "
-            f"{self.n_kept} steps = {self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, "
-            f"{name(i_t)}), "
-            f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
+            f"after {self.n_steps} steps: {rhat}, kept chain {self.n_kept} steps = "
+            f"{self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), min bulk "
+            f"ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
         )
 
     def as_dict(self):

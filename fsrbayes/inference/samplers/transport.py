@@ -127,9 +127,7 @@ class TriangularMap:
         if n < 4 * n_features:
             raise ValueError(
                 f"fitting a {'quadratic' if quadratic else 'linear'} map in {ndim} dimensions "
-                "needs "
-                ""
-                f"at least {4 * n_features} draws, got {n}"
+                f"needs at least {4 * n_features} draws, got {n}"
             )
         if not quadratic:
             draws = draws[np.linspace(0, n - 1, min(n, 50 * ndim)).astype(int)]
