@@ -82,7 +82,7 @@ class DemoPlan:
     diagnose_specimens : int
         Specimens per sensor in the ``diagnose`` run.
     diagnose_effects : tuple, optional
-        Catalogue effects tried (default: all five).
+        Catalogue effects tried (default: all of them).
     """
 
     name: str
@@ -103,8 +103,8 @@ class DemoPlan:
 
 
 FULL = DemoPlan("full", specimens_per_sensor=4, diagnose_specimens=1)
-"""Four specimens per sensor at all eleven voltages (264 creep tests); diagnose (all five effects)
-on one specimen per sensor."""
+"""Four specimens per sensor at all eleven voltages (264 creep tests); diagnose (every catalogue
+effect) on one specimen per sensor."""
 QUICK = DemoPlan(
     "quick",
     specimens_per_sensor=2,

@@ -214,12 +214,11 @@ def population_drift_plot(groups, observed=None, by="voltage"):
 
 
 def _diagnosis_panels(diagnosis):
-    """(title, checks) of the base model and, when an effect is named, of base + effect."""
+    """(title, checks) of the base model and, when effects were added, of the extended model."""
     panels = [(f"before: {diagnosis.base}", diagnosis.checks())]
-    if diagnosis.effect is not None:
-        panels.append(
-            (f"after: {diagnosis.base}+{diagnosis.effect}", diagnosis.checks(diagnosis.effect))
-        )
+    if diagnosis.effects:
+        model = "+".join([diagnosis.base, *diagnosis.effects])
+        panels.append((f"after: {model}", diagnosis.checks_after()))
     return panels
 
 
@@ -274,7 +273,7 @@ def diagnosis_drift_plot(diagnosis):
 
 def diagnosis_misfit_plot(diagnosis):
     """Mean standardised drift(3600 s) misfit z per voltage and per stress, before and after."""
-    from .discrepancy.diagnose import misfit_by
+    from .discrepancy import misfit_by
 
     panels = _diagnosis_panels(diagnosis)
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), squeeze=False)

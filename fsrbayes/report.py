@@ -45,6 +45,83 @@ def _parameter_text(parameters):
     )
 
 
+def _verdict_text(result, n_spec):
+    """Return the verdict in words, with the numbers that decided it."""
+    band, before, after = result["band"], result["gap_before"], result["gap_after"]
+    n_failed_before = len(result["findings_before"]["failed"])
+    n_failed_after = len(result["checks_after"]["failed"])
+    added = " + ".join(f"**{e}**" for e in result["effects"])
+    steps = [c for c in result["candidates"] if c["rank"] == 1 and c["effect"] in result["effects"]]
+    evidence = "; ".join(
+        f"{c['effect']} ln B = {c['log_bf']:.1f} ({c['specimens_favouring']} of {n_spec} "
+        f"specimens favour it; {_parameter_text(c['parameters'])})"
+        for c in steps
+    )
+    verdict = result["verdict"]
+    if verdict == "adequate":
+        return [
+            f"No check fails and the gap {before:.2f} lies inside the band an adequate model "
+            f"stays below on this design (G0 = {band:.2f}): the base model is **adequate** for "
+            "these data."
+        ]
+    if verdict == "missing-effect":
+        return [
+            f"Adding {added} ({evidence}) takes the gap from {before:.2f} to **gap_after = "
+            f"{after:.2f}** (band G0 = {band:.2f}) and every check passes: a **missing effect** is "
+            f"named (drift(3600 s) misfit {result['drift_gap_before']:.2f} → "
+            f"{result['drift_gap_after']:.2f})."
+        ]
+    if verdict == "partially-explained":
+        reason = (
+            f"{n_failed_after} check(s) still fail"
+            if n_failed_after
+            else f"the gap stays out of the band (G0 = {band:.2f}) without halving its excess"
+        )
+        return [
+            f"Adding {added} ({evidence}) helps — the gap goes from {before:.2f} to {after:.2f} — "
+            f"but does not explain the data: {reason}. The verdict is **partially explained**: "
+            "read the effect(s) as part of the story; the misfit map below shows what is left."
+        ]
+    best = result["candidates"][0] if result["candidates"] else None
+    tried = (
+        f" (best: {best['effect']}, ln B = {best['log_bf']:.1f}, gap after {best['gap_after']:.2f})"
+        if best
+        else ""
+    )
+    return [
+        f"The base model misses these data (gap {before:.2f} against G0 = {band:.2f}; "
+        f"{n_failed_before} check(s) fail), and no effect of the catalogue helps{tried}: the "
+        "verdict is **unexplained** — the cause lies outside the catalogue. Where and what shape "
+        "the missing physics has is below."
+    ]
+
+
+def _where_text(where):
+    """Return where the misfit lies: time windows, sign, the discrepancy's size and shape."""
+    quarters = ", ".join(f"{q['mean_z']:+.1f}" for q in where["by_time"])
+    sign = where["sign"]
+    d = where["discrepancy"]
+    shape = ", ".join(
+        f"{t:g} s: {'–' if v is None else f'{v:+.2f}'}"
+        for t, v in zip(d["times_s"], d["mean_shape_sigma"], strict=False)
+    )
+    size = (
+        f"rms {d['rms_sigma']:.2f} noise sd against {d['noise_rms_sigma']:.2f} from noise alone"
+        if d["rms_sigma"] is not None
+        else "too few samples per test to fit"
+    )
+    return [
+        "## Where the base model misses",
+        "",
+        f"- Mean z of the log-current in the four quarters of the tests (early → late): "
+        f"{quarters}.",
+        f"- The model under-predicts drift(3600 s) in "
+        f"{100 * sign['share_under_predicted']:.0f} % of {sign['tests']} tests (mean observed − "
+        f"predicted {sign['mean_misfit_pct']:+.2f} points).",
+        f"- Discrepancy term ({d['basis']}): {size}; its mean shape in noise sd: {shape}.",
+    ]
+
+
 def diagnosis_narrative(result):
     """Markdown text of a diagnosis (``Diagnosis.as_dict()``), without figures.
 
@@ -88,38 +165,20 @@ def diagnosis_narrative(result):
         lines.append(
             f"- `{f['statistic']}` of {f['specimen']}{where}{values} (p = {f['p_value']:.1e})"
         )
-    best = result["candidates"][0]
-    lines.append("")
-    if result["effect"]:
-        lines.append(
-            f"Adding **{best['effect']}** ({best['summary']}) with "
-            f"{_parameter_text(best['parameters'])} raises the evidence by ln B = "
-            f"{best['log_bf']:.1f} summed over {n_spec} specimen(s) ({best['specimens_favouring']} "
-            f"of {n_spec} favour it; the runner-up is "
-            f"{best.get('margin_over_next', float('nan')):.1f} nats behind) and takes the gap from "
-            f"{result['gap_before']:.2f} to **gap_after = {result['gap_after']:.2f}** "
-            f"({100 * best['gap_closed']:.0f} % closed; drift(3600 s) misfit "
-            f"{result['drift_gap_before']:.2f} → {result['drift_gap_after']:.2f})."
-        )
-    else:
-        lines.append(
-            f"No effect of the catalogue earns ln B ≥ {result['threshold_log_bf']:g} over the base "
-            f"model (best: {best['effect']}, ln B = {best['log_bf']:.1f}): the base model is "
-            "**adequate** for these data."
-        )
+    lines += ["", *_verdict_text(result, n_spec), "", *_where_text(result["where"])]
     lines += [
         "",
         "## Candidates",
         "",
         (
-            "| rank | effect | ln B over base | specimens favouring | gap after | gap closed | "
-            "parameters |"
+            "| step | rank | effect | ln B over the model before | specimens favouring | gap after "
+            "| gap closed | parameters |"
         ),
-        "|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for c in result["candidates"]:
         lines.append(
-            f"| {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | "
+            f"| {c['step']} | {c['rank']} | {c['effect']} | {c['log_bf']:.1f} | "
             f"{c['specimens_favouring']}/{n_spec} | {c['gap_after']:.2f} | "
             f"{100 * c['gap_closed']:.0f} % | {_parameter_text(c['parameters'])} |"
         )

@@ -50,8 +50,14 @@ def test_compare_sums_specimens_and_states_a_preference(small):
             assert len(v["reference_regions"]) == TINY.replicates
     other = next(m for m in out["models"] if m != out["preferred"])
     bf = out["bayes_factors"][other]
-    assert bf["log_bf_preferred_over"] >= 0
-    assert out["strength"] == bf["strength"]
+    best, rival = out["models"][out["preferred"]], out["models"][other]
+    # the Bayes factor is recomputed here from the totals, not read back from where it was set
+    assert bf["log_bf_preferred_over"] == pytest.approx(
+        best["log_evidence"] - rival["log_evidence"]
+    )
+    assert bf["err"] == pytest.approx(np.hypot(best["log_evidence_err"], rival["log_evidence_err"]))
+    assert best["log_evidence"] == max(m["log_evidence"] for m in out["models"].values())
+    assert out["strength"] == bf["strength"] == strength(bf["log_bf_preferred_over"], bf["err"])
     json.dumps(out)
 
 

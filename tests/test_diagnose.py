@@ -7,12 +7,20 @@ import pytest
 
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import simulate
-from fsrbayes.discrepancy import diagnose, predictive_checks
-from fsrbayes.discrepancy.checks import drift_gap, gap, two_sided_p
+from fsrbayes.discrepancy import diagnose, diagnose_schema, predictive_checks, verdict_of
+from fsrbayes.discrepancy.checks import two_sided_p
+from fsrbayes.discrepancy.gaps import drift_gap, gap
+from fsrbayes.discrepancy.verdict import closes
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 
 A201_VOLTAGES = (0.5, 2.0, 4.5)
+
+
+def _validate(payload):
+    """Every diagnosis the tests make must match the shipped JSON Schema."""
+    jsonschema = pytest.importorskip("jsonschema")
+    jsonschema.validate(payload, diagnose_schema())
 
 
 def test_two_sided_p_is_uniform_when_observed_and_replicated_share_a_distribution():
@@ -74,16 +82,21 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
     best = result.candidates[0]
     assert best["log_bf"] >= result.threshold and best["margin_over_next"] > 10
     assert best["parameters"]["area_creep"]["q05"] < -30 < best["parameters"]["area_creep"]["q95"]
-    out = result.as_dict()
-    for key in ("verdict", "effect", "gap_before", "gap_after", "gap_metric", "candidates"):
-        assert key in out
+    assert result.effects == ["area-creep"] and not result.findings_after["failed"]
+    assert result.gap_after <= result.band or (
+        result.gap_after - result.band <= 0.5 * (result.gap_before - result.band)
+    )
+    _validate(result.as_dict())
 
 
 def test_diagnose_calls_burgers_data_adequate():
     sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, seed=4)
     result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=2)
-    assert result.verdict == "adequate" and result.effect is None
-    assert result.gap_after == result.gap_before < 1.5
+    assert result.verdict == "adequate" and result.effect is None and result.effects == []
+    # adequate means: no check fails, and the gap lies inside the band (not set equal by fiat)
+    assert not result.findings["failed"] and result.gap_before <= result.band
+    assert result.gap_after == result.gap_before
+    _validate(result.as_dict())
     assert all(
         c["log_bf"] < 0 for c in result.candidates
     )  # the Occam factor of unneeded parameters
@@ -95,5 +108,70 @@ def test_diagnose_rejects_bad_arguments():
         diagnose(sim.data, effects=("area-crepe",))
     with pytest.raises(ValueError, match="threshold must be > 0"):
         diagnose(sim.data, threshold=0)
-    with pytest.raises(ValueError, match="no candidate effect"):
-        diagnose(sim.data, base="burgers+area-creep", effects=("area-creep",))
+    with pytest.raises(ValueError, match="peer model 'kalantari' takes none"):
+        diagnose(sim.data, base="kalantari")
+
+
+# The verdict logic itself, on made-up numbers: each verdict and each way to lose it.
+BAND = 1.0
+
+
+def _step(effect, log_bf, gap_after, checks_fail=False):
+    return {"effect": effect, "log_bf": log_bf, "gap_after": gap_after, "checks_fail": checks_fail}
+
+
+def test_adequate_needs_passing_checks_and_a_gap_inside_the_band():
+    assert verdict_of(0.9, False, BAND, [], 10.0) == ("adequate", [], 0.9)
+    # a failing check forbids "adequate", however small the gap
+    assert verdict_of(0.9, True, BAND, [], 10.0) == ("unexplained", [], 0.9)
+    # so does a gap outside the band with every check passing
+    assert verdict_of(1.4, False, BAND, [], 10.0)[0] == "unexplained"
+
+
+def test_an_effect_is_named_only_when_it_closes_the_gap_and_its_checks_pass():
+    closing = _step("area-creep", 50.0, 1.2)  # excess 2.0 -> 0.2: at least halved
+    assert verdict_of(3.0, True, BAND, [closing], 10.0) == ("missing-effect", ["area-creep"], 1.2)
+    # the same step with a check still failing only partly explains the data
+    failing = _step("area-creep", 50.0, 1.2, checks_fail=True)
+    assert verdict_of(3.0, True, BAND, [failing], 10.0)[0] == "partially-explained"
+    # a step that helps but leaves more than half of the excess
+    weak = _step("area-creep", 50.0, 2.5)
+    assert verdict_of(3.0, True, BAND, [weak], 10.0) == ("partially-explained", ["area-creep"], 2.5)
+    assert closes(2.0, 3.0, BAND) and not closes(2.01, 3.0, BAND) and closes(0.9, 5.0, BAND)
+
+
+def test_two_effects_are_added_greedily_and_named_together():
+    first = _step("area-creep", 40.0, 2.5)
+    second = _step("contact-creep", 30.0, 1.1)
+    verdict, effects, gap_after = verdict_of(3.0, True, BAND, [first, second], 10.0)
+    assert verdict == "missing-effect" and effects == ["area-creep", "contact-creep"]
+    assert gap_after == 1.1
+    # a second step under the threshold is not added
+    timid = _step("contact-creep", 5.0, 1.1)
+    assert verdict_of(3.0, True, BAND, [first, timid], 10.0) == (
+        "partially-explained",
+        ["area-creep"],
+        2.5,
+    )
+
+
+def test_no_candidate_that_helps_is_unexplained():
+    # strong evidence but a gap that does not shrink: it absorbed something else
+    assert verdict_of(3.0, True, BAND, [_step("area-creep", 400.0, 3.1)], 10.0)[0] == (
+        "unexplained"
+    )
+    # a smaller gap but evidence under the threshold
+    assert verdict_of(3.0, True, BAND, [_step("area-creep", 9.0, 1.0)], 10.0) == (
+        "unexplained",
+        [],
+        3.0,
+    )
+
+
+def test_the_band_narrows_with_more_tests_and_sits_above_the_null_mean():
+    from fsrbayes.discrepancy import gap_band
+    from fsrbayes.discrepancy.gaps import GAP_NULL_MEAN_SQUARE
+
+    assert gap_band(9) > gap_band(54) > gap_band(10_000) > np.sqrt(GAP_NULL_MEAN_SQUARE)
+    with pytest.raises(ValueError, match="n_tests must be >= 1"):
+        gap_band(0)

@@ -7,6 +7,7 @@ import sys
 import pytest
 
 from fsrbayes.data.synthetic import simulate, write_simulation
+from fsrbayes.discrepancy import diagnose_schema
 
 
 def run(*args, timeout=300):
@@ -46,6 +47,8 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert result.returncode == 0, result.stderr
     assert "verdict: missing-effect: area-creep" in result.stdout
     payload = json.loads(out.read_text())
+    jsonschema = pytest.importorskip("jsonschema")
+    jsonschema.validate(payload, diagnose_schema())
     assert payload["verdict"] == "missing-effect" and payload["effect"] == "area-creep"
     assert payload["gap_after"] < payload["gap_before"] and "quarter" in payload["gap_metric"]
     assert payload["drift_gap_after"] < payload["drift_gap_before"]

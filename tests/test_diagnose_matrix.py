@@ -2,9 +2,10 @@
 
 Every catalogue effect hidden at two magnitudes on each sensor is named, with gap_after ≤ 0.5 ×
 gap_before where the base model's misfit is significant (``Case.gap_check``); Burgers and Zener
-truths are called adequate; the paper's own mismatch (drift nearly independent of stress, from a
-negative area creep) is diagnosed as area-creep. Results are printed as a table (``pytest -m slow
--s``).
+truths are called adequate; a negative area creep that cancels the drift at 0.5 V is diagnosed as
+area-creep (the catalogue cannot produce the paper's positive drift that does not grow with stress:
+``test_area_creep_cancels_the_drift_but_cannot_flatten_it``). Results are printed as a table
+(``pytest -m slow -s``).
 """
 
 import pytest
@@ -38,8 +39,45 @@ def test_case(matrix, case):
             assert row["gap_after"] <= 0.5 * row["gap_before"], row
 
 
-@pytest.mark.slow
-def test_paper_mismatch_is_flat_in_stress():
+def test_area_creep_cancels_the_drift_but_cannot_flatten_it():
+    """The paper measured a *positive* drift that does not grow with stress. The catalogue's
+    area creep scales with the creep strain (∝ σ), so it can only cancel the drift: at 0.5 V the
+    "flat" case of the matrix is flat because its drift is gone, and no amplitude gives a drift
+    that stays positive while its spread over stress falls below half its mean. (Checking only
+    the spread, as before, passed on a drift of ≈ 0 and proved nothing.)"""
+    import numpy as np
+
+    import fsrbayes
+    from fsrbayes.data.synthetic import PAPER_FORCES_N
+
+    a201 = fsrbayes.load_sensor("a201")
+    params, stresses = dict(a201.params), a201.stress(np.array(PAPER_FORCES_N))
     base, hidden = stress_flatness()
-    assert hidden < 0.05 * base
+    assert base > 1.0 and hidden < 0.05 * base  # the spread goes ...
+    gone = fsrbayes.drift(
+        {**params, "area_creep": -9.0}, 0.5, stresses, 3600.0, effects=("area-creep",)
+    )
+    assert np.all(np.abs(gone) < 0.1)  # ... because the drift goes
+    for amplitude in np.linspace(-12.0, 0.0, 49):
+        drift = fsrbayes.drift(
+            {**params, "area_creep": amplitude}, 0.5, stresses, 3600.0, effects=("area-creep",)
+        )
+        flat_and_positive = drift.mean() > 1.0 and np.ptp(drift) < 0.5 * drift.mean()
+        assert not flat_and_positive, (amplitude, drift)
     assert PAPER_MISMATCH in MATRIX
+
+
+def test_area_growth_gives_the_papers_positive_drift_that_does_not_grow_with_stress():
+    """The catalogue's answer to the test above: an area that grows by a stress-independent
+    fraction, on top of the area creep that cancels the gap's drift, leaves a positive drift
+    whose spread over the paper's forces is a small part of its mean (the paper's Figure 13)."""
+    import numpy as np
+
+    import fsrbayes
+    from fsrbayes.data.synthetic import PAPER_FORCES_N
+
+    a201 = fsrbayes.load_sensor("a201")
+    params = {**a201.params, "area_creep": -9.0, "ag_amp": 0.08}
+    stresses = a201.stress(np.array(PAPER_FORCES_N))
+    drift = fsrbayes.drift(params, 0.5, stresses, 3600.0, effects=("area-creep", "area-growth"))
+    assert drift.mean() > 5.0 and np.ptp(drift) < 0.05 * drift.mean()

@@ -399,11 +399,14 @@ def test_parameter_recovery_on_twenty_simulated_specimens():
     identified = np.median(study["sd_ratio"], axis=0) < 0.5
     coverage = study["inside"].mean(axis=0)
     for name, ok, c in zip(study["names"], identified, coverage, strict=False):
-        if ok:
-            assert 0.8 <= c <= 1.0, (
-                f"{name}: 90% interval covers the truth in {c:.2f} of the specimens"
-            )
-    assert np.mean(study["drift_inside"]) >= 0.85
+        if ok:  # 20 specimens cannot see over-coverage of one parameter: one-sided here
+            assert c >= 0.8, f"{name}: 90% interval covers the truth in {c:.2f} of the specimens"
+    # pooled, both ways: over-wide intervals fail too (binomial 99 % range of the pooled share,
+    # widened for the correlation of one specimen's parameters)
+    pooled = float(np.mean(coverage[identified]))
+    assert 0.84 <= pooled <= 0.96, pooled
+    drift = float(np.mean(study["drift_inside"]))
+    assert 0.84 <= drift <= 0.97, drift
 
 
 def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):

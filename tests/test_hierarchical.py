@@ -362,8 +362,9 @@ def test_two_stage_recovers_the_simulated_population(tmp_path):
     assert sum(not row["joint_inside"] for row in routes["rows"]) <= 5
     misses = [row["name"] for row in study["hyper"] if not row["inside"]]
     assert len(misses) <= 5, misses
-    assert study["observed_covered"] >= 0.80
-    assert study["noiseless_covered"] >= 0.80
+    # two-sided: a new-specimen range that holds every observed drift is too wide
+    assert 0.80 <= study["observed_covered"] <= 0.98
+    assert 0.80 <= study["noiseless_covered"] <= 0.99
     assert study["hyper_converged"], study["hyper_report"]
     fig, _ = plots.population_drift_plot(study["groups"], study["observed"])
     assert plots.save_figure(fig, tmp_path / "population.png").stat().st_size > 20000

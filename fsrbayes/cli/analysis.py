@@ -115,16 +115,16 @@ def cmd_diagnose(args):
         seed=args.seed,
         processes=args.processes,
     )
-    print(f"gap before ({args.base}): {result.gap_before:.2f}")
+    print(f"gap before ({args.base}): {result.gap_before:.2f} (adequate below {result.band:.2f})")
     for c in result.candidates:
         print(
-            f"  {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   gap after = "
-            f"{c['gap_after']:.2f}"
+            f"  step {c['step']}, {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   "
+            f"gap after = {c['gap_after']:.2f}"
         )
     named = (
-        f": {result.effect} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
-        if result.effect
-        else ""
+        f": {' + '.join(result.effects)} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
+        if result.effects
+        else f" (gap {result.gap_before:.2f})"
     )
     print(f"verdict: {result.verdict}{named}")
     if args.json:

@@ -32,6 +32,7 @@ def cmd_fit(args):
 
     Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen.
     """
+    from ..discrepancy import fit_checks
     from ..inference.fit import DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
@@ -84,7 +85,16 @@ def cmd_fit(args):
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
-        summaries[specimen] = save_fit(result, folder)
+        checks = fit_checks(result, args.seed)
+        if not checks["passed"]:
+            worst = "; ".join(f["message"] for f in checks["failed"][:3])
+            print(
+                f"fsrbayes fit: warning: {specimen}: the model does not fit these data "
+                f"({len(checks['failed'])} check(s) fail: {worst}); see 'checks' in summary.json, "
+                "and 'fsrbayes diagnose' for where and what is missing",
+                file=sys.stderr,
+            )
+        summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
         if args.plots:
             _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"

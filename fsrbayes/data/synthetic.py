@@ -71,8 +71,18 @@ EFFECT_DEFAULTS = {
     "power-law-creep": {"plc_psi": None, "plc_n": 0.3},  # None: half the sensor's Nutting psi
     "voltage-degradation": {"deg_amp": 0.1, "deg_onset": None, "deg_tau": 600.0, "deg_width": 0.25},
     "offset-stress": {"sigma0": 2e4},
+    "area-growth": {"ag_amp": 0.08, "ag_tau": 300.0},
+    "second-kelvin": {"kv2_comp": None, "kv2_tau": 20.0},  # None: 0.3/k1
+    "log-creep": {"lc_comp": None, "lc_tau": 1.0},  # None: 0.03/k1
 }
 """Strength of each hidden effect when named without values (None: from the sensor file)."""
+
+_SENSOR_RELATIVE = {
+    "plc_psi": lambda p: 0.5 * p["psi"],
+    "kv2_comp": lambda p: 0.3 / p["k1"],
+    "lc_comp": lambda p: 0.03 / p["k1"],
+}
+"""Defaults that scale with the sensor's own creep (None in :data:`EFFECT_DEFAULTS`)."""
 
 
 @dataclass(frozen=True)
@@ -132,7 +142,7 @@ def _effect_params(sensor, effects):
         name, values = parse_effect(spec) if isinstance(spec, str) else spec
         for key, value in values.items():
             if value is None:
-                value = 0.5 * sensor.params["psi"] if key == "plc_psi" else sensor.params[key]
+                value = _SENSOR_RELATIVE.get(key, lambda p, k=key: p[k])(sensor.params)
             resolved.setdefault(name, {})[key] = float(value)
     return resolved
 

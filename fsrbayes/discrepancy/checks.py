@@ -54,17 +54,13 @@ from scipy import special
 from ..physics.constants import DRIFT_TIME_S
 
 __all__ = [
-    "DRIFT_TIME_S",
     "TEST_STATISTICS",
     "SPECIMEN_STATISTICS",
     "SpecimenChecks",
     "predictive_checks",
-    "gap",
-    "drift_gap",
     "two_sided_p",
 ]
 
-"""The time of the headline drift (the paper's one-hour creep tests)."""
 TEST_STATISTICS = ("drift_3600", "early_late", "logtime_trend", "quarter_means")
 """Per-test statistics with replicates (``loo_pit`` is per test too, but has no replicates);
 ``quarter_means`` has four values per test."""
@@ -408,34 +404,3 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         pit,
         max_k,
     )
-
-
-def gap(checks):
-    """Return the headline gap over specimens.
-
-    Return the headline gap over specimens: √(mean over tests of the quarter-mean distance
-    :attr:`SpecimenChecks.quarter_distance`) (see the module docstring).
-
-    Parameters
-    ----------
-    checks : sequence of SpecimenChecks
-
-    Returns
-    -------
-    float
-    """
-    d2 = np.concatenate([c.quarter_distance for c in checks])
-    d2 = d2[np.isfinite(d2)]
-    return float(np.sqrt(np.mean(d2))) if d2.size else float("nan")
-
-
-def drift_gap(checks):
-    """√(mean z²) of the drift(3600 s) misfit over all tests (the drift part of the gap)."""
-    return _rms([c.z for c in checks])
-
-
-def _rms(parts):
-    """√(mean z²) over the finite values of a list of arrays (NaN if there are none)."""
-    z = np.concatenate(parts)
-    z = z[np.isfinite(z)]
-    return float(np.sqrt(np.mean(z**2))) if z.size else float("nan")

@@ -34,16 +34,14 @@ from ..inference.evidence.laplace import laplace_fit
 from ..inference.likelihood import SpecimenData
 from ..inference.parallel import map_jobs, single_threaded_blas
 from ..inference.posterior import LogPosterior
+from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects
-from ..physics.models import model_components, parse_model, register_components
-from .checks import (
-    DRIFT_TIME_S,
-    SPECIMEN_STATISTICS,
-    TEST_STATISTICS,
-    drift_gap,
-    gap,
-    predictive_checks,
-)
+from ..physics.models import PEER_MODELS, model_components, parse_model, register_components
+from ..utils import json_ready
+from .checks import predictive_checks
+from .gaps import drift_gap, failed_checks, gap, gap_band
+from .locate import locate, misfit_by
+from .verdict import MAX_EFFECTS, verdict_of
 
 __all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
 
@@ -78,28 +76,30 @@ class SpecimenDiagnosis:
 
 
 def _diagnose_one(job):
+    """Fit one specimen's base model (or take the fit given) and every candidate extension."""
     data, specimen, options = job
-    for effect in options["effects"]:  # a user's own effects, in a fresh worker
-        register_components(options["components"][effect])
-    register_components(options["components"][options["base"]])
+    for components in options["components"].values():  # a user's own laws or effects
+        register_components(components)
     rng = np.random.default_rng(options["seed"])
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(options["sensor"] or packed.sensor)
     kwargs = {"tunneling": options["tunneling"], "likelihood": options["likelihood"]}
     with single_threaded_blas():
-        base_post = LogPosterior.for_sensor(packed, sensor, model=options["base"], **kwargs)
-        base = laplace_fit(base_post, rng, n_starts=options["n_starts"])
-        out = SpecimenDiagnosis(
-            specimen,
-            base,
-            predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
-        )
+        start = options.get("start", {}).get(specimen)
+        if start is None:
+            base_post = LogPosterior.for_sensor(packed, sensor, model=options["base"], **kwargs)
+            base = laplace_fit(base_post, rng, n_starts=options["n_starts"])
+            start = (
+                base,
+                predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
+            )
+        out = SpecimenDiagnosis(specimen, *start)
         for effect in options["effects"]:
             post = LogPosterior.for_sensor(
                 packed, sensor, model=f"{options['base']}+{effect}", **kwargs
             )
             fitted = laplace_fit(
-                post, rng, n_starts=options["n_starts"], base=base, null=EFFECTS[effect].null
+                post, rng, n_starts=options["n_starts"], base=out.base, null=EFFECTS[effect].null
             )
             out.candidates[effect] = (
                 fitted,
@@ -133,152 +133,146 @@ def _effect_parameters(per_specimen, effect):
     return out
 
 
-def _findings(checks, alpha=0.01):
-    """Return the checks that fail at ``alpha``, Bonferroni-corrected over every check made."""
-    n_checks = sum(np.isfinite(c.p_values[name]).sum() for c in checks for name in c.p_values)
-    level = alpha / max(1, n_checks)
-    found = []
-    for c in checks:
-        z = c.z
-        for name in (*TEST_STATISTICS, "loo_pit"):
-            for where in np.argwhere(c.p_values[name] < level):
-                i = where[0]
-                entry = {
-                    "statistic": name,
-                    "specimen": c.specimen,
-                    "voltage_V": float(c.voltage_V[i]),
-                    "stress_Pa": float(c.stress_Pa[i]),
-                    "p_value": float(c.p_values[name][tuple(where)]),
-                }
-                if name == "quarter_means":
-                    entry["quarter"] = int(where[1]) + 1
-                if name in c.observed:
-                    entry["observed"] = float(np.mean(c.observed[name][(slice(None), *where)]))
-                    entry["predicted"] = float(np.mean(c.replicated[name][(slice(None), *where)]))
-                if name == "drift_3600":
-                    entry["z"] = float(z[i])
-                found.append(entry)
-        for name in SPECIMEN_STATISTICS:
-            p = float(c.p_values[name])
-            if p < level:
-                found.append(
-                    {
-                        "statistic": name,
-                        "specimen": c.specimen,
-                        "p_value": p,
-                        "observed": float(np.nanmean(c.observed[name])),
-                        "predicted": float(np.nanmean(c.replicated[name])),
-                    }
-                )
-    return {
-        "alpha": alpha,
-        "n_checks": int(n_checks),
-        "bonferroni_level": level,
-        "failed": found,
-        "loo_pit_max_pareto_k": float(max(c.max_pareto_k for c in checks)),
-    }
-
-
-def misfit_by(checks, attribute):
-    """Mean observed − predicted drift(3600 s) and mean z per level of voltage or stress."""
-    values = np.concatenate([getattr(c, attribute) for c in checks])
-    misfit = np.concatenate(
-        [c.observed_drift - np.median(c.replicated_drift, axis=0) for c in checks]
-    )
-    z = np.concatenate([c.z for c in checks])
-    out = []
-    for level in np.unique(np.round(values, 9)):
-        sel = np.isclose(values, level, rtol=1e-9)
-        out.append(
-            {
-                attribute: float(level),
-                "tests": int(sel.sum()),
-                "mean_misfit_pct": float(np.mean(misfit[sel])),
-                "mean_z": float(np.nanmean(z[sel])),
-            }
-        )
-    return out
-
-
 @dataclass
 class Diagnosis:
     """The outcome of :func:`diagnose`.
 
     Attributes
     ----------
-    verdict : {"adequate", "missing-effect"}
-    effect : str or None
-        The named effect.
+    verdict : {"adequate", "missing-effect", "partially-explained", "unexplained"}
+    effects : list of str
+        The effects added (greedily, at most :data:`MAX_EFFECTS`); empty for ``adequate`` and
+        ``unexplained``.
     gap_before, gap_after : float
-        The headline gap of the base model and of base + effect (= gap_before when adequate).
+        The headline gap of the base model and of the model with ``effects``.
+    band : float
+        G0: the 95th percentile of the gap of an adequate model on this design.
     candidates : list of dict
-        Every effect tried, best first: ``effect``, ``model``, ``log_bf`` (summed Laplace ln B
-        over the base model), ``log_bf_per_specimen``, ``gap_after``, ``gap_closed`` (fraction of
-        the gap's excess over 1 removed… see :meth:`as_dict`), ``parameters``.
+        Every extension tried, best first within each step: ``step``, ``effect``, ``model``,
+        ``log_bf`` (summed ln B over the model of the step before, ``evidence_method``),
+        ``log_bf_per_specimen``, ``gap_after``, ``gap_closed``, ``parameters``.
     base : str
-    specimens : list of SpecimenDiagnosis
+    rounds : list of list of SpecimenDiagnosis
+        Per greedy step, the specimens' fits (step 1: the base model and base + each effect).
     threshold : float
-    findings : dict
-        Failed checks of the base model (Bonferroni-corrected).
+    findings, findings_after : dict
+        Failed checks of the base model and of the final model (Bonferroni-corrected).
+    where : dict
+        The misfit map of :func:`~.locate.locate`, before any candidate.
     """
 
     verdict: str
-    effect: str
+    effects: list
     gap_before: float
     gap_after: float
+    band: float
     candidates: list
     base: str
-    specimens: list
+    rounds: list
     threshold: float
     findings: dict
-    findings_after: dict = None
+    findings_after: dict
+    where: dict
     seconds: float = float("nan")
+
+    @property
+    def effect(self):
+        """The first effect added (None when none is)."""
+        return self.effects[0] if self.effects else None
+
+    @property
+    def specimens(self):
+        """The specimens' base fits and first-step candidates."""
+        return self.rounds[0]
 
     def checks(self, effect=None):
         """Return the SpecimenChecks of the base model (``effect=None``) or of base + ``effect``."""
         if effect is None:
-            return [d.base_checks for d in self.specimens]
-        return [d.candidates[effect][1] for d in self.specimens]
+            return [d.base_checks for d in self.rounds[0]]
+        return [d.candidates[effect][1] for d in self.rounds[0]]
+
+    def checks_after(self):
+        """Return the SpecimenChecks of the final model (base + :attr:`effects`)."""
+        if not self.effects:
+            return self.checks()
+        return [d.candidates[self.effects[-1]][1] for d in self.rounds[len(self.effects) - 1]]
 
     def as_dict(self):
-        """Return the diagnosis as a JSON-ready dict.
+        """Return the diagnosis as a JSON-ready dict (the schema of ``diagnose.schema.json``)."""
+        before, after = self.checks(), self.checks_after()
+        return json_ready(
+            {
+                "verdict": self.verdict,
+                "effect": self.effect,
+                "effects": list(self.effects),
+                "gap_before": self.gap_before,
+                "gap_after": self.gap_after,
+                "band": self.band,
+                "gap_metric": GAP_METRIC,
+                "band_method": BAND_METHOD,
+                "drift_gap_before": drift_gap(before),
+                "drift_gap_after": drift_gap(after),
+                "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
+                "base": self.base,
+                "model_after": "+".join([self.base, *self.effects]),
+                "threshold_log_bf": self.threshold,
+                "evidence_method": EVIDENCE_METHOD,
+                "drift_time_s": DRIFT_TIME_S,
+                "specimens": [d.specimen for d in self.rounds[0]],
+                "n_tests": int(sum(len(c.test_keys) for c in before)),
+                "where": self.where,
+                "candidates": self.candidates,
+                "findings_before": self.findings,
+                "checks_after": self.findings_after,
+                "misfit_by_voltage_before": misfit_by(before, "voltage_V"),
+                "misfit_by_stress_before": misfit_by(before, "stress_Pa"),
+                "misfit_by_voltage_after": misfit_by(after, "voltage_V"),
+                "misfit_by_stress_after": misfit_by(after, "stress_Pa"),
+                "seconds": self.seconds,
+            }
+        )
 
-        JSON-ready: the keys of docs/outputs.md (verdict, effect, gap_before, gap_after, gap_metric,
-        candidates) and the findings, per-level misfits and settings.
-        """
-        before = self.checks()
-        out = {
-            "verdict": self.verdict,
-            "effect": self.effect,
-            "gap_before": self.gap_before,
-            "gap_after": self.gap_after,
-            "gap_metric": GAP_METRIC,
-            "drift_gap_before": drift_gap(before),
-            "drift_gap_after": drift_gap(self.checks(self.effect))
-            if self.effect
-            else drift_gap(before),
-            "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
-            "base": self.base,
-            "threshold_log_bf": self.threshold,
-            "evidence_method": (
-                "laplace (MAP + finite-difference Hessian in the sampler's u-space), per "
-                "specimen, summed"
-            ),
-            "drift_time_s": DRIFT_TIME_S,
-            "specimens": [d.specimen for d in self.specimens],
-            "n_tests": int(sum(len(c.test_keys) for c in before)),
-            "candidates": self.candidates,
-            "findings_before": self.findings,
-            "misfit_by_voltage_before": misfit_by(before, "voltage_V"),
-            "misfit_by_stress_before": misfit_by(before, "stress_Pa"),
-            "seconds": self.seconds,
-        }
-        if self.effect is not None:
-            after = self.checks(self.effect)
-            out["findings_after"] = self.findings_after
-            out["misfit_by_voltage_after"] = misfit_by(after, "voltage_V")
-            out["misfit_by_stress_after"] = misfit_by(after, "stress_Pa")
-        return out
+
+EVIDENCE_METHOD = (
+    "laplace (MAP + finite-difference Hessian in the sampler's u-space), per specimen, summed; "
+    "ranks candidates, labelled as an approximation"
+)
+BAND_METHOD = (
+    "95th percentile of the gap of the base model fitted to data it generated, by the number of "
+    "creep tests (fsrbayes.discrepancy.checks.gap_band)"
+)
+
+
+def _candidates(step, model, effects, per_specimen, gap_ref):
+    """Return the candidate entries of one greedy step, best ln B first."""
+    out = []
+    for effect in effects:
+        per = {d.specimen: float(d.log_bf(effect)) for d in per_specimen}
+        after = [d.candidates[effect][1] for d in per_specimen]
+        gap_effect = gap(after)
+        out.append(
+            {
+                "step": step,
+                "effect": effect,
+                "model": f"{model}+{effect}",
+                "summary": EFFECTS[effect].summary,
+                "log_bf": float(sum(per.values())),
+                "evidence_method": "laplace",
+                "log_bf_per_specimen": per,
+                "specimens_favouring": int(sum(v > 0 for v in per.values())),
+                "gap_after": gap_effect,
+                "drift_gap_after": drift_gap(after),
+                "gap_closed": float(1.0 - gap_effect / gap_ref) if gap_ref > 0 else 0.0,
+                "checks_fail": bool(failed_checks(after)["failed"]),
+                "parameters": _effect_parameters(per_specimen, effect),
+            }
+        )
+    out.sort(key=lambda c: -c["log_bf"])
+    for rank, c in enumerate(out, start=1):
+        c["rank"] = rank
+    if len(out) > 1:
+        out[0]["margin_over_next"] = out[0]["log_bf"] - out[1]["log_bf"]
+    return out
 
 
 def diagnose(
@@ -306,7 +300,8 @@ def diagnose(
     base : str
         The base model (``"burgers"``, ``"zener"``, ``"nutting"``, possibly with effects already).
     effects : sequence of str, optional
-        Candidate effects (default: every catalogue effect the base model does not have).
+        Candidate effects (default: every catalogue effect the base model does not have; an empty
+        sequence checks the base model only).
     specimens : sequence of str, optional
         Default: all specimens.
     sensor : str or Sensor, optional
@@ -314,7 +309,7 @@ def diagnose(
     tunneling, likelihood : str
         As in :func:`fsrbayes.fit`.
     threshold : float
-        ln B (summed over specimens) an effect needs over the base model to be named.
+        ln B (summed over specimens) an effect needs over the model before it to be added.
     n_draws : int
         Draws of each Laplace posterior for the predictive checks.
     n_starts : int
@@ -331,79 +326,94 @@ def diagnose(
 
     started = time.perf_counter()
     family, had = parse_model(base)
-    if family == "kalantari":
+    if family in PEER_MODELS:
         raise ValueError(
-            "diagnose extends the paper's model with catalogue effects; base 'kalantari' (eq. 14) "
+            f"diagnose extends the paper's model with catalogue effects; the peer model {family!r} "
             "takes none: use burgers, zener or nutting"
         )
     effects = check_effects(
         effects if effects is not None else [e for e in EFFECTS if e not in had]
     )
     effects = tuple(e for e in effects if e not in had)
-    if not effects:
-        raise ValueError(f"no candidate effect left to try on base model {base!r}")
     if threshold <= 0:
         raise ValueError(f"threshold must be > 0 (a ln Bayes factor), got {threshold}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     options = {
-        "base": base,
-        "effects": effects,
         "sensor": sensor,
         "tunneling": tunneling,
         "likelihood": likelihood,
         "n_draws": int(n_draws),
         "n_starts": int(n_starts),
-        "components": {
-            name: model_components(name if name == base else f"{base}+{name}")
-            for name in (base, *effects)
-        },
     }
-    jobs = [
-        (data.select(specimen=s), s, dict(options, seed=[seed, k])) for k, s in enumerate(specimens)
-    ]
-    per_specimen = map_jobs(
-        _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
-    )
-    gap_before = gap([d.base_checks for d in per_specimen])
-    candidates = []
-    for effect in effects:
-        per = {d.specimen: float(d.log_bf(effect)) for d in per_specimen}
-        gap_effect = gap([d.candidates[effect][1] for d in per_specimen])
-        candidates.append(
+
+    def run_step(model, candidates, step, start=None):
+        step_options = dict(
+            options,
+            base=model,
+            effects=candidates,
+            start=start or {},
+            components={
+                name: model_components(name if name == model else f"{model}+{name}")
+                for name in (model, *candidates)
+            },
+        )
+        jobs = [
+            (data.select(specimen=s), s, dict(step_options, seed=[seed, step, k]))
+            for k, s in enumerate(specimens)
+        ]
+        return map_jobs(
+            _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
+        )
+
+    rounds = [run_step(base, effects, 0)]
+    base_checks = [d.base_checks for d in rounds[0]]
+    gap_before = gap(base_checks)
+    findings = failed_checks(base_checks)
+    band = gap_band(int(sum(len(c.test_keys) for c in base_checks)))
+    candidates = _candidates(1, base, effects, rounds[0], gap_before)
+    steps, model, remaining = [], base, list(effects)
+    adequate = not findings["failed"] and gap_before <= band
+    step_candidates = candidates
+    while not adequate and step_candidates and len(steps) < MAX_EFFECTS:
+        best = step_candidates[0]
+        steps.append(
             {
-                "effect": effect,
-                "model": f"{base}+{effect}",
-                "summary": EFFECTS[effect].summary,
-                "log_bf": float(sum(per.values())),
-                "log_bf_per_specimen": per,
-                "specimens_favouring": int(sum(v > 0 for v in per.values())),
-                "gap_after": gap_effect,
-                "drift_gap_after": drift_gap([d.candidates[effect][1] for d in per_specimen]),
-                "gap_closed": float(1.0 - gap_effect / gap_before) if gap_before > 0 else 0.0,
-                "parameters": _effect_parameters(per_specimen, effect),
+                "effect": best["effect"],
+                "log_bf": best["log_bf"],
+                "gap_after": best["gap_after"],
+                "checks_fail": best["checks_fail"],
             }
         )
-    candidates.sort(key=lambda c: -c["log_bf"])
-    for rank, c in enumerate(candidates, start=1):
-        c["rank"] = rank
-    best = candidates[0]
-    named = best["log_bf"] >= threshold
-    if len(candidates) > 1:
-        best["margin_over_next"] = best["log_bf"] - candidates[1]["log_bf"]
-    findings = _findings([d.base_checks for d in per_specimen])
-    findings_after = (
-        _findings([d.candidates[best["effect"]][1] for d in per_specimen]) if named else None
+        verdict, _, _ = verdict_of(gap_before, True, band, steps, threshold)
+        remaining.remove(best["effect"])
+        if verdict != "partially-explained" or not remaining or len(steps) == MAX_EFFECTS:
+            break
+        # The best effect helps but does not close the gap: try a second one on top of it.
+        model = f"{model}+{best['effect']}"
+        start = {d.specimen: d.candidates[best["effect"]] for d in rounds[-1]}
+        rounds.append(run_step(model, tuple(remaining), len(steps), start))
+        step_candidates = _candidates(
+            len(steps) + 1, model, remaining, rounds[-1], best["gap_after"]
+        )
+        candidates += step_candidates
+    verdict, named, gap_after = verdict_of(
+        gap_before, bool(findings["failed"]), band, steps, threshold
     )
-    return Diagnosis(
-        "missing-effect" if named else "adequate",
-        best["effect"] if named else None,
+    diagnosis = Diagnosis(
+        verdict,
+        named,
         gap_before,
-        best["gap_after"] if named else gap_before,
+        gap_after,
+        band,
         candidates,
         base,
-        per_specimen,
+        rounds[: max(1, len(named))],
         float(threshold),
         findings,
-        findings_after,
-        time.perf_counter() - started,
+        None,
+        locate(base_checks),
+        0.0,
     )
+    diagnosis.findings_after = failed_checks(diagnosis.checks_after())
+    diagnosis.seconds = time.perf_counter() - started
+    return diagnosis

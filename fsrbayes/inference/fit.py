@@ -139,15 +139,31 @@ class FitResult:
         """Whether the convergence criteria held at the last check."""
         return self.run.report.converged
 
+    @property
+    def thinning(self):
+        """Steps between the kept steps that :meth:`draws` uses: about one autocorrelation time.
+
+        The largest τ of the run's report, at least 1 and at most a twentieth of the kept chain
+        (a short, unconverged run keeps some twenty steps).
+        """
+        report = self.run.report
+        tau = np.nanmax(report.tau) if np.any(np.isfinite(report.tau)) else 1.0
+        return int(np.clip(np.floor(tau), 1, max(1, report.n_kept // 20)))
+
     def draws(self, max_draws=2000):
         """Posterior draws of the sampled parameters in physical units, shape (E, D, ndim).
 
-        The kept chain of each ensemble is thinned evenly to at most ``max_draws`` in total;
-        draws are taken step by step over all walkers.
+        Each ensemble's kept chain is thinned to steps :attr:`thinning` apart (the last kept
+        step included), every walker of each, then evenly to at most ``max_draws`` in total;
+        draws run step by step over the walkers. Steps one autocorrelation time apart are
+        nearly independent, so ArviZ's R-hat and ESS on the draws (ensembles as chains) tell
+        the same story as the run's own convergence report; draws a few steps apart would be
+        one walker's correlated path and would make a converged run look unconverged.
         """
         chain, _ = self.run.kept()
         n_ens, n_steps, n_walk, ndim = chain.shape
-        flat = chain.reshape(n_ens, n_steps * n_walk, ndim)
+        steps = np.arange(n_steps - 1, -1, -self.thinning)[::-1]
+        flat = chain[:, steps].reshape(n_ens, steps.size * n_walk, ndim)
         per_ensemble = max(1, max_draws // n_ens)
         index = even_index(flat.shape[1], per_ensemble)
         x, _ = self.posterior.prior.from_unconstrained(flat[:, index])

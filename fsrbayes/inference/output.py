@@ -13,7 +13,7 @@ import numpy as np
 
 from ..data.creep import observed_drift
 from ..physics.constants import DRIFT_TIME_S
-from ..utils import atomic_path, write_json_atomic
+from ..utils import atomic_path, json_ready, write_json_atomic
 from .samplers import even_index
 
 __all__ = [
@@ -199,16 +199,17 @@ def _evidence(result):
     }
 
 
-def save_fit(result, folder, *, stem="posterior"):
+def save_fit(result, folder, *, stem="posterior", extra=None):
     """Write a fit's posterior and summary into ``folder`` atomically.
 
-    Write ``<stem>.nc`` (DataTree) and ``summary.json`` into ``folder`` atomically; return the
-    summary.
+    Write ``<stem>.nc`` (DataTree) and ``summary.json`` into ``folder`` atomically; ``extra``
+    (a JSON-ready dict, e.g. the fit's checks) is added to the summary. Return the summary.
     """
     tree = to_datatree(result, seed=result.seed)
     with atomic_path(folder / f"{stem}.nc") as tmp:
         tree.to_netcdf(tmp, engine="h5netcdf")
     info = summary(result, tree)
+    info.update(json_ready(extra or {}))
     write_json_atomic(folder / "summary.json", info)
     return info
 

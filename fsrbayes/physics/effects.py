@@ -25,6 +25,12 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     0 below the onset.
 ``offset-stress`` — ``sigma0`` (null 0)
     Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
+``area-growth`` — ``ag_amp`` (null 0), ``ag_tau``
+    A(t) = A(σ)·exp(ag_amp·g(t)), a stress-independent change of the area with its own kinetics.
+``second-kelvin`` — ``kv2_comp`` (null 0), ``kv2_tau``
+    ε(t) gains σ·kv2_comp·(1 − e^(−t/kv2_tau)): a second retardation time.
+``log-creep`` — ``lc_comp`` (null 0), ``lc_tau``
+    ε(t) gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t over decades of time.
 
 ``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
 bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
@@ -40,8 +46,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .constants import DRIFT_TIME_S
 from .parameters import PARAMETERS, Parameter, register_parameter
-from .rheology import NUTTING
+from .rheology import NUTTING, CreepLaw
 
 __all__ = ["EFFECTS", "Effect", "check_effects", "register_effect", "resolve_effects"]
 
@@ -77,8 +84,8 @@ class Effect:
         """Return the creep strain added under a stress history (None: none)."""
         return None
 
-    def adjust_state(self, params, area, series, creep_strain):
-        """Tunneling area and series resistance given the creep strain Δε = ε − σ/k1."""
+    def adjust_state(self, params, area, series, creep_strain, time):
+        """Tunneling area and series resistance at the creep strain Δε = ε − σ/k1 and time t."""
         return area, series
 
     def current_factor(self, params, voltage, time):
@@ -89,14 +96,14 @@ class Effect:
 class AreaCreep(Effect):
     """A(t) = A(σ)·exp(area_creep·Δε(t)); sign free, the paper expects < 0 (section 4.3)."""
 
-    def adjust_state(self, params, area, series, creep_strain):
+    def adjust_state(self, params, area, series, creep_strain, time):
         return area * np.exp(params["area_creep"] * creep_strain), series
 
 
 class ContactCreep(Effect):
     """Rc(t) = Rc(σ)·exp(−contact_creep·Δε(t)); > 0: more contact paths form under load."""
 
-    def adjust_state(self, params, area, series, creep_strain):
+    def adjust_state(self, params, area, series, creep_strain, time):
         return area, series * np.exp(-params["contact_creep"] * creep_strain)
 
 
@@ -132,6 +139,83 @@ class OffsetStress(Effect):
     The contact law reads ``sigma0`` itself (0 without the effect), so no hook is needed: the
     effect only makes σ0 a model parameter.
     """
+
+
+class AreaGrowth(Effect):
+    """A(t) = A(σ)·exp(ag_amp·g(t)): the tunneling area changes by a stress-independent fraction.
+
+    Its own kinetics, g(t) = ln(1 + t/ag_tau)/ln(1 + 3600 s/ag_tau) (0 at the step, 1 at an hour:
+    like ln t past ag_tau, linear in t for ag_tau ≫ 1 h), so ``ag_amp`` is the log-change of the
+    area over the hour. Unlike ``area-creep`` (∝ the creep strain, hence ∝ σ) it gives a drift
+    that does not grow with stress — the paper's observation (section 4.3).
+    """
+
+    def adjust_state(self, params, area, series, creep_strain, time):
+        tau = params["ag_tau"]
+        t = np.maximum(np.asarray(time, dtype=float), 0.0)
+        growth = np.log1p(t / tau) / np.log1p(DRIFT_TIME_S / tau)
+        return area * np.exp(params["ag_amp"] * growth), series
+
+
+def _kelvin(t, params):
+    t = np.asarray(t, dtype=float)
+    tp = np.maximum(t, 0.0)
+    return np.where(t >= 0, -params["kv2_comp"] * np.expm1(-tp / params["kv2_tau"]), 0.0)
+
+
+def _kelvin_ramp(t, params):
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)
+    x = tp / params["kv2_tau"]
+    kv = np.where(x > 1e-3, x + np.expm1(-x), x * x * (0.5 - x / 6.0 + x * x / 24.0))
+    return params["kv2_comp"] * params["kv2_tau"] * kv
+
+
+def _log_creep(t, params):
+    t = np.asarray(t, dtype=float)
+    tp = np.maximum(t, 0.0)
+    return np.where(t >= 0, params["lc_comp"] * np.log1p(tp / params["lc_tau"]), 0.0)
+
+
+def _log_creep_ramp(t, params):
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)
+    tau = params["lc_tau"]
+    return params["lc_comp"] * ((tp + tau) * np.log1p(tp / tau) - tp)
+
+
+_SECOND_KELVIN = CreepLaw("second-kelvin strain", ("kv2_comp", "kv2_tau"), _kelvin, _kelvin_ramp)
+_LOG_CREEP = CreepLaw("log-creep strain", ("lc_comp", "lc_tau"), _log_creep, _log_creep_ramp)
+
+
+class ExtraCreep(Effect):
+    """Creep strain added by a compliance of the effect's own (:class:`CreepLaw` ``law``)."""
+
+    law = None
+
+    def extra_strain(self, params, stress, time):
+        return self.law.creep_strain(stress, time, params)
+
+    def extra_strain_history(self, params, history, time):
+        return self.law.strain_history(history, time, params)
+
+
+class SecondKelvin(ExtraCreep):
+    """ε gains σ·kv2_comp·(1 − e^(−t/kv2_tau)): a second Kelvin–Voigt element, its own time scale.
+
+    One Kelvin element cannot follow creep spread over decades of time; a second one with its
+    own retardation time is the smallest extension of the Burgers element that can.
+    """
+
+    law = _SECOND_KELVIN
+
+
+class LogCreep(ExtraCreep):
+    """ε gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t, a spectrum of retardation times.
+
+    Real FSRs creep roughly linearly in ln t from a second to an hour (datasheets quote drift per
+    decade of time); a flat spectrum of Kelvin elements gives exactly that.
+    """
+
+    law = _LOG_CREEP
 
 
 EFFECTS = {}
@@ -179,6 +263,12 @@ for _parameter in (
     Parameter("deg_tau", "s", "effect", None, "degradation time constant"),
     Parameter("deg_width", "V", "effect", None, "voltage over which degradation switches on"),
     Parameter("sigma0", "Pa", "effect", None, "preload stress in the contact resistance"),
+    Parameter("ag_amp", "–", "effect", None, "log-change of the tunneling area over an hour"),
+    Parameter("ag_tau", "s", "effect", None, "time scale of the area growth"),
+    Parameter("kv2_comp", "1/Pa", "effect", None, "compliance of a second Kelvin element"),
+    Parameter("kv2_tau", "s", "effect", None, "retardation time of the second Kelvin element"),
+    Parameter("lc_comp", "1/Pa", "effect", None, "compliance per unit ln t of log-time creep"),
+    Parameter("lc_tau", "s", "effect", None, "onset time of log-time creep"),
 ):
     register_parameter(_parameter)
 
@@ -209,6 +299,24 @@ for _effect in (
     ),
     OffsetStress(
         "offset-stress", ("sigma0",), {"sigma0": 0.0}, "a preload stress in the contact resistance"
+    ),
+    AreaGrowth(
+        "area-growth",
+        ("ag_amp", "ag_tau"),
+        {"ag_amp": 0.0},
+        "the tunneling area changes by a stress-independent fraction, with its own kinetics",
+    ),
+    SecondKelvin(
+        "second-kelvin",
+        ("kv2_comp", "kv2_tau"),
+        {"kv2_comp": 0.0},
+        "creep with a second Kelvin element and retardation time",
+    ),
+    LogCreep(
+        "log-creep",
+        ("lc_comp", "lc_tau"),
+        {"lc_comp": 0.0},
+        "creep linear in ln t over decades of time",
     ),
 ):
     register_effect(_effect)

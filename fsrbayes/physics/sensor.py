@@ -93,7 +93,7 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
     if effects:
         creep = strain - np.asarray(stress, dtype=float) / params["k1"]
         for effect in effects:
-            area, series = effect.adjust_state(params, area, series, creep)
+            area, series = effect.adjust_state(params, area, series, creep, time)
     threshold = params["Vth"] if tunneling == "paper" else None
     solution = solve_bulk(
         voltage, series + extra_series, s, params["Va"], area, law=tunneling, threshold=threshold

@@ -1,0 +1,111 @@
+"""Checks after every fit: a converged posterior of a model that does not fit must not be silent.
+
+A sampler can converge perfectly on a model that misses the data: the noise term then absorbs
+the misfit, the fitted noise is far larger than the measurement's, and the credible bands are
+wide and wrong together. :func:`fit_checks` looks for that in three ways:
+
+- the posterior predictive checks of :mod:`.checks` (drift(3600 s), early- vs late-time
+  residuals, the trend over ln t, the quarter means, LOO-PIT and the trends over stress and
+  voltage), Bonferroni-corrected over every check made;
+- the noise level: white measurement noise makes successive standardised residuals differ by
+  √2 on average, so ``noise_over_scatter`` = 1/√(mean(Δr²)/2) is about 1 when the fitted noise
+  is the measurement's, and well above 1 when the noise term has absorbed a smooth misfit that
+  sample-to-sample differences do not see;
+- the residuals' lag-1 autocorrelation within tests: about 0 for white noise; large for a smooth
+  misfit — or for correlated measurement noise, which the white-noise likelihood does not model
+  either.
+
+The command line's ``fsrbayes fit`` runs them on every fitted specimen, warns on stderr when one
+fails and records them as ``checks`` in ``summary.json``.
+"""
+
+import numpy as np
+
+from .checks import predictive_checks
+from .gaps import failed_checks
+
+__all__ = ["AUTOCORRELATION_LIMIT", "NOISE_RATIO_LIMIT", "fit_checks"]
+
+NOISE_RATIO_LIMIT = 2.0
+"""Fitted noise more than this many times the sample-to-sample scatter fails the check."""
+AUTOCORRELATION_LIMIT = 0.5
+"""A lag-1 autocorrelation of the standardised residuals above this fails the check."""
+
+
+def _residual_statistics(residual):
+    """Return (noise over scatter, lag-1 autocorrelation) of residuals (C, T), NaN-padded."""
+    steps = np.diff(residual, axis=1)
+    mean_square_step = np.nanmean(steps**2)
+    noise_over_scatter = (
+        float(1.0 / np.sqrt(mean_square_step / 2.0)) if mean_square_step > 0 else np.inf
+    )
+    centred = residual - np.nanmean(residual, axis=1, keepdims=True)
+    lagged = np.nansum(centred[:, 1:] * centred[:, :-1])
+    total = np.nansum(centred**2)
+    lag1 = float(lagged / total) if total > 0 else float("nan")
+    return noise_over_scatter, lag1
+
+
+def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
+    """Check a fitted specimen against its data.
+
+    Parameters
+    ----------
+    result : fsrbayes.inference.fit.FitResult
+    rng : numpy.random.Generator or int, optional
+        For the replicated data.
+    n_draws : int
+        Posterior draws used (from :meth:`FitResult.draws`).
+    alpha : float
+        Family-wise level of the predictive checks (Bonferroni over all of them).
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``passed`` (bool), ``failed`` (a list of ``{check, …, message}``),
+        ``noise_over_scatter``, ``residual_lag1_autocorrelation``, ``n_checks``, ``alpha``.
+    """
+    rng = np.random.default_rng(rng)
+    posterior = result.posterior
+    draws = result.draws(n_draws).reshape(-1, posterior.ndim)
+    checks = predictive_checks(posterior, draws, rng)
+    found = failed_checks([checks], alpha)
+    failed = [
+        dict(entry, check=entry["statistic"], message=_message(entry)) for entry in found["failed"]
+    ]
+    ratio, lag1 = _residual_statistics(checks.residual_observed)
+    if ratio > NOISE_RATIO_LIMIT:
+        failed.append(
+            {
+                "check": "noise_level",
+                "noise_over_scatter": ratio,
+                "message": f"the fitted noise is {ratio:.1f}x the sample-to-sample scatter of the "
+                "residuals: the noise term absorbs structure the model misses",
+            }
+        )
+    if lag1 > AUTOCORRELATION_LIMIT:
+        failed.append(
+            {
+                "check": "residual_autocorrelation",
+                "lag1": lag1,
+                "message": f"the residuals are correlated in time (lag-1 {lag1:.2f}): "
+                "structure the model misses, or correlated measurement noise",
+            }
+        )
+    return {
+        "passed": not failed,
+        "failed": failed,
+        "noise_over_scatter": ratio,
+        "residual_lag1_autocorrelation": lag1,
+        "n_checks": found["n_checks"],
+        "alpha": alpha,
+    }
+
+
+def _message(entry):
+    where = ""
+    if "voltage_V" in entry:
+        where = f" at {entry['voltage_V']:g} V, {entry['stress_Pa'] / 1e3:.0f} kPa"
+    return (
+        f"posterior predictive check {entry['statistic']} fails{where} (p = {entry['p_value']:.2g})"
+    )

@@ -1,0 +1,95 @@
+"""A converged fit tells the same story in posterior.nc as in summary.json, and a fit of a model
+that does not fit the data is never silent."""
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import fsrbayes
+from fsrbayes.data import synthetic as syn
+from fsrbayes.data import write_csv
+from fsrbayes.discrepancy import fit_checks
+from fsrbayes.inference import FIT_SETTINGS, save_fit
+
+
+@pytest.fixture(scope="module")
+def null_fit():
+    """Bench data of the base model itself (no effect), fitted to convergence."""
+    sim = syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=21, seed=11
+    )
+    return fsrbayes.fit(sim.data, rng=3, settings=replace(FIT_SETTINGS, processes=2))
+
+
+def test_arviz_on_the_stored_draws_agrees_with_the_summary(null_fit, tmp_path):
+    import arviz as az
+
+    assert null_fit.converged
+    summary = save_fit(null_fit, tmp_path)
+    assert summary["converged"]
+    tree = xr.open_datatree(tmp_path / "posterior.nc", engine="h5netcdf")
+    rhat = az.rhat(tree).to_dataset()  # the posterior group's diagnostics
+    ess = az.ess(tree, method="bulk").to_dataset()
+    assert max(float(rhat[name]) for name in rhat.data_vars) < 1.01
+    assert min(float(ess[name]) for name in ess.data_vars) >= 400
+
+
+def test_a_fit_of_the_model_s_own_data_passes_its_checks(null_fit):
+    checks = fit_checks(null_fit, 0)
+    assert checks["passed"], checks["failed"]
+    assert 0.7 < checks["noise_over_scatter"] < 1.5
+    assert abs(checks["residual_lag1_autocorrelation"]) < 0.3
+
+
+def _temperature_cycle(sim, amplitude=0.04, period_s=1500.0):
+    """The rig's temperature swings: every reading scaled by 1 + a·sin(2πt/P) — a measurement
+    artefact that no creep law or catalogue effect produces (written here, not in the package)."""
+    tests = []
+    for test in sim.data.tests:
+        factor = 1.0 + amplitude * np.sin(2 * np.pi * test.time_s / period_s)
+        tests.append(type(test)(**{**test.__dict__, "current_A": test.current_A * factor}))
+    return type(sim.data)(tuple(tests), "temperature cycle")
+
+
+def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
+    sim = syn.simulate(
+        "a201",
+        n_specimens=1,
+        voltages=[0.5, 2.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=41,
+        spacing="linear",
+        seed=12,
+    )
+    path = tmp_path / "cycle.csv"
+    write_csv(_temperature_cycle(sim), path)
+    out = tmp_path / "fit"
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "fsrbayes",
+            "fit",
+            str(path),
+            "--out",
+            str(out),
+            "--seed",
+            "1",
+            "--max-steps",
+            "2000",
+            "--no-plots",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "does not fit these data" in run.stderr
+    checks = json.loads((out / "summary.json").read_text())["checks"]
+    assert not checks["passed"]
+    failed = {f["check"] for f in checks["failed"]}
+    assert failed & {"residual_autocorrelation", "noise_level"}, failed
