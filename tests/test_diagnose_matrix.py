@@ -81,3 +81,19 @@ def test_area_growth_gives_the_papers_positive_drift_that_does_not_grow_with_str
     stresses = a201.stress(np.array(PAPER_FORCES_N))
     drift = fsrbayes.drift(params, 0.5, stresses, 3600.0, effects=("area-creep", "area-growth"))
     assert drift.mean() > 5.0 and np.ptp(drift) < 0.05 * drift.mean()
+
+
+@pytest.mark.slow
+def test_outside_the_menu():
+    """Causes no catalogue effect is (artefacts, another creep law, another tunneling law,
+    correlated noise), simulated by code outside the package's effects: never called adequate,
+    and any effect named closes the gap with its checks passing (the verdict's definition)."""
+    from validation.outside_menu import format_rows, run
+
+    rows = run(n_sets=5)
+    print("\n" + format_rows(rows))
+    assert not [r for r in rows if r["verdict"] == "adequate"], rows
+    for r in rows:
+        if r["verdict"] == "missing-effect":
+            band, before, after = r["band"], r["gap_before"], r["gap_after"]
+            assert after <= band or after - band <= 0.5 * (before - band), r

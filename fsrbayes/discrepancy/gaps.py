@@ -96,11 +96,11 @@ def failed_checks(checks, alpha=0.01):
     }
 
 
-GAP_NULL_MEAN_SQUARE = 0.6
+GAP_NULL_MEAN_SQUARE = 0.758
 """Mean of a test's quarter distance d² when the base model is fitted to data it generated."""
 
 
-GAP_NULL_SD_SQUARE = 0.6
+GAP_NULL_SD_SQUARE = 0.472
 """Spread of gap² over such data sets, per √(number of tests)."""
 
 
