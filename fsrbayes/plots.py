@@ -21,6 +21,7 @@ __all__ = [
     "population_drift_plot",
     "diagnosis_drift_plot",
     "diagnosis_misfit_plot",
+    "diagnosis_discrepancy_plot",
     "diagnosis_residual_plot",
     "sbc_rank_plot",
     "save_figure",
@@ -327,6 +328,54 @@ def diagnosis_residual_plot(diagnosis):
     axes[0, -1].legend(fontsize=7, title="V_FSR", title_fontsize=7)
     fig.tight_layout()
     return fig, axes
+
+
+def diagnosis_discrepancy_plot(diagnosis):
+    """Shape of the base model's misfit: the smooth discrepancy term δ(ln t) of every test.
+
+    Per test, the polynomial in ln t fitted to the standardised residuals
+    (:func:`fsrbayes.discrepancy.locate.discrepancy_shapes`), coloured by voltage, dashed by
+    stress; the grey band is the size white noise alone leaves (±√(p/n)).
+    """
+    from .discrepancy.locate import discrepancy_shapes
+
+    checks = diagnosis.checks()
+    times = np.geomspace(1.0, 3600.0, 60)
+    shapes = discrepancy_shapes(checks, at_s=times)
+    fig, ax = plt.subplots(figsize=(6.2, 3.8))
+    voltages = sorted({s["voltage_V"] for s in shapes})
+    stresses = sorted({s["stress_Pa"] for s in shapes})
+    styles = ("-", "--", ":", "-.")
+    noise = [s["noise_rms_sigma"] for s in shapes if s["noise_rms_sigma"] is not None]
+    if noise:
+        level = float(np.sqrt(np.mean(np.square(noise))))
+        ax.axhspan(-level, level, color="0.85", label="what noise alone leaves")
+    for s in shapes:
+        if s["shape_sigma"] is None:
+            continue
+        values = np.array([np.nan if v is None else v for v in s["shape_sigma"]])
+        k = voltages.index(s["voltage_V"])
+        ax.plot(
+            times,
+            values,
+            color=plt.cm.viridis(k / max(1, len(voltages) - 1)),
+            ls=styles[stresses.index(s["stress_Pa"]) % len(styles)],
+            lw=1,
+        )
+    for k, v in enumerate(voltages):
+        ax.plot([], [], color=plt.cm.viridis(k / max(1, len(voltages) - 1)), label=f"{v:g} V")
+    for j, sigma in enumerate(stresses):
+        ax.plot([], [], "k", ls=styles[j % len(styles)], label=f"{sigma / 1e3:.0f} kPa")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set(
+        xscale="log",
+        xlabel="time (s)",
+        ylabel="discrepancy δ (noise sd)",
+        title=f"shape of the misfit of {diagnosis.base}",
+    )
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    return fig, ax
 
 
 def sbc_rank_plot(result, bins=10, per_row=4):

@@ -281,6 +281,11 @@ FIGURES = (
         plots.diagnosis_misfit_plot,
     ),
     ("residuals_over_time.png", "Residuals over time", plots.diagnosis_residual_plot),
+    (
+        "discrepancy_shape.png",
+        "Where and what shape: the smooth discrepancy term of every test",
+        plots.diagnosis_discrepancy_plot,
+    ),
 )
 
 

@@ -54,13 +54,15 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert payload["drift_gap_after"] < payload["drift_gap_before"]
     assert [c["effect"] for c in payload["candidates"]] == ["area-creep", "offset-stress"]
     html = (report / "report.html").read_text()
-    assert html.count("data:image/png;base64,") == 3 and "area-creep" in html
+    assert html.count("data:image/png;base64,") == 4 and "area-creep" in html
+    assert "Where the base model misses" in html
     for name in (
         "report.md",
         "diagnosis.json",
         "drift_before_after.png",
         "misfit_by_level.png",
         "residuals_over_time.png",
+        "discrepancy_shape.png",
     ):
         assert (report / name).stat().st_size > 0
     assert not list(tmp_path.rglob(".*.tmp"))

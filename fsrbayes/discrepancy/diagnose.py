@@ -51,7 +51,7 @@ GAP_METRIC = (
     "rms Mahalanobis misfit of the mean log-current in the four quarters of every creep test's "
     "samples (level, shape and drift of the creep curves): sqrt(mean over tests of d^2 / 4), d^2 "
     "= (observed - predictive mean)' inverse(predictive covariance) (observed - predictive mean); "
-    "~1 or below for an adequate model (about 0.75 on fitted virtual-bench data)"
+    "about 0.87 for an adequate model fitted to its own data; the band G0 in `band` bounds it"
 )
 
 
