@@ -154,7 +154,7 @@ def build_parser():
         "(Kalantari et al.'s eq. 14)",
     )
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
-    fit_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    fit_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
@@ -222,7 +222,7 @@ def build_parser():
     cmp_.add_argument("--specimen", help="compare on this specimen only (default: all, summed)")
     cmp_.add_argument("--json", help="write the result here (atomically)")
     cmp_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
-    cmp_.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    cmp_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
     cmp_.add_argument(
         "--path",
         choices=("reference", "prior"),
@@ -283,7 +283,7 @@ def build_parser():
         help="ln B over the base model (summed over specimens) to name an effect (default 10)",
     )
     dia.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
-    dia.add_argument("--likelihood", choices=("gaussian", "student"), default="gaussian")
+    dia.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
     dia.add_argument("--processes", type=int, help="specimens side by side (default: one per core)")
     dia.add_argument("--seed", type=int, default=0)
     dia.add_argument("--sep", default=",", help="CSV field separator")

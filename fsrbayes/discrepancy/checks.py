@@ -50,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
+from ..inference.likelihood import ar1_innovations
 from ..physics.constants import DRIFT_TIME_S
 
 __all__ = [
@@ -149,7 +150,7 @@ def _residual_weights(time_s, mask):
     return early_late, slope
 
 
-def loo_pit(y, log_mu, sigma, mask, nu=None):
+def loo_pit(y, log_mu, sigma, mask, nu=None, *, standardised=None, log_scale=None):
     """LOO probability integral transforms of every sample and each test's uniformity p-value.
 
     PIT_i = Σ_s w_is·F(y_i | θ_s), with w_is the Pareto-smoothed importance weights
@@ -164,6 +165,9 @@ def loo_pit(y, log_mu, sigma, mask, nu=None):
     sigma : ndarray, shape (S,)
         Noise scale per draw; ``nu`` (S,) for Student-t noise.
     mask : ndarray of bool, shape (C, T)
+    standardised, log_scale : ndarray, shape (S, C, T), optional
+        For correlated (AR(1)) noise: each sample's standardised innovation given the one before,
+        and the log of its conditional sd in units of sigma; they replace (y − log_mu)/sigma.
 
     Returns
     -------
@@ -177,13 +181,15 @@ def loo_pit(y, log_mu, sigma, mask, nu=None):
     from arviz_stats.base import array_stats
     from scipy import stats
 
-    z = (y[None] - log_mu) / sigma[:, None, None]
+    z = (y[None] - log_mu) / sigma[:, None, None] if standardised is None else standardised
     if nu is None:
         log_pdf, cdf = -0.5 * z**2, special.ndtr(z)
     else:
         t = stats.t(nu[:, None, None])
         log_pdf, cdf = t.logpdf(z), t.cdf(z)
     log_pdf = log_pdf - np.log(sigma)[:, None, None]
+    if log_scale is not None:
+        log_pdf = log_pdf - log_scale
     try:
         log_w, k = array_stats.psislw(-log_pdf[:, mask].T, axis=-1)
     except ValueError:  # identical draws (a point-mass posterior): the weights are uniform
@@ -263,6 +269,9 @@ class SpecimenChecks:
     names: tuple = ()
     loo_pit: np.ndarray = None
     max_pareto_k: float = float("nan")
+    innovation_observed: np.ndarray = None
+    """Posterior-mean standardised innovations: the residuals whitened by the noise model (equal
+    to ``residual_observed`` for white noise; AR(1) noise is whitened), shape (C, T)."""
 
     @property
     def z(self):
@@ -302,6 +311,18 @@ class SpecimenChecks:
         return np.quantile(self.replicated_drift, [0.05, 0.5, 0.95], axis=0)
 
 
+def _ornstein_uhlenbeck(white, time_s, tau):
+    """Unit-variance Ornstein–Uhlenbeck noise on the sample times from white normals (S, C, T)."""
+    dt = np.diff(time_s, axis=-1)[None]
+    rho = np.exp(-dt / tau[:, None, None])
+    scale = np.sqrt(-np.expm1(-2.0 * dt / tau[:, None, None]))
+    out = np.empty_like(white)
+    out[..., 0] = white[..., 0]
+    for k in range(1, white.shape[-1]):
+        out[..., k] = rho[..., k - 1] * out[..., k - 1] + scale[..., k - 1] * white[..., k]
+    return out
+
+
 def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     """Posterior predictive checks of one specimen.
 
@@ -334,6 +355,8 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if posterior.likelihood == "student":
         nu = params["nu"][:, None, None]
         noise = noise / np.sqrt(rng.chisquare(nu, size=log_mu.shape) / nu)
+    if posterior.likelihood == "ar1":
+        noise = _ornstein_uhlenbeck(noise, data.time_s, params["noise_tau"])
     y_rep = log_mu + sigma * noise
     y_obs = np.broadcast_to(data.log_current, log_mu.shape)
 
@@ -374,14 +397,21 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         observed[name] = _slope_over(d_obs - d_model, covariate)
         replicated[name] = _slope_over(d_rep - d_model, covariate)
     p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
+    innovations, log_scale = r_obs, None
+    if posterior.likelihood == "ar1":
+        with np.errstate(invalid="ignore"):
+            innovations, log_scale = ar1_innovations(r_obs, data.time_s, params["noise_tau"])
     pit, p_values["loo_pit"], max_k = loo_pit(
         data.log_current,
         log_mu,
         params["sigma_rel"],
         data.mask,
         params["nu"] if posterior.likelihood == "student" else None,
+        standardised=innovations if log_scale is not None else None,
+        log_scale=log_scale,
     )
     residual = np.where(data.mask, r_obs.mean(axis=0), np.nan)
+    innovation = np.where(data.mask, innovations.mean(axis=0), np.nan)
     return SpecimenChecks(
         data.specimen,
         data.sensor,
@@ -402,4 +432,5 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         tuple(posterior.names),
         pit,
         max_k,
+        innovation,
     )

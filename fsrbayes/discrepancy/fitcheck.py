@@ -13,7 +13,8 @@ wide and wrong together. :func:`fit_checks` looks for that in three ways:
   sample-to-sample differences do not see;
 - the residuals' lag-1 autocorrelation within tests: about 0 for white noise; large for a smooth
   misfit — or for correlated measurement noise, which the white-noise likelihood does not model
-  either.
+  either (fit with ``likelihood="ar1"``: the residuals are then whitened by the fitted noise
+  model before these two statistics).
 
 The command line's ``fsrbayes fit`` runs them on every fitted specimen, warns on stderr when one
 fails and records them as ``checks`` in ``summary.json``.
@@ -73,7 +74,7 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
     failed = [
         dict(entry, check=entry["statistic"], message=_message(entry)) for entry in found["failed"]
     ]
-    ratio, lag1 = _residual_statistics(checks.residual_observed)
+    ratio, lag1 = _residual_statistics(checks.innovation_observed)
     if ratio > NOISE_RATIO_LIMIT:
         failed.append(
             {

@@ -1,13 +1,21 @@
-"""Likelihood of measured creep currents: relative (log-current) Gaussian or Student-t.
+"""Likelihood of measured creep currents: relative (log-current) Gaussian, Student-t or AR(1).
 
 For each sample y = log I_obs, with the model current I(θ) at the same time,
 
     gaussian:  y ~ Normal(log I(θ), sigma_rel)
     student:   y ~ Student-t(nu, log I(θ), sigma_rel)
+    ar1:       e = y − log I(θ) is an Ornstein–Uhlenbeck process of sd sigma_rel and
+               correlation time noise_tau: e_k | e_{k−1} ~ Normal(ρ_k·e_{k−1},
+               sigma_rel·√(1 − ρ_k²)), ρ_k = exp(−(t_k − t_{k−1})/noise_tau), e_0 ~ Normal(0,
+               sigma_rel)
 
 and the density is that of the measured current, p(I_obs) = p(y)/I_obs. ``sigma_rel`` is
 the relative noise of the current; ``nu`` the Student-t degrees of freedom (robust to outlying
-samples). The pointwise log-likelihood (one value per sample) is kept for LOO.
+samples); ``noise_tau`` the correlation time of correlated noise (a drifting amplifier, the
+rig's temperature, a logger's filter) — the AR(1) law in continuous time, so that unevenly
+spaced samples are handled exactly. Correlated noise is then not read as creep. The pointwise
+log-likelihood (one value per sample; for AR(1) each sample given the one before) is kept for
+LOO.
 """
 
 import hashlib
@@ -19,9 +27,9 @@ from scipy import special
 from ..data.creep import CreepData
 from ..utils import HALF_LOG_2PI
 
-__all__ = ["LIKELIHOODS", "SpecimenData", "log_likelihood_pointwise"]
+__all__ = ["LIKELIHOODS", "SpecimenData", "ar1_innovations", "log_likelihood_pointwise"]
 
-LIKELIHOODS = ("gaussian", "student")
+LIKELIHOODS = ("gaussian", "student", "ar1")
 
 
 @dataclass(frozen=True)
@@ -130,7 +138,26 @@ class SpecimenData:
         return digest.hexdigest()
 
 
-def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian", nu=None):
+def ar1_innovations(resid_full, time_s, tau):
+    """Standardised innovations and log-scales of an Ornstein–Uhlenbeck residual series.
+
+    ``resid_full`` (W, C, T) is e/σ on the padded grid; returns (z, log of the conditional sd in
+    units of σ), each (W, C, T): the first sample of a test has z = e/σ and scale 1.
+    """
+    dt = np.diff(time_s, axis=-1)  # (C, T−1); padding repeats the last time: dt = 0 there
+    rho = np.exp(-dt[None] / tau[:, None, None])
+    scale = np.sqrt(np.maximum(-np.expm1(-2.0 * dt[None] / tau[:, None, None]), 1e-300))
+    z = np.empty_like(resid_full)
+    z[..., 0] = resid_full[..., 0]
+    z[..., 1:] = (resid_full[..., 1:] - rho * resid_full[..., :-1]) / scale
+    log_scale = np.zeros_like(resid_full)
+    log_scale[..., 1:] = np.log(scale)
+    return z, log_scale
+
+
+def log_likelihood_pointwise(
+    log_model, data, sigma_rel, *, likelihood="gaussian", nu=None, noise_tau=None
+):
     """Log-likelihood of every observed sample.
 
     Parameters
@@ -140,9 +167,11 @@ def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian
     data : SpecimenData
     sigma_rel : ndarray, shape (W,)
         Relative noise scale.
-    likelihood : {"gaussian", "student"}
+    likelihood : {"gaussian", "student", "ar1"}
     nu : ndarray, shape (W,), optional
         Student-t degrees of freedom.
+    noise_tau : ndarray, shape (W,), optional
+        Correlation time of the AR(1) noise in s.
 
     Returns
     -------
@@ -154,6 +183,14 @@ def log_likelihood_pointwise(log_model, data, sigma_rel, *, likelihood="gaussian
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
     sigma = np.asarray(sigma_rel, dtype=float)[:, None]
     y = data.log_current[data.mask]
+    if likelihood == "ar1":
+        tau = np.asarray(noise_tau, dtype=float)
+        with np.errstate(invalid="ignore"):
+            full = (data.log_current[None] - log_model) / sigma[:, :, None]
+            z, log_scale = ar1_innovations(full, data.time_s, tau)
+            value = -0.5 * z**2 - log_scale - np.log(sigma[:, :, None]) - HALF_LOG_2PI
+        value = value[:, data.mask] - y
+        return np.where(np.isfinite(value), value, -np.inf)
     resid = (y[None, :] - log_model[:, data.mask]) / sigma
     if likelihood == "gaussian":
         value = -0.5 * resid**2 - np.log(sigma) - HALF_LOG_2PI - y

@@ -18,10 +18,11 @@ __all__ = ["LogPosterior", "PriorScaledTarget", "noise_parameters"]
 
 
 def noise_parameters(likelihood):
-    """Likelihood parameters: sigma_rel, plus nu for Student-t."""
+    """Likelihood parameters: sigma_rel, plus nu for Student-t or noise_tau for AR(1)."""
     if likelihood not in LIKELIHOODS:
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
-    return ("sigma_rel", "nu") if likelihood == "student" else ("sigma_rel",)
+    extra = {"student": ("nu",), "ar1": ("noise_tau",)}.get(likelihood, ())
+    return ("sigma_rel", *extra)
 
 
 class PriorScaledTarget:
@@ -84,7 +85,7 @@ class LogPosterior(PriorScaledTarget):
         ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"``
         (eq. 14).
     tunneling : {"smooth", "paper"}
-    likelihood : {"gaussian", "student"}
+    likelihood : {"gaussian", "student", "ar1"}
     beta : float
         Likelihood power (1 for the posterior, < 1 for the power posteriors of the evidence).
     """
@@ -208,6 +209,7 @@ class LogPosterior(PriorScaledTarget):
             params["sigma_rel"],
             likelihood=self.likelihood,
             nu=params.get("nu"),
+            noise_tau=params.get("noise_tau"),
         )
 
     def log_prior(self, u):

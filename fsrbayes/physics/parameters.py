@@ -95,6 +95,7 @@ for _entry in (
     Parameter("n", "–", "physical", 0.1, "Nutting exponent (eq. 13)"),
     Parameter("sigma_rel", "–", "nuisance", None, "relative noise of the current (sd of its log)"),
     Parameter("nu", "–", "nuisance", None, "Student-t degrees of freedom"),
+    Parameter("noise_tau", "s", "nuisance", None, "correlation time of AR(1) measurement noise"),
 ):
     register_parameter(_entry)
 
