@@ -21,7 +21,7 @@ from fsrbayes.inference import FIT_SETTINGS, save_fit
 def null_fit():
     """Bench data of the base model itself (no effect), fitted to convergence."""
     sim = syn.simulate(
-        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=21, seed=11
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8], samples=13, seed=11
     )
     return fsrbayes.fit(sim.data, rng=3, settings=replace(FIT_SETTINGS, processes=2))
 
