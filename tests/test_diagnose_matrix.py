@@ -102,3 +102,16 @@ def test_outside_the_menu():
         if r["verdict"] == "missing-effect":
             band, before, after = r["band"], r["gap_before"], r["gap_after"]
             assert after <= band or after - band <= 0.5 * (before - band), r
+
+
+@pytest.mark.slow
+def test_catalogue_mechanisms_with_their_own_time_courses():
+    """Mechanisms of the catalogue's kinds, written with nature's own time courses: never
+    called adequate, and whatever is named first is the right kind (VALIDATION.md §6)."""
+    from validation.foreign_forms import format_rows, run
+
+    rows = run()
+    print("\n" + format_rows(rows))
+    assert not [r for r in rows if r["verdict"] in ("adequate", "unexplained")], rows
+    assert all(r["right"] for r in rows), rows
+    assert all(r["halved"] for r in rows if r["verdict"] == "missing-effect"), rows
