@@ -37,8 +37,8 @@ NOISE = 0.005
 CASES = (
     ("area-shrink", 0.05, ("area-growth", "area-creep")),
     ("area-shrink", 0.15, ("area-growth", "area-creep")),
-    ("contact-paths", 0.15, ("contact-creep",)),
-    ("contact-paths", 0.4, ("contact-creep",)),
+    ("contact-paths", 0.15, ("contact-creep", "contact-growth")),
+    ("contact-paths", 0.4, ("contact-creep", "contact-growth")),
     ("soft-degradation", 0.05, ("voltage-degradation",)),
     ("soft-degradation", 0.15, ("voltage-degradation",)),
     ("findley-creep", 0.5, ("power-law-creep", "log-creep", "second-kelvin")),

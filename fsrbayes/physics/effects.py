@@ -29,6 +29,8 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     A(t) = A(σ)·exp(ag_amp·g(t)), a stress-independent change of the area with its own kinetics.
 ``second-kelvin`` — ``kv2_comp`` (null 0), ``kv2_tau``
     ε(t) gains σ·kv2_comp·(1 − e^(−t/kv2_tau)): a second retardation time.
+``contact-growth`` — ``cg_amp`` (null 0), ``cg_tau``
+    Rc(t) = Rc(σ)·exp(−cg_amp·g(t)): contact paths form with kinetics of their own.
 ``log-creep`` — ``lc_comp`` (null 0), ``lc_tau``
     ε(t) gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t over decades of time.
 
@@ -151,10 +153,26 @@ class AreaGrowth(Effect):
     """
 
     def adjust_state(self, params, area, series, creep_strain, time):
-        tau = params["ag_tau"]
-        t = np.maximum(np.asarray(time, dtype=float), 0.0)
-        growth = np.log1p(t / tau) / np.log1p(DRIFT_TIME_S / tau)
-        return area * np.exp(params["ag_amp"] * growth), series
+        return area * np.exp(params["ag_amp"] * _log_growth(time, params["ag_tau"])), series
+
+
+def _log_growth(time, tau):
+    """g(t) = ln(1 + t/τ)/ln(1 + 3600 s/τ): 0 at the step, 1 at an hour, ln t past τ."""
+    t = np.maximum(np.asarray(time, dtype=float), 0.0)
+    return np.log1p(t / tau) / np.log1p(DRIFT_TIME_S / tau)
+
+
+class ContactGrowth(Effect):
+    """Rc(t) = Rc(σ)·exp(−cg_amp·g(t)): contact paths form with kinetics of their own.
+
+    The same time course as ``area-growth`` (g(t) = ln(1 + t/cg_tau)/ln(1 + 3600 s/cg_tau));
+    unlike ``contact-creep`` it does not follow the creep strain, so paths may form faster or
+    slower than the polymer creeps. ``cg_amp`` is the log-fall of the contact resistance over
+    the hour (> 0: paths form).
+    """
+
+    def adjust_state(self, params, area, series, creep_strain, time):
+        return area, series * np.exp(-params["cg_amp"] * _log_growth(time, params["cg_tau"]))
 
 
 def _kelvin(t, params):
@@ -269,6 +287,8 @@ for _parameter in (
     Parameter("kv2_tau", "s", "effect", None, "retardation time of the second Kelvin element"),
     Parameter("lc_comp", "1/Pa", "effect", None, "compliance per unit ln t of log-time creep"),
     Parameter("lc_tau", "s", "effect", None, "onset time of log-time creep"),
+    Parameter("cg_amp", "–", "effect", None, "log-fall of the contact resistance over an hour"),
+    Parameter("cg_tau", "s", "effect", None, "time scale of contact-path formation"),
 ):
     register_parameter(_parameter)
 
@@ -311,6 +331,12 @@ for _effect in (
         ("kv2_comp", "kv2_tau"),
         {"kv2_comp": 0.0},
         "creep with a second Kelvin element and retardation time",
+    ),
+    ContactGrowth(
+        "contact-growth",
+        ("cg_amp", "cg_tau"),
+        {"cg_amp": 0.0},
+        "contact paths form with kinetics of their own",
     ),
     LogCreep(
         "log-creep",
