@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from ..inference.likelihood import ar1_innovations
+from ..inference.likelihood import ar1_innovations, ou_coefficients
 from ..physics.constants import DRIFT_TIME_S
 
 __all__ = [
@@ -313,9 +313,7 @@ class SpecimenChecks:
 
 def _ornstein_uhlenbeck(white, time_s, tau):
     """Unit-variance Ornstein–Uhlenbeck noise on the sample times from white normals (S, C, T)."""
-    dt = np.diff(time_s, axis=-1)[None]
-    rho = np.exp(-dt / tau[:, None, None])
-    scale = np.sqrt(-np.expm1(-2.0 * dt / tau[:, None, None]))
+    rho, scale = ou_coefficients(time_s, tau)
     out = np.empty_like(white)
     out[..., 0] = white[..., 0]
     for k in range(1, white.shape[-1]):

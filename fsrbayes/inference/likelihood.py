@@ -27,7 +27,13 @@ from scipy import special
 from ..data.creep import CreepData
 from ..utils import HALF_LOG_2PI
 
-__all__ = ["LIKELIHOODS", "SpecimenData", "ar1_innovations", "log_likelihood_pointwise"]
+__all__ = [
+    "LIKELIHOODS",
+    "SpecimenData",
+    "ar1_innovations",
+    "log_likelihood_pointwise",
+    "ou_coefficients",
+]
 
 LIKELIHOODS = ("gaussian", "student", "ar1")
 
@@ -138,15 +144,25 @@ class SpecimenData:
         return digest.hexdigest()
 
 
+def ou_coefficients(time_s, tau):
+    """Return (ρ, √(1 − ρ²)) between successive samples of an Ornstein–Uhlenbeck process.
+
+    ``time_s`` (C, T), ``tau`` (W,); both results (W, C, T − 1), ρ = exp(−Δt/τ). Padding repeats
+    the last time (Δt = 0), where the conditional scale is floored instead of 0.
+    """
+    dt = np.diff(time_s, axis=-1)[None]
+    rho = np.exp(-dt / tau[:, None, None])
+    scale = np.sqrt(np.maximum(-np.expm1(-2.0 * dt / tau[:, None, None]), 1e-300))
+    return rho, scale
+
+
 def ar1_innovations(resid_full, time_s, tau):
     """Standardised innovations and log-scales of an Ornstein–Uhlenbeck residual series.
 
     ``resid_full`` (W, C, T) is e/σ on the padded grid; returns (z, log of the conditional sd in
     units of σ), each (W, C, T): the first sample of a test has z = e/σ and scale 1.
     """
-    dt = np.diff(time_s, axis=-1)  # (C, T−1); padding repeats the last time: dt = 0 there
-    rho = np.exp(-dt[None] / tau[:, None, None])
-    scale = np.sqrt(np.maximum(-np.expm1(-2.0 * dt[None] / tau[:, None, None]), 1e-300))
+    rho, scale = ou_coefficients(time_s, tau)
     z = np.empty_like(resid_full)
     z[..., 0] = resid_full[..., 0]
     z[..., 1:] = (resid_full[..., 1:] - rho * resid_full[..., :-1]) / scale

@@ -50,7 +50,7 @@ import numpy as np
 
 from .constants import DRIFT_TIME_S
 from .parameters import PARAMETERS, Parameter, register_parameter
-from .rheology import NUTTING, CreepLaw
+from .rheology import NUTTING, CreepLaw, kelvin_ramp
 
 __all__ = ["EFFECTS", "Effect", "check_effects", "register_effect", "resolve_effects"]
 
@@ -183,9 +183,7 @@ def _kelvin(t, params):
 
 def _kelvin_ramp(t, params):
     tp = np.maximum(np.asarray(t, dtype=float), 0.0)
-    x = tp / params["kv2_tau"]
-    kv = np.where(x > 1e-3, x + np.expm1(-x), x * x * (0.5 - x / 6.0 + x * x / 24.0))
-    return params["kv2_comp"] * params["kv2_tau"] * kv
+    return params["kv2_comp"] * params["kv2_tau"] * kelvin_ramp(tp / params["kv2_tau"])
 
 
 def _log_creep(t, params):

@@ -43,6 +43,7 @@ __all__ = [
     "creep_strain",
     "strain_history",
     "fluidity",
+    "kelvin_ramp",
 ]
 
 
@@ -88,14 +89,21 @@ def burgers_compliance(t, k1, k2, b2, inv_b1=0.0):
     return np.where(t >= 0, value, 0.0)
 
 
+def kelvin_ramp(x):
+    """Return x − (1 − e^(−x)) = ∫₀ˣ (1 − e^(−u)) du, a Kelvin element's ramp response.
+
+    x is time in units of the retardation time. x + expm1(−x) loses digits for tiny x; there its
+    series x²/2 − x³/6 + x⁴/24 is used.
+    """
+    return np.where(x > 1e-3, x + np.expm1(-x), x * x * (0.5 - x / 6.0 + x * x / 24.0))
+
+
 def burgers_ramp_compliance(t, k1, k2, b2, inv_b1=0.0):
     """Ĵ(t) = ∫₀ᵗ J_Burgers: t/k1 + t²/(2 b1) + [t − (b2/k2)(1 − exp(−k2 t/b2))]/k2."""
     tp = np.maximum(np.asarray(t, dtype=float), 0.0)
     tau = b2 / k2
     x = tp / tau
-    # x + expm1(-x) loses digits for tiny x; its series is x²/2 − x³/6 + x⁴/24.
-    kv = np.where(x > 1e-3, x + np.expm1(-x), x * x * (0.5 - x / 6.0 + x * x / 24.0))
-    return tp / k1 + 0.5 * tp * tp * inv_b1 + tau * kv / k2
+    return tp / k1 + 0.5 * tp * tp * inv_b1 + tau * kelvin_ramp(x) / k2
 
 
 def nutting_compliance(t, k1, psi, n):
