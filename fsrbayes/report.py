@@ -58,6 +58,14 @@ def _verdict_text(result, n_spec):
         for c in steps
     )
     verdict = result["verdict"]
+    artefacts = result.get("artefacts") or []
+    rig = (
+        f" {' and '.join(f'**{e}**' for e in artefacts)} describes the rig, not the sensor: the "
+        "misfit is at least partly a **measurement artefact** — check the readout (gain, "
+        "temperature, reference) before reading the fit as the sensor's behaviour."
+        if artefacts
+        else ""
+    )
     if verdict == "adequate":
         return [
             f"No check fails and the gap {before:.2f} lies inside the band an adequate model "
@@ -69,7 +77,7 @@ def _verdict_text(result, n_spec):
             f"Adding {added} ({evidence}) takes the gap from {before:.2f} to **gap_after = "
             f"{after:.2f}** (band G0 = {band:.2f}) and every check passes: a **missing effect** is "
             f"named (drift(3600 s) misfit {result['drift_gap_before']:.2f} → "
-            f"{result['drift_gap_after']:.2f})."
+            f"{result['drift_gap_after']:.2f}).{rig}"
         ]
     if verdict == "partially-explained":
         reason = (
@@ -81,6 +89,7 @@ def _verdict_text(result, n_spec):
             f"Adding {added} ({evidence}) helps — the gap goes from {before:.2f} to {after:.2f} — "
             f"but does not explain the data: {reason}. The verdict is **partially explained**: "
             "read the effect(s) as part of the story; the misfit map below shows what is left."
+            + rig
         ]
     best = result["candidates"][0] if result["candidates"] else None
     tried = (

@@ -18,6 +18,7 @@ named (or a documented equivalent) and the named extension at least halving the 
 over the band. Run ``python -m validation.foreign_forms``.
 """
 
+import json
 import sys
 import time
 
@@ -75,28 +76,35 @@ def data_set(mechanism, magnitude, seed, sensor="a201"):
     return CreepData(tuple(tests), mechanism)
 
 
-def run(processes=2):
-    """Diagnose every case; one row per case."""
+def run(n_sets=1, processes=2):
+    """Diagnose ``n_sets`` data sets of every case; one row per data set."""
     rows = []
     for k, (mechanism, magnitude, right) in enumerate(CASES):
-        started = time.perf_counter()
-        result = diagnose(data_set(mechanism, magnitude, 500 + k), seed=k, processes=processes)
-        band, before, after = result.band, result.gap_before, result.gap_after
-        rows.append(
-            {
-                "mechanism": mechanism,
-                "magnitude": magnitude,
-                "verdict": result.verdict,
-                "effects": list(result.effects),
-                "right": bool(result.effects) and result.effects[0] in right,
-                "gap_before": before,
-                "gap_after": after,
-                "band": band,
-                "halved": bool(after <= band or after - band <= 0.5 * (before - band)),
-                "seconds": time.perf_counter() - started,
-            }
-        )
-        print(rows[-1], flush=True)
+        for j in range(n_sets):
+            seed = 500 + k + 100 * j
+            started = time.perf_counter()
+            result = diagnose(
+                data_set(mechanism, magnitude, seed), seed=k + 100 * j, processes=processes
+            )
+            band, before, after = result.band, result.gap_before, result.gap_after
+            rows.append(
+                {
+                    "mechanism": mechanism,
+                    "magnitude": magnitude,
+                    "seed": seed,
+                    "verdict": result.verdict,
+                    "effects": list(result.effects),
+                    "right": bool(result.effects) and result.effects[0] in right,
+                    "false_name": result.verdict == "missing-effect"
+                    and not set(result.effects) & set(right),
+                    "gap_before": before,
+                    "gap_after": after,
+                    "band": band,
+                    "halved": bool(after <= band or after - band <= 0.5 * (before - band)),
+                    "seconds": time.perf_counter() - started,
+                }
+            )
+            print(rows[-1], flush=True)
     return rows
 
 
@@ -116,5 +124,8 @@ def format_rows(rows):
 
 
 if __name__ == "__main__":
-    print(format_rows(run()))
-    sys.exit(0)
+    rows = run(n_sets=int(sys.argv[1]) if len(sys.argv) > 1 else 1)
+    print(format_rows(rows))
+    if len(sys.argv) > 2:
+        with open(sys.argv[2], "w") as f:
+            json.dump(rows, f, indent=1)

@@ -1,12 +1,16 @@
 """diagnose on causes outside its catalogue: it must never call such data adequate.
 
-Five kinds of cause that no catalogue effect is, each simulated by code written here — the
+Six kinds of cause that no catalogue effect is, each simulated by code written here — the
 mechanisms do not come from the package's effect or creep-law code:
 
 - ``temperature-cycle``: the rig's temperature swings, every reading scaled by
   1 + a·sin(2πt/P + φ) (a measurement artefact);
-- ``gain-drift``: the amplifier's gain drifts linearly over the hour (an artefact the same for
-  every test, whatever its voltage or stress);
+- ``gain-warm-up``: the amplifier's gain settles as the rig warms up, 1 − a·(1 − e^(−t/τ)) — a
+  readout artefact the same for every test, with a time course the catalogue's linear
+  ``gain-drift`` does not have;
+- ``offset-drift``: an additive offset current creeping into the readout (a leakage or an
+  amplifier's offset), the same in amperes for every test — largest, relatively, on the smallest
+  currents;
 - ``kww-creep``: the gap creeps by a stretched exponential, ε = σ/k1 + σ/k_s·(1 − exp(−(t/τ)^β)),
   β < 1 — a creep law outside the catalogue (the current then follows from the package's circuit
   and tunneling law, which are not what is tested);
@@ -14,11 +18,15 @@ mechanisms do not come from the package's effect or creep-law code:
 - ``ar1-noise``: correlated measurement noise (AR(1) in the log-current, ρ = 0.9).
 
 For every data set the study records the verdict, the effects named and the gaps. What must
-hold: the verdict is never ``adequate``, and a ``missing-effect`` verdict names effects that
-close the gap (by the verdict's definition). Run ``python -m validation.outside_menu [n_sets]``;
-the slow test ``tests/test_diagnose_matrix.py::test_outside_the_menu`` runs it.
+hold: the verdict is never ``adequate`` (but for ``paper-law``, which these designs cannot tell
+from the smooth law), a ``missing-effect`` verdict names effects that close the gap (by the
+verdict's definition), and what is named is of the right kind (:data:`ACCEPTED`): an artefact is
+named, if at all, as a readout effect — never as the sensor's physics. Run ``python -m
+validation.outside_menu [n_sets] [rows.json]``; the slow test
+``tests/test_diagnose_matrix.py::test_outside_the_menu`` runs it.
 """
 
+import json
 import sys
 import time
 
@@ -31,7 +39,24 @@ from fsrbayes.discrepancy import diagnose
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
 
-KINDS = ("temperature-cycle", "gain-drift", "kww-creep", "paper-law", "ar1-noise")
+KINDS = (
+    "temperature-cycle",
+    "gain-warm-up",
+    "offset-drift",
+    "kww-creep",
+    "paper-law",
+    "ar1-noise",
+)
+ACCEPTED = {
+    "temperature-cycle": ("gain-drift",),
+    "gain-warm-up": ("gain-drift",),
+    "offset-drift": ("gain-drift",),
+    "kww-creep": ("log-creep", "power-law-creep", "second-kelvin"),
+    "paper-law": (),
+    "ar1-noise": (),
+}
+"""Names that are of the right kind for each cause: readout effects for the artefacts, creep
+kinetics for a foreign creep law, nothing for the tunneling law and for correlated noise."""
 VOLTAGES = (0.5, 2.0, 4.5)
 SAMPLES = 31
 NOISE = 0.005
@@ -82,12 +107,15 @@ def data_set(kind, seed, sensor="a201"):
     ).data
     tests = []
     phase = rng.uniform(0, 2 * np.pi)
+    smallest = min(float(test.current_A[0]) for test in base.tests)
     for test in base.tests:
         t, current = test.time_s, test.current_A
         if kind == "temperature-cycle":
             current = current * (1.0 + 0.04 * np.sin(2 * np.pi * t / 1500.0 + phase))
-        elif kind == "gain-drift":
-            current = current * (1.0 - 0.03 * t / 3600.0)
+        elif kind == "gain-warm-up":
+            current = current * (1.0 - 0.03 * (1.0 - np.exp(-t / 600.0)))
+        elif kind == "offset-drift":
+            current = current + 0.05 * smallest * t / 3600.0
         elif kind == "ar1-noise":
             rho, sd = 0.9, 0.01
             e = np.empty(t.size)
@@ -112,12 +140,18 @@ def run(kinds=KINDS, n_sets=5, processes=2):
         for k in range(n_sets):
             started = time.perf_counter()
             result = diagnose(data_set(kind, 1000 + k), seed=k, processes=processes)
+            named = result.verdict == "missing-effect"
             rows.append(
                 {
                     "kind": kind,
                     "seed": 1000 + k,
                     "verdict": result.verdict,
                     "effects": list(result.effects),
+                    "kinds": [
+                        c["kind"] for c in result.candidates if c["effect"] in result.effects
+                    ],
+                    "right_name": named and set(result.effects) <= set(ACCEPTED[kind]),
+                    "false_name": named and not set(result.effects) <= set(ACCEPTED[kind]),
                     "gap_before": result.gap_before,
                     "gap_after": result.gap_after,
                     "band": result.band,
@@ -133,8 +167,8 @@ def format_rows(rows):
     """A Markdown table and the rates per kind."""
     lines = [
         "| kind | data sets | adequate | missing-effect | partially-explained | unexplained | "
-        "named |",
-        "|---|---|---|---|---|---|---|",
+        "named | right name | false name |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for kind in dict.fromkeys(r["kind"] for r in rows):
         mine = [r for r in rows if r["kind"] == kind]
@@ -146,7 +180,8 @@ def format_rows(rows):
         lines.append(
             f"| {kind} | {len(mine)} | {count['adequate']} | {count['missing-effect']} | "
             f"{count['partially-explained']} | {count['unexplained']} | "
-            f"{', '.join(named) or '–'} |"
+            f"{', '.join(named) or '–'} | {sum(r['right_name'] for r in mine)} | "
+            f"{sum(r['false_name'] for r in mine)} |"
         )
     return "\n".join(lines)
 
@@ -154,3 +189,6 @@ def format_rows(rows):
 if __name__ == "__main__":
     rows = run(n_sets=int(sys.argv[1]) if len(sys.argv) > 1 else 5)
     print(format_rows(rows))
+    if len(sys.argv) > 2:
+        with open(sys.argv[2], "w") as f:
+            json.dump(rows, f, indent=1)

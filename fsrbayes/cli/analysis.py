@@ -119,7 +119,7 @@ def cmd_diagnose(args):
     for c in result.candidates:
         print(
             f"  step {c['step']}, {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   "
-            f"gap after = {c['gap_after']:.2f}"
+            f"gap after = {c['gap_after']:.2f}{'   (readout)' if c['kind'] == 'readout' else ''}"
         )
     named = (
         f": {' + '.join(result.effects)} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
@@ -127,6 +127,11 @@ def cmd_diagnose(args):
         else f" (gap {result.gap_before:.2f})"
     )
     print(f"verdict: {result.verdict}{named}")
+    if result.artefacts:
+        print(
+            f"  {' + '.join(result.artefacts)} describes the rig, not the sensor: a measurement "
+            "artefact to check on the rig before reading the fit as the sensor's"
+        )
     if args.json:
         write_json_atomic(Path(args.json), json_ready(result.as_dict()))
     if args.report:

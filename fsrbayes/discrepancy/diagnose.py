@@ -197,6 +197,11 @@ class Diagnosis:
             return self.checks()
         return [d.candidates[self.effects[-1]][1] for d in self.rounds[len(self.effects) - 1]]
 
+    @property
+    def artefacts(self):
+        """The named effects that describe the rig, not the sensor (``kind == "readout"``)."""
+        return [e for e in self.effects if EFFECTS[e].kind == "readout"]
+
     def as_dict(self):
         """Return the diagnosis as a JSON-ready dict (the schema of ``diagnose.schema.json``)."""
         before, after = self.checks(), self.checks_after()
@@ -205,6 +210,8 @@ class Diagnosis:
                 "verdict": self.verdict,
                 "effect": self.effect,
                 "effects": list(self.effects),
+                "effect_kinds": [EFFECTS[e].kind for e in self.effects],
+                "artefacts": self.artefacts,
                 "gap_before": self.gap_before,
                 "gap_after": self.gap_after,
                 "band": self.band,
@@ -256,6 +263,7 @@ def _candidates(step, model, effects, per_specimen, gap_ref):
                 "effect": effect,
                 "model": f"{model}+{effect}",
                 "summary": EFFECTS[effect].summary,
+                "kind": EFFECTS[effect].kind,
                 "log_bf": float(sum(per.values())),
                 "evidence_method": "laplace",
                 "log_bf_per_specimen": per,

@@ -33,6 +33,11 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     Rc(t) = Rc(σ)·exp(−cg_amp·g(t)): contact paths form with kinetics of their own.
 ``log-creep`` — ``lc_comp`` (null 0), ``lc_tau``
     ε(t) gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t over decades of time.
+``gain-drift`` — ``gd_amp`` (null 0)
+    Every reading scaled by exp(gd_amp·t/3600 s): the readout's gain drifting linearly over the
+    test, the same for every test whatever its voltage and stress. A *readout* effect
+    (``kind = "readout"``): it describes the rig, not the sensor, so when it is what explains
+    the data the diagnosis says so.
 
 ``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
 bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
@@ -52,7 +57,14 @@ from .constants import DRIFT_TIME_S
 from .parameters import PARAMETERS, Parameter, register_parameter
 from .rheology import NUTTING, CreepLaw, kelvin_ramp
 
-__all__ = ["EFFECTS", "Effect", "check_effects", "register_effect", "resolve_effects"]
+__all__ = [
+    "EFFECTS",
+    "EFFECT_KINDS",
+    "Effect",
+    "check_effects",
+    "register_effect",
+    "resolve_effects",
+]
 
 
 @dataclass(frozen=True)
@@ -71,12 +83,16 @@ class Effect:
         Parameter values at which it is switched off (the base model is nested there).
     summary : str
         One line for reports.
+    kind : str
+        ``"physics"`` (the sensor) or ``"readout"`` (the rig: an artefact of the measurement, which
+        the diagnosis reports as such rather than as a property of the sensor).
     """
 
     name: str
     parameters: tuple
     null: dict
     summary: str
+    kind: str = "physics"
 
     def extra_strain(self, params, stress, time):
         """Creep strain added after a stress step of ``stress`` at t = 0 (None: none)."""
@@ -133,6 +149,20 @@ class VoltageDegradation(Effect):
         switch = np.clip((v - params["deg_onset"]) / params["deg_width"], 0.0, 1.0)
         growth = -np.expm1(-np.maximum(np.asarray(time, dtype=float), 0.0) / params["deg_tau"])
         return np.exp(-params["deg_amp"] * switch * growth)
+
+
+class GainDrift(Effect):
+    """Every reading scaled by exp(gd_amp·t/3600 s): the readout's gain drifting over the test.
+
+    A measurement artefact (an amplifier's or reference's drift, the rig warming up): the same
+    relative change for every test, whatever its voltage and stress — which is what tells it from
+    the sensor's own effects, whose size depends on how the voltage divides between the bulk and
+    the contacts.
+    """
+
+    def current_factor(self, params, voltage, time):
+        t = np.maximum(np.asarray(time, dtype=float), 0.0)
+        return np.exp(params["gd_amp"] * t / DRIFT_TIME_S)
 
 
 class OffsetStress(Effect):
@@ -237,6 +267,9 @@ class LogCreep(ExtraCreep):
 EFFECTS = {}
 """Name → :class:`Effect`, every effect known (the catalogue and registered ones)."""
 
+EFFECT_KINDS = ("physics", "readout")
+"""What an effect describes: the sensor, or the rig that reads it."""
+
 
 def register_effect(effect, *, replace=False):
     """Add an :class:`Effect` to :data:`EFFECTS`; returns it.
@@ -249,6 +282,10 @@ def register_effect(effect, *, replace=False):
     if effect.name in EFFECTS and not replace:
         raise ValueError(
             f"an effect named {effect.name!r} is already registered (replace=True to replace it)"
+        )
+    if effect.kind not in EFFECT_KINDS:
+        raise ValueError(
+            f"effect {effect.name!r}: kind must be one of {EFFECT_KINDS}, got {effect.kind!r}"
         )
     if "+" in effect.name or not effect.name:
         raise ValueError(f"an effect's name must be non-empty and hold no '+', got {effect.name!r}")
@@ -287,6 +324,7 @@ for _parameter in (
     Parameter("lc_tau", "s", "effect", None, "onset time of log-time creep"),
     Parameter("cg_amp", "–", "effect", None, "log-fall of the contact resistance over an hour"),
     Parameter("cg_tau", "s", "effect", None, "time scale of contact-path formation"),
+    Parameter("gd_amp", "–", "effect", None, "log-change of the readout's gain over an hour"),
 ):
     register_parameter(_parameter)
 
@@ -341,6 +379,13 @@ for _effect in (
         ("lc_comp", "lc_tau"),
         {"lc_comp": 0.0},
         "creep linear in ln t over decades of time",
+    ),
+    GainDrift(
+        "gain-drift",
+        ("gd_amp",),
+        {"gd_amp": 0.0},
+        "the readout's gain drifts over the test (a measurement artefact, not the sensor)",
+        kind="readout",
     ),
 ):
     register_effect(_effect)
