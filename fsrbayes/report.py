@@ -141,7 +141,7 @@ def diagnosis_narrative(result):
     n_spec = len(result["specimens"])
     lines = [
         f"# fsrbayes diagnose: {result['verdict']}"
-        + (f" — {result['effect']}" if result["effect"] else ""),
+        + (f" — {' + '.join(result['effects'])}" if result["effects"] else ""),
         "",
     ]
     voltage = _where_worst(result["misfit_by_voltage_before"], "voltage_V", "V")

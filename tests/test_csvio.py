@@ -106,7 +106,7 @@ def replace_row(i, row):
 BAD = {
     "missing column": (
         HEADER.replace(",current_A", "") + "\n" + "\n".join(r.rsplit(",", 1)[0] for r in ROWS),
-        r"data.csv line 1: missing column\(s\) current_A \(or vo_V and rf_ohm\)",
+        r"data.csv line 1: missing column\(s\) current_A \(or vo_V and rf_ohm, resistance_ohm",
     ),
     "unknown sensor": (
         replace_row(4, "s1,a301,2.0,100000,10,5.01e-5"),

@@ -175,3 +175,37 @@ def test_the_band_narrows_with_more_tests_and_sits_above_the_null_mean():
     assert gap_band(9) > gap_band(54) > gap_band(10_000) > np.sqrt(GAP_NULL_MEAN_SQUARE)
     with pytest.raises(ValueError, match="n_tests must be >= 1"):
         gap_band(0)
+
+
+def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path):
+    """Area creep and a drifting readout gain hidden together: both are named (two greedy steps),
+    the gain drift as the rig's artefact, and the report says so and shows the curves."""
+    from fsrbayes.report import write_diagnosis_report
+
+    sim = simulate(
+        "a201",
+        n_specimens=1,
+        voltages=A201_VOLTAGES,
+        samples=21,
+        effects=["area-creep=-30", "gain-drift=-0.05"],
+        seed=3,
+    )
+    result = diagnose(
+        sim.data, effects=("area-creep", "gain-drift", "area-growth"), n_draws=200, processes=2
+    )
+    assert result.verdict == "missing-effect", result.candidates
+    assert sorted(result.effects) == ["area-creep", "gain-drift"]
+    assert result.artefacts == ["gain-drift"] and closes(
+        result.gap_after, result.gap_before, result.band
+    )
+    gd = [c for c in result.candidates if c["effect"] == "gain-drift" and c["step"] == 2][0]
+    assert gd["kind"] == "readout" and gd["parameters"]["gd_amp"]["q05"] < -0.05
+    assert -0.05 < gd["parameters"]["gd_amp"]["q95"]
+    payload = result.as_dict()
+    assert payload["effect_kinds"] == [
+        "readout" if e == "gain-drift" else "physics" for e in result.effects
+    ]
+    _validate(payload)
+    html = write_diagnosis_report(result, tmp_path / "report").read_text()
+    assert "area-creep + gain-drift" in html and "measurement artefact" in html
+    assert html.count("data:image/png;base64,") == 4

@@ -2,11 +2,11 @@
 shrink?
 
 Each case simulates specimens of one sensor type with one catalogue effect hidden at a given
-magnitude (or none, with Burgers or Zener truth), runs :func:`fsrbayes.diagnose` on all five
-candidates and records the verdict, the named effect, the gaps and the evidence. The matrix
-:data:`MATRIX` holds two magnitudes per effect and sensor, the effect-free cases and the
-paper's own mismatch (:data:`PAPER_MISMATCH`: a negative area creep that makes drift(3600 s)
-nearly independent of stress at low voltage, as the paper measured on A201 sensors).
+magnitude (or none, with Burgers or Zener truth), runs :func:`fsrbayes.diagnose` with every
+catalogue effect a candidate and records the verdict, the named effect, the gaps and the evidence.
+The matrix :data:`MATRIX` holds two magnitudes per effect and sensor, the effect-free cases and the
+paper's own mismatch (:data:`PAPER_MISMATCH`: a negative area creep that makes drift(3600 s) nearly
+independent of stress at low voltage, as the paper measured on A201 sensors).
 
 Run ``python -m validation.diagnose_study`` for the table (``--scan`` for the detection limits);
 the slow test ``tests/test_diagnose_matrix.py`` runs the matrix.
@@ -98,9 +98,22 @@ MATRIX = (
     Case("a201", "offset-stress=sigma0=1e5"),
     Case("fsr402", "offset-stress=sigma0=3e4", gap_check=False),
     Case("fsr402", "offset-stress=sigma0=1e5", gap_check=False),
+    Case("a201", "area-growth=ag_amp=0.05"),
+    Case("a201", "area-growth=ag_amp=0.15"),
+    Case("a201", "contact-growth=cg_amp=0.1"),
+    Case("a201", "contact-growth=cg_amp=0.3"),
+    Case("a201", "second-kelvin=kv2_comp=2.1e-8"),
+    Case("a201", "second-kelvin=kv2_comp=6.3e-8"),
+    Case("a201", "log-creep=lc_comp=2e-9"),
+    Case("a201", "log-creep=lc_comp=6.3e-9"),
+    Case("a201", "gain-drift=gd_amp=-0.02"),
+    Case("a201", "gain-drift=gd_amp=-0.05"),
 )
-"""The acceptance matrix: 4 effect-free cases, the paper's mismatch, 5 effects × 2 magnitudes × 2
-sensors.
+"""The acceptance matrix: 4 effect-free cases, the paper's mismatch, the first five effects × 2
+magnitudes × 2 sensors, and the effects with time constants of their own (and the readout's gain
+drift) × 2 magnitudes on A201 — 0.1 and 0.3 of the elastic compliance 1/k1 for a second Kelvin
+element, a log-time creep adding 8 % and 25 % of the elastic strain by the hour, 5 % and 15 % of
+area, 10 % and 30 % of contact resistance, 2 % and 5 % of readout gain.
 
 A preload on FSR 402 (``offset-stress``, σ0 = 3·10⁴ and 10⁵ Pa) is decisive in evidence (ln B
 ≈ 250 and 30) but moves the creep curves by no more than the noise (gap 0.99–1.02 against

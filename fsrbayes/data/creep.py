@@ -53,9 +53,19 @@ class CreepTest:
     voltage_V, stress_Pa : float
         Sourcing voltage and held stress.
     time_s, current_A : ndarray
-        Samples, time strictly increasing from 0.
+        Samples, time strictly increasing from 0 (the load's landing); the current through the
+        FSR, converted exactly from whatever the rig logged (:mod:`.readouts`).
     lines : ndarray of int
         The file line of each sample (for messages).
+    rm_ohm : float
+        Resistance in series with the sensor in the rig's circuit (a divider's fixed resistor;
+        0 for a constant sourcing voltage). ``voltage_V`` is then the divider's supply.
+    quantum_A : float
+        One step of the reading in amperes (an ADC's least significant bit; 0 if continuous).
+    readout : fsrbayes.data.readouts.Readout or None
+        How the test was logged (None: a current or amplifier reading at ``voltage_V``).
+    onset_s : float
+        The logger's time at which the load landed (t = 0 of ``time_s``).
     """
 
     specimen: str
@@ -66,6 +76,10 @@ class CreepTest:
     time_s: np.ndarray = field(repr=False)
     current_A: np.ndarray = field(repr=False)
     lines: np.ndarray = field(repr=False, compare=False, default=None)
+    rm_ohm: float = 0.0
+    quantum_A: float = 0.0
+    readout: object = field(default=None, compare=False)
+    onset_s: float = field(default=0.0, compare=False)
 
     @property
     def key(self):

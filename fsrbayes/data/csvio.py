@@ -19,6 +19,8 @@ import numpy as np
 from ..physics.sensor import current_from_amplifier
 from ..utils import atomic_path
 from .creep import CreepData, CreepTest, DataError
+from .readouts import UNIT_COLUMNS
+from .rigio import is_rig_file, rig_tests
 from .sensors import load_sensor
 
 __all__ = ["read_csv", "write_csv"]
@@ -109,20 +111,33 @@ def _require_positive(array, name, path, lines, what):
 
 
 def _columns_of(header, path):
+    """Return the header's names, suffixed unit columns renamed to SI, and the renaming."""
     names = [h.strip() for h in header]
     seen = set()
     for name in names:
         if name in seen:
             raise DataError(f"column {name!r} appears twice in the header", path, 1)
         seen.add(name)
-    missing = [c for c in ("specimen", "sensor", "voltage_V", "time_s") if c not in names]
+    renamed = {}
+    for raw, (si, factor) in UNIT_COLUMNS.items():
+        if raw in seen:
+            if si in seen:
+                raise DataError(f"give {si} or {raw}, not both", path, 1, raw)
+            renamed[si] = (raw, factor)
+    names = [next((si for si, (r, _) in renamed.items() if r == n), n) for n in names]
+    rig = is_rig_file(names)
+    missing = [c for c in ("specimen", "sensor", "time_s") if c not in names]
+    if not rig and "voltage_V" not in names:
+        missing.append("voltage_V (or supply_V and rm_ohm for a divider)")
     if "stress_Pa" not in names and "force_N" not in names:
-        missing.append("stress_Pa (or force_N)")
-    if "current_A" not in names and not ("vo_V" in names and "rf_ohm" in names):
-        missing.append("current_A (or vo_V and rf_ohm)")
+        missing.append("stress_Pa (or force_N, force_g)")
+    if not rig and "current_A" not in names and not ("vo_V" in names and "rf_ohm" in names):
+        missing.append("current_A (or vo_V and rf_ohm, resistance_ohm, vout_V, adc_counts)")
+    if rig and "voltage_V" not in names and "supply_V" not in names:
+        missing.append("voltage_V (or supply_V and rm_ohm for a divider)")
     if missing:
         raise DataError(f"missing column(s) {', '.join(missing)}; the header has {names}", path, 1)
-    return names
+    return names, renamed
 
 
 def read_csv(path, *, sep=",", shift_time=False):
@@ -172,7 +187,7 @@ def read_csv(path, *, sep=",", shift_time=False):
             path,
             reader.line_num,
         ) from None
-    names = _columns_of(rows[0], path)
+    names, renamed = _columns_of(rows[0], path)
     width = len(names)
     body, line_numbers = [], []
     for number, row in enumerate(rows[1:], start=2):
@@ -186,17 +201,18 @@ def read_csv(path, *, sep=",", shift_time=False):
         line_numbers.append(number)
     if not body:
         raise DataError("the file has a header but no data rows", path, 1)
-    return _validate(names, body, np.array(line_numbers), path, sep == ";", shift_time)
+    return _validate(names, renamed, body, np.array(line_numbers), path, sep == ";", shift_time)
 
 
-def _validate(names, body, line_no, path, decimal_comma, shift_time):
+def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
     cols = dict(zip(names, (list(c) for c in zip(*body, strict=False)), strict=False))
 
     def floats(name):
-        return _parse_floats(cols[name], name, line_no, path, decimal_comma)
+        raw, factor = renamed.get(name, (name, 1.0))
+        values = _parse_floats(cols[name], raw, line_no, path, decimal_comma)
+        return values * factor if factor != 1.0 else values
 
-    voltage = floats("voltage_V")
-    time = floats("time_s")
+    rig = is_rig_file(names)
     specimen = [s.strip() for s in cols["specimen"]]
     empty = [i for i, s in enumerate(specimen) if not s]
     if empty:
@@ -204,14 +220,37 @@ def _validate(names, body, line_no, path, decimal_comma, shift_time):
             "expected a specimen id, got an empty field", path, int(line_no[empty[0]]), "specimen"
         )
     sensor_names = _sensor_column(cols["sensor"], line_no, path)
-    if "stress_Pa" in cols:
-        stress = floats("stress_Pa")
-        _require_positive(stress, "stress_Pa", path, line_no, "stress")
+    load_name = "stress_Pa" if "stress_Pa" in cols else "force_N"
+    load = floats(load_name)
+    if not rig:
+        what = "stress" if load_name == "stress_Pa" else "force"
+        _require_positive(load, renamed.get(load_name, (load_name,))[0], path, line_no, what)
+    if load_name == "stress_Pa":
+        stress = load
     else:
-        force = floats("force_N")
-        _require_positive(force, "force_N", path, line_no, "force")
-        area = np.array([load_sensor(s).area_m2 for s in sensor_names])
-        stress = force / area
+        areas = {s: load_sensor(s).area_m2 for s in dict.fromkeys(sensor_names)}
+        stress = load / np.array([areas[s] for s in sensor_names])
+    if rig:
+        if "stress_Pa" in cols:
+            _check_units(
+                stress[stress > 0], np.ones(1), np.zeros(1), line_no[stress > 0], path, True
+            )
+        _check_sensor_per_specimen(specimen, sensor_names, line_no, path)
+        tests = rig_tests(
+            names,
+            cols,
+            floats,
+            specimen,
+            sensor_names,
+            stress,
+            line_no,
+            path,
+            decimal_comma,
+            renamed,
+        )
+        return CreepData(tests, str(path))
+    voltage = floats("voltage_V")
+    time = floats("time_s")
     if "current_A" in cols:
         current = floats("current_A")
         _require_positive(current, "current_A", path, line_no, "current")
@@ -298,11 +337,10 @@ def _codes(values):
     return np.array([table.setdefault(v, len(table)) for v in values]), list(table)
 
 
-def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path, body, shift_time):
+def _check_sensor_per_specimen(specimen, sensor, line_no, path):
+    """Check that a specimen is one sensor; return the specimen codes and names."""
     spec_code, spec_names = _codes(specimen)
-    sensor_code, sensor_names = _codes(sensor)
-    test_code, test_names = _codes(test)
-    # A specimen is one sensor: every (specimen, sensor) pair must repeat the first one seen.
+    sensor_code, _ = _codes(sensor)
     first_sensor = np.full(len(spec_names), -1)
     first_sensor[spec_code[::-1]] = sensor_code[::-1]
     clash = sensor_code != first_sensor[spec_code]
@@ -316,6 +354,12 @@ def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path
             int(line_no[i]),
             "sensor",
         )
+    return spec_code, spec_names
+
+
+def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path, body, shift_time):
+    spec_code, _ = _check_sensor_per_specimen(specimen, sensor, line_no, path)
+    test_code, test_names = _codes(test)
     keys = np.rec.fromarrays([spec_code, voltage, stress, test_code])
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     inverse = inverse.ravel()

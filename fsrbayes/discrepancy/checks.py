@@ -348,7 +348,7 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         )
     draws, log_mu = draws[keep], log_mu[keep]
     params = posterior.parameters(draws)
-    sigma = params["sigma_rel"][:, None, None]
+    sigma = data.noise_scale(params["sigma_rel"])
     noise = rng.standard_normal(log_mu.shape)
     if posterior.likelihood == "student":
         nu = params["nu"][:, None, None]
@@ -396,6 +396,8 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         replicated[name] = _slope_over(d_rep - d_model, covariate)
     p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
     innovations, log_scale = r_obs, None
+    if not data.plain:  # each point's own sd, in units of sigma_rel
+        log_scale = np.log(sigma / params["sigma_rel"][:, None, None])
     if posterior.likelihood == "ar1":
         with np.errstate(invalid="ignore"):
             innovations, log_scale = ar1_innovations(r_obs, data.time_s, params["noise_tau"])

@@ -9,7 +9,16 @@ For each sample y = log I_obs, with the model current I(θ) at the same time,
                sigma_rel·√(1 − ρ_k²)), ρ_k = exp(−(t_k − t_{k−1})/noise_tau), e_0 ~ Normal(0,
                sigma_rel)
 
-and the density is that of the measured current, p(I_obs) = p(y)/I_obs. ``sigma_rel`` is
+and the density is that of the measured current, p(I_obs) = p(y)/I_obs.
+
+Rig data (:mod:`fsrbayes.data.readouts`) add two things, both with the Gaussian law. A high-rate
+log is reduced to log-spaced bins in time (:func:`bin_log_time`): a bin of n samples with mean
+ȳ and within-bin scatter S = Σ(y_i − ȳ)² contributes −(n/2)·log(2π v) − (S + n·(ȳ − log
+I(θ))²)/(2v) − n·ȳ, exactly the samples' own likelihood when the model is linear across the bin.
+A quantised reading (ADC counts, step q in amperes) adds its rounding error as noise: v = σ² +
+δ², δ² = (q/I)²/12, the variance of a rounding error spread evenly over one step — so a
+10-bit logger's stair-steps are read as noise of known size, not as signal, and the binned
+statistics stay sufficient. ``sigma_rel`` is
 the relative noise of the current; ``nu`` the Student-t degrees of freedom (robust to outlying
 samples); ``noise_tau`` the correlation time of correlated noise (a drifting amplifier, the
 rig's temperature, a logger's filter) — the AR(1) law in continuous time, so that unevenly
@@ -28,14 +37,110 @@ from ..data.creep import CreepData
 from ..utils import HALF_LOG_2PI
 
 __all__ = [
+    "BINS_PER_DECADE",
     "LIKELIHOODS",
+    "MAX_RAW_SAMPLES",
     "SpecimenData",
     "ar1_innovations",
+    "bin_log_time",
     "log_likelihood_pointwise",
     "ou_coefficients",
 ]
 
 LIKELIHOODS = ("gaussian", "student", "ar1")
+
+MAX_RAW_SAMPLES = 400
+"""Tests with more samples than this are reduced to log-spaced bins for inference."""
+BINS_PER_DECADE = 20
+"""Bins per decade of time since the load landed (12 % wide: the model is linear across one)."""
+
+
+def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
+    """Reduce one test's samples to log-spaced bins in time: sufficient statistics of each.
+
+    The first sample at t = 0 (the load's landing) keeps a bin of its own; the later ones fall
+    into bins whose edges are spaced ``bins_per_decade`` per decade from the first positive
+    time. For white noise of sd σ in the log-current and a model that is linear in t across a
+    bin, the samples' likelihood is exactly that of the bin's mean ȳ at the mean time t̄ with sd
+    σ/√n, times a factor in σ carried by the within-bin scatter S = Σ(y − ȳ)²
+    (:func:`log_likelihood_pointwise`): the posterior is unchanged by the binning.
+
+    Returns
+    -------
+    time, mean, count, scatter : ndarray
+        Per non-empty bin.
+    """
+    time_s = np.asarray(time_s, dtype=float)
+    log_current = np.asarray(log_current, dtype=float)
+    positive = time_s > 0
+    if not positive.any():
+        return time_s, log_current, np.ones(time_s.size), np.zeros(time_s.size)
+    first = time_s[positive][0]
+    index = np.full(time_s.size, -1)
+    index[positive] = np.floor(bins_per_decade * np.log10(time_s[positive] / first) + 1e-9).astype(
+        int
+    )
+    out = [
+        (
+            time_s[~positive],
+            log_current[~positive],
+            np.ones((~positive).sum()),
+            np.zeros((~positive).sum()),
+        )
+    ]
+    labels, start = np.unique(index[positive], return_index=True)
+    counts = np.diff(np.append(start, positive.sum()))
+    t, y = time_s[positive], log_current[positive]
+    sums = np.add.reduceat(y, start)
+    means = sums / counts
+    centred = y - np.repeat(means, counts)
+    out.append(
+        (
+            np.add.reduceat(t, start) / counts,
+            means,
+            counts.astype(float),
+            np.add.reduceat(centred**2, start),
+        )
+    )
+    return tuple(np.concatenate(parts) for parts in zip(*out, strict=True))
+
+
+def _pack_rig(cls, tests, max_samples, bins_per_decade):
+    """Pack tests with circuits, quantised readings or many samples (see ``from_tests``)."""
+    columns = []
+    for t in tests:
+        y = np.log(t.current_A)
+        if t.time_s.size > max_samples:
+            time, mean, count, scatter = bin_log_time(t.time_s, y, bins_per_decade)
+        else:
+            time, mean, count, scatter = t.time_s, y, np.ones(y.size), np.zeros(y.size)
+        quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(y.size)
+        columns.append((time, mean, count, scatter, np.broadcast_to(quant, mean.shape)))
+    width = max(c[0].size for c in columns)
+    arrays = [np.empty((len(tests), width)) for _ in range(5)]
+    mask = np.zeros((len(tests), width), dtype=bool)
+    pad = (None, None, 1.0, 0.0, 0.0)
+    for i, column in enumerate(columns):
+        n = column[0].size
+        for array, values, fill in zip(arrays, column, pad, strict=True):
+            array[i, :n] = values
+            array[i, n:] = values[-1] if fill is None else fill
+        mask[i, :n] = True
+    time, logc, weight, scatter, quant = arrays
+    return cls(
+        tests[0].specimen,
+        tests[0].sensor,
+        np.array([t.voltage_V for t in tests]),
+        np.array([t.stress_Pa for t in tests]),
+        time,
+        logc,
+        mask,
+        tuple(t.key for t in tests),
+        np.array([t.rm_ohm for t in tests], dtype=float),
+        weight,
+        scatter,
+        quant,
+    )
 
 
 @dataclass(frozen=True)
@@ -55,6 +160,17 @@ class SpecimenData:
         True for real samples.
     test_keys : tuple
         (specimen, voltage_V, stress_Pa, test) per test.
+    extra_series : ndarray, shape (C,), optional
+        Resistance in series with the sensor in the rig's circuit (a divider's fixed resistor),
+        Ω; ``voltage_V`` is then the supply. None: 0 (a constant sourcing voltage).
+    weight : ndarray, shape (C, T), optional
+        Samples behind each point (log-spaced bins of a high-rate log, :func:`bin_log_time`);
+        ``log_current`` is then the bin's mean log-current and ``time_s`` its mean time. None: 1.
+    scatter : ndarray, shape (C, T), optional
+        Σ (y_i − ȳ)² of the log-currents within each bin. None: 0.
+    quant_var : ndarray, shape (C, T), optional
+        Variance a reading's quantisation adds to the log-current, (q/I)²/12 for a step q
+        (an ADC's least significant bit). None: 0.
     """
 
     specimen: str
@@ -65,16 +181,28 @@ class SpecimenData:
     log_current: np.ndarray
     mask: np.ndarray
     test_keys: tuple = field(default=())
+    extra_series: np.ndarray = None
+    weight: np.ndarray = None
+    scatter: np.ndarray = None
+    quant_var: np.ndarray = None
 
     @classmethod
-    def from_tests(cls, tests):
-        """Pack a sequence of :class:`fsrbayes.data.creep.CreepTest` of one specimen."""
+    def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
+        """Pack a sequence of :class:`fsrbayes.data.creep.CreepTest` of one specimen.
+
+        Tests longer than ``max_samples`` are reduced to log-spaced bins
+        (:func:`bin_log_time`, ``bins_per_decade``); rig circuits (a divider's series
+        resistance) and quantised readings are carried into the likelihood.
+        """
         tests = list(tests)
         if not tests:
             raise ValueError("no creep tests to fit")
         specimens = {t.specimen for t in tests}
         if len(specimens) != 1:
             raise ValueError(f"SpecimenData holds one specimen, got {sorted(specimens)}")
+        rig = any(t.rm_ohm > 0 or t.quantum_A > 0 or t.time_s.size > max_samples for t in tests)
+        if rig:
+            return _pack_rig(cls, tests, max_samples, bins_per_decade)
         width = max(t.time_s.size for t in tests)
         time = np.empty((len(tests), width))
         logc = np.empty((len(tests), width))
@@ -135,11 +263,42 @@ class SpecimenData:
         """Number of observed samples."""
         return int(self.mask.sum())
 
+    @property
+    def plain(self):
+        """Whether every point is one continuous reading at a constant sourcing voltage."""
+        return (
+            self.extra_series is None
+            and self.weight is None
+            and self.scatter is None
+            and self.quant_var is None
+        )
+
+    def series(self):
+        """Series resistance of each test's circuit, shape (C,) (zeros at constant voltage)."""
+        if self.extra_series is None:
+            return np.zeros(self.n_tests)
+        return self.extra_series
+
+    def noise_scale(self, sigma_rel):
+        """Return the sd of each point's log-current given sigma_rel (W,), shape (W, C, T).
+
+        √((σ² + δ²)/n): the relative noise, a reading's quantisation variance δ² and the bin
+        size n; σ itself, broadcast, for plain data.
+        """
+        sigma = np.asarray(sigma_rel, dtype=float)[:, None, None]
+        if self.weight is None and self.quant_var is None:
+            return sigma
+        variance = sigma**2 + (0.0 if self.quant_var is None else self.quant_var)
+        return np.sqrt(variance / (1.0 if self.weight is None else self.weight))
+
     def fingerprint(self):
         """SHA-256 of the arrays: changes whenever the data do."""
         digest = hashlib.sha256()
         for array in (self.voltage_V, self.stress_Pa, self.time_s, self.log_current, self.mask):
             digest.update(np.ascontiguousarray(array).tobytes())
+        for array in (self.extra_series, self.weight, self.scatter, self.quant_var):
+            if array is not None:
+                digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(repr(self.test_keys).encode())
         return digest.hexdigest()
 
@@ -199,6 +358,22 @@ def log_likelihood_pointwise(
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
     sigma = np.asarray(sigma_rel, dtype=float)[:, None]
     y = data.log_current[data.mask]
+    if data.weight is not None or data.quant_var is not None:
+        if likelihood != "gaussian":
+            raise ValueError(
+                "binned or quantised readings (a high-rate log, ADC counts) need "
+                f"likelihood='gaussian', got {likelihood!r}"
+            )
+        n = 1.0 if data.weight is None else data.weight[data.mask]
+        scatter = 0.0 if data.scatter is None else data.scatter[data.mask]
+        variance = sigma**2 + (0.0 if data.quant_var is None else data.quant_var[data.mask])
+        resid = y[None, :] - log_model[:, data.mask]
+        value = (
+            -0.5 * n * np.log(2.0 * np.pi * variance)
+            - (scatter + n * resid**2) / (2.0 * variance)
+            - n * y
+        )
+        return np.where(np.isfinite(value), value, -np.inf)
     if likelihood == "ar1":
         tau = np.asarray(noise_tau, dtype=float)
         with np.errstate(invalid="ignore"):

@@ -185,6 +185,7 @@ class LogPosterior(PriorScaledTarget):
             rheology=self.family,
             tunneling=self.tunneling,
             effects=self.effect_objects,
+            extra_series=0.0 if self.data.extra_series is None else self.data.series()[:, None],
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)

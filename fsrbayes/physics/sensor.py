@@ -82,11 +82,26 @@ def sensor_state(params, stress, strain):
     return gap(params["s0"], strain), area, series
 
 
+def _current_factor(effects, params, voltage, time, kind):
+    """Product of the ``kind`` effects' current factors at V_FSR and t (None: none)."""
+    factor = None
+    for effect in effects:
+        if effect.kind != kind:
+            continue
+        own = effect.current_factor(params, voltage, time)
+        if own is not None:
+            factor = own if factor is None else factor * own
+    return factor
+
+
 def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
     """Solve the paper's circuit with the effects' hooks.
 
-    Solve the paper's circuit with the effects' hooks (``effects``: :class:`~.effects.Effect`
-    objects).
+    ``effects`` are :class:`~.effects.Effect` objects. A physical effect's current factor f
+    (conduction paths lost) scales every conduction path of the sensor, I = f·g(V_FSR); in
+    series with a resistance R (a divider), V_s = V_FSR + R·f·g(V_FSR) is the undegraded sensor
+    in series with R·f, solved as such with f taken at V_FSR of the undegraded solution (one
+    fixed-point step). A readout effect's factor scales the reading, after the circuit.
     """
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     s, area, series = sensor_state(params, stress, strain)
@@ -98,11 +113,24 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
     solution = solve_bulk(
         voltage, series + extra_series, s, params["Va"], area, law=tunneling, threshold=threshold
     )
-    factor = None
-    for effect in effects:
-        own = effect.current_factor(params, voltage, time)
-        if own is not None:
-            factor = own if factor is None else factor * own
+    if not effects:
+        return solution
+    in_series = np.any(np.asarray(extra_series) != 0)
+    v_fsr = voltage - solution.current * extra_series if in_series else voltage
+    factor = _current_factor(effects, params, v_fsr, time, "physics")
+    if factor is not None and in_series:
+        solution = solve_bulk(
+            voltage,
+            series + extra_series * factor,
+            s,
+            params["Va"],
+            area,
+            law=tunneling,
+            threshold=threshold,
+        )
+    gain = _current_factor(effects, params, v_fsr, time, "readout")
+    if gain is not None:
+        factor = gain if factor is None else factor * gain
     if factor is not None:
         solution = replace(solution, current=solution.current * factor)
     return solution
@@ -153,12 +181,21 @@ def _strain_step(params, stress, time, family, effects=()):
 
 
 def solve_current(
-    params, voltage, stress, time, *, rheology="burgers", tunneling="smooth", effects=()
+    params,
+    voltage,
+    stress,
+    time,
+    *,
+    rheology="burgers",
+    tunneling="smooth",
+    effects=(),
+    extra_series=0.0,
 ):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
     ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`), or gives them as
-    :class:`~fsrbayes.physics.effects.Effect` objects.
+    :class:`~fsrbayes.physics.effects.Effect` objects. ``extra_series`` (Ω) is a resistance in
+    series with the sensor (a divider's fixed resistor; ``voltage`` is then the supply).
 
     Returns
     -------
@@ -171,7 +208,9 @@ def solve_current(
     family = model_family(rheology)
     effects = _check_effect_params(params, effects)
     strain = _strain_step(params, stress, time, family, effects)
-    return _solve_model(params, voltage, stress, strain, family, tunneling, effects, time)
+    return _solve_model(
+        params, voltage, stress, strain, family, tunneling, effects, time, extra_series
+    )
 
 
 def _apply_policy(solution, on_invalid, voltage, stress, time):

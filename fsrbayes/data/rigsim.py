@@ -1,0 +1,161 @@
+"""The virtual test bench for rigs: a divider log as a hobby or lab logger writes it.
+
+:func:`simulate_rig` puts specimens of a sensor in the datasheet circuit — the FSR in series
+with a fixed resistor across a supply, read by an ADC — and loads them with dead weights, one
+10-minute test from rest per weight, at a high sampling rate. It writes what such a logger
+writes: the time in seconds or minutes, the weight in grams, and the reading as ADC counts,
+as the voltage across the fixed resistor, or as the FSR's resistance in Ω or kΩ; the logger
+starts before the weight lands (zero load on the first rows, an open divider reading a few
+counts). The circuit is solved exactly at every sample (the model's V_FSR is whatever the
+circuit gives it), noise is relative on the measured voltage, and counts are rounded and
+clipped as a real ADC does. The truth — every specimen's parameters, the rig and the
+protocol — is returned beside the CSV text, so every rig path is tested with known answers.
+"""
+
+import json
+
+import numpy as np
+
+from ..physics.sensor import solve_current
+from ..utils import atomic_path
+from .readouts import STANDARD_GRAVITY
+from .sensors import load_sensor
+from .synthetic import draw_specimens
+
+__all__ = ["RIG_DEFAULTS", "simulate_rig", "write_rig"]
+
+RIG_DEFAULTS = {
+    "sensor": "fsr402",
+    "weights_g": (133.0, 170.0, 210.0, 255.0),
+    "supply_V": 4.9,
+    "rm_ohm": 3300.0,
+    "adc_bits": 10,
+    "adc_vref_V": 5.0,
+    "rate_hz": 100.0,
+    "duration_s": 600.0,
+    "pre_s": 1.5,
+    "noise_rel": 0.002,
+}
+"""An Interlink FSR 402 in an Arduino divider (4.9 V USB supply, 3.3 kΩ, 10-bit ADC on a 5 V
+reference) read at 100 Hz, 10 minutes per dead weight from rest."""
+
+READINGS = ("adc_counts", "vout_V", "resistance_ohm", "resistance_kohm")
+
+
+def simulate_rig(
+    n_specimens=1,
+    *,
+    reading="adc_counts",
+    time_unit="s",
+    seed=0,
+    effects=(),
+    **rig,
+):
+    """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
+
+    Parameters
+    ----------
+    n_specimens : int
+    reading : {"adc_counts", "vout_V", "resistance_ohm", "resistance_kohm"}
+        What the logger prints (resistance as computed from the noisy voltage).
+    time_unit : {"s", "min", "ms"}
+    seed : int
+    effects : sequence
+        Effects hidden in the data, as ``(name, {parameter: value})`` pairs.
+    **rig
+        Overrides of :data:`RIG_DEFAULTS`.
+
+    Returns
+    -------
+    text : str
+        The CSV.
+    truth : dict
+        JSON-ready: the rig, the protocol, the effects and every specimen's parameters.
+    """
+    if reading not in READINGS:
+        raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
+    scale = {"s": 1.0, "min": 60.0, "ms": 1e-3}
+    if time_unit not in scale:
+        raise ValueError(f"time_unit must be one of {sorted(scale)}, got {time_unit!r}")
+    unknown = sorted(set(rig) - set(RIG_DEFAULTS))
+    if unknown:
+        raise ValueError(f"unknown rig setting(s) {unknown}; known: {sorted(RIG_DEFAULTS)}")
+    setup = {**RIG_DEFAULTS, **rig}
+    rng = np.random.default_rng(seed)
+    sensor = load_sensor(setup["sensor"])
+    specimens = draw_specimens(sensor, n_specimens, rng)
+    effect_params = {name: dict(values) for name, values in effects}
+    names = tuple(effect_params)
+    supply, rm = setup["supply_V"], setup["rm_ohm"]
+    step = 1.0 / setup["rate_hz"]
+    logger_t = np.arange(0.0, setup["pre_s"] + setup["duration_s"], step)
+    onset = setup["pre_s"] + step * rng.uniform(0.1, 0.9)  # between two samples
+    loaded = logger_t >= onset
+    top = 2 ** setup["adc_bits"] - 1
+    lsb = setup["adc_vref_V"] / 2 ** setup["adc_bits"]
+    time_col = {"s": "time_s", "min": "time_min", "ms": "time_ms"}[time_unit]
+    header = ["specimen", "sensor", "test", time_col, "force_g", "supply_V", "rm_ohm"]
+    header += ["adc_bits", "adc_vref_V", "adc_counts"] if reading == "adc_counts" else [reading]
+    lines = [",".join(header)]
+    truth = {
+        "rig": setup | {"weights_g": list(setup["weights_g"])},
+        "reading": reading,
+        "time_unit": time_unit,
+        "onset_s": float(onset),
+        "effects": effect_params,
+        "specimens": {},
+        "seed": seed,
+    }
+    for k, params in enumerate(specimens):
+        name = f"{sensor.name}-{k + 1:02d}"
+        params = {
+            **params,
+            **{p: v for values in effect_params.values() for p, v in values.items()},
+        }
+        truth["specimens"][name] = {"params": params}
+        for j, grams in enumerate(setup["weights_g"]):
+            stress = grams * STANDARD_GRAVITY / 1000.0 / sensor.area_m2
+            t = logger_t[loaded] - onset
+            current = solve_current(
+                params, supply, stress, t, effects=names, extra_series=rm
+            ).current
+            vout = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(t.size))
+            open_reading = np.abs(rng.normal(0.0, 1.5, (~loaded).sum())) * lsb
+            vout = np.concatenate([open_reading, vout])
+            force = np.where(loaded, grams, 0.0)
+            column = _reading(reading, vout, supply, rm, lsb, top, loaded)
+            prefix = f"{name},{sensor.name},w{j + 1}"
+            extra = (
+                f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
+            )
+            lines += [
+                f"{prefix},{tt / scale[time_unit]:.6g},{f:g},{supply!r},{rm!r}{extra},{r}"
+                for tt, f, r in zip(logger_t, force, column, strict=True)
+            ]
+    return "\n".join(lines) + "\n", truth
+
+
+def _reading(reading, vout, supply, rm, lsb, top, loaded):
+    """Return the printed reading per row (strings), from the voltage across the fixed resistor."""
+    if reading == "adc_counts":
+        counts = np.clip(np.round(vout / lsb), 0, top).astype(int)
+        return [str(c) for c in counts]
+    if reading == "vout_V":
+        return [f"{v:.6g}" for v in vout]
+    with np.errstate(divide="ignore"):
+        resistance = rm * (supply / vout - 1.0)
+    factor = 1e3 if reading == "resistance_kohm" else 1.0
+    return [f"{r / factor:.6g}" if ok else "inf" for r, ok in zip(resistance, loaded, strict=True)]
+
+
+def write_rig(text, truth, csv_path):
+    """Write a rig log and its truth (``<stem>.truth.json``) atomically; returns both paths."""
+    from pathlib import Path
+
+    csv_path = Path(csv_path)
+    truth_path = csv_path.with_name(csv_path.name.removesuffix(".csv") + ".truth.json")
+    with atomic_path(csv_path) as tmp:
+        tmp.write_text(text)
+    with atomic_path(truth_path) as tmp:
+        tmp.write_text(json.dumps(truth, indent=1, sort_keys=True) + "\n")
+    return csv_path, truth_path

@@ -1,0 +1,224 @@
+"""Rig data: divider and resistance readouts, logger units, load onsets, binning, hostile input."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from fsrbayes.data import DataError, read_csv
+from fsrbayes.data.readouts import STANDARD_GRAVITY
+from fsrbayes.data.rigsim import simulate_rig, write_rig
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.likelihood import SpecimenData, bin_log_time, log_likelihood_pointwise
+from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.physics.sensor import solve_current
+
+SHORT = {"duration_s": 60.0, "rate_hz": 20.0, "weights_g": (133.0, 255.0)}
+
+
+def _rig(tmp_path, name="rig.csv", **options):
+    text, truth = simulate_rig(1, seed=options.pop("seed", 3), **{**SHORT, **options})
+    return write_rig(text, truth, tmp_path / name)[0], truth
+
+
+def _noiseless(truth, test):
+    params = truth["specimens"][test.specimen]["params"]
+    rig = truth["rig"]
+    return solve_current(
+        params, rig["supply_V"], test.stress_Pa, test.time_s, extra_series=rig["rm_ohm"]
+    ).current
+
+
+@pytest.mark.parametrize(
+    "reading, time_unit, tolerance",
+    [
+        ("vout_V", "s", 1e-5),  # printed to 6 digits
+        ("resistance_kohm", "min", 1e-5),
+        ("resistance_ohm", "ms", 1e-5),
+        ("adc_counts", "s", None),  # within half a step
+    ],
+)
+def test_every_divider_reading_gives_the_current_through_the_fsr(
+    tmp_path, reading, time_unit, tolerance
+):
+    path, truth = _rig(tmp_path, reading=reading, time_unit=time_unit, noise_rel=0.0)
+    data = read_csv(path)
+    sensor = load_sensor("fsr402")
+    assert [t.test for t in data.tests] == ["w1", "w2"]
+    for test, grams in zip(data.tests, SHORT["weights_g"], strict=True):
+        assert test.voltage_V == 4.9 and test.rm_ohm == 3300.0 and test.readout.circuit == "divider"
+        assert test.stress_Pa == pytest.approx(grams * STANDARD_GRAVITY / 1000 / sensor.area_m2)
+        exact = _noiseless(truth, test)
+        if tolerance is None:
+            q = test.quantum_A
+            assert q == pytest.approx(5.0 / 1024 / 3300)
+            assert np.all(np.abs(test.current_A - exact) <= 0.5 * q * (1 + 1e-9))
+        else:
+            np.testing.assert_allclose(test.current_A, exact, rtol=tolerance)
+
+
+def test_the_load_onset_is_the_first_loaded_row(tmp_path):
+    path, truth = _rig(tmp_path)
+    data = read_csv(path)
+    step = 1.0 / SHORT["rate_hz"]
+    for test in data.tests:
+        # the logger's first loaded sample follows the landing by less than one sample period
+        assert 0.0 <= test.onset_s - truth["onset_s"] < step
+        assert test.time_s[0] == 0.0 and test.time_s.size == pytest.approx(60 * 20, abs=2)
+
+
+def test_a_resistance_at_constant_voltage_is_a_rig_test(tmp_path):
+    path = tmp_path / "ohm.csv"
+    rows = ["specimen,sensor,test,voltage_V,force_N,time_s,resistance_kohm"]
+    rows += [f"s1,a201,1,1.0,4.9,{t},{100 + t / 100}" for t in range(5)]
+    path.write_text("\n".join(rows) + "\n")
+    (test,) = read_csv(path).tests
+    np.testing.assert_allclose(test.current_A, 1.0 / (1e3 * (100 + np.arange(5) / 100)))
+    assert test.rm_ohm == 0.0 and test.readout.reading == "resistance_ohm"
+
+
+def test_binning_leaves_the_likelihood_unchanged_up_to_a_constant(tmp_path):
+    """The binned likelihood's differences between parameter values match the raw samples'."""
+    path, truth = _rig(tmp_path, rate_hz=50.0, duration_s=120.0)
+    data = read_csv(path)
+    raw = SpecimenData.from_tests(data.tests, max_samples=10**9)
+    binned = SpecimenData.from_tests(data.tests, max_samples=100)
+    assert np.all(raw.weight[raw.mask] == 1) and raw.n_obs == sum(t.time_s.size for t in data)
+    assert binned.weight[binned.mask].sum() == raw.n_obs and binned.n_obs < raw.n_obs / 10
+    sensor = load_sensor("fsr402")
+    values = []
+    for packed in (raw, binned):
+        posterior = LogPosterior.for_sensor(packed, sensor)
+        params = truth["specimens"]["fsr402-01"]["params"]
+        x = np.array([[params.get(n, 0.002) for n in posterior.names]])
+        x = np.repeat(x, 4, axis=0)
+        x[1, posterior.names.index("k1")] *= 1.05
+        x[2, posterior.names.index("s0")] *= 1.001
+        x[3, posterior.names.index("sigma_rel")] *= 1.3
+        values.append(posterior.log_likelihood_pointwise(x).sum(axis=1))
+    raw_diff, bin_diff = values[0] - values[0][0], values[1] - values[1][0]
+    # 0.1 % of differences of 150-2500 nats: the model's curvature across a 12 %-wide bin
+    np.testing.assert_allclose(bin_diff, raw_diff, rtol=3e-3, atol=0.05)
+
+
+def test_bins_are_sufficient_statistics():
+    rng = np.random.default_rng(0)
+    t = np.arange(0, 600, 0.01)
+    y = -8.0 + 0.01 * np.log1p(t) + 0.002 * rng.standard_normal(t.size)
+    time, mean, count, scatter = bin_log_time(t, y)
+    assert count.sum() == t.size and time[0] == 0.0 and np.all(np.diff(time) > 0)
+    assert np.sum(count * mean) == pytest.approx(y.sum())
+    assert np.sum(scatter + count * mean**2) == pytest.approx(np.sum(y**2))
+    late = time[time > 1.0]  # past the first sparse samples, bins are 1/20 decade wide
+    assert np.log10(late[1:] / late[:-1]).max() < 0.06 and late.size == pytest.approx(58, abs=2)
+
+
+def test_quantised_readings_add_their_step_to_the_noise():
+    """With the noise far below one ADC step, the quantisation variance keeps the likelihood
+    finite and sets its scale (sigma_rel cannot collapse to 0)."""
+    text, truth = simulate_rig(1, seed=5, **{**SHORT, "noise_rel": 1e-5})
+    folder = __import__("tempfile").mkdtemp()
+    path = write_rig(text, truth, f"{folder}/q.csv")[0]
+    data = SpecimenData.select(read_csv(path))
+    sigma = np.array([1e-6, 1e-4, 1e-3])
+    log_model = np.repeat(data.log_current[None], 3, axis=0)
+    value = log_likelihood_pointwise(log_model, data, sigma).sum(axis=1)
+    assert np.all(np.isfinite(value))
+    assert value[0] == pytest.approx(value[1], rel=1e-3)  # below the step, sigma does not matter
+    with pytest.raises(ValueError, match="need likelihood='gaussian'"):
+        log_likelihood_pointwise(log_model, data, sigma, likelihood="student", nu=np.ones(3) * 5)
+
+
+HEADER = "specimen,sensor,test,time_s,force_N,supply_V,rm_ohm,vout_V"
+
+
+def _rows(**change):
+    row = {"force_N": "4.9", "supply_V": "4.9", "rm_ohm": "3300", "vout_V": "1.5"}
+    out = [HEADER]
+    for t in range(5):
+        values = {**row, **{k: v(t) if callable(v) else v for k, v in change.items()}}
+        out.append(f"s1,fsr402,1,{t}," + ",".join(values[k] for k in row))
+    return "\n".join(out) + "\n"
+
+
+HOSTILE = {
+    "negative supply": (_rows(supply_V="-4.9"), r"supply_V must be > 0, got -4\.9"),
+    "rm 0": (_rows(rm_ohm="0"), r"fixed resistor must be > 0 ohm, got 0"),
+    "rm in kOhm": (_rows(rm_ohm="3.3"), r"3\.3 ohm looks like kOhm"),
+    "supply in mV": (_rows(supply_V="4900"), r"4900 V looks like mV"),
+    "negative force": (_rows(force_N=lambda t: "-1" if t == 2 else "4.9"), r"load must be >= 0"),
+    "no loaded rows": (_rows(force_N="0"), r"has no loaded rows"),
+    "unloading within a test": (
+        _rows(force_N=lambda t: "0" if t == 3 else "4.9"),
+        r"unloaded again at 3 s; load histories",
+    ),
+    "supply changes": (
+        _rows(supply_V=lambda t: "5.0" if t == 4 else "4.9"),
+        r"supply_V must stay constant within test",
+    ),
+    "vout above supply": (_rows(vout_V="5.2"), r"vout_V must lie between 0 and the supply"),
+    "empty reading under load": (
+        _rows(vout_V=lambda t: "" if t == 1 else "1.5"),
+        r"expected a number on a loaded row, got an empty field",
+    ),
+    "voltage_V with supply_V": (
+        _rows().replace("rm_ohm,", "rm_ohm,voltage_V,").replace(",3300,", ",3300,1.0,"),
+        r"voltage_V must then be absent",
+    ),
+    "mixed readouts": (
+        _rows().replace("vout_V", "vout_V,resistance_ohm").replace(",1.5\n", ",1.5,7000\n"),
+        r"one reading column, got \['vout_V', 'resistance_ohm'\]",
+    ),
+    "counts above the top": (
+        _rows()
+        .replace("vout_V", "adc_bits,adc_vref_V,adc_counts")
+        .replace(",1.5\n", ",10,5.0,1024\n"),
+        r"ADC counts must be whole numbers in 1\.\.1023",
+    ),
+    "counts without bits": (
+        _rows().replace("vout_V", "adc_counts").replace(",1.5\n", ",300\n"),
+        r"adc_counts needs the columns adc_bits and adc_vref_V",
+    ),
+    "kOhm written as ohms": (
+        _rows().replace("vout_V", "resistance_ohm").replace(",1.5\n", ",7.2\n"),
+        r"7\.2 ohm looks like kOhm written as ohms",
+    ),
+    "time twice": (
+        _rows().replace("time_s", "time_s,time_min").replace(",4.9,4.9,", ",0,4.9,4.9,"),
+        r"give time_s or time_min, not both",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE))
+def test_hostile_rig_input_is_one_located_line(tmp_path, case):
+    text, message = HOSTILE[case]
+    path = tmp_path / "rig.csv"
+    path.write_text(text)
+    with pytest.raises(DataError, match=message) as info:
+        read_csv(path)
+    assert "\n" not in str(info.value) and str(path) in str(info.value)
+
+
+@pytest.mark.parametrize("case", ["rm 0", "counts above the top", "mixed readouts"])
+def test_the_cli_refuses_hostile_rig_input_with_exit_2_and_writes_nothing(tmp_path, case):
+    path = tmp_path / "rig.csv"
+    path.write_text(HOSTILE[case][0])
+    out = tmp_path / "fit-out"
+    result = subprocess.run(
+        [sys.executable, "-m", "fsrbayes", "fit", str(path), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in result.stderr and not out.exists()
+
+
+def test_the_truth_file_describes_the_rig(tmp_path):
+    path, truth = _rig(tmp_path)
+    stored = json.loads(path.with_name("rig.truth.json").read_text())
+    assert stored["rig"]["rm_ohm"] == 3300.0 and stored["reading"] == "adc_counts"
+    assert set(stored["specimens"]) == {"fsr402-01"}
