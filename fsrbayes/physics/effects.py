@@ -33,9 +33,10 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     Rc(t) = Rc(σ)·exp(−cg_amp·g(t)): contact paths form with kinetics of their own.
 ``log-creep`` — ``lc_comp`` (null 0), ``lc_tau``
     ε(t) gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t over decades of time.
-``gain-drift`` — ``gd_amp`` (null 0)
-    Every reading scaled by exp(gd_amp·t/3600 s): the readout's gain drifting linearly over the
-    test, the same for every test whatever its voltage and stress. A *readout* effect
+``gain-drift`` — ``gd_amp`` (null 0), ``gd_tau``
+    Every reading scaled by exp(gd_amp·g(t)), g as for ``area-growth``: the readout's gain
+    drifting with a time course of its own (linear in t to logarithmic), the same for every test
+    whatever its voltage and stress. A *readout* effect
     (``kind = "readout"``): it describes the rig, not the sensor, so when it is what explains
     the data the diagnosis says so.
 
@@ -152,17 +153,19 @@ class VoltageDegradation(Effect):
 
 
 class GainDrift(Effect):
-    """Every reading scaled by exp(gd_amp·t/3600 s): the readout's gain drifting over the test.
+    """Every reading scaled by exp(gd_amp·g(t)): the readout's gain drifting over the test.
 
     A measurement artefact (an amplifier's or reference's drift, the rig warming up): the same
     relative change for every test, whatever its voltage and stress — which is what tells it from
-    the sensor's own effects, whose size depends on how the voltage divides between the bulk and
-    the contacts.
+    the sensor's own effects (``area-growth`` has the same time course, but its effect on the
+    current depends on how the voltage divides between the bulk and the contacts). g(t) =
+    ln(1 + t/gd_tau)/ln(1 + 3600 s/gd_tau): 0 at the load step, 1 at an hour, linear in t for
+    gd_tau ≫ 1 h and logarithmic for a drift that settles early; ``gd_amp`` is the log-change of
+    the gain over the hour.
     """
 
     def current_factor(self, params, voltage, time):
-        t = np.maximum(np.asarray(time, dtype=float), 0.0)
-        return np.exp(params["gd_amp"] * t / DRIFT_TIME_S)
+        return np.exp(params["gd_amp"] * _log_growth(time, params["gd_tau"]))
 
 
 class OffsetStress(Effect):
@@ -325,6 +328,7 @@ for _parameter in (
     Parameter("cg_amp", "–", "effect", None, "log-fall of the contact resistance over an hour"),
     Parameter("cg_tau", "s", "effect", None, "time scale of contact-path formation"),
     Parameter("gd_amp", "–", "effect", None, "log-change of the readout's gain over an hour"),
+    Parameter("gd_tau", "s", "effect", None, "time scale of the readout's gain drift"),
 ):
     register_parameter(_parameter)
 
@@ -382,7 +386,7 @@ for _effect in (
     ),
     GainDrift(
         "gain-drift",
-        ("gd_amp",),
+        ("gd_amp", "gd_tau"),
         {"gd_amp": 0.0},
         "the readout's gain drifts over the test (a measurement artefact, not the sensor)",
         kind="readout",
