@@ -8,10 +8,24 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["HALF_LOG_2PI", "atomic_path", "json_ready", "logsumexp", "write_json_atomic"]
+__all__ = [
+    "HALF_LOG_2PI",
+    "atomic_path",
+    "codes_of",
+    "json_ready",
+    "logsumexp",
+    "write_json_atomic",
+]
 
 HALF_LOG_2PI = 0.5 * np.log(2.0 * np.pi)
 """½·log(2π), the normal density's constant."""
+
+
+def codes_of(values):
+    """Return integer codes of hashable values in order of first appearance, and the values."""
+    table = {v: i for i, v in enumerate(dict.fromkeys(values))}
+    codes = np.fromiter(map(table.__getitem__, values), dtype=np.intp, count=len(values))
+    return codes, list(table)
 
 
 def logsumexp(values, axis=0):

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.sensor import current_from_amplifier
-from ..utils import atomic_path
+from ..utils import atomic_path, codes_of
 from .creep import CreepData, CreepTest, DataError
 from .readouts import UNIT_COLUMNS
 from .rigio import is_rig_file, rig_tests
@@ -170,8 +170,8 @@ def read_csv(path, *, sep=",", shift_time=False):
             "(specimen,sensor,voltage_V,stress_Pa,time_s,current_A)",
             path,
         )
-    lines = text.splitlines()
-    if sep == "," and ";" in lines[0] and "," not in lines[0]:
+    first_line = text.partition("\n")[0]
+    if sep == "," and ";" in first_line and "," not in first_line:
         raise DataError(
             "fields are separated by ';', expected ','; re-export as comma-separated or read "
             "with sep=';' (CLI: --sep ';')",
@@ -189,19 +189,25 @@ def read_csv(path, *, sep=",", shift_time=False):
         ) from None
     names, renamed = _columns_of(rows[0], path)
     width = len(names)
-    body, line_numbers = [], []
-    for number, row in enumerate(rows[1:], start=2):
-        if len(row) != width:
-            if not row or (len(row) == 1 and not row[0].strip()):
-                continue  # a blank line holds no sample
+    body = rows[1:]
+    line_numbers = np.arange(2, len(rows) + 1)
+    odd = np.flatnonzero(np.fromiter(map(len, body), dtype=np.intp, count=len(body)) != width)
+    if odd.size:
+        blank = [i for i in odd if not body[i] or (len(body[i]) == 1 and not body[i][0].strip())]
+        wrong = sorted(set(odd) - set(blank))
+        if wrong:
             raise DataError(
-                f"expected {width} fields like the header, got {len(row)}", path, number
+                f"expected {width} fields like the header, got {len(body[wrong[0]])}",
+                path,
+                int(line_numbers[wrong[0]]),
             )
-        body.append(row)
-        line_numbers.append(number)
+        keep = np.ones(len(body), dtype=bool)
+        keep[blank] = False  # a blank line holds no sample
+        body = [row for row, k in zip(body, keep, strict=True) if k]
+        line_numbers = line_numbers[keep]
     if not body:
         raise DataError("the file has a header but no data rows", path, 1)
-    return _validate(names, renamed, body, np.array(line_numbers), path, sep == ";", shift_time)
+    return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time)
 
 
 def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
@@ -213,7 +219,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
         return values * factor if factor != 1.0 else values
 
     rig = is_rig_file(names)
-    specimen = [s.strip() for s in cols["specimen"]]
+    specimen = list(map(str.strip, cols["specimen"]))
     empty = [i for i, s in enumerate(specimen) if not s]
     if empty:
         raise DataError(
@@ -270,7 +276,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
             )
     _require_positive(voltage, "voltage_V", path, line_no, "voltage")
     _check_units(stress, voltage, current, line_no, path, "stress_Pa" in cols)
-    test = [t.strip() for t in cols["test"]] if "test" in cols else [""] * len(body)
+    test = list(map(str.strip, cols["test"])) if "test" in cols else [""] * len(body)
     return CreepData(
         _group(
             specimen,
@@ -291,16 +297,14 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
 
 def _sensor_column(values, line_no, path):
     canonical = {}
-    out = []
-    for i, value in enumerate(values):
+    for value in dict.fromkeys(values):
         name = value.strip()
-        if name not in canonical:
-            try:
-                canonical[name] = load_sensor(name).name
-            except ValueError as exc:
-                raise DataError(str(exc), path, int(line_no[i]), "sensor") from None
-        out.append(canonical[name])
-    return out
+        try:
+            canonical[value] = load_sensor(name).name
+        except ValueError as exc:
+            i = values.index(value)
+            raise DataError(str(exc), path, int(line_no[i]), "sensor") from None
+    return list(map(canonical.__getitem__, values))
 
 
 def _check_units(stress, voltage, current, line_no, path, stress_given):
@@ -331,16 +335,10 @@ def _check_units(stress, voltage, current, line_no, path, stress_given):
         )
 
 
-def _codes(values):
-    """Integer codes of strings in order of first appearance."""
-    table = {}
-    return np.array([table.setdefault(v, len(table)) for v in values]), list(table)
-
-
 def _check_sensor_per_specimen(specimen, sensor, line_no, path):
     """Check that a specimen is one sensor; return the specimen codes and names."""
-    spec_code, spec_names = _codes(specimen)
-    sensor_code, _ = _codes(sensor)
+    spec_code, spec_names = codes_of(specimen)
+    sensor_code, _ = codes_of(sensor)
     first_sensor = np.full(len(spec_names), -1)
     first_sensor[spec_code[::-1]] = sensor_code[::-1]
     clash = sensor_code != first_sensor[spec_code]
@@ -359,7 +357,7 @@ def _check_sensor_per_specimen(specimen, sensor, line_no, path):
 
 def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path, body, shift_time):
     spec_code, _ = _check_sensor_per_specimen(specimen, sensor, line_no, path)
-    test_code, test_names = _codes(test)
+    test_code, test_names = codes_of(test)
     keys = np.rec.fromarrays([spec_code, voltage, stress, test_code])
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     inverse = inverse.ravel()

@@ -14,6 +14,7 @@ Every problem is a one-line :class:`~.creep.DataError` naming file, line and col
 
 import numpy as np
 
+from ..utils import codes_of
 from .creep import CreepTest, DataError
 from .readouts import Readout, current_of
 
@@ -138,14 +139,18 @@ def rig_tests(
         raise DataError(
             f"the load must be >= 0 (0: not yet loaded), got {stress[i]:g}", path, int(line_no[i])
         )
-    test = [t.strip() for t in cols["test"]] if "test" in cols else [""] * len(time)
-    groups = {}
-    for i, key in enumerate(zip(specimen, test, strict=True)):
-        groups.setdefault(key, []).append(i)
+    test = list(map(str.strip, cols["test"])) if "test" in cols else [""] * len(time)
+    spec_code, spec_names = codes_of(specimen)
+    test_code, test_names = codes_of(test)
+    pair = spec_code * len(test_names) + test_code
+    _, first, code = np.unique(pair, return_index=True, return_inverse=True)
+    order = np.argsort(code, kind="stable")  # each test's rows in file order
+    groups = np.split(order, np.cumsum(np.bincount(code))[:-1])
     raw = cols[reading]
     tests = []
-    for (spec, label), rows in groups.items():
-        idx = np.array(rows)
+    for g in np.argsort(first, kind="stable"):  # tests in order of first appearance
+        idx = groups[g]
+        spec, label = specimen[idx[0]], test[idx[0]]
         what = f"test (specimen {spec!r}" + (f", test {label!r}" if label else "") + ")"
         lines = line_no[idx]
         readout = Readout(

@@ -47,6 +47,7 @@ def simulate_rig(
     *,
     reading="adc_counts",
     time_unit="s",
+    force_unit="g",
     seed=0,
     effects=(),
     **rig,
@@ -59,6 +60,8 @@ def simulate_rig(
     reading : {"adc_counts", "vout_V", "resistance_ohm", "resistance_kohm"}
         What the logger prints (resistance as computed from the noisy voltage).
     time_unit : {"s", "min", "ms"}
+    force_unit : {"g", "N"}
+        The dead weight as its mass (``force_g``) or its force (``force_N``).
     seed : int
     effects : sequence
         Effects hidden in the data, as ``(name, {parameter: value})`` pairs.
@@ -94,7 +97,10 @@ def simulate_rig(
     top = 2 ** setup["adc_bits"] - 1
     lsb = setup["adc_vref_V"] / 2 ** setup["adc_bits"]
     time_col = {"s": "time_s", "min": "time_min", "ms": "time_ms"}[time_unit]
-    header = ["specimen", "sensor", "test", time_col, "force_g", "supply_V", "rm_ohm"]
+    if force_unit not in ("g", "N"):
+        raise ValueError(f"force_unit must be 'g' or 'N', got {force_unit!r}")
+    force_scale = 1.0 if force_unit == "g" else STANDARD_GRAVITY / 1000.0
+    header = ["specimen", "sensor", "test", time_col, f"force_{force_unit}", "supply_V", "rm_ohm"]
     header += ["adc_bits", "adc_vref_V", "adc_counts"] if reading == "adc_counts" else [reading]
     lines = [",".join(header)]
     truth = {
@@ -122,7 +128,7 @@ def simulate_rig(
             vout = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(t.size))
             open_reading = np.abs(rng.normal(0.0, 1.5, (~loaded).sum())) * lsb
             vout = np.concatenate([open_reading, vout])
-            force = np.where(loaded, grams, 0.0)
+            force = np.where(loaded, grams * force_scale, 0.0)
             column = _reading(reading, vout, supply, rm, lsb, top, loaded)
             prefix = f"{name},{sensor.name},w{j + 1}"
             extra = (
