@@ -222,3 +222,28 @@ def test_the_truth_file_describes_the_rig(tmp_path):
     stored = json.loads(path.with_name("rig.truth.json").read_text())
     assert stored["rig"]["rm_ohm"] == 3300.0 and stored["reading"] == "adc_counts"
     assert set(stored["specimens"]) == {"fsr402-01"}
+
+
+def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
+    out = tmp_path / "rig.csv"
+    command = [sys.executable, "-m", "fsrbayes"]
+    made = subprocess.run(
+        [*command, "simulate-rig", "-o", str(out), "--duration", "30", "--rate-hz", "10"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert made.returncode == 0, made.stderr
+    checked = subprocess.run(
+        [*command, "check", str(out)], capture_output=True, text=True, timeout=120
+    )
+    assert checked.returncode == 0, checked.stderr
+    assert "4 creep tests" in checked.stdout and "a divider: 4.9 V supply" in checked.stdout
+    refused = subprocess.run(
+        [*command, "simulate-rig", "-o", str(tmp_path / "x.csv"), "--rm-ohm", "0"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert refused.returncode == 2 and "--rm-ohm must be > 0" in refused.stderr
+    assert not (tmp_path / "x.csv").exists()

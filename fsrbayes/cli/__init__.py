@@ -14,7 +14,7 @@ from ..physics.models import model_families
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
-from .model import cmd_check, cmd_demo, cmd_forward, cmd_simulate
+from .model import cmd_check, cmd_demo, cmd_forward, cmd_simulate, cmd_simulate_rig
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -138,6 +138,43 @@ def build_parser():
         "--digits", type=int, help="significant digits in the CSV (default: exact round trip)"
     )
     sim.set_defaults(func=cmd_simulate)
+
+    rig = sub.add_parser(
+        "simulate-rig",
+        help="the virtual test bench for rigs: a divider log as a logger writes it (CSV + truth)",
+    )
+    rig.add_argument("-o", "--output", required=True, help="CSV to write")
+    rig.add_argument("--sensor", default="fsr402", help="sensor name (default fsr402)")
+    rig.add_argument("--specimens", type=int, default=1, help="specimens (default 1)")
+    rig.add_argument(
+        "--weights-g", default="133,170,210,255", help="dead weights in g, one test each"
+    )
+    rig.add_argument("--supply-v", type=float, default=4.9, help="divider supply (default 4.9)")
+    rig.add_argument("--rm-ohm", type=float, default=3300.0, help="fixed resistor (default 3300)")
+    rig.add_argument("--adc-bits", type=int, default=10, help="ADC resolution (default 10)")
+    rig.add_argument("--adc-vref-v", type=float, default=5.0, help="ADC reference (default 5)")
+    rig.add_argument("--rate-hz", type=float, default=100.0, help="sampling rate (default 100)")
+    rig.add_argument(
+        "--duration", type=float, default=600.0, help="seconds under each weight (default 600)"
+    )
+    rig.add_argument(
+        "--pre", type=float, default=1.5, help="seconds logged before the weight lands"
+    )
+    rig.add_argument(
+        "--noise", type=float, default=0.002, help="relative noise of the divider's output"
+    )
+    rig.add_argument(
+        "--reading",
+        choices=("adc_counts", "vout_V", "resistance_ohm", "resistance_kohm"),
+        default="adc_counts",
+        help="what the logger prints (default adc_counts)",
+    )
+    rig.add_argument("--time-unit", choices=("s", "min", "ms"), default="s")
+    rig.add_argument(
+        "--effect", action="append", metavar="NAME[=params]", help="hide an effect, as in simulate"
+    )
+    rig.add_argument("--seed", type=int, default=0, help="random seed")
+    rig.set_defaults(func=cmd_simulate_rig)
 
     fit_ = sub.add_parser(
         "fit", help="Bayesian fit per specimen with emcee (posterior.nc + summary.json)"

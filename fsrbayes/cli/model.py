@@ -245,6 +245,42 @@ def cmd_simulate(args):
     return 0
 
 
+def cmd_simulate_rig(args):
+    """Simulate a divider rig's log (dead weights from rest, high rate), with known truth."""
+    from ..data.rigsim import simulate_rig, write_rig
+
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise UsageError(f"-o: directory {out.parent} does not exist")
+    for flag in ("specimens", "supply_v", "rm_ohm", "adc_bits", "adc_vref_v", "rate_hz"):
+        if getattr(args, flag) <= 0:
+            raise UsageError(f"--{flag.replace('_', '-')} must be > 0, got {getattr(args, flag)}")
+    try:
+        text, truth = simulate_rig(
+            args.specimens,
+            reading=args.reading,
+            time_unit=args.time_unit,
+            seed=args.seed,
+            effects=args.effect or (),
+            sensor=args.sensor,
+            weights_g=tuple(floats(args.weights_g, "weights-g")),
+            supply_V=args.supply_v,
+            rm_ohm=args.rm_ohm,
+            adc_bits=args.adc_bits,
+            adc_vref_V=args.adc_vref_v,
+            rate_hz=args.rate_hz,
+            duration_s=args.duration,
+            pre_s=args.pre,
+            noise_rel=args.noise,
+        )
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    csv_path, truth_path = write_rig(text, truth, out)
+    print(csvio.read_csv(csv_path).summary())
+    print(f"truth written to {truth_path}")
+    return 0
+
+
 def cmd_check(args):
     """Read and validate a creep-test CSV; print what it holds."""
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)

@@ -91,6 +91,21 @@ class CreepTest:
         return observed_drift(self.time_s, self.current_A, time_s)
 
 
+def _describe(readout):
+    """One line describing a rig's readout."""
+    if readout.circuit == "divider":
+        adc = (
+            f", {readout.adc_bits}-bit ADC on {readout.adc_vref_V:g} V"
+            if readout.reading == "adc_counts"
+            else ""
+        )
+        return (
+            f"a divider: {readout.source_V:g} V supply, {readout.rm_ohm:g} ohm fixed resistor, "
+            f"reading {readout.reading}{adc}"
+        )
+    return f"{readout.reading} at a constant {readout.source_V:g} V"
+
+
 @dataclass(frozen=True)
 class CreepData:
     """A set of creep tests, in the order they first appear in the file.
@@ -177,4 +192,6 @@ class CreepData:
                 f"{', '.join(f'{v:g}' for v in volts)} V, stresses "
                 f"{', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
             )
+            rigs = sorted({_describe(t.readout) for t in sub if t.readout is not None}, key=str)
+            lines += [f"    read by {rig}" for rig in rigs]
         return "\n".join(lines)

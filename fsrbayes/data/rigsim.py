@@ -20,7 +20,7 @@ from ..physics.sensor import solve_current
 from ..utils import atomic_path
 from .readouts import STANDARD_GRAVITY
 from .sensors import load_sensor
-from .synthetic import draw_specimens
+from .synthetic import draw_specimens, effect_parameters
 
 __all__ = ["RIG_DEFAULTS", "simulate_rig", "write_rig"]
 
@@ -64,7 +64,8 @@ def simulate_rig(
         The dead weight as its mass (``force_g``) or its force (``force_N``).
     seed : int
     effects : sequence
-        Effects hidden in the data, as ``(name, {parameter: value})`` pairs.
+        Effects hidden in the data: ``NAME[=...]`` specs as for ``fsrbayes simulate --effect``,
+        or ``(name, {parameter: value})`` pairs.
     **rig
         Overrides of :data:`RIG_DEFAULTS`.
 
@@ -87,7 +88,7 @@ def simulate_rig(
     rng = np.random.default_rng(seed)
     sensor = load_sensor(setup["sensor"])
     specimens = draw_specimens(sensor, n_specimens, rng)
-    effect_params = {name: dict(values) for name, values in effects}
+    effect_params = effect_parameters(sensor, effects)
     names = tuple(effect_params)
     supply, rm = setup["supply_V"], setup["rm_ohm"]
     step = 1.0 / setup["rate_hz"]
@@ -135,7 +136,7 @@ def simulate_rig(
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
             )
             lines += [
-                f"{prefix},{tt / scale[time_unit]:.6g},{f:g},{supply!r},{rm!r}{extra},{r}"
+                f"{prefix},{tt / scale[time_unit]:.9g},{f:g},{supply!r},{rm!r}{extra},{r}"
                 for tt, f, r in zip(logger_t, force, column, strict=True)
             ]
     return "\n".join(lines) + "\n", truth

@@ -42,6 +42,7 @@ __all__ = [
     "EFFECT_DEFAULTS",
     "Simulation",
     "parse_effect",
+    "effect_parameters",
     "draw_specimens",
     "simulate",
     "paper_protocol",
@@ -137,8 +138,8 @@ def parse_effect(spec):
     return name, values
 
 
-def _effect_params(sensor, effects):
-    """Resolve effect specs to concrete parameter values for a sensor."""
+def effect_parameters(sensor, effects):
+    """Resolve effect specs (``NAME[=...]`` strings or pairs) to parameter values for a sensor."""
     resolved = {}
     for spec in effects or ():
         name, values = parse_effect(spec) if isinstance(spec, str) else spec
@@ -298,7 +299,7 @@ def simulate(
         )
         if np.any(volts <= 0) or np.any(loads <= 0):
             raise ValueError("voltages and stresses (forces) must be > 0")
-        resolved = _effect_params(sensor, effects)
+        resolved = effect_parameters(sensor, effects)
         effect_names = tuple(resolved)
         effect_params[sensor.name] = resolved
         protocol[sensor.name] = {"voltages_V": volts.tolist(), "stresses_Pa": loads.tolist()}
