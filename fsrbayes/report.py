@@ -66,6 +66,13 @@ def _verdict_text(result, n_spec):
         if artefacts
         else ""
     )
+    rivals = {e: r for e, r in (result.get("indistinguishable") or {}).items() if r}
+    if rivals:
+        rig += " " + " ".join(
+            f"The data cannot tell **{e}** from {', '.join(f'**{r}**' for r in rs)}: their ln B "
+            f"differ by less than {result['threshold_log_bf']:g}."
+            for e, rs in rivals.items()
+        )
     if verdict == "adequate":
         return [
             f"No check fails and the gap {before:.2f} lies inside the band an adequate model "

@@ -205,6 +205,7 @@ def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path
     assert payload["effect_kinds"] == [
         "readout" if e == "gain-drift" else "physics" for e in result.effects
     ]
+    assert set(payload["indistinguishable"]) == set(result.effects)
     _validate(payload)
     html = write_diagnosis_report(result, tmp_path / "report").read_text()
     assert "area-creep + gain-drift" in html and "measurement artefact" in html

@@ -247,3 +247,29 @@ def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
     )
     assert refused.returncode == 2 and "--rm-ohm must be > 0" in refused.stderr
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_path):
+    """A gain drift hidden in a one-supply divider log: named as the rig's, and the diagnosis
+    says that a stress-independent change of the sensor's area would do as well — one supply
+    voltage and a narrow load range give the data no lever to tell them apart."""
+    from fsrbayes.discrepancy import diagnose
+
+    text, truth = simulate_rig(
+        1,
+        seed=2,
+        effects=["gain-drift=gd_amp=-0.05,gd_tau=100"],
+        duration_s=120.0,
+        rate_hz=20.0,
+        weights_g=(133.0, 255.0),
+    )
+    data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
+    result = diagnose(data, effects=("gain-drift", "area-growth"), processes=1)
+    assert result.verdict == "missing-effect" and result.artefacts == ["gain-drift"]
+    assert result.indistinguishable == {"gain-drift": ["area-growth"]}
+    payload = result.as_dict()
+    assert payload["indistinguishable"] == {"gain-drift": ["area-growth"]}
+    jsonschema = pytest.importorskip("jsonschema")
+    from fsrbayes.discrepancy import diagnose_schema
+
+    jsonschema.validate(json.loads(json.dumps(payload)), diagnose_schema())

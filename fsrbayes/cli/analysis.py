@@ -127,6 +127,12 @@ def cmd_diagnose(args):
         else f" (gap {result.gap_before:.2f})"
     )
     print(f"verdict: {result.verdict}{named}")
+    for effect, rivals in result.indistinguishable.items():
+        if rivals:
+            print(
+                f"  the data cannot tell {effect} from {', '.join(rivals)} (ln B within "
+                f"{result.threshold:g})"
+            )
     if result.artefacts:
         print(
             f"  {' + '.join(result.artefacts)} describes the rig, not the sensor: a measurement "

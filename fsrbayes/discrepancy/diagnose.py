@@ -198,6 +198,24 @@ class Diagnosis:
         return [d.candidates[self.effects[-1]][1] for d in self.rounds[len(self.effects) - 1]]
 
     @property
+    def indistinguishable(self):
+        """Named effect → candidates of its step whose ln B comes within the threshold of it.
+
+        The data cannot tell these apart from the named effect (e.g. a readout's gain drift from
+        a stress-independent change of the sensor's area, on a rig with one supply voltage).
+        """
+        out = {}
+        for step, effect in enumerate(self.effects, start=1):
+            same_step = [c for c in self.candidates if c["step"] == step]
+            named = next(c for c in same_step if c["effect"] == effect)
+            out[effect] = [
+                c["effect"]
+                for c in same_step
+                if c["effect"] != effect and c["log_bf"] >= named["log_bf"] - self.threshold
+            ]
+        return out
+
+    @property
     def artefacts(self):
         """The named effects that describe the rig, not the sensor (``kind == "readout"``)."""
         return [e for e in self.effects if EFFECTS[e].kind == "readout"]
@@ -212,6 +230,7 @@ class Diagnosis:
                 "effects": list(self.effects),
                 "effect_kinds": [EFFECTS[e].kind for e in self.effects],
                 "artefacts": self.artefacts,
+                "indistinguishable": self.indistinguishable,
                 "gap_before": self.gap_before,
                 "gap_after": self.gap_after,
                 "band": self.band,

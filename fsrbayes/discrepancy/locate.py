@@ -15,6 +15,8 @@ Kennedy & O'Hagan, J. R. Stat. Soc. B 63, 425 (2001); Gelman, Meng & Stern, Stat
 (1996).
 """
 
+import warnings
+
 import numpy as np
 
 __all__ = ["DISCREPANCY_DEGREE", "SHAPE_TIMES_S", "discrepancy_shapes", "locate", "misfit_by"]
@@ -138,7 +140,8 @@ def locate(checks, degree=DISCREPANCY_DEGREE):
     shape = np.array(
         [[np.nan if v is None else v for v in s["shape_sigma"]] for s in fitted]
     ).reshape(len(fitted), len(SHAPE_TIMES_S))
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():  # times past the tests' end: no shape there (NaN)
+        warnings.simplefilter("ignore", RuntimeWarning)
         mean_shape = (
             np.nanmean(shape, axis=0) if len(fitted) else np.full(len(SHAPE_TIMES_S), np.nan)
         )
