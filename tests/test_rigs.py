@@ -273,3 +273,18 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     from fsrbayes.discrepancy import diagnose_schema
 
     jsonschema.validate(json.loads(json.dumps(payload)), diagnose_schema())
+
+
+def test_the_circuit_matters_a_constant_voltage_fit_halves_the_sensors_drift():
+    """The default rig fitted with its divider recovers the sensor's drift at constant V_FSR;
+    converted by hand to constant voltages, the fit reads the divider's damping as a sensor that
+    creeps about half as much (Laplace approximations at the MAP; validation/divider_bias.py)."""
+    from validation.divider_bias import PROBE_V, run
+
+    rows = run(seed=0, n_draws=200)
+    for v in PROBE_V:
+        truth = np.array(rows["truth"][v])
+        exact, approx = rows["divider"][v], rows["constant voltage"][v]
+        assert np.all((np.array(exact["q05"]) < truth) & (truth < np.array(exact["q95"])))
+        assert np.all(np.array(approx["q50"]) < 0.7 * truth)
+        assert np.all(np.array(approx["q95"]) < truth)
