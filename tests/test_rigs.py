@@ -288,3 +288,28 @@ def test_the_circuit_matters_a_constant_voltage_fit_halves_the_sensors_drift():
         assert np.all((np.array(exact["q05"]) < truth) & (truth < np.array(exact["q95"])))
         assert np.all(np.array(approx["q50"]) < 0.7 * truth)
         assert np.all(np.array(approx["q95"]) < truth)
+
+
+def test_an_onset_column_sets_t0_and_is_checked(tmp_path):
+    rows = ["specimen,sensor,test,time_ms,force_g,supply_V,rm_ohm,vout_V,onset_s"]
+    for k in range(8):
+        grams = 0 if k < 2 else 200
+        rows.append(f"s1,fsr402,a,{k * 500},{grams},4.9,3300,{'' if k < 2 else 1.5 + k / 100},0.8")
+    path = tmp_path / "onset.csv"
+    path.write_text("\n".join(rows) + "\n")
+    (test,) = read_csv(path).tests
+    assert test.onset_s == 0.8 and test.time_s[0] == pytest.approx(0.2)  # 1.0 s - 0.8 s
+    path.write_text("\n".join(rows).replace(",0.8", ",1.2") + "\n")
+    with pytest.raises(DataError, match=r"onset_s 1\.2 s of test .* is not between"):
+        read_csv(path)
+
+
+def test_semicolon_files_with_decimal_commas_read_the_same(tmp_path):
+    path, _ = _rig(tmp_path, reading="resistance_kohm", noise_rel=0.0)
+    text = path.read_text()
+    european = tmp_path / "eu.csv"
+    european.write_text(text.replace(",", ";").replace(".", ","))
+    same, other = read_csv(path), read_csv(european, sep=";")
+    for a, b in zip(same.tests, other.tests, strict=True):
+        np.testing.assert_allclose(a.current_A, b.current_A, rtol=1e-12)
+        np.testing.assert_allclose(a.time_s, b.time_s, rtol=1e-12)
