@@ -96,7 +96,7 @@ def run(n_sets=1, processes=2):
                     "effects": list(result.effects),
                     "right": bool(result.effects) and result.effects[0] in right,
                     "false_name": result.verdict == "missing-effect"
-                    and not set(result.effects) & set(right),
+                    and result.effects[0] not in right,
                     "gap_before": before,
                     "gap_after": after,
                     "band": band,

@@ -159,8 +159,8 @@ def run(kinds=KINDS, n_sets=5, processes=2):
                     "kinds": [
                         c["kind"] for c in result.candidates if c["effect"] in result.effects
                     ],
-                    "right_name": named and set(result.effects) <= set(ACCEPTED[kind]),
-                    "false_name": named and not set(result.effects) <= set(ACCEPTED[kind]),
+                    "right_name": named and result.effects[0] in ACCEPTED[kind],
+                    "false_name": named and result.effects[0] not in ACCEPTED[kind],
                     "gap_before": result.gap_before,
                     "gap_after": result.gap_after,
                     "band": result.band,

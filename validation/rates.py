@@ -6,8 +6,8 @@ module turns rows into outcomes and outcomes into rates with their binomial unce
 
 - *right name*: a hidden cause that has a right name in the catalogue is named by it
   (``missing-effect``, the first effect one of the accepted names);
-- *false name*: a ``missing-effect`` verdict naming an effect that is not of the right kind
-  (for data without any effect: any name);
+- *false name*: a ``missing-effect`` verdict whose first effect — the main explanation — is not
+  of the right kind (for data without any effect: any name);
 - *false adequate*: data with a hidden cause called ``adequate``;
 - *false refusal*: data without any effect not called ``adequate``.
 
@@ -84,7 +84,7 @@ def outcome(verdict, effects, accepted, null=False):
         }
     return {
         "right_name": (named and effects[0] in accepted) if accepted else None,
-        "false_name": named and not set(effects) & set(accepted),
+        "false_name": named and effects[0] not in accepted,
         "false_adequate": verdict == "adequate",
         "false_refusal": None,
     }
