@@ -14,7 +14,14 @@ from ..physics.models import model_families
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
 from .fitting import cmd_drift, cmd_fit
-from .model import cmd_check, cmd_demo, cmd_forward, cmd_simulate, cmd_simulate_rig
+from .model import (
+    cmd_check,
+    cmd_demo,
+    cmd_forward,
+    cmd_sensor_new,
+    cmd_simulate,
+    cmd_simulate_rig,
+)
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -175,6 +182,24 @@ def build_parser():
     )
     rig.add_argument("--seed", type=int, default=0, help="random seed")
     rig.set_defaults(func=cmd_simulate_rig)
+
+    sensor = sub.add_parser("sensor", help="sensor files: write one for an FSR of your own")
+    sensor_sub = sensor.add_subparsers(dest="sensor_command", required=True)
+    new = sensor_sub.add_parser(
+        "new",
+        help="a generic sensor file scaled from what you know: area and a typical resistance",
+    )
+    new.add_argument("name", help="the sensor's name (letters, digits, '-', '_')")
+    new.add_argument("--area-mm2", type=float, required=True, help="active area in mm²")
+    new.add_argument(
+        "--typical-ohm", type=float, required=True, help="resistance at 1 V under the typical force"
+    )
+    new.add_argument(
+        "--typical-force-n", type=float, default=5.0, help="the typical force in N (default 5)"
+    )
+    new.add_argument("--template", default="fsr402", help="catalogue sensor to rescale")
+    new.add_argument("--out", required=True, help="the TOML file to write")
+    new.set_defaults(func=cmd_sensor_new)
 
     fit_ = sub.add_parser(
         "fit", help="Bayesian fit per specimen with emcee (posterior.nc + summary.json)"

@@ -281,6 +281,32 @@ def cmd_simulate_rig(args):
     return 0
 
 
+def cmd_sensor_new(args):
+    """Write a generic sensor file rescaled from a catalogue sensor (atomically)."""
+    from ..data.generic import new_sensor_toml
+    from ..utils import atomic_path
+
+    out = Path(args.out)
+    if out.suffix != ".toml":
+        raise UsageError(f"--out must name a .toml file, got {out}")
+    if not out.parent.is_dir():
+        raise UsageError(f"--out: directory {out.parent} does not exist")
+    try:
+        text = new_sensor_toml(
+            args.name, args.area_mm2, args.typical_ohm, args.typical_force_n, args.template
+        )
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    with atomic_path(out) as tmp:
+        tmp.write_text(text)
+    sensor = load_sensor(out)
+    print(
+        f"{out}: sensor {sensor.name!r}, {sensor.area_m2 * 1e6:g} mm², from the {args.template} "
+        f"template; name it in the CSV's sensor column as {out.name} (relative to the CSV)"
+    )
+    return 0
+
+
 def cmd_check(args):
     """Read and validate a creep-test CSV; print what it holds."""
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)

@@ -296,11 +296,19 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
 
 
 def _sensor_column(values, line_no, path):
+    """Canonical sensor per row: a catalogue name, or a sensor file's resolved path.
+
+    A ``.toml`` path is read relative to the CSV's folder; its resolved path is the sensor's name
+    in the data, so that every later step (and every worker process) loads the same file.
+    """
     canonical = {}
     for value in dict.fromkeys(values):
         name = value.strip()
+        if name.lower().endswith(".toml"):
+            name = str((Path(path).parent / name).resolve())
         try:
-            canonical[value] = load_sensor(name).name
+            sensor = load_sensor(name)
+            canonical[value] = name if name.lower().endswith(".toml") else sensor.name
         except ValueError as exc:
             i = values.index(value)
             raise DataError(str(exc), path, int(line_no[i]), "sensor") from None
