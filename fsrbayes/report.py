@@ -74,10 +74,18 @@ def _verdict_text(result, n_spec):
             for e, rs in rivals.items()
         )
     if verdict == "adequate":
+        favoured = [c for c in result["candidates"] if c["log_bf"] >= result["threshold_log_bf"]]
+        named = ", ".join(f"{c['effect']} (ln B = {c['log_bf']:.1f})" for c in favoured)
+        aside = (
+            f" The evidence favours {named}, but it changes the predictions by no more than the "
+            "noise: the base model describes these data as well as they can tell."
+            if favoured
+            else ""
+        )
         return [
             f"No check fails and the gap {before:.2f} lies inside the band an adequate model "
             f"stays below on this design (G0 = {band:.2f}): the base model is **adequate** for "
-            "these data."
+            "these data." + aside
         ]
     if verdict == "missing-effect":
         return [

@@ -1,4 +1,4 @@
-"""The acceptance matrix of the discrepancy workflow (slow: ~32 min on 2 cores).
+"""The acceptance matrix of the discrepancy workflow (slow: ~45 min on 2 cores).
 
 Every catalogue effect hidden at two magnitudes on each sensor is named, with gap_after ≤ 0.5 ×
 gap_before where the base model's misfit is significant (``Case.gap_check``); Burgers and Zener
@@ -33,6 +33,9 @@ def test_case(matrix, case):
     if case.expected is None:
         assert row["verdict"] == "adequate" and row["effect"] is None, row
         assert max(row["log_bf"].values()) < 10, row
+    elif not case.detectable:  # absorbed inside the band: adequate, or named rightly
+        assert row["verdict"] in ("adequate", "missing-effect"), row
+        assert row["effect"] in (None, case.expected), row
     else:
         assert row["verdict"] == "missing-effect" and row["effect"] == case.expected, row
         if case.gap_check:
