@@ -206,8 +206,8 @@ def format_study(rows):
     """A Markdown table of study results."""
     lines = [
         "| case | verdict | named | ln B of the hidden effect | best rival ln B | gap before | "
-        "gap after | after/before | s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "gap after | after/before | drift misfit | s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         rivals = [v for k, v in r["log_bf"].items() if k != r["expected"]]
