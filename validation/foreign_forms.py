@@ -31,6 +31,7 @@ from fsrbayes.discrepancy import diagnose
 from fsrbayes.physics.rheology import burgers_compliance, fluidity
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
+from validation.rates import outcome
 
 VOLTAGES = (0.5, 2.0, 4.5)
 SAMPLES = 31
@@ -95,8 +96,9 @@ def run(n_sets=1, processes=2):
                     "verdict": result.verdict,
                     "effects": list(result.effects),
                     "right": bool(result.effects) and result.effects[0] in right,
-                    "false_name": result.verdict == "missing-effect"
-                    and result.effects[0] not in right,
+                    "false_name": outcome(result.verdict, list(result.effects), right)[
+                        "false_name"
+                    ],
                     "gap_before": before,
                     "gap_after": after,
                     "band": band,

@@ -38,8 +38,10 @@ from fsrbayes.data import CreepData, CreepTest
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import PAPER_FORCES_N, draw_specimens, simulate
 from fsrbayes.discrepancy import diagnose
+from fsrbayes.physics.effects import EFFECTS
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
+from validation.rates import outcome
 
 KINDS = (
     "temperature-cycle",
@@ -149,18 +151,16 @@ def run(kinds=KINDS, n_sets=5, processes=2):
         for k in range(n_sets):
             started = time.perf_counter()
             result = diagnose(data_set(kind, 1000 + k), seed=k, processes=processes)
-            named = result.verdict == "missing-effect"
+            flags = outcome(result.verdict, list(result.effects), ACCEPTED[kind])
             rows.append(
                 {
                     "kind": kind,
                     "seed": 1000 + k,
                     "verdict": result.verdict,
                     "effects": list(result.effects),
-                    "kinds": [
-                        c["kind"] for c in result.candidates if c["effect"] in result.effects
-                    ],
-                    "right_name": named and result.effects[0] in ACCEPTED[kind],
-                    "false_name": named and result.effects[0] not in ACCEPTED[kind],
+                    "kinds": [EFFECTS[e].kind for e in result.effects],
+                    "right_name": bool(flags["right_name"]),
+                    "false_name": flags["false_name"],
                     "gap_before": result.gap_before,
                     "gap_after": result.gap_after,
                     "band": result.band,

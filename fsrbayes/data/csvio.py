@@ -238,9 +238,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
         stress = load / np.array([areas[s] for s in sensor_names])
     if rig:
         if "stress_Pa" in cols:
-            _check_units(
-                stress[stress > 0], np.ones(1), np.zeros(1), line_no[stress > 0], path, True
-            )
+            _check_stress_unit(stress[stress > 0], line_no[stress > 0], path)
         _check_sensor_per_specimen(specimen, sensor_names, line_no, path)
         tests = rig_tests(
             names,
@@ -315,8 +313,9 @@ def _sensor_column(values, line_no, path):
     return list(map(canonical.__getitem__, values))
 
 
-def _check_units(stress, voltage, current, line_no, path, stress_given):
-    if stress_given and np.any(stress < STRESS_PLAUSIBLE_MIN_PA):
+def _check_stress_unit(stress, line_no, path):
+    """Refuse stresses whose size says kPa was written into stress_Pa."""
+    if np.any(stress < STRESS_PLAUSIBLE_MIN_PA):
         i = int(np.argmax(stress < STRESS_PLAUSIBLE_MIN_PA))
         raise DataError(
             f"stress {stress[i]:g} Pa looks like kPa (FSR creep loads are 10-1000 kPa); stress_Pa "
@@ -325,6 +324,11 @@ def _check_units(stress, voltage, current, line_no, path, stress_given):
             int(line_no[i]),
             "stress_Pa",
         )
+
+
+def _check_units(stress, voltage, current, line_no, path, stress_given):
+    if stress_given:
+        _check_stress_unit(stress, line_no, path)
     if np.any(voltage > VOLTAGE_PLAUSIBLE_MAX_V):
         i = int(np.argmax(voltage > VOLTAGE_PLAUSIBLE_MAX_V))
         raise DataError(
