@@ -77,8 +77,8 @@ def _verdict_text(result, n_spec):
         favoured = [c for c in result["candidates"] if c["log_bf"] >= result["threshold_log_bf"]]
         named = ", ".join(f"{c['effect']} (ln B = {c['log_bf']:.1f})" for c in favoured)
         aside = (
-            f" The evidence favours {named}, but it changes the predictions by no more than the "
-            "noise: the base model describes these data as well as they can tell."
+            f" The evidence favours {named}, but its model fails a check or leaves the band: the "
+            "base model describes these data as well as they can tell."
             if favoured
             else ""
         )
@@ -86,6 +86,14 @@ def _verdict_text(result, n_spec):
             f"No check fails and the gap {before:.2f} lies inside the band an adequate model "
             f"stays below on this design (G0 = {band:.2f}): the base model is **adequate** for "
             "these data." + aside
+        ]
+    if verdict == "missing-effect" and before <= band and not n_failed_before:
+        return [
+            f"The base model's gap {before:.2f} already lies inside the band (G0 = {band:.2f}) and "
+            f"no check fails, but the evidence for {added} is decisive ({evidence}) and its model "
+            f"passes every check (gap {after:.2f}): a **missing effect** is named that changes the "
+            "creep curves by less than the quarter means can show — typically the first seconds "
+            f"after loading.{rig}"
         ]
     if verdict == "missing-effect":
         return [

@@ -128,6 +128,26 @@ def test_adequate_needs_passing_checks_and_a_gap_inside_the_band():
     assert verdict_of(1.4, False, BAND, [], 10.0)[0] == "unexplained"
 
 
+def test_decisive_evidence_names_an_effect_the_gap_cannot_see():
+    # base in band, checks pass: the best candidate is named only on decisive evidence, passing
+    # checks and a gap still in band — a fast retardation time the quarter means average away
+    fast = _step("second-kelvin", 74.0, 0.76)
+    assert verdict_of(0.75, False, BAND, [fast], 10.0) == (
+        "missing-effect",
+        ["second-kelvin"],
+        0.76,
+    )
+    assert verdict_of(0.75, False, BAND, [_step("second-kelvin", 9.9, 0.7)], 10.0)[0] == "adequate"
+    failing = _step("second-kelvin", 74.0, 0.7, checks_fail=True)
+    assert verdict_of(0.75, False, BAND, [failing], 10.0) == ("adequate", [], 0.75)
+    assert verdict_of(0.75, False, BAND, [_step("second-kelvin", 74.0, 1.2)], 10.0)[0] == (
+        "adequate"
+    )
+    # only the first step counts: a second effect is never added to an in-band base model
+    second = _step("log-creep", 50.0, 0.7)
+    assert verdict_of(0.75, False, BAND, [fast, second], 10.0)[1] == ["second-kelvin"]
+
+
 def test_an_effect_is_named_only_when_it_closes_the_gap_and_its_checks_pass():
     closing = _step("area-creep", 50.0, 1.2)  # excess 2.0 -> 0.2: at least halved
     assert verdict_of(3.0, True, BAND, [closing], 10.0) == ("missing-effect", ["area-creep"], 1.2)

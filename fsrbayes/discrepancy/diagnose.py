@@ -16,10 +16,12 @@
    the model in turn and refitted on every specimen (each specimen its own effect parameters);
    candidates are ranked by the log Bayes factor over the base model, summed over specimens
    (Laplace evidences), and by how much of the gap they close;
-5. the best candidate is named only when its ln B ≥ ``threshold`` (default 10: e^10 ≈ 22,000
-   to 1, well beyond the few nats a Laplace evidence can be off by); otherwise the verdict is
-   ``adequate``;
-6. ``gap_after`` is the gap of the base model plus the named effect.
+5. the verdict (:mod:`fsrbayes.discrepancy.verdict`): the base model is ``adequate`` when its
+   checks pass, its gap is inside the band and no candidate reaches ln B ≥ ``threshold``
+   (default 10: e^10 ≈ 22,000 to 1, well beyond the few nats a Laplace evidence can be off by);
+   otherwise effects are added greedily (at most two) and named only when they close the gap
+   and pass their checks, else the diagnosis refuses (``partially-explained``, ``unexplained``);
+6. ``gap_after`` is the gap of the base model plus the named effects.
 
 Every extension nests the base model (the effect is off at its null value), so a ln B well
 below zero is the Occam penalty of parameters the data do not need.
@@ -399,9 +401,13 @@ def diagnose(
     band = gap_band(int(sum(len(c.test_keys) for c in base_checks)))
     candidates = _candidates(1, base, effects, rounds[0], gap_before)
     steps, model, remaining = [], base, list(effects)
-    adequate = not findings["failed"] and gap_before <= band
+    in_band = not findings["failed"] and gap_before <= band
     step_candidates = candidates
-    while not adequate and step_candidates and len(steps) < MAX_EFFECTS:
+    if in_band and candidates:
+        # The gap cannot see everything the evidence sees: the best candidate is still weighed.
+        best = candidates[0]
+        steps.append({k: best[k] for k in ("effect", "log_bf", "gap_after", "checks_fail")})
+    while not in_band and step_candidates and len(steps) < MAX_EFFECTS:
         best = step_candidates[0]
         steps.append(
             {
