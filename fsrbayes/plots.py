@@ -427,6 +427,32 @@ def sbc_rank_plot(result, bins=10, per_row=4):
     return fig, axes
 
 
+def predict_plot(prediction, max_tests=12):
+    """Per protocol test: the predictive reading's 50 % and 90 % bands and any logged readings."""
+    tests = prediction["tests"][:max_tests]
+    cols = min(3, len(tests))
+    rows = int(np.ceil(len(tests) / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    unit = f"{prediction['reading']} ({prediction['reading_unit']})"
+    for ax, test in zip(axes.ravel(), tests, strict=False):
+        t = np.asarray(test["time_s"])
+        for (lo, hi), alpha in ((("q05", "q95"), 0.25), (("q25", "q75"), 0.45)):
+            ax.fill_between(t, test[lo], test[hi], color="C0", alpha=alpha, lw=0, step="mid")
+        ax.plot(t, test["q50"], "C0", lw=1)
+        if test["observed"] is not None:
+            ax.plot(t, test["observed"], "k.", ms=2)
+        covered = "" if test["coverage_90"] is None else f"; {test['coverage_90']:.0%} in 90 %"
+        label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
+        ax.set(title=f"{test['specimen']} {label}{covered}", xlabel="time (s)", ylabel=unit)
+        if t.size and t.min() > 0:
+            ax.set_xscale("log")
+    for ax in axes.ravel()[len(tests) :]:
+        ax.set_visible(False)
+    fig.suptitle("posterior predictive reading: 50 % and 90 % bands", fontsize=10)
+    fig.tight_layout()
+    return fig, axes
+
+
 def save_figure(fig, path, dpi=110):
     """Save a figure atomically and close it."""
     from .utils import atomic_path

@@ -71,8 +71,8 @@ def write_json_atomic(path, payload):
 def json_ready(value):
     """Return a JSON-ready copy of nested dicts and lists.
 
-    Return a copy of nested dicts/lists with NaN and inf as None and numpy scalars as Python numbers
-    (JSON has no NaN).
+    Return a copy of nested dicts/lists with NaN and inf as None, numpy scalars as Python numbers
+    and arrays as lists (JSON has no NaN).
     """
     import math
 
@@ -80,6 +80,8 @@ def json_ready(value):
         return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
+    if getattr(value, "ndim", 0) > 0 and hasattr(value, "tolist"):  # an array
+        return json_ready(value.tolist())
     if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
         value = value.item()
     if isinstance(value, float):

@@ -13,7 +13,7 @@ from ..physics.effects import EFFECTS
 from ..physics.models import model_families
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .common import FitFailed, UsageError
-from .fitting import cmd_drift, cmd_fit
+from .fitting import cmd_drift, cmd_fit, cmd_predict
 from .model import (
     cmd_check,
     cmd_demo,
@@ -440,6 +440,28 @@ def build_parser():
     )
     drf.add_argument("--seed", type=int, default=0)
     drf.set_defaults(func=cmd_drift)
+
+    prd = sub.add_parser(
+        "predict",
+        help="what a fitted specimen will read under a protocol: posterior predictive bands of "
+        "the reading (noise and ADC steps included); coverage of any readings logged",
+    )
+    prd.add_argument("fit_dir", help="output folder of 'fsrbayes fit' (one or several specimens)")
+    prd.add_argument(
+        "protocol",
+        help="CSV of the tests to predict (docs/data-format.md); the reading column is optional",
+    )
+    prd.add_argument("--json", help="write the bands (and coverage) here, atomically")
+    prd.add_argument("--plot", help="figure of the bands (PNG/PDF/SVG)")
+    prd.add_argument(
+        "--draws", type=int, default=1000, help="replicate readings per sample (default 1000)"
+    )
+    prd.add_argument(
+        "--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)"
+    )
+    prd.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    prd.add_argument("--seed", type=int, default=0)
+    prd.set_defaults(func=cmd_predict)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")
     chk.add_argument("data", help="CSV file (docs/data-format.md)")

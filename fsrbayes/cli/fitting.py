@@ -1,7 +1,7 @@
-"""Commands that sample posteriors: fit and drift.
+"""Commands that sample posteriors and use them: fit, drift and predict.
 
-Commands that sample posteriors: fit (per specimen or hierarchical) and drift (population
-predictive).
+Commands that sample posteriors — fit (per specimen or hierarchical) — and use them: drift (the
+population's predictive drift) and predict (what a fitted specimen reads under a protocol).
 """
 
 import json
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data import csvio
-from ..utils import write_json_atomic
+from ..utils import json_ready, write_json_atomic
 from .common import (
     FitFailed,
     UsageError,
@@ -376,3 +376,40 @@ def _fit_plots(folder):
     plots.save_figure(plots.band_plot(tree, "drift")[0], folder / "drift_bands.png")
     plots.save_figure(plots.band_plot(tree, "current")[0], folder / "current_bands.png")
     plots.save_figure(plots.drift_3600_plot(tree)[0], folder / "drift_3600.png")
+
+
+def cmd_predict(args):
+    """Write the posterior predictive reading of every test of a protocol CSV (JSON, figure)."""
+    from ..inference.predict import predict
+
+    if args.draws < 10:
+        raise UsageError(f"--draws must be >= 10, got {args.draws}")
+    protocol = csvio.read_csv(
+        args.protocol, sep=args.sep, shift_time=args.shift_time, readings="optional"
+    )
+    for path in (args.json, args.plot):
+        if path:
+            writable(Path(path).parent)
+    result = predict(args.fit_dir, protocol, n_draws=args.draws, seed=args.seed)
+    for test in result["tests"]:
+        label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
+        covered = (
+            f"; {test['n_inside_90']}/{test['n_readings']} readings inside the 90 % band"
+            if test["n_readings"]
+            else ""
+        )
+        end = -1
+        print(
+            f"{test['specimen']} {label}: {result['reading']} at {test['time_s'][end]:g} s "
+            f"{test['q50'][end]:.4g} (90 %: {test['q05'][end]:.4g}..{test['q95'][end]:.4g})"
+            f"{covered}{'' if test['fit_converged'] else ' [fit NOT converged]'}"
+        )
+    if result["coverage_90"] is not None:
+        print(f"coverage_90 = {result['coverage_90']:.3f} over {result['n_readings']} readings")
+    if args.json:
+        write_json_atomic(Path(args.json), json_ready(result))
+    if args.plot:
+        from .. import plots
+
+        plots.save_figure(plots.predict_plot(result)[0], Path(args.plot))
+    return 0

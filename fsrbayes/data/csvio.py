@@ -110,8 +110,11 @@ def _require_positive(array, name, path, lines, what):
         raise DataError(f"{what} must be > 0, got {array[i]:g}", path, int(lines[i]), name)
 
 
-def _columns_of(header, path):
-    """Return the header's names, suffixed unit columns renamed to SI, and the renaming."""
+def _columns_of(header, path, readings=True):
+    """Return the header's names, suffixed unit columns renamed to SI, and the renaming.
+
+    ``readings=False`` reads a protocol: the reading column may be absent.
+    """
     names = [h.strip() for h in header]
     seen = set()
     for name in names:
@@ -131,7 +134,12 @@ def _columns_of(header, path):
         missing.append("voltage_V (or supply_V and rm_ohm for a divider)")
     if "stress_Pa" not in names and "force_N" not in names:
         missing.append("stress_Pa (or force_N, force_g)")
-    if not rig and "current_A" not in names and not ("vo_V" in names and "rf_ohm" in names):
+    if (
+        readings
+        and not rig
+        and "current_A" not in names
+        and not ("vo_V" in names and "rf_ohm" in names)
+    ):
         missing.append("current_A (or vo_V and rf_ohm, resistance_ohm, vout_V, adc_counts)")
     if rig and "voltage_V" not in names and "supply_V" not in names:
         missing.append("voltage_V (or supply_V and rm_ohm for a divider)")
@@ -140,7 +148,7 @@ def _columns_of(header, path):
     return names, renamed
 
 
-def read_csv(path, *, sep=",", shift_time=False):
+def read_csv(path, *, sep=",", shift_time=False, readings="required"):
     """Read and validate a creep-test CSV file.
 
     Parameters
@@ -153,6 +161,11 @@ def read_csv(path, *, sep=",", shift_time=False):
     shift_time : bool
         Shift each test's times so that it starts at 0 (by default a test that does not start
         at 0 is an error, since t = 0 is the stress step).
+    readings : {"required", "optional"}
+        ``"optional"`` reads a protocol (``fsrbayes predict``): the reading column may be
+        absent or have empty fields, which become NaN currents. A divider without a reading
+        column reads ``adc_counts`` when it gives ``adc_bits`` and ``adc_vref_V``, else
+        ``vout_V``.
 
     Returns
     -------
@@ -163,6 +176,9 @@ def read_csv(path, *, sep=",", shift_time=False):
     DataError
         One line naming the file, line, column and what was expected.
     """
+    if readings not in ("required", "optional"):
+        raise ValueError(f"readings must be 'required' or 'optional', got {readings!r}")
+    required = readings == "required"
     text = _decode(path)
     if not text.strip():
         raise DataError(
@@ -187,7 +203,7 @@ def read_csv(path, *, sep=",", shift_time=False):
             path,
             reader.line_num,
         ) from None
-    names, renamed = _columns_of(rows[0], path)
+    names, renamed = _columns_of(rows[0], path, required)
     width = len(names)
     body = rows[1:]
     line_numbers = np.arange(2, len(rows) + 1)
@@ -207,15 +223,29 @@ def read_csv(path, *, sep=",", shift_time=False):
         line_numbers = line_numbers[keep]
     if not body:
         raise DataError("the file has a header but no data rows", path, 1)
-    return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time)
+    return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time, required)
 
 
-def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
+def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, required=True):
     cols = dict(zip(names, (list(c) for c in zip(*body, strict=False)), strict=False))
 
-    def floats(name):
+    def floats(name, optional=False):
         raw, factor = renamed.get(name, (name, 1.0))
-        values = _parse_floats(cols[name], raw, line_no, path, decimal_comma)
+        values = cols[name]
+        if optional:  # a protocol's missing readings
+            missing = np.array([not v.strip() for v in values])
+            parsed = np.full(len(values), np.nan)
+            keep = ~missing
+            parsed[keep] = _parse_floats(
+                [v for v, k in zip(values, keep, strict=True) if k],
+                raw,
+                line_no[keep],
+                path,
+                decimal_comma,
+            )
+            values = parsed
+        else:
+            values = _parse_floats(values, raw, line_no, path, decimal_comma)
         return values * factor if factor != 1.0 else values
 
     rig = is_rig_file(names)
@@ -251,15 +281,18 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
             path,
             decimal_comma,
             renamed,
+            required,
         )
         return CreepData(tests, str(path))
     voltage = floats("voltage_V")
     time = floats("time_s")
     if "current_A" in cols:
-        current = floats("current_A")
+        current = floats("current_A", optional=not required)
         _require_positive(current, "current_A", path, line_no, "current")
+    elif "vo_V" not in cols:  # a protocol without readings
+        current = np.full(len(time), np.nan)
     else:
-        vo, rf = floats("vo_V"), floats("rf_ohm")
+        vo, rf = floats("vo_V", optional=not required), floats("rf_ohm")
         _require_positive(rf, "rf_ohm", path, line_no, "feedback resistance")
         current = current_from_amplifier(vo, rf)
         bad = current <= 0
@@ -273,7 +306,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time):
                 "vo_V",
             )
     _require_positive(voltage, "voltage_V", path, line_no, "voltage")
-    _check_units(stress, voltage, current, line_no, path, "stress_Pa" in cols)
+    _check_units(stress, voltage, np.nan_to_num(current), line_no, path, "stress_Pa" in cols)
     test = list(map(str.strip, cols["test"])) if "test" in cols else [""] * len(body)
     return CreepData(
         _group(

@@ -30,6 +30,7 @@ __all__ = [
     "UNIT_COLUMNS",
     "Readout",
     "current_of",
+    "reading_of",
 ]
 
 STANDARD_GRAVITY = 9.80665
@@ -140,3 +141,34 @@ def current_of(readout, values):
     if reading == "vout_V":
         return values / readout.rm_ohm
     return values * readout.quantum_A  # adc_counts
+
+
+def reading_of(readout, current_A):
+    """Return what the rig logs for currents ``current_A`` through the FSR.
+
+    The inverse of :func:`current_of`.
+
+    Parameters
+    ----------
+    readout : Readout or None
+        None: the current itself (a current reading at a constant voltage).
+    current_A : ndarray
+        I in A.
+
+    Returns
+    -------
+    ndarray
+        The reading in SI units; ADC counts rounded to whole counts and clipped to
+        0 … 2^bits − 1 as the converter does.
+    """
+    current = np.asarray(current_A, dtype=float)
+    if readout is None or readout.reading == "current_A":
+        return current
+    if readout.reading == "vo_V":
+        return -current * readout.rf_ohm
+    if readout.reading == "resistance_ohm":
+        return readout.source_V / current - readout.rm_ohm
+    if readout.reading == "vout_V":
+        return current * readout.rm_ohm
+    top = 2.0**readout.adc_bits - 1.0
+    return np.clip(np.round(current / readout.quantum_A), 0.0, top)  # adc_counts

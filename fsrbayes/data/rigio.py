@@ -50,10 +50,12 @@ def _constant(values, idx, name, what, path, lines):
     return float(first)
 
 
-def _reading_column(names, path):
+def _reading_column(names, path, required=True):
     present = [
         n for n in ("vout_V", "adc_counts", "resistance_ohm", "current_A", "vo_V") if n in names
     ]
+    if not present and not required:  # a protocol: what the rig would read
+        return "adc_counts" if "adc_bits" in names and "adc_vref_V" in names else "vout_V"
     if len(present) != 1:
         raise DataError(
             f"a rig file holds one reading column, got {present or 'none'}; a divider reads one of "
@@ -65,7 +67,17 @@ def _reading_column(names, path):
 
 
 def rig_tests(
-    names, cols, floats, specimen, sensor, stress, line_no, path, decimal_comma=False, renamed=None
+    names,
+    cols,
+    floats,
+    specimen,
+    sensor,
+    stress,
+    line_no,
+    path,
+    decimal_comma=False,
+    renamed=None,
+    required=True,
 ):
     """Group a rig file's rows into :class:`~.creep.CreepTest` objects.
 
@@ -87,6 +99,8 @@ def rig_tests(
         Read the reading's decimal commas as points (``sep=";"`` files).
     renamed : dict, optional
         SI column → (column in the file, factor to SI), for unit-suffixed columns.
+    required : bool
+        False for a protocol: the reading column may be absent or have empty fields (NaN).
 
     Returns
     -------
@@ -103,7 +117,7 @@ def rig_tests(
         )
     if divider and "rm_ohm" not in names:
         raise DataError("a divider needs rm_ohm, the fixed resistor in ohms", path, 1)
-    reading = _reading_column(names, path)
+    reading = _reading_column(names, path, required)
     if not divider and reading != "resistance_ohm":
         raise DataError(f"{reading} is not a rig reading", path, 1, reading)
     if reading == "adc_counts" and not ("adc_bits" in names and "adc_vref_V" in names):
@@ -146,7 +160,7 @@ def rig_tests(
     _, first, code = np.unique(pair, return_index=True, return_inverse=True)
     order = np.argsort(code, kind="stable")  # each test's rows in file order
     groups = np.split(order, np.cumsum(np.bincount(code))[:-1])
-    raw = cols[reading]
+    raw = cols.get(reading) or [""] * len(specimen)
     tests = []
     for g in np.argsort(first, kind="stable"):  # tests in order of first appearance
         idx = groups[g]
@@ -213,7 +227,9 @@ def rig_tests(
                 int(lines[first]),
             )
         column, factor = (renamed or {}).get(reading, (reading, 1.0))
-        values = _reading_values(raw, keep, (column, factor), readout, line_no, path, decimal_comma)
+        values = _reading_values(
+            raw, keep, (column, factor), readout, line_no, path, decimal_comma, required
+        )
         current = current_of(readout, values)
         tests.append(
             CreepTest(
@@ -274,13 +290,22 @@ def _check_adc(adc, line_no, path):
         )
 
 
-def _reading_values(raw, keep, column, readout, line_no, path, decimal_comma):
+def _reading_values(raw, keep, column, readout, line_no, path, decimal_comma, required=True):
     """Return the reading on a test's loaded rows in SI units, parsed and range-checked.
 
-    ``column`` is (the column's name in the file, its factor to SI).
+    ``column`` is (the column's name in the file, its factor to SI). Without ``required`` (a
+    protocol), empty fields are NaN and the rest are checked.
     """
     reading, factor = column
     fields = [raw[i].strip() for i in keep]
+    if not required:
+        present = np.array([bool(f) for f in fields])
+        values = np.full(len(fields), np.nan)
+        if present.any():
+            values[present] = _reading_values(
+                raw, keep[present], column, readout, line_no, path, decimal_comma
+            )
+        return values
     if decimal_comma:
         fields = [f.replace(",", ".") for f in fields]
     try:

@@ -1,0 +1,289 @@
+"""What a fitted sensor will read under a protocol: the posterior predictive reading of any test.
+
+``predict(fit_dir, protocol)`` takes the posterior of every specimen the protocol names (the
+``posterior.nc`` of ``fsrbayes fit``) and, for every test of the protocol — any load, time
+span and readout the CSV format describes — draws the reading the rig would log:
+
+1. the model current for each posterior draw, with the rig's circuit solved at every sample
+   (a divider's V_FSR is whatever the circuit gives it, eqs. 19–21 with the fixed resistor in
+   series);
+2. the fitted measurement noise on top (relative, as in the likelihood: Gaussian, Student-t, or
+   an AR(1) process in time with the fitted correlation time);
+3. the reading the logger prints: the current, the amplifier output (eq. 23), the FSR's
+   resistance, the voltage across the divider's fixed resistor, or ADC counts rounded and clipped
+   as the converter does (:func:`~fsrbayes.data.readouts.reading_of`).
+
+Quantiles of the replicate readings give the predictive band at every sample — the quantile at
+p is the p·(n + 1)-th of n replicates (Weibull's plotting position), so that a fresh reading from
+the same distribution falls inside the 90 % band with probability 0.90 exactly, not
+0.9·(n − 1)/(n + 1) as with linearly interpolated sample quantiles (0.88 for n = 100). Where the protocol holds readings,
+``coverage_90`` is the share of them inside their 90 % band — how a fit is checked on a test it
+never saw. ADC counts are whole numbers, and so are their quantiles (the inverted empirical
+distribution): a band of counts holds at least its share of readings.
+
+The model current is smooth in time, so on long, high-rate tests it is evaluated on a grid
+log-spaced in time and interpolated in ln(1 + t) to every sample (relative error ≪ the noise);
+the noise and the reading are drawn at every sample.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..data.readouts import reading_of
+from ..data.sensors import load_sensor
+from .likelihood import SpecimenData
+from .posterior import LogPosterior, noise_parameters
+
+__all__ = ["PREDICT_QUANTILES", "READING_UNITS", "fit_folders", "predict", "reading_name"]
+
+PREDICT_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+"""The band's quantiles (q05 … q95)."""
+
+READING_UNITS = {
+    "current_A": "A",
+    "vo_V": "V",
+    "resistance_ohm": "ohm",
+    "vout_V": "V",
+    "adc_counts": "counts",
+}
+"""Reading column → its unit."""
+
+GRID_POINTS = 400
+"""Model evaluations per test on long tests (log-spaced in time, interpolated to the samples)."""
+
+CHUNK = 4000
+"""Samples per block when drawing the noise and the reading (bounds memory at draws × CHUNK)."""
+
+
+def fit_folders(fit_dir):
+    """Map specimen → folder of its ``posterior.nc`` under a fit's output folder.
+
+    Parameters
+    ----------
+    fit_dir : str or Path
+        A folder written by ``fsrbayes fit`` (one specimen, several, or ``--hierarchical``).
+
+    Returns
+    -------
+    dict
+    """
+    import xarray as xr
+
+    root = Path(fit_dir)
+    files = [root / "posterior.nc"] if (root / "posterior.nc").is_file() else []
+    files += sorted(root.glob("*/posterior.nc")) + sorted(root.glob("*/*/posterior.nc"))
+    out = {}
+    for path in files:
+        with xr.open_datatree(path, engine="h5netcdf") as tree:
+            out.setdefault(str(tree.attrs["specimen"]), path.parent)
+    return out
+
+
+def reading_name(test):
+    """Return the reading column a test is logged in (``current_A``: a current at a set voltage)."""
+    return "current_A" if test.readout is None else test.readout.reading
+
+
+def _posterior_of(folder, packed):
+    """Return the fit's LogPosterior rebuilt on ``packed`` and its stored draws, shape (S, ndim)."""
+    import xarray as xr
+
+    tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
+    attrs = tree.attrs
+    sensor = load_sensor(attrs["sensor"])
+    likelihood = attrs["likelihood"]
+    prior = sensor.prior_for(attrs["fsrbayes_model"], noise_parameters(likelihood))
+    posterior = LogPosterior(
+        packed,
+        prior,
+        json.loads(attrs["fixed_parameters"]),
+        model=attrs["fsrbayes_model"],
+        tunneling=attrs["tunneling"],
+        likelihood=likelihood,
+    )
+    draws = np.stack([tree.posterior[n].values.ravel() for n in posterior.names], axis=-1)
+    return posterior, draws, attrs
+
+
+def _model_times(time_s):
+    """Return where the model is evaluated: the samples, or a log-spaced grid on long tests."""
+    if time_s.size <= GRID_POINTS:
+        return time_s
+    positive = time_s[time_s > 0]
+    grid = np.geomspace(positive.min(), time_s.max(), GRID_POINTS - 1)
+    return np.unique(np.concatenate([[time_s.min()], grid, [time_s.max()]]))
+
+
+def _noise(rng, likelihood, params, time_s, before=None):
+    """Relative noise of the log-current in units of σ, (S, T): the likelihood's noise model.
+
+    For AR(1) noise ``before`` is (the last time, the last value) of the block before, so that
+    blocks of a long test continue one Ornstein–Uhlenbeck path.
+    """
+    n = (params["sigma_rel"].shape[0], time_s.size)
+    if likelihood == "student":
+        return rng.standard_t(params["nu"][:, None], size=n)
+    out = rng.standard_normal(n)
+    if likelihood == "ar1":
+        tau = params["noise_tau"][:, None]
+        if before is None:
+            times, previous = time_s, None
+        else:
+            times, previous = np.concatenate([[before[0]], time_s]), before[1]
+        dt = np.diff(times)[None, :]
+        rho, scale = np.exp(-dt / tau), np.sqrt(-np.expm1(-2.0 * dt / tau))
+        offset = 0 if previous is None else 1
+        for k in range(1 - offset, n[1]):
+            last = out[:, k - 1] if k > 0 else previous
+            out[:, k] = rho[:, k - 1 + offset] * last + scale[:, k - 1 + offset] * out[:, k]
+    return out
+
+
+def _predict_tests(folder, tests, n_draws, rng):
+    """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
+    times = [_model_times(t.time_s) for t in tests]
+    width = max(t.size for t in times)
+    grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
+    packed = SpecimenData(
+        tests[0].specimen,
+        tests[0].sensor,
+        np.array([t.voltage_V for t in tests]),
+        np.array([t.stress_Pa for t in tests]),
+        grid,
+        np.zeros_like(grid),
+        np.ones_like(grid, dtype=bool),
+        tuple(t.key for t in tests),
+        np.array([t.rm_ohm for t in tests]) if any(t.rm_ohm > 0 for t in tests) else None,
+    )
+    posterior, draws, attrs = _posterior_of(folder, packed)
+    if attrs["sensor"] != tests[0].sensor:
+        raise ValueError(
+            f"specimen {tests[0].specimen!r} was fitted as a {attrs['sensor']} sensor, the "
+            f"protocol says {tests[0].sensor}"
+        )
+    # n_draws replicate readings per sample: the stored draws, subsampled or resampled
+    replace = draws.shape[0] < n_draws
+    draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=replace))]
+    log_model = posterior.log_model_current(draws)
+    params = posterior.parameters(draws)
+    out = []
+    for i, test in enumerate(tests):
+        model_t = times[i]
+        log_i = log_model[:, i, : model_t.size]
+        if model_t.size != test.time_s.size or not np.array_equal(model_t, test.time_s):
+            x = np.log1p(model_t)
+            log_i = np.stack([np.interp(np.log1p(test.time_s), x, row) for row in log_i])
+        valid = np.all(np.isfinite(log_i), axis=1)
+        if not valid.any():
+            raise ValueError(
+                f"no posterior draw of specimen {test.specimen!r} gives a valid current for the "
+                f"protocol's test at {test.voltage_V:g} V, {test.stress_Pa:g} Pa (outside the "
+                "model's domain)"
+            )
+        kept = {k: v[valid] for k, v in params.items()}
+        bands = np.empty((len(PREDICT_QUANTILES), test.time_s.size))
+        before = None
+        discrete = test.readout is not None and test.readout.reading == "adc_counts"
+        method = "inverted_cdf" if discrete else "weibull"  # whole counts stay whole
+        for start in range(0, test.time_s.size, CHUNK):
+            part = slice(start, start + CHUNK)
+            z = _noise(rng, posterior.likelihood, kept, test.time_s[part], before)
+            before = (test.time_s[part][-1], z[:, -1])
+            current = np.exp(log_i[valid, part] + kept["sigma_rel"][:, None] * z)
+            bands[:, part] = np.quantile(
+                reading_of(test.readout, current), PREDICT_QUANTILES, axis=0, method=method
+            )
+        observed = _observed_reading(test)
+        present = np.isfinite(observed)
+        inside = (observed >= bands[0]) & (observed <= bands[-1])
+        out.append(
+            {
+                "specimen": test.specimen,
+                "test": test.test,
+                "voltage_V": test.voltage_V,
+                "stress_Pa": test.stress_Pa,
+                "readout": None if test.readout is None else test.readout.as_dict(),
+                "time_s": test.time_s,
+                **{
+                    f"q{round(100 * q):02d}": b
+                    for q, b in zip(PREDICT_QUANTILES, bands, strict=True)
+                },
+                "observed": observed if present.any() else None,
+                "n_readings": int(present.sum()),
+                "n_inside_90": int(inside[present].sum()),
+                "coverage_90": float(inside[present].mean()) if present.any() else None,
+                "draws": int(valid.sum()),
+                "invalid_draws": int((~valid).sum()),
+                "fit": str(folder),
+                "fit_converged": bool(int(attrs.get("converged", 0))),
+                "model": posterior.model,
+            }
+        )
+    return out
+
+
+def _observed_reading(test):
+    """Return the protocol's own readings in the reading's unit (NaN where none was logged)."""
+    with np.errstate(invalid="ignore"):
+        return reading_of(test.readout, test.current_A)
+
+
+def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
+    """Posterior predictive readings of every test of a protocol.
+
+    Parameters
+    ----------
+    fit_dir : str or Path
+        Output folder of ``fsrbayes fit`` holding the specimens the protocol names.
+    protocol : CreepData
+        The tests to predict (``read_csv(path, readings="optional")``: readings may be absent).
+    n_draws : int
+        Replicate readings per sample, each from its own posterior draw (the fit's stored draws,
+        subsampled, or resampled when it stored fewer).
+    seed : int
+
+    Returns
+    -------
+    dict
+        ``reading_unit``, ``reading``, ``tests`` (per test: ``specimen``, ``test``, ``time_s``,
+        ``q05``…``q95``, ``observed`` or None, ``coverage_90`` or None, …) and the overall
+        ``coverage_90`` (share of all present readings inside their 90 % band; None without
+        readings).
+
+    Raises
+    ------
+    ValueError
+        A specimen of the protocol has no fit in ``fit_dir``, was fitted as another sensor, or
+        the protocol mixes reading columns.
+    """
+    folders = fit_folders(fit_dir)
+    if not folders:
+        raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
+    missing = [s for s in protocol.specimens if s not in folders]
+    if missing:
+        raise ValueError(
+            f"specimen(s) {missing} of the protocol have no fit in {fit_dir}; it holds "
+            f"{sorted(folders)[:8]}"
+        )
+    readings = sorted({reading_name(t) for t in protocol})
+    if len(readings) != 1:
+        raise ValueError(
+            f"the protocol mixes reading columns {readings}; predict one kind at a time"
+        )
+    rng = np.random.default_rng(seed)
+    tests = []
+    for specimen in protocol.specimens:
+        part = protocol.select(specimen=specimen).tests
+        tests += _predict_tests(folders[specimen], part, int(n_draws), rng)
+    counts = [(t["n_inside_90"], t["n_readings"]) for t in tests]
+    total = sum(n for _, n in counts)
+    return {
+        "reading": readings[0],
+        "reading_unit": READING_UNITS[readings[0]],
+        "quantiles": list(PREDICT_QUANTILES),
+        "tests": tests,
+        "coverage_90": sum(k for k, _ in counts) / total if total else None,
+        "n_readings": total,
+    }

@@ -1,0 +1,170 @@
+"""fsrbayes predict: the posterior predictive reading of a protocol, checked against the bench.
+
+A fit whose posterior is a point mass at a simulated specimen's true parameters makes the
+predictive distribution the bench's own sampling distribution (the rig's circuit, its noise on
+the divider's output, its ADC), written by independent code (:mod:`fsrbayes.data.rigsim`): the
+90 % band must then hold 90 % of fresh readings, within their binomial error.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from fsrbayes.cli import main
+from fsrbayes.data import read_csv
+from fsrbayes.data.rigsim import simulate_rig, write_rig
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.predict import fit_folders, predict
+
+RIG = {"duration_s": 60.0, "rate_hz": 50.0, "weights_g": (150.0, 255.0)}
+
+
+def _point_mass_fit(folder, truth, specimen, sensor="fsr402", model="burgers", n_draws=100):
+    """Write a posterior.nc whose every draw is the specimen's true parameters."""
+    from arviz_base import from_dict
+
+    params = truth["specimens"][specimen]["params"]
+    params = {**params, "sigma_rel": truth["rig"]["noise_rel"]}
+    sim = load_sensor(sensor)
+    dummy = SpecimenData(
+        specimen, sensor, np.ones(1), np.ones(1), np.ones((1, 3)), np.zeros((1, 3)), np.ones((1, 3))
+    )
+    names = LogPosterior.for_sensor(dummy, sim, model=model).names
+    fixed = {k: float(v) for k, v in params.items() if k not in names}
+    tree = from_dict(
+        {"posterior": {n: np.full((2, n_draws // 2), float(params[n])) for n in names}}
+    )
+    tree.attrs.update(
+        {
+            "fsrbayes_model": model,
+            "tunneling": "smooth",
+            "likelihood": "gaussian",
+            "specimen": specimen,
+            "sensor": sensor,
+            "converged": 1,
+            "fixed_parameters": json.dumps(fixed),
+        }
+    )
+    folder.mkdir(parents=True, exist_ok=True)
+    tree.to_netcdf(folder / "posterior.nc", engine="h5netcdf")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory):
+    """A simulated divider log read as vout_V and as ADC counts, and a point-mass fit of it."""
+    root = tmp_path_factory.mktemp("predict")
+    out = {}
+    for reading in ("vout_V", "adc_counts"):
+        text, truth = simulate_rig(1, reading=reading, seed=11, **RIG)
+        out[reading] = write_rig(text, truth, root / f"{reading}.csv")[0]
+    out["truth"] = truth
+    out["fit"] = _point_mass_fit(root / "fit", truth, "fsr402-01")
+    return out
+
+
+@pytest.mark.parametrize("reading", ["vout_V", "adc_counts"])
+def test_the_band_of_a_true_posterior_holds_90_percent_of_fresh_readings(rig, reading):
+    protocol = read_csv(rig[reading], readings="optional")
+    result = predict(rig["fit"], protocol, n_draws=400, seed=1)
+    assert result["reading"] == reading
+    assert result["reading_unit"] == {"vout_V": "V", "adc_counts": "counts"}[reading]
+    n = result["n_readings"]
+    assert n == sum(t.time_s.size for t in protocol)
+    sd = np.sqrt(0.9 * 0.1 / n)
+    if reading == "vout_V":
+        # continuous readings: the band's coverage is 0.90 within the binomial error (and the
+        # Monte-Carlo error of the quantiles of 400 replicates, which adds no bias)
+        assert abs(result["coverage_90"] - 0.9) < 4.5 * sd
+    else:
+        # ADC counts are whole numbers: an interval between two count quantiles holds at least
+        # 90 % of readings, and the 2-3 steps across the noise keep it well short of all of them
+        assert 0.9 - 4.5 * sd < result["coverage_90"] < 0.995
+        for test in result["tests"]:
+            assert np.all(np.asarray(test["q50"]) == np.round(test["q50"]))
+    for test in result["tests"]:
+        q = np.array([test[k] for k in ("q05", "q25", "q50", "q75", "q95")])
+        assert np.all(np.diff(q, axis=0) >= 0)
+        assert test["invalid_draws"] == 0 and test["fit_converged"]
+
+
+def test_a_wrong_model_is_caught_by_the_coverage_of_a_test_it_never_saw(rig, tmp_path):
+    # the same specimen predicted with a 20 % larger elastic compliance: the band misses
+    truth = json.loads(json.dumps(rig["truth"]))
+    params = truth["specimens"]["fsr402-01"]["params"]
+    params["k1"] = params["k1"] / 1.2
+    wrong = _point_mass_fit(tmp_path / "wrong", truth, "fsr402-01")
+    result = predict(wrong, read_csv(rig["vout_V"], readings="optional"), n_draws=200)
+    assert result["coverage_90"] < 0.5
+
+
+def test_a_protocol_without_readings_is_predicted_and_written(rig, tmp_path):
+    rows = rig["vout_V"].read_text().splitlines()
+    header = rows[0].split(",")
+    keep = [i for i, name in enumerate(header) if name != "vout_V"]
+    protocol = tmp_path / "protocol.csv"
+    protocol.write_text("\n".join(",".join(r.split(",")[i] for i in keep) for r in rows) + "\n")
+    out, plot = tmp_path / "prediction.json", tmp_path / "prediction.png"
+    assert (
+        main(["predict", str(rig["fit"]), str(protocol), "--json", str(out), "--plot", str(plot)])
+        == 0
+    )
+    result = json.loads(out.read_text())
+    assert result["coverage_90"] is None and result["reading"] == "vout_V"
+    assert set(result) >= {"reading_unit", "tests", "coverage_90"}
+    for test in result["tests"]:
+        assert test["observed"] is None and test["coverage_90"] is None
+        assert len(test["time_s"]) == len(test["q05"]) == len(test["q95"])
+        assert set(test) >= {"specimen", "test", "time_s", "q05", "q25", "q50", "q75", "q95"}
+    assert plot.stat().st_size > 10_000
+
+
+def test_empty_reading_fields_are_predicted_but_not_scored(rig, tmp_path):
+    rows = rig["vout_V"].read_text().splitlines()
+    # blank the reading of every second loaded row
+    blanked = [rows[0]] + [
+        r.rsplit(",", 1)[0] + "," if k % 2 and not r.split(",")[4] == "0" else r
+        for k, r in enumerate(rows[1:])
+    ]
+    path = tmp_path / "half.csv"
+    path.write_text("\n".join(blanked) + "\n")
+    full = predict(rig["fit"], read_csv(rig["vout_V"], readings="optional"), n_draws=100)
+    half = predict(rig["fit"], read_csv(path, readings="optional"), n_draws=100)
+    assert 0.4 < half["n_readings"] / full["n_readings"] < 0.6
+    assert len(half["tests"][0]["time_s"]) == len(full["tests"][0]["time_s"])
+    assert half["tests"][0]["observed"][1] != half["tests"][0]["observed"][1]  # NaN, not scored
+
+
+def test_fit_folders_finds_every_specimen_of_a_multi_specimen_fit(rig, tmp_path):
+    for name in ("fsr402-01", "fsr402-02"):
+        _point_mass_fit(
+            tmp_path / "fits" / name,
+            rig["truth"] | {"specimens": {name: rig["truth"]["specimens"]["fsr402-01"]}},
+            name,
+        )
+    assert sorted(fit_folders(tmp_path / "fits")) == ["fsr402-01", "fsr402-02"]
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda text: text.replace("fsr402-01", "fsr402-07"), "have no fit in"),
+        (lambda text: text.replace(",fsr402,", ",a201,"), "was fitted as a fsr402 sensor"),
+    ],
+)
+def test_predict_refuses_protocols_the_fit_cannot_answer(rig, tmp_path, capsys, edit, message):
+    protocol = tmp_path / "protocol.csv"
+    protocol.write_text(edit(rig["vout_V"].read_text()))
+    out = tmp_path / "never.json"
+    assert main(["predict", str(rig["fit"]), str(protocol), "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_predict_needs_a_fit(tmp_path, rig, capsys):
+    assert main(["predict", str(tmp_path), str(rig["vout_V"])]) == 2
+    assert "holds no posterior.nc" in capsys.readouterr().err
