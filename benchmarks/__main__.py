@@ -1,5 +1,5 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[likelihood] [fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
+[predict] [likelihood] [fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
 
 Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
 install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds), ``evidence``,
@@ -24,6 +24,7 @@ from benchmarks import (  # noqa: E402
     fit,
     hierarchical,
     likelihood,
+    predict,
     rig_read,
     solver,
 )  # noqa: E402
@@ -33,6 +34,7 @@ BENCHMARKS = {
     "solver": lambda: solver.report(solver.run(dict(load_sensor("a201").params))),
     "csv": lambda: csv_read.report(csv_read.run()),
     "rig-read": lambda: rig_read.report(rig_read.run()),
+    "predict": lambda: predict.report(predict.run()),
     "likelihood": lambda: likelihood.report(likelihood.run()),
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
     "evidence": lambda: evidence.report(evidence.run()),
