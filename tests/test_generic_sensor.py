@@ -12,7 +12,7 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.physics.sensor import resistances
+from fsrbayes.physics.circuits import resistances
 
 
 @pytest.mark.parametrize("template", ["fsr402", "a201"])

@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from fsrbayes.data import synthetic
-from fsrbayes.data.csvio import write_csv
+from fsrbayes.data.csvwrite import write_csv
 
 
 def fsrbayes(*args, timeout=600):

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 import fsrbayes
-from fsrbayes.physics import loading, peers
+from fsrbayes.physics import circuits, loading, peers
 from fsrbayes.physics import sensor as fsr
+from fsrbayes.physics.circuits import resistances, voltage_divider
 from fsrbayes.physics.constants import KAPPA
 from fsrbayes.physics.models import model_parameters, parse_model
-from fsrbayes.physics.sensor import resistances, voltage_divider
 
 
 def test_public_api_is_the_design_contract(a201):
@@ -53,15 +53,15 @@ def test_offset_stress_lowers_the_contact_resistance(a201):
 
 def test_amplifier_readout_round_trip():
     current = np.array([1e-6, 3e-5])
-    vo = fsr.amplifier_output(current, 1e4)
+    vo = circuits.amplifier_output(current, 1e4)
     np.testing.assert_allclose(vo, [-1e-2, -0.3])
-    np.testing.assert_allclose(fsr.current_from_amplifier(vo, 1e4), current)
-    np.testing.assert_allclose(fsr.resistance_from_amplifier(2.0, vo, 1e4), 2.0 / current)
+    np.testing.assert_allclose(circuits.current_from_amplifier(vo, 1e4), current)
+    np.testing.assert_allclose(circuits.resistance_from_amplifier(2.0, vo, 1e4), 2.0 / current)
 
 
 def test_voltage_divider_kirchhoff_and_limits(a201):
     supply, load = 5.0, np.array([0.0, 1e3, 1e4, 1e5])
-    result = fsr.voltage_divider(a201, supply, load, 1e5)
+    result = circuits.voltage_divider(a201, supply, load, 1e5)
     np.testing.assert_allclose(result.v_fsr + result.current * load, supply, rtol=1e-12)
     assert result.v_fsr[0] == supply
     assert np.all(np.diff(result.v_fsr) < 0)
@@ -69,12 +69,12 @@ def test_voltage_divider_kirchhoff_and_limits(a201):
     alone = fsrbayes.current(a201, result.v_fsr, 1e5, 0.0)
     np.testing.assert_allclose(alone, result.current, rtol=1e-9)
     # V_FSR swings with the stress: the paper's warning about 5 V dividers.
-    swing = fsr.voltage_divider(a201, supply, 1e4, np.array([1e4, 3e5])).v_fsr
+    swing = circuits.voltage_divider(a201, supply, 1e4, np.array([1e4, 3e5])).v_fsr
     assert swing[0] - swing[1] > 0.5
 
 
 def test_resistances_of_figure8(a201):
-    r = fsr.resistances(a201, np.array([0.01, 0.5, 5.0]), 5e4)
+    r = circuits.resistances(a201, np.array([0.01, 0.5, 5.0]), 5e4)
     np.testing.assert_allclose(r["R_fsr"], r["R_bulk"] + 2 * r["Rc"], rtol=1e-9)
     assert r["R_bulk"][0] > 100 * r["Rc"][0]  # millivolts: the bulk dominates
     assert r["R_bulk"][2] < 3 * r["Rc"][2]  # volts: comparable to the contact resistance

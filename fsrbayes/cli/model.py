@@ -246,7 +246,7 @@ def cmd_simulate(args):
 
 
 def cmd_simulate_rig(args):
-    """Simulate a divider rig's log (dead weights from rest, high rate), with known truth."""
+    """Simulate a divider rig's log (dead weights from rest or a staircase), with known truth."""
     from ..data.rigsim import simulate_rig, write_rig
 
     out = Path(args.output)
@@ -262,6 +262,8 @@ def cmd_simulate_rig(args):
             time_unit=args.time_unit,
             seed=args.seed,
             effects=args.effect or (),
+            protocol=args.protocol,
+            rest_s=args.rest,
             sensor=args.sensor,
             weights_g=tuple(floats(args.weights_g, "weights-g")),
             supply_V=args.supply_v,

@@ -8,7 +8,8 @@
 """
 
 from .creep import CreepData, CreepTest, DataError, observed_drift
-from .csvio import read_csv, write_csv
+from .csvio import read_csv
+from .csvwrite import write_csv
 from .distributions import Distribution, make_distribution
 from .sensors import Sensor, available_sensors, load_sensor, models_directory
 

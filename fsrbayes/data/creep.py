@@ -66,6 +66,11 @@ class CreepTest:
         How the test was logged (None: a current or amplifier reading at ``voltage_V``).
     onset_s : float
         The logger's time at which the load landed (t = 0 of ``time_s``).
+    load_steps : tuple of ndarray or None
+        (times in s since the onset, signed sizes in Pa) of the load's steps when it changes
+        within the test (a staircase, an unloading and reloading); the first is (0,
+        ``stress_Pa``). None: one step of ``stress_Pa`` held throughout. Samples at zero load
+        are not in ``time_s``; the creep goes on through them.
     """
 
     specimen: str
@@ -80,6 +85,15 @@ class CreepTest:
     quantum_A: float = 0.0
     readout: object = field(default=None, compare=False)
     onset_s: float = field(default=0.0, compare=False)
+    load_steps: tuple = field(default=None, compare=False, repr=False)
+
+    def load_at(self, time_s):
+        """Return the load in Pa at times since the onset (``stress_Pa`` without steps)."""
+        time_s = np.asarray(time_s, dtype=float)
+        if self.load_steps is None:
+            return np.where(time_s >= 0, self.stress_Pa, 0.0)
+        at, size = self.load_steps
+        return np.sum(size * (time_s[..., None] >= at), axis=-1)
 
     @property
     def key(self):
@@ -194,4 +208,12 @@ class CreepData:
             )
             rigs = sorted({_describe(t.readout) for t in sub if t.readout is not None}, key=str)
             lines += [f"    read by {rig}" for rig in rigs]
+            for t in sub:
+                if t.load_steps is not None:
+                    loads = np.cumsum(t.load_steps[1])
+                    lines.append(
+                        f"    test {t.test or t.key}: the load changes {len(loads) - 1} times — "
+                        f"{' → '.join(f'{v / 1e3:.4g}' for v in loads)} kPa at "
+                        f"{', '.join(f'{a:g}' for a in t.load_steps[0])} s"
+                    )
         return "\n".join(lines)

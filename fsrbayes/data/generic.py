@@ -20,7 +20,7 @@ import tomllib
 
 import numpy as np
 
-from ..physics.sensor import resistances
+from ..physics.circuits import resistances
 from .sensors import load_sensor
 
 __all__ = ["SCALED", "new_sensor_toml"]

@@ -28,6 +28,8 @@ RESISTANCE_PLAUSIBLE_MIN_OHM = 50.0
 RM_PLAUSIBLE_MIN_OHM = 10.0
 """A divider's fixed resistor below 10 Ω is taken for kΩ written as Ω."""
 SUPPLY_PLAUSIBLE_MAX_V = 100.0
+MAX_LOAD_STEPS = 64
+"""Load steps a test may hold (its first loading included)."""
 
 
 def is_rig_file(names):
@@ -198,15 +200,16 @@ def rig_tests(
                 int(lines[0]),
             )
         first = int(np.argmax(loaded))
-        if not loaded[first:].all():
-            j = first + int(np.argmax(~loaded[first:]))
+        load = stress[idx[first]]
+        changes = first + 1 + np.flatnonzero(np.diff(stress[idx[first:]]) != 0)
+        if changes.size >= MAX_LOAD_STEPS:
             raise DataError(
-                f"{what} is unloaded again at {t[j]:g} s; load histories within a test (unloading, "
-                "staircases) are not read yet: split the test where the load changes",
+                f"{what} changes its load {changes.size} times; at most {MAX_LOAD_STEPS - 1} "
+                "changes are read (staircases, unloading, reloading): smooth ramps sampled row by "
+                "row are not",
                 path,
-                int(lines[j]),
+                int(lines[changes[MAX_LOAD_STEPS - 1]]),
             )
-        load = _constant(stress, idx[first:], "the load", what, path, line_no)
         if onset is not None:
             t_on = _constant(onset, idx, "onset_s", what, path, line_no)
             if t_on > t[first] or (first > 0 and t_on < t[first - 1]):
@@ -219,7 +222,15 @@ def rig_tests(
                 )
         else:
             t_on = float(t[first])
-        keep = idx[first:]
+        keep = idx[first:][loaded[first:]]  # unloaded rows after the onset carry no reading
+        steps = None
+        if changes.size:
+            step_rows = np.concatenate([[first], changes])
+            levels = stress[idx[step_rows]]
+            steps = (
+                np.concatenate([[0.0], t[changes] - t_on]),
+                np.diff(np.concatenate([[0.0], levels])),
+            )
         if keep.size < 3:
             raise DataError(
                 f"{what} has {keep.size} loaded sample(s); a creep test needs at least 3",
@@ -245,6 +256,7 @@ def rig_tests(
                 readout.quantum_A,
                 readout,
                 t_on,
+                steps,
             )
         )
     return tuple(tests)

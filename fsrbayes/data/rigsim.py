@@ -50,9 +50,16 @@ def simulate_rig(
     force_unit="g",
     seed=0,
     effects=(),
+    protocol="from-rest",
+    rest_s=0.0,
     **rig,
 ):
     """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
+
+    ``protocol="from-rest"`` logs one test per weight, each from rest; ``"staircase"`` logs one
+    test per specimen with the weights put on one after another, each held ``duration_s`` —
+    without unloading (``rest_s`` 0), or unloaded for ``rest_s`` seconds between weights
+    (load–unload–reload; the open divider reads a few counts meanwhile).
 
     Parameters
     ----------
@@ -78,6 +85,10 @@ def simulate_rig(
     """
     if reading not in READINGS:
         raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
+    if protocol not in ("from-rest", "staircase"):
+        raise ValueError(f"protocol must be 'from-rest' or 'staircase', got {protocol!r}")
+    if rest_s < 0 or (rest_s and protocol != "staircase"):
+        raise ValueError(f"rest_s must be >= 0 and is for a staircase, got {rest_s!r}")
     scale = {"s": 1.0, "min": 60.0, "ms": 1e-3}
     if time_unit not in scale:
         raise ValueError(f"time_unit must be one of {sorted(scale)}, got {time_unit!r}")
@@ -92,9 +103,17 @@ def simulate_rig(
     names = tuple(effect_params)
     supply, rm = setup["supply_V"], setup["rm_ohm"]
     step = 1.0 / setup["rate_hz"]
-    logger_t = np.arange(0.0, setup["pre_s"] + setup["duration_s"], step)
+    weights = list(setup["weights_g"])
+    held = setup["duration_s"]
+    if protocol == "staircase":  # one test: the weights in turn, with rests between
+        span = len(weights) * held + (len(weights) - 1) * rest_s
+        logger_t = np.arange(0.0, setup["pre_s"] + span, step)
+        starts = np.arange(len(weights)) * (held + rest_s)
+        tests = [("staircase", weights, starts)]
+    else:
+        logger_t = np.arange(0.0, setup["pre_s"] + held, step)
+        tests = [(f"w{j + 1}", [g], np.zeros(1)) for j, g in enumerate(weights)]
     onset = setup["pre_s"] + step * rng.uniform(0.1, 0.9)  # between two samples
-    loaded = logger_t >= onset
     top = 2 ** setup["adc_bits"] - 1
     lsb = setup["adc_vref_V"] / 2 ** setup["adc_bits"]
     time_col = {"s": "time_s", "min": "time_min", "ms": "time_ms"}[time_unit]
@@ -109,6 +128,8 @@ def simulate_rig(
         "reading": reading,
         "time_unit": time_unit,
         "onset_s": float(onset),
+        "protocol": protocol,
+        "rest_s": float(rest_s),
         "effects": effect_params,
         "specimens": {},
         "seed": seed,
@@ -120,18 +141,37 @@ def simulate_rig(
             **{p: v for values in effect_params.values() for p, v in values.items()},
         }
         truth["specimens"][name] = {"params": params}
-        for j, grams in enumerate(setup["weights_g"]):
-            stress = grams * STANDARD_GRAVITY / 1000.0 / sensor.area_m2
-            t = logger_t[loaded] - onset
+        for label, grams, starts in tests:
+            since = logger_t - onset
+            # the weight on the rig at each logger time (rows at a step's time see the new one)
+            index = np.searchsorted(starts, since, side="right") - 1
+            on = (index >= 0) & (since - starts[np.maximum(index, 0)] < held)
+            mass = np.where(on, np.asarray(grams)[np.maximum(index, 0)], 0.0)
+            levels = np.concatenate([[0.0], np.asarray(grams, float)])
+            step_at, step_g = [], []
+            for k, g in enumerate(grams):
+                step_at.append(starts[k])
+                step_g.append(g - levels[k] if k == 0 or rest_s == 0 else g)
+                if rest_s and k < len(grams) - 1:
+                    step_at.append(starts[k] + held)
+                    step_g.append(-g)
+            area = sensor.area_m2
+            load = np.array(step_g) * STANDARD_GRAVITY / 1000.0 / area
             current = solve_current(
-                params, supply, stress, t, effects=names, extra_series=rm
-            ).current
-            vout = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(t.size))
-            open_reading = np.abs(rng.normal(0.0, 1.5, (~loaded).sum())) * lsb
-            vout = np.concatenate([open_reading, vout])
-            force = np.where(loaded, grams * force_scale, 0.0)
-            column = _reading(reading, vout, supply, rm, lsb, top, loaded)
-            prefix = f"{name},{sensor.name},w{j + 1}"
+                params,
+                supply,
+                None,
+                np.maximum(since[on], 0.0)[None],
+                effects=names,
+                extra_series=rm,
+                load_steps=(np.array(step_at)[None], load[None]),
+            ).current[0]
+            vout = np.empty(since.size)
+            vout[on] = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(on.sum()))
+            vout[~on] = np.abs(rng.normal(0.0, 1.5, (~on).sum())) * lsb  # the open divider
+            force = mass * force_scale
+            column = _reading(reading, vout, supply, rm, lsb, top, on)
+            prefix = f"{name},{sensor.name},{label}"
             extra = (
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
             )

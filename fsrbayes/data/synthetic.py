@@ -32,7 +32,8 @@ from ..physics.parameters import population_scatter
 from ..physics.sensor import current as model_current
 from ..utils import atomic_path
 from .creep import CreepData, CreepTest
-from .csvio import read_csv, write_csv
+from .csvio import read_csv
+from .csvwrite import write_csv
 from .sensors import load_sensor
 
 __all__ = [

@@ -43,6 +43,7 @@ __all__ = [
     "SpecimenData",
     "ar1_innovations",
     "bin_log_time",
+    "load_step_arrays",
     "log_likelihood_pointwise",
     "ou_coefficients",
 ]
@@ -105,16 +106,45 @@ def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
     return tuple(np.concatenate(parts) for parts in zip(*out, strict=True))
 
 
+def load_step_arrays(tests):
+    """Return (step_time, step_size), each (C, K), of tests whose load changes; None if none does.
+
+    A test holding one load is the single step (0, ``stress_Pa``); padding steps have size 0.
+    """
+    if all(t.load_steps is None for t in tests):
+        return None
+    histories = [t.load_steps or (np.zeros(1), np.array([t.stress_Pa])) for t in tests]
+    n_steps = max(h[0].size for h in histories)
+    step_time, step_size = np.zeros((len(tests), n_steps)), np.zeros((len(tests), n_steps))
+    for i, (at, size) in enumerate(histories):
+        step_time[i, : at.size], step_size[i, : size.size] = at, size
+    return step_time, step_size
+
+
+def _bin_segments(test, y, bins_per_decade):
+    """Log-spaced bins of each constant-load segment of a test, in time since its load step."""
+    if test.load_steps is None:
+        return bin_log_time(test.time_s, y, bins_per_decade)
+    edges = np.append(test.load_steps[0], np.inf)
+    parts = []
+    for start, end in zip(edges[:-1], edges[1:], strict=True):
+        inside = (test.time_s >= start) & (test.time_s < end)
+        if inside.any():
+            time, *rest = bin_log_time(test.time_s[inside] - start, y[inside], bins_per_decade)
+            parts.append((time + start, *rest))
+    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
+
+
 def _pack_rig(cls, tests, max_samples, bins_per_decade):
-    """Pack tests with circuits, quantised readings or many samples (see ``from_tests``)."""
+    """Pack tests with circuits, quantised readings, load steps or many samples (``from_tests``)."""
     columns = []
     for t in tests:
         y = np.log(t.current_A)
         if t.time_s.size > max_samples:
-            time, mean, count, scatter = bin_log_time(t.time_s, y, bins_per_decade)
+            time, mean, count, scatter = _bin_segments(t, y, bins_per_decade)
         else:
             time, mean, count, scatter = t.time_s, y, np.ones(y.size), np.zeros(y.size)
-        quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(y.size)
+        quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(mean.size)
         columns.append((time, mean, count, scatter, np.broadcast_to(quant, mean.shape)))
     width = max(c[0].size for c in columns)
     arrays = [np.empty((len(tests), width)) for _ in range(5)]
@@ -127,6 +157,7 @@ def _pack_rig(cls, tests, max_samples, bins_per_decade):
             array[i, n:] = values[-1] if fill is None else fill
         mask[i, :n] = True
     time, logc, weight, scatter, quant = arrays
+    steps = load_step_arrays(tests)
     return cls(
         tests[0].specimen,
         tests[0].sensor,
@@ -140,6 +171,7 @@ def _pack_rig(cls, tests, max_samples, bins_per_decade):
         weight,
         scatter,
         quant,
+        *(steps or (None, None)),
     )
 
 
@@ -171,6 +203,10 @@ class SpecimenData:
     quant_var : ndarray, shape (C, T), optional
         Variance a reading's quantisation adds to the log-current, (q/I)²/12 for a step q
         (an ADC's least significant bit). None: 0.
+    step_time, step_size : ndarray, shape (C, K), optional
+        Time (s) and signed size (Pa) of each test's load steps when the load changes within a
+        test (padding: size 0); ``stress_Pa`` is then the first load. None: one step of
+        ``stress_Pa`` at t = 0.
     """
 
     specimen: str
@@ -185,6 +221,8 @@ class SpecimenData:
     weight: np.ndarray = None
     scatter: np.ndarray = None
     quant_var: np.ndarray = None
+    step_time: np.ndarray = None
+    step_size: np.ndarray = None
 
     @classmethod
     def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
@@ -200,7 +238,13 @@ class SpecimenData:
         specimens = {t.specimen for t in tests}
         if len(specimens) != 1:
             raise ValueError(f"SpecimenData holds one specimen, got {sorted(specimens)}")
-        rig = any(t.rm_ohm > 0 or t.quantum_A > 0 or t.time_s.size > max_samples for t in tests)
+        rig = any(
+            t.rm_ohm > 0
+            or t.quantum_A > 0
+            or t.time_s.size > max_samples
+            or t.load_steps is not None
+            for t in tests
+        )
         if rig:
             return _pack_rig(cls, tests, max_samples, bins_per_decade)
         width = max(t.time_s.size for t in tests)
@@ -271,7 +315,15 @@ class SpecimenData:
             and self.weight is None
             and self.scatter is None
             and self.quant_var is None
+            and self.step_time is None
         )
+
+    def load_steps(self):
+        """Return (step_time, step_size) for :func:`~fsrbayes.physics.sensor.solve_current`.
+
+        None when every test holds one load.
+        """
+        return None if self.step_time is None else (self.step_time, self.step_size)
 
     def series(self):
         """Series resistance of each test's circuit, shape (C,) (zeros at constant voltage)."""
@@ -296,7 +348,14 @@ class SpecimenData:
         digest = hashlib.sha256()
         for array in (self.voltage_V, self.stress_Pa, self.time_s, self.log_current, self.mask):
             digest.update(np.ascontiguousarray(array).tobytes())
-        for array in (self.extra_series, self.weight, self.scatter, self.quant_var):
+        for array in (
+            self.extra_series,
+            self.weight,
+            self.scatter,
+            self.quant_var,
+            self.step_time,
+            self.step_size,
+        ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(repr(self.test_keys).encode())

@@ -17,6 +17,7 @@ from ..utils import atomic_path, json_ready, write_json_atomic
 from .samplers import even_index
 
 __all__ = [
+    "segment_drifts",
     "to_datatree",
     "summary",
     "save_fit",
@@ -144,13 +145,15 @@ def summary(result, tree):
     data = posterior.data
     drift = tree.posterior_predictive["drift_3600"].values
     observed = tree.constant_data["observed_drift_3600"].values
+    segments = segment_drifts(posterior, result.draws(400).reshape(-1, posterior.ndim))
     tests = [
         {
             "specimen": data.specimen,
             "voltage_V": float(data.voltage_V[i]),
             "stress_Pa": float(data.stress_Pa[i]),
-            "drift_3600": _q(drift[..., i].ravel()),
-            "observed_drift_3600": _finite(observed[i]),
+            "drift_3600": None if segments[i] else _q(drift[..., i].ravel()),
+            "observed_drift_3600": None if segments[i] else _finite(observed[i]),
+            **({"segments": segments[i]} if segments[i] else {}),
         }
         for i in range(data.n_tests)
     ]
@@ -181,6 +184,59 @@ def summary(result, tree):
         "sampler": getattr(result, "sampler", "ensemble"),
         "log_evidence": _evidence(result),
     }
+
+
+def segment_drifts(posterior, draws):
+    """Drift over each constant-load segment of the tests whose load changes.
+
+    For a staircase or a load–unload–reload test a single drift(3600 s) means nothing; per
+    loaded segment — from its load step to its last sample — the model's drift 100·(I(end) −
+    I(start))/I(start) (eq. 22 within the segment; median and 5–95 % over ``draws``) and the
+    observed one from the segment's first and last points.
+
+    Returns
+    -------
+    list
+        Per test: a list of segment dicts (``start_s``, ``end_s``, ``load_Pa``, ``drift``,
+        ``observed_drift``), or None for a test holding one load.
+    """
+    data = posterior.data
+    if data.step_time is None:
+        return [None] * data.n_tests
+    rows, times = [], np.zeros((data.n_tests, 2 * data.step_time.shape[1]))
+    for i in range(data.n_tests):
+        at, size = data.step_time[i], data.step_size[i]
+        t, y = data.time_s[i][data.mask[i]], data.log_current[i][data.mask[i]]
+        loads = np.cumsum(size)
+        ends = np.append(at[1:], np.inf)
+        found = []
+        for k in np.flatnonzero((size != 0) & (loads > 0)):
+            inside = (t >= at[k]) & (t < ends[k])
+            if inside.sum() >= 2:
+                first, last = np.flatnonzero(inside)[[0, -1]]
+                found.append((k, at[k], t[last], loads[k], 100.0 * np.expm1(y[last] - y[first])))
+        rows.append(found if (size != 0).sum() > 1 else None)
+        for j, (_, start, end, _, _) in enumerate(found):
+            times[i, 2 * j : 2 * j + 2] = (start, end)
+    log_i = posterior.log_model_current(draws, times)
+    out = []
+    for i, found in enumerate(rows):
+        if found is None:
+            out.append(None)
+            continue
+        out.append(
+            [
+                {
+                    "start_s": float(start),
+                    "end_s": float(end),
+                    "load_Pa": float(load),
+                    "drift": _q(100.0 * np.expm1(log_i[:, i, 2 * j + 1] - log_i[:, i, 2 * j])),
+                    "observed_drift": _finite(seen),
+                }
+                for j, (_, start, end, load, seen) in enumerate(found)
+            ]
+        )
+    return out
 
 
 def _evidence(result):

@@ -186,6 +186,7 @@ class LogPosterior(PriorScaledTarget):
             tunneling=self.tunneling,
             effects=self.effect_objects,
             extra_series=0.0 if self.data.extra_series is None else self.data.series()[:, None],
+            load_steps=self.data.load_steps(),
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
-from .likelihood import SpecimenData
+from .likelihood import SpecimenData, load_step_arrays
 from .posterior import LogPosterior, noise_parameters
 
 __all__ = [
@@ -116,13 +116,53 @@ def _posterior_of(folder, packed):
     return posterior, draws, attrs
 
 
-def _model_times(time_s):
-    """Return where the model is evaluated: the samples, or a log-spaced grid on long tests."""
+def _segments(test):
+    """Return the start times of a test's constant-load segments (one at 0 without steps)."""
+    return np.zeros(1) if test.load_steps is None else np.asarray(test.load_steps[0])
+
+
+def _model_times(test):
+    """Return where the model is evaluated: the samples, or log-spaced grids on long tests.
+
+    A grid per constant-load segment, log-spaced in time since its load step, ending at the
+    segment's last sample, so that interpolation never crosses a step.
+    """
+    time_s = test.time_s
     if time_s.size <= GRID_POINTS:
         return time_s
-    positive = time_s[time_s > 0]
-    grid = np.geomspace(positive.min(), time_s.max(), GRID_POINTS - 1)
-    return np.unique(np.concatenate([[time_s.min()], grid, [time_s.max()]]))
+    starts = _segments(test)
+    ends = np.append(starts[1:], np.inf)
+    per = max(8, GRID_POINTS // starts.size)
+    grids = []
+    for start, end in zip(starts, ends, strict=True):
+        inside = time_s[(time_s >= start) & (time_s < end)]
+        if inside.size == 0:
+            continue
+        since = inside - start
+        positive = since[since > 0]
+        grid = [since[:1], since[-1:]]
+        if positive.size:
+            grid.append(np.geomspace(positive.min(), since.max(), per))
+        grids.append(start + np.unique(np.concatenate(grid)))
+    return np.concatenate(grids)
+
+
+def _interpolate(test, model_t, log_i):
+    """Interpolate log I (S, G) from the model times to the test's samples, segment by segment."""
+    if model_t.size == test.time_s.size and np.array_equal(model_t, test.time_s):
+        return log_i
+    starts = _segments(test)
+    segment_of = np.searchsorted(starts, test.time_s, side="right") - 1
+    grid_segment = np.searchsorted(starts, model_t, side="right") - 1
+    out = np.empty((log_i.shape[0], test.time_s.size))
+    for k, start in enumerate(starts):
+        here, grid = segment_of == k, grid_segment == k
+        if not here.any():
+            continue
+        x, xs = np.log1p(model_t[grid] - start), np.log1p(test.time_s[here] - start)
+        for row in range(log_i.shape[0]):
+            out[row, here] = np.interp(xs, x, log_i[row, grid])
+    return out
 
 
 def _noise(rng, likelihood, params, time_s, before=None):
@@ -152,7 +192,7 @@ def _noise(rng, likelihood, params, time_s, before=None):
 
 def _predict_tests(folder, tests, n_draws, rng):
     """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
-    times = [_model_times(t.time_s) for t in tests]
+    times = [_model_times(t) for t in tests]
     width = max(t.size for t in times)
     grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
     packed = SpecimenData(
@@ -165,6 +205,10 @@ def _predict_tests(folder, tests, n_draws, rng):
         np.ones_like(grid, dtype=bool),
         tuple(t.key for t in tests),
         np.array([t.rm_ohm for t in tests]) if any(t.rm_ohm > 0 for t in tests) else None,
+        None,
+        None,
+        None,
+        *(load_step_arrays(tests) or (None, None)),
     )
     posterior, draws, attrs = _posterior_of(folder, packed)
     if attrs["sensor"] != tests[0].sensor:
@@ -179,11 +223,7 @@ def _predict_tests(folder, tests, n_draws, rng):
     params = posterior.parameters(draws)
     out = []
     for i, test in enumerate(tests):
-        model_t = times[i]
-        log_i = log_model[:, i, : model_t.size]
-        if model_t.size != test.time_s.size or not np.array_equal(model_t, test.time_s):
-            x = np.log1p(model_t)
-            log_i = np.stack([np.interp(np.log1p(test.time_s), x, row) for row in log_i])
+        log_i = _interpolate(test, times[i], log_model[:, i, : times[i].size])
         valid = np.all(np.isfinite(log_i), axis=1)
         if not valid.any():
             raise ValueError(

@@ -6,29 +6,43 @@ solver also has a numba-compiled point-by-point engine (:mod:`.compiled`, the de
 :func:`~.solver.solve_bulk`), tested against the numpy one.
 """
 
-from . import compiled, constants, contact, effects, loading, peers, rheology, solver, tunneling
+from . import (
+    circuits,
+    compiled,
+    constants,
+    contact,
+    effects,
+    loading,
+    peers,
+    rheology,
+    solver,
+    tunneling,
+)
+from .circuits import (
+    DividerResult,
+    amplifier_output,
+    current_from_amplifier,
+    resistance_from_amplifier,
+    resistances,
+    voltage_divider,
+)
 from .contact import contact_resistance, effective_area, gap, stress_from_force
 from .loading import StressHistory
 from .rheology import creep_compliance, creep_strain, strain_history
 from .sensor import (
-    DividerResult,
     DomainError,
     DomainWarning,
-    amplifier_output,
     current,
-    current_from_amplifier,
     current_history,
     drift,
-    resistance_from_amplifier,
-    resistances,
     sensor_state,
     solve_current,
-    voltage_divider,
 )
 from .solver import BulkSolution, solve_bulk
 from .tunneling import paper_peak_voltage, tunneling_current
 
 __all__ = [
+    "circuits",
     "compiled",
     "constants",
     "contact",

@@ -50,7 +50,7 @@ class PeerModel:
         :class:`~fsrbayes.physics.solver.BulkSolution`.
     contact_alpha : float
         Exponent of its contact resistance Rc0·σ^−alpha (for
-        :func:`~fsrbayes.physics.sensor.resistances`).
+        :func:`~fsrbayes.physics.circuits.resistances`).
     summary : str
     """
 

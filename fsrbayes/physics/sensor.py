@@ -12,7 +12,7 @@ Paredes-Madrid et al. 2017, eqs. (1), (4)–(11), (17)–(24) and Figure 17.
 """
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -27,15 +27,11 @@ __all__ = [
     "DomainWarning",
     "sensor_state",
     "solve_current",
+    "strain_of_steps",
+    "load_of_steps",
     "current",
     "drift",
     "current_history",
-    "resistances",
-    "amplifier_output",
-    "current_from_amplifier",
-    "resistance_from_amplifier",
-    "voltage_divider",
-    "DividerResult",
 ]
 
 ON_INVALID = ("raise", "nan", "mask")
@@ -180,6 +176,42 @@ def _strain_step(params, stress, time, family, effects=()):
     return strain
 
 
+def strain_of_steps(params, step_time, step_size, time, family, effects=()):
+    """Strain under a load that changes in steps, by Boltzmann superposition (eq. 15).
+
+    ε(t) = Σ_k Δσ_k·J(t − τ_k), plus each effect's extra creep strain for the same steps (every
+    catalogue strain effect is linear in the stress). J is 0 before its step.
+
+    Parameters
+    ----------
+    params : mapping
+        Parameters, broadcasting with ``time`` (e.g. (W, 1, 1) against (C, T)).
+    step_time, step_size : ndarray, shape (C, K)
+        Time (s) and size (Pa, signed) of each test's load steps; padding steps have size 0.
+    time : ndarray, shape (C, T)
+
+    Returns
+    -------
+    ndarray
+    """
+    law = _creep_law(family)
+    strain = 0.0
+    for k in range(step_time.shape[-1]):
+        since = time - step_time[:, k : k + 1]
+        size = step_size[:, k : k + 1]
+        strain = strain + law.creep_strain(size, since, params)
+        for effect in effects:
+            extra = effect.extra_strain(params, size, since)
+            if extra is not None:
+                strain = strain + extra
+    return strain
+
+
+def load_of_steps(step_time, step_size, time):
+    """Return the momentary stress Σ_k Δσ_k·[t ≥ τ_k] of step loads, shaped like ``time``."""
+    return np.sum(step_size[:, None, :] * (time[..., None] >= step_time[:, None, :]), axis=-1)
+
+
 def solve_current(
     params,
     voltage,
@@ -190,12 +222,17 @@ def solve_current(
     tunneling="smooth",
     effects=(),
     extra_series=0.0,
+    load_steps=None,
 ):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
     ``effects`` names catalogue extensions (:mod:`fsrbayes.physics.effects`), or gives them as
     :class:`~fsrbayes.physics.effects.Effect` objects. ``extra_series`` (Ω) is a resistance in
     series with the sensor (a divider's fixed resistor; ``voltage`` is then the supply).
+    ``load_steps`` = (step_time, step_size), each (C, K), replaces the single step by a load
+    that changes in steps (a staircase, an unloading): ``stress`` is then ignored, the strain
+    follows by superposition (:func:`strain_of_steps`) and the contact and area laws see the
+    momentary load (:func:`load_of_steps`); ``time`` must then be (C, T).
 
     Returns
     -------
@@ -203,11 +240,19 @@ def solve_current(
 
     References
     ----------
-    Paper eqs. (17)–(21).
+    Paper eqs. (15), (17)–(21).
     """
     family = model_family(rheology)
     effects = _check_effect_params(params, effects)
-    strain = _strain_step(params, stress, time, family, effects)
+    if load_steps is None:
+        strain = _strain_step(params, stress, time, family, effects)
+    else:
+        step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
+        time = np.broadcast_to(
+            np.asarray(time, dtype=float), (step_time.shape[0], np.shape(time)[-1])
+        )
+        strain = strain_of_steps(params, step_time, step_size, time, family, effects)
+        stress = load_of_steps(step_time, step_size, time)
     return _solve_model(
         params, voltage, stress, strain, family, tunneling, effects, time, extra_series
     )
@@ -380,115 +425,3 @@ def current_history(
             strain = strain + extra
     solution = _solve_model(params, voltage, stress, strain, family, tunneling, effects, time)
     return _apply_policy(solution, on_invalid, voltage, stress, time)
-
-
-def resistances(params, voltage, stress, time=0.0, *, rheology="burgers", tunneling="smooth"):
-    """R_FSR, R_bulk and Rc in Ω at a sourcing voltage (the curves of Figure 8).
-
-    Returns
-    -------
-    dict of ndarray
-        ``{"R_fsr": V/I, "R_bulk": V_bulk/I, "Rc": Rc}``, NaN outside the validity domain.
-
-    References
-    ----------
-    Paper eqs. (1), (5), (9)–(11).
-    """
-    solution = solve_current(params, voltage, stress, time, rheology=rheology, tunneling=tunneling)
-    family = model_family(rheology)
-    if isinstance(family, PeerModel):
-        rc = contact_resistance(stress, params["Rc0"], family.contact_alpha)
-    else:
-        rc = contact_resistance(
-            stress,
-            params["Rc0"],
-            params["alpha"],
-            params.get("Rpar", 0.0),
-            params.get("sigma0", 0.0),
-        )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return {
-            "R_fsr": np.asarray(voltage) / solution.current,
-            "R_bulk": solution.v_bulk / solution.current,
-            "Rc": np.broadcast_to(rc, solution.current.shape).copy(),
-        }
-
-
-def amplifier_output(current_A, rf_ohm):
-    """Output V_o = −I·R_f in V of the inverting amplifier of Figure 9c (eq. 23)."""
-    return -np.asarray(current_A, dtype=float) * rf_ohm
-
-
-def current_from_amplifier(vo_V, rf_ohm):
-    """Sensor current I = −V_o/R_f in A from the amplifier output (eq. 23)."""
-    return -np.asarray(vo_V, dtype=float) / rf_ohm
-
-
-def resistance_from_amplifier(voltage, vo_V, rf_ohm):
-    """Sensor resistance R_FSR = −V_FSR·R_f/V_o in Ω (eq. 24)."""
-    return -np.asarray(voltage, dtype=float) * rf_ohm / np.asarray(vo_V, dtype=float)
-
-
-@dataclass(frozen=True)
-class DividerResult:
-    """Operating point of an FSR in a voltage divider.
-
-    Attributes
-    ----------
-    v_fsr : ndarray
-        Voltage across the sensor in V.
-    current : ndarray
-        Current in A.
-    v_out : ndarray
-        Voltage across the load resistor (the divider's output) in V.
-    valid : ndarray of bool
-        False outside the validity domain.
-    """
-
-    v_fsr: np.ndarray
-    current: np.ndarray
-    v_out: np.ndarray
-    valid: np.ndarray
-
-
-def voltage_divider(
-    params, supply, load_resistance, stress, time=0.0, *, rheology="burgers", tunneling="smooth"
-):
-    """V_FSR of a sensor in series with a load resistor across a supply (Figure 17).
-
-    The supply sees V_s = V_bulk + (2·Rc + R_L)·I, the same implicit equation as the sensor
-    alone with the load added to the series resistance, so it is solved exactly the same
-    way. Unlike the amplifier of Figure 9c, V_FSR = V_s − I·R_L swings with the stress: a
-    5 V supply can put several volts across the sensor, into the range where A201 sensors
-    degrade (paper section 4.5).
-
-    Parameters
-    ----------
-    supply : array_like
-        Supply voltage V_s in V.
-    load_resistance : array_like
-        Load resistor R_L in Ω.
-    stress, time : array_like
-        Stress step (Pa) and time since it (s).
-
-    Returns
-    -------
-    DividerResult
-
-    References
-    ----------
-    Paper section 4.5 and Figure 17.
-    """
-    family = model_family(rheology)
-    strain = _strain_step(params, stress, time, family)
-    load = np.asarray(load_resistance, dtype=float)
-    if np.any(load < 0):
-        raise ValueError(f"load_resistance must be >= 0 ohm, got min {load.min():g}")
-    solution = _solve_model(params, supply, stress, strain, family, tunneling, extra_series=load)
-    v_out = solution.current * load
-    return DividerResult(
-        v_fsr=np.asarray(supply, dtype=float) - v_out,
-        current=solution.current,
-        v_out=v_out,
-        valid=solution.valid,
-    )

@@ -216,7 +216,7 @@ def solve_bulk(
         Sourcing voltage V_FSR in V (the sign is carried through: I(−V) = −I(V)).
     series_resistance : array_like
         R_s = 2·Rc in Ω (plus a divider's load resistor, see
-        :func:`fsrbayes.physics.sensor.voltage_divider`).
+        :func:`fsrbayes.physics.circuits.voltage_divider`).
     gap, barrier, area : array_like
         Barrier width s (m), height Va (eV), effective area A (m²).
     law : {"smooth", "paper"}

@@ -1,0 +1,153 @@
+"""Loads that change within a test: staircases and load–unload–reload, read, modelled, predicted."""
+
+import numpy as np
+import pytest
+
+from fsrbayes.data import read_csv
+from fsrbayes.data.readouts import STANDARD_GRAVITY
+from fsrbayes.data.rigsim import simulate_rig, write_rig
+from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.predict import predict, write_point_fit
+from fsrbayes.physics.loading import StressHistory
+from fsrbayes.physics.sensor import current_history, solve_current
+
+WEIGHTS = (133.0, 210.0, 255.0)
+AREA = load_sensor("fsr402").area_m2
+
+
+def _stress(grams):
+    return np.asarray(grams) * STANDARD_GRAVITY / 1000.0 / AREA
+
+
+def _staircase(tmp_path, rest_s=0.0, rate_hz=20.0, duration_s=20.0, seed=4, reading="vout_V"):
+    text, truth = simulate_rig(
+        1,
+        reading=reading,
+        protocol="staircase",
+        rest_s=rest_s,
+        weights_g=WEIGHTS,
+        duration_s=duration_s,
+        rate_hz=rate_hz,
+        seed=seed,
+    )
+    return write_rig(text, truth, tmp_path / "stairs.csv")[0], truth
+
+
+def test_superposed_steps_match_the_stress_history_path():
+    # two implementations of Boltzmann superposition: load steps over walkers and tests, and
+    # the piecewise-linear StressHistory's jumps
+    params = dict(load_sensor("a201").params)
+    t = np.linspace(0.0, 2400.0, 301)
+    history = StressHistory([0, 0, 600, 600, 1500, 1500], [0, 1e5, 1e5, 2e5, 2e5, 1.4e5])
+    reference = current_history(params, 1.0, history, t)
+    steps = (np.array([[0.0, 600.0, 1500.0]]), np.array([[1e5, 1e5, -6e4]]))
+    got = solve_current(params, 1.0, None, t[None], load_steps=steps).current[0]
+    np.testing.assert_allclose(got, reference, rtol=1e-12)
+
+
+def test_a_staircase_is_one_test_with_its_steps(tmp_path):
+    path, truth = _staircase(tmp_path)
+    data = read_csv(path)
+    (test,) = data.tests
+    at, size = test.load_steps
+    np.testing.assert_allclose(at, [0.0, 20.0, 40.0], atol=0.05 + 1e-9)  # one sample
+    np.testing.assert_allclose(np.cumsum(size), _stress(WEIGHTS), rtol=1e-6)
+    assert test.stress_Pa == pytest.approx(_stress(WEIGHTS[0]), rel=1e-6)
+    np.testing.assert_allclose(test.load_at(np.array([1.0, 25.0, 59.0])), _stress(WEIGHTS))
+
+
+def test_unloaded_rows_are_dropped_but_the_creep_goes_on_through_them(tmp_path):
+    path, truth = _staircase(tmp_path, rest_s=10.0)
+    (test,) = read_csv(path).tests
+    at, size = test.load_steps
+    np.testing.assert_allclose(at, [0.0, 20.0, 30.0, 50.0, 60.0], atol=0.05 + 1e-9)
+    np.testing.assert_allclose(
+        size, _stress([WEIGHTS[0], -WEIGHTS[0], WEIGHTS[1], -WEIGHTS[1], WEIGHTS[2]]), rtol=1e-6
+    )
+    resting = ((test.time_s > 20.05) & (test.time_s < 29.95)) | (
+        (test.time_s > 50.05) & (test.time_s < 59.95)
+    )
+    # 20 s at 20 Hz under each weight (the log ends a fraction of a sample after the last one)
+    assert not resting.any() and 3 * 20 * 20 - 1 <= test.time_s.size <= 3 * 20 * 20
+    # the model on the packed data reproduces the logged currents at the true parameters, with
+    # the recovery during the rests: residuals are the rig's noise, unbiased
+    packed = SpecimenData.from_tests([test], max_samples=10**6)  # every sample, not bins
+    params = {**truth["specimens"][test.specimen]["params"], "sigma_rel": 0.002}
+    posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"))
+    x = np.array([[params[n] for n in posterior.names]])
+    model = posterior.log_model_current(x)[0][packed.mask]
+    residual = packed.log_current[packed.mask] - model
+    assert abs(residual.mean()) < 4 * 0.002 / np.sqrt(residual.size) + 2e-4
+    assert 0.8 * 0.002 < residual.std() < 1.2 * 0.002
+    # without the rests' recovery (the same loads held from the first step) it does not
+    held = test.__class__(**{**test.__dict__, "load_steps": None})
+    no_rest = SpecimenData.from_tests([held], max_samples=10**6)
+    off = LogPosterior.for_sensor(no_rest, load_sensor("fsr402")).log_model_current(x)[0]
+    assert np.abs(no_rest.log_current[no_rest.mask] - off[no_rest.mask]).mean() > 0.05
+
+
+def test_high_rate_staircases_are_binned_within_each_load(tmp_path):
+    path, _ = _staircase(tmp_path, rate_hz=100.0, duration_s=60.0)
+    (test,) = read_csv(path).tests
+    packed = SpecimenData.from_tests([test])
+    assert packed.weight is not None and packed.n_obs < test.time_s.size / 10
+    times = packed.time_s[packed.mask]
+    starts = packed.step_time[0]
+    segment = np.searchsorted(starts, times, side="right") - 1
+    # every bin lies inside one segment, each segment's first sample has a bin of its own
+    assert np.all(np.diff(segment) >= 0) and set(segment) == {0, 1, 2}
+    counts = packed.weight[packed.mask]
+    assert counts.sum() == test.time_s.size
+    first_of_segment = np.searchsorted(times, starts)
+    assert np.all(counts[first_of_segment] == 1)
+
+
+def test_a_staircase_never_fitted_is_predicted_from_the_from_rest_truth(tmp_path):
+    # the point mass at the specimen's truth: the staircase's readings fall in their 90 % band
+    # 90 % of the time — the superposition, the circuit and the ADC all as the bench has them
+    path, truth = _staircase(tmp_path, rate_hz=50.0, duration_s=30.0, reading="adc_counts")
+    specimen = next(iter(truth["specimens"]))
+    params = {**truth["specimens"][specimen]["params"], "sigma_rel": truth["rig"]["noise_rel"]}
+    fit = write_point_fit(tmp_path / "fit", params, specimen, "fsr402")
+    result = predict(fit, read_csv(path, readings="optional"), n_draws=400, seed=3)
+    n = result["n_readings"]
+    assert n == 3 * 30 * 50 - 1 or n == 3 * 30 * 50
+    assert abs(result["coverage_90"] - 0.9) < 4.5 * np.sqrt(0.09 / n)
+    (test,) = result["tests"]
+    # the median jumps up at each added weight
+    q50, t = np.asarray(test["q50"]), np.asarray(test["time_s"])
+    for at in (30.0, 60.0):
+        before, after = q50[(t < at) & (t > at - 1)], q50[(t >= at + 0.05) & (t < at + 1)]
+        assert after.min() > before.max()
+
+
+def test_each_loaded_segment_reports_its_own_drift(tmp_path):
+    from fsrbayes.inference.output import segment_drifts
+
+    path, truth = _staircase(tmp_path, rest_s=10.0, duration_s=40.0)
+    data = read_csv(path)
+    packed = SpecimenData.from_tests(data.tests)
+    posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"))
+    params = {**truth["specimens"]["fsr402-01"]["params"], "sigma_rel": 0.002}
+    draws = np.array([[params[n] for n in posterior.names]] * 3)
+    (segments,) = segment_drifts(posterior, draws)
+    assert [round(s["start_s"]) for s in segments] == [0, 50, 100]  # the three loadings
+    np.testing.assert_allclose([s["load_Pa"] for s in segments], _stress(WEIGHTS), rtol=1e-6)
+    for s in segments:
+        assert s["start_s"] < s["end_s"] <= s["start_s"] + 40.0
+        # the model's drift at the truth and the logged one agree within the readings' noise
+        assert abs(s["drift"]["median"] - s["observed_drift"]) < 1.0
+    # a test of one load has no segments
+    (single,) = segment_drifts(
+        LogPosterior.for_sensor(
+            SpecimenData.from_tests(
+                [data.tests[0].__class__(**{**data.tests[0].__dict__, "load_steps": None})]
+            ),
+            load_sensor("fsr402"),
+        ),
+        draws,
+    )
+    assert single is None
+    assert "the load changes 4 times" in data.summary()
