@@ -151,3 +151,34 @@ def test_each_loaded_segment_reports_its_own_drift(tmp_path):
     )
     assert single is None
     assert "the load changes 4 times" in data.summary()
+
+
+@pytest.mark.parametrize("reading", ["adc_counts", "vout_V", "resistance_kohm"])
+def test_the_onset_is_found_from_the_reading_when_the_weight_is_written_on_every_row(
+    tmp_path, reading
+):
+    # the logger's load column says the weight from its first row; only the reading shows when
+    # it landed: the onset is found within one sample of the bench's, on every test
+    text, truth = simulate_rig(
+        2, reading=reading, weight_from_start=True, duration_s=20.0, rate_hz=20.0, seed=9
+    )
+    data = read_csv(write_rig(text, truth, tmp_path / "log.csv")[0])
+    for test in data.tests:
+        assert test.onset_source == "reading"
+        assert 0.0 <= test.onset_s - truth["onset_s"] <= 1 / 20.0 + 1e-9
+        assert test.time_s[0] == 0.0 and test.current_A.min() > 0.3 * np.median(test.current_A)
+    assert "from the reading's jump in 8 test(s)" in data.summary()
+    # with the load written from its landing the load column sets the onset, as before
+    plain = read_csv(write_rig(*simulate_rig(1, reading=reading, seed=9), tmp_path / "p.csv")[0])
+    assert {t.onset_source for t in plain.tests} == {"load"}
+
+
+def test_a_log_started_after_the_landing_starts_at_its_first_row(tmp_path):
+    text, truth = simulate_rig(1, weight_from_start=True, duration_s=10.0, seed=1)
+    header, *rows = text.splitlines()
+    late = [r for r in rows if float(r.split(",")[3]) > truth["onset_s"] + 0.5]
+    path = tmp_path / "late.csv"
+    path.write_text("\n".join([header, *late]) + "\n")
+    (test, *_) = read_csv(path).tests
+    assert test.onset_source == "load" and test.time_s[0] == 0.0
+    assert test.onset_s == pytest.approx(truth["onset_s"] + 0.5, abs=0.011)

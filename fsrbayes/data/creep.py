@@ -86,6 +86,9 @@ class CreepTest:
     readout: object = field(default=None, compare=False)
     onset_s: float = field(default=0.0, compare=False)
     load_steps: tuple = field(default=None, compare=False, repr=False)
+    onset_source: str = field(default="load", compare=False, repr=False)
+    """What set the onset: the load column's first nonzero row (``load``), the ``onset_s``
+    column, or the reading's jump (``reading``) when the load is written on every row."""
 
     def load_at(self, time_s):
         """Return the load in Pa at times since the onset (``stress_Pa`` without steps)."""
@@ -208,6 +211,13 @@ class CreepData:
             )
             rigs = sorted({_describe(t.readout) for t in sub if t.readout is not None}, key=str)
             lines += [f"    read by {rig}" for rig in rigs]
+            detected = [t for t in sub if t.onset_source == "reading"]
+            if detected:
+                lines.append(
+                    f"    the load's onset found from the reading's jump in {len(detected)} "
+                    f"test(s) (the load column is nonzero from the first row), at "
+                    f"{', '.join(f'{t.onset_s:g}' for t in detected[:6])} s of the logger's clock"
+                )
             for t in sub:
                 if t.load_steps is not None:
                     loads = np.cumsum(t.load_steps[1])

@@ -163,6 +163,7 @@ def rig_tests(
     order = np.argsort(code, kind="stable")  # each test's rows in file order
     groups = np.split(order, np.cumsum(np.bincount(code))[:-1])
     raw = cols.get(reading) or [""] * len(specimen)
+    renamed_reading = (renamed or {}).get(reading, (reading, 1.0))
     tests = []
     for g in np.argsort(first, kind="stable"):  # tests in order of first appearance
         idx = groups[g]
@@ -192,6 +193,14 @@ def rig_tests(
                 "time_s",
             )
         loaded = stress[idx] > 0
+        onset_from = "onset_s" if onset is not None else "load"
+        if onset is None and required and loaded[0]:
+            # the load is written on every row: the weight landed where the reading jumps
+            landed = _landing(raw, idx, renamed_reading, readout, decimal_comma)
+            if landed > 0:
+                loaded = loaded.copy()
+                loaded[:landed] = False
+                onset_from = "reading"
         if not loaded.any():
             raise DataError(
                 f"{what} has no loaded rows (the load is 0 throughout); expected the load after it "
@@ -237,9 +246,8 @@ def rig_tests(
                 path,
                 int(lines[first]),
             )
-        column, factor = (renamed or {}).get(reading, (reading, 1.0))
         values = _reading_values(
-            raw, keep, (column, factor), readout, line_no, path, decimal_comma, required
+            raw, keep, renamed_reading, readout, line_no, path, decimal_comma, required
         )
         current = current_of(readout, values)
         tests.append(
@@ -257,9 +265,39 @@ def rig_tests(
                 readout,
                 t_on,
                 steps,
+                onset_from,
             )
         )
     return tuple(tests)
+
+
+LANDING_FRACTION = 0.1
+"""A weight has landed where the current first reaches this fraction of the test's late level."""
+
+
+def _landing(raw, idx, column, readout, decimal_comma):
+    """Return the index of a test's first row after the weight landed, from the reading's jump.
+
+    Before the weight lands an open divider reads a few counts (a resistance reads ``inf``): the
+    current is near 0. The landing is the first row from which two successive currents reach
+    :data:`LANDING_FRACTION` of the median current of the test's second half; 0 when the first
+    row already does (the logger started after the landing). Unparsable fields count as no
+    current here; the loaded rows are checked afterwards as always.
+    """
+    _, factor = column
+    values = np.empty(idx.size)
+    for j, i in enumerate(idx):
+        field = raw[i].strip().replace(",", ".") if decimal_comma else raw[i].strip()
+        try:
+            values[j] = float(field) * factor
+        except ValueError:
+            values[j] = np.nan
+    with np.errstate(divide="ignore", invalid="ignore"):
+        current = np.nan_to_num(current_of(readout, values), nan=0.0, posinf=0.0)
+    level = np.median(current[current.size // 2 :])
+    high = current >= LANDING_FRACTION * level
+    both = high[:-1] & high[1:]
+    return int(np.argmax(both)) if both.any() else 0
 
 
 def _check_rm(rm, line_no, path):

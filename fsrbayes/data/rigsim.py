@@ -52,6 +52,7 @@ def simulate_rig(
     effects=(),
     protocol="from-rest",
     rest_s=0.0,
+    weight_from_start=False,
     **rig,
 ):
     """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
@@ -59,7 +60,9 @@ def simulate_rig(
     ``protocol="from-rest"`` logs one test per weight, each from rest; ``"staircase"`` logs one
     test per specimen with the weights put on one after another, each held ``duration_s`` —
     without unloading (``rest_s`` 0), or unloaded for ``rest_s`` seconds between weights
-    (load–unload–reload; the open divider reads a few counts meanwhile).
+    (load–unload–reload; the open divider reads a few counts meanwhile). With
+    ``weight_from_start`` the load column holds the first weight from the logger's first row, as
+    when the experimenter writes the weight beside the log: only the reading shows the landing.
 
     Parameters
     ----------
@@ -130,6 +133,7 @@ def simulate_rig(
         "onset_s": float(onset),
         "protocol": protocol,
         "rest_s": float(rest_s),
+        "weight_from_start": bool(weight_from_start),
         "effects": effect_params,
         "specimens": {},
         "seed": seed,
@@ -169,6 +173,8 @@ def simulate_rig(
             vout = np.empty(since.size)
             vout[on] = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(on.sum()))
             vout[~on] = np.abs(rng.normal(0.0, 1.5, (~on).sum())) * lsb  # the open divider
+            if weight_from_start:
+                mass = np.where(since < 0, grams[0], mass)
             force = mass * force_scale
             column = _reading(reading, vout, supply, rm, lsb, top, on)
             prefix = f"{name},{sensor.name},{label}"
