@@ -408,3 +408,42 @@ def test_optimal_voltage_finds_the_minimum_of_a_known_drift_curve():
     dense = np.abs(specimens.drift(grid, [117e3])[0, 0, :, 0])
     assert best["median"] == pytest.approx(grid[np.argmin(dense)], rel=0.01)
     assert best["q05"] == pytest.approx(best["q95"], rel=1e-6)  # identical specimens
+
+
+class _KnownRoots:
+    """New specimens whose drift is 2·ln(V0/V) %: each crosses zero at its own V0."""
+
+    def __init__(self, v0):
+        self.v0 = np.asarray(v0, dtype=float)
+
+    def drift(self, voltage_V, stress_Pa, time_s=3600.0):
+        v = np.asarray(voltage_V, dtype=float)
+        return (2.0 * np.log(self.v0[:, None] / v[None, :]))[None, :, :, None]
+
+
+def test_zero_drift_voltage_finds_known_roots_and_their_share_in_range():
+    from fsrbayes.inference.population.predictive import zero_drift_voltage
+
+    rng = np.random.default_rng(0)
+    v0 = np.exp(rng.normal(np.log(3.0), 0.3, 400))
+    v0[:100] = 20.0  # a quarter of the specimens never reach zero below 9 V
+    root = zero_drift_voltage(_KnownRoots(v0), 1e5, (0.1, 9.0))
+    inside = v0[(v0 > 0.1) & (v0 < 9.0)]
+    assert root["p_root_in_range"] == pytest.approx(inside.size / v0.size)
+    for key, q in (("q05", 0.05), ("q50", 0.5), ("q95", 0.95)):
+        assert root[key] == pytest.approx(np.quantile(inside, q), rel=2e-3)
+    # fewer than half with a root: no quantiles, only the share
+    v0[:300] = 20.0
+    sparse = zero_drift_voltage(_KnownRoots(v0), 1e5, (0.1, 9.0))
+    assert sparse["p_root_in_range"] == pytest.approx(0.25, abs=0.01)
+    assert sparse["q50"] is None and sparse["q05"] is None
+
+
+def test_the_base_models_drift_has_no_zero_below_9_volts():
+    # the model without effects: drift falls with voltage but stays positive (the demo's old
+    # story) — the root finder must not invent one
+    from fsrbayes.inference.population.predictive import zero_drift_voltage
+
+    specimens, _ = _identical_new_specimens(20)
+    root = zero_drift_voltage(specimens, 117e3, (0.1, 9.0))
+    assert root["p_root_in_range"] == 0.0 and root["q50"] is None

@@ -113,6 +113,8 @@ def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit,
         str(tmp_path / "box.png"),
         "--optimal-voltage",
         "0.1,9",
+        "--zero-drift",
+        "0.1,9",
         "--hyper-draws",
         "40",
         "--as-measured",
@@ -129,6 +131,10 @@ def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit,
     assert len(payload["optimal_voltage"]) == 2
     best = payload["optimal_voltage"][0]
     assert 0.1 <= best["q05"] <= best["median"] <= best["q95"] <= 9
+    assert len(payload["zero_drift_voltage"]) == 2
+    for root in payload["zero_drift_voltage"]:
+        assert 0.0 <= root["p_root_in_range"] <= 1.0
+        assert (root["q50"] is None) == (root["p_root_in_range"] < 0.5)
     assert (tmp_path / "box.png").stat().st_size > 10000
 
 

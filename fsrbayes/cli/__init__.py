@@ -298,6 +298,12 @@ def build_parser():
         help="the sourcing voltage minimising a new specimen's |drift| per stress, in VMIN..VMAX",
     )
     drf.add_argument(
+        "--zero-drift",
+        metavar="VMIN,VMAX",
+        help="the sourcing voltage where a new specimen's drift crosses zero, per stress, in "
+        "VMIN..VMAX: its probability of existing there and its quantiles",
+    )
+    drf.add_argument(
         "--as-measured",
         action="store_true",
         help="drift as a rig measures it: add the fitted measurement noise to both readings "

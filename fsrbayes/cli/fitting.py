@@ -288,6 +288,7 @@ def cmd_drift(args):
         drift_groups,
         new_specimens,
         optimal_voltage,
+        zero_drift_voltage,
     )
 
     if args.time <= 0:
@@ -297,10 +298,15 @@ def cmd_drift(args):
         raise UsageError(
             f"--optimal-voltage takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.optimal_voltage!r}"
         )
+    zero_range = floats(args.zero_drift, "zero-drift") if args.zero_drift else None
+    if zero_range is not None and (len(zero_range) != 2 or not 0 < zero_range[0] < zero_range[1]):
+        raise UsageError(
+            f"--zero-drift takes VMIN,VMAX with 0 < VMIN < VMAX, got {args.zero_drift!r}"
+        )
     for path in (args.json, args.plot):
         if path:
             writable(Path(path).parent)
-    payload = {"time_s": args.time, "groups": [], "optimal_voltage": []}
+    payload = {"time_s": args.time, "groups": [], "optimal_voltage": [], "zero_drift_voltage": []}
     figures = []
     for folder in _population_folders(args.fit_dir):
         tree = xr.open_datatree(folder / "population.nc", engine="h5netcdf")
@@ -343,6 +349,20 @@ def cmd_drift(args):
                     f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} "
                     f"V (90 %: {best['q05']:.3g}–{best['q95']:.3g}), drift there "
                     f"{best['drift_at_optimum']['q50']:.2f} %"
+                )
+        if zero_range is not None:
+            for stress in stresses:
+                root = zero_drift_voltage(specimens, stress, zero_range, time_s=args.time)
+                payload["zero_drift_voltage"].append({"sensor": sensor.name, **root})
+                where = (
+                    f"median {root['q50']:.3g} V (90 %: {root['q05']:.3g}–{root['q95']:.3g})"
+                    if root["q50"] is not None
+                    else "no median: fewer than half of new specimens have one"
+                )
+                print(
+                    f"{sensor.name} at {stress / 1e3:.0f} kPa: drift({args.time:g} s) = 0 in "
+                    f"{zero_range[0]:g}–{zero_range[1]:g} V for {root['p_root_in_range']:.0%} of "
+                    f"new specimens; {where}"
                 )
         for g in groups:
             q = g["new_specimen"]

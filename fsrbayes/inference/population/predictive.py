@@ -30,6 +30,7 @@ __all__ = [
     "new_specimens",
     "drift_groups",
     "optimal_voltage",
+    "zero_drift_voltage",
     "BOX_QUANTILES",
 ]
 
@@ -274,4 +275,66 @@ def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_gri
         "q95": float(q[2]),
         "at_boundary": float(np.mean(edge)),
         "drift_at_optimum": {"q05": float(d[0]), "q50": float(d[1]), "q95": float(d[2])},
+    }
+
+
+def zero_drift_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_grid=161):
+    """Return the sourcing voltage at which a new specimen's drift(time) is zero, at one stress.
+
+    The paper's open question (section 4.2): the A201's drift(3600 s) falls with V_FSR and
+    turns negative above a few volts, so some voltage gives none. Each specimen's drift is
+    evaluated on ``n_grid`` log-spaced voltages in ``v_range``; its root is the lowest voltage
+    where the drift changes sign, by linear interpolation in log V between the two grid points
+    that bracket it. Specimens without a sign change in the range have no root there.
+
+    Parameters
+    ----------
+    specimens : NewSpecimens
+        Draws of new specimens (:func:`new_specimens`).
+    stress_Pa : float
+    v_range : (float, float)
+        VMIN, VMAX in V, 0 < VMIN < VMAX.
+    time_s : float
+    n_grid : int
+
+    Returns
+    -------
+    dict
+        ``{stress_Pa, v_range, time_s, p_root_in_range, q05, q50, q95, n_specimens}``: the share
+        of new specimens whose drift crosses zero inside the range, and the 5/50/95 % quantiles
+        of the root among them — None when fewer than half have one (a median of a minority
+        would describe the exception, not the population).
+    """
+    v_min, v_max = (float(v) for v in v_range)
+    if not 0 < v_min < v_max:
+        raise ValueError(f"voltage range must be 0 < VMIN < VMAX, got {v_range!r}")
+    grid = np.geomspace(v_min, v_max, n_grid)
+    grid[[0, -1]] = v_min, v_max
+    drift = specimens.drift(grid, [stress_Pa], time_s)[..., 0].reshape(-1, n_grid)
+    drift = drift[np.all(np.isfinite(drift), axis=1)]
+    if not len(drift):
+        raise ValueError(
+            f"no new specimen stays inside the model's domain over {v_min:g}–{v_max:g} V"
+        )
+    sign = np.sign(drift)
+    change = (sign[:, :-1] * sign[:, 1:] <= 0) & (sign[:, :-1] != 0)
+    has_root = change.any(axis=1)
+    first = np.argmax(change, axis=1)
+    rows = np.arange(len(drift))
+    y0, y1 = drift[rows, first], drift[rows, first + 1]
+    log_v = np.log(grid)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(y1 != y0, y0 / (y0 - y1), 0.0)
+    roots = np.exp(log_v[first] + np.clip(w, 0.0, 1.0) * (log_v[first + 1] - log_v[first]))
+    share = float(np.mean(has_root))
+    q = np.quantile(roots[has_root], [0.05, 0.5, 0.95]) if share >= 0.5 else [None] * 3
+    return {
+        "stress_Pa": float(stress_Pa),
+        "v_range": [v_min, v_max],
+        "time_s": float(time_s),
+        "p_root_in_range": share,
+        "q05": None if q[0] is None else float(q[0]),
+        "q50": None if q[1] is None else float(q[1]),
+        "q95": None if q[2] is None else float(q[2]),
+        "n_specimens": int(len(drift)),
     }
