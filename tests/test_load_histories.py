@@ -182,3 +182,53 @@ def test_a_log_started_after_the_landing_starts_at_its_first_row(tmp_path):
     (test, *_) = read_csv(path).tests
     assert test.onset_source == "load" and test.time_s[0] == 0.0
     assert test.onset_s == pytest.approx(truth["onset_s"] + 0.5, abs=0.011)
+
+
+def test_a_loading_ramp_given_in_ramp_s_is_inside_the_model(tmp_path):
+    # a weight that settles over 1 s, logged at 100 Hz: with ramp_s read, the model follows the
+    # first second (the load rising linearly; the creep of 16 steps against the bench's 400)
+    # from the first 1/16 of the ramp on, where the contact law starts to describe contact; as a
+    # step, it misses the whole second
+    text, truth = simulate_rig(
+        1, reading="vout_V", ramp_s=1.0, weights_g=(200.0,), duration_s=20.0, rate_hz=100.0, seed=6
+    )
+    # the bench's own onset (a ramp makes the instant matter: one sample late is 1 % of the
+    # weight at the start of the ramp)
+    text = "\n".join(
+        f"{row},onset_s" if k == 0 else f"{row},{truth['onset_s']!r}"
+        for k, row in enumerate(text.strip().splitlines())
+    )
+    path = tmp_path / "ramp.csv"
+    path.write_text(text + "\n")
+    (test,) = read_csv(path).tests
+    assert test.ramp_s == 1.0 and test.load_steps is None and test.onset_source == "onset_s"
+    params = {**truth["specimens"][test.specimen]["params"], "sigma_rel": 0.002}
+    early = test.time_s < 1.0
+
+    def residual(t):
+        packed = SpecimenData.from_tests([t], max_samples=10**6)
+        posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"))
+        x = np.array([[params[n] for n in posterior.names]])
+        return (packed.log_current - posterior.log_model_current(x)[0])[packed.mask]
+
+    ramped = residual(test)
+    settled = early & (test.time_s >= 1.0 / 16)
+    assert np.abs(ramped[settled]).mean() < 3 * 0.002
+    assert np.abs(ramped[~early].mean()) < 5e-4
+    stepped = residual(test.__class__(**{**test.__dict__, "ramp_s": 0.0}))
+    assert np.abs(stepped[early]).mean() > 10 * 0.002
+    # the ramp is one loading: no segments of its own in summary.json
+    from fsrbayes.inference.output import segment_drifts
+
+    packed = SpecimenData.from_tests([test])
+    posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"))
+    x = np.array([[params[n] for n in posterior.names]])
+    assert segment_drifts(posterior, x) == [None]
+
+
+def test_a_ramp_longer_than_the_load_is_refused(tmp_path):
+    text, truth = simulate_rig(1, reading="vout_V", ramp_s=1.0, duration_s=5.0, rate_hz=20.0)
+    path = tmp_path / "bad.csv"
+    path.write_text(text.replace(",1.0,", ",9.0,"))
+    with pytest.raises(Exception, match=r"ramp_s of test .* must be >= 0 s and end before"):
+        read_csv(path)

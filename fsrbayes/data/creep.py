@@ -89,6 +89,8 @@ class CreepTest:
     onset_source: str = field(default="load", compare=False, repr=False)
     """What set the onset: the load column's first nonzero row (``load``), the ``onset_s``
     column, or the reading's jump (``reading``) when the load is written on every row."""
+    ramp_s: float = field(default=0.0, compare=False, repr=False)
+    """Seconds the first loading takes, rising linearly from the onset (0: a step)."""
 
     def load_at(self, time_s):
         """Return the load in Pa at times since the onset (``stress_Pa`` without steps)."""
@@ -217,6 +219,12 @@ class CreepData:
                     f"    the load's onset found from the reading's jump in {len(detected)} "
                     f"test(s) (the load column is nonzero from the first row), at "
                     f"{', '.join(f'{t.onset_s:g}' for t in detected[:6])} s of the logger's clock"
+                )
+            ramps = sorted({t.ramp_s for t in sub if t.ramp_s > 0})
+            if ramps:
+                lines.append(
+                    f"    loading ramps of {', '.join(f'{r:g}' for r in ramps)} s (ramp_s) in "
+                    f"{sum(t.ramp_s > 0 for t in sub)} test(s)"
                 )
             for t in sub:
                 if t.load_steps is not None:

@@ -149,6 +149,7 @@ def rig_tests(
         _check_adc(adc, line_no, path)
     time = floats("time_s")
     onset = floats("onset_s") if "onset_s" in names else None
+    ramp = floats("ramp_s") if "ramp_s" in names else None
     negative = stress < 0
     if negative.any():
         i = int(np.argmax(negative))
@@ -240,6 +241,19 @@ def rig_tests(
                 np.concatenate([[0.0], t[changes] - t_on]),
                 np.diff(np.concatenate([[0.0], levels])),
             )
+        ramp_s = 0.0
+        if ramp is not None:
+            ramp_s = _constant(ramp, idx, "ramp_s", what, path, line_no)
+            next_change = t[changes[0]] - t_on if changes.size else t[-1] - t_on
+            if not 0 <= ramp_s < next_change:
+                raise DataError(
+                    f"ramp_s of {what} must be >= 0 s and end before the load changes or the "
+                    f"test ends ({next_change:g} s after the onset), got {ramp_s:g}",
+                    path,
+                    int(lines[first]),
+                    "ramp_s",
+                )
+
         if keep.size < 3:
             raise DataError(
                 f"{what} has {keep.size} loaded sample(s); a creep test needs at least 3",
@@ -266,6 +280,7 @@ def rig_tests(
                 t_on,
                 steps,
                 onset_from,
+                ramp_s,
             )
         )
     return tuple(tests)
@@ -281,7 +296,7 @@ def _landing(raw, idx, column, readout, decimal_comma):
     Before the weight lands an open divider reads a few counts (a resistance reads ``inf``): the
     current is near 0. The landing is the first row from which two successive currents reach
     :data:`LANDING_FRACTION` of the median current of the test's second half; 0 when the first
-    row already does (the logger started after the landing). Unparsable fields count as no
+    row already reaches it (the logger started after the landing). Unparsable fields count as no
     current here; the loaded rows are checked afterwards as always.
     """
     _, factor = column
@@ -296,6 +311,8 @@ def _landing(raw, idx, column, readout, decimal_comma):
         current = np.nan_to_num(current_of(readout, values), nan=0.0, posinf=0.0)
     level = np.median(current[current.size // 2 :])
     high = current >= LANDING_FRACTION * level
+    if high[0]:  # loaded from the first row: nothing to find
+        return 0
     both = high[:-1] & high[1:]
     return int(np.argmax(both)) if both.any() else 0
 

@@ -16,7 +16,7 @@ import json
 
 import numpy as np
 
-from ..physics.sensor import solve_current
+from ..physics.sensor import load_of_steps, solve_current
 from ..utils import atomic_path
 from .readouts import STANDARD_GRAVITY
 from .sensors import load_sensor
@@ -53,6 +53,7 @@ def simulate_rig(
     protocol="from-rest",
     rest_s=0.0,
     weight_from_start=False,
+    ramp_s=0.0,
     **rig,
 ):
     """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
@@ -63,6 +64,8 @@ def simulate_rig(
     (load–unload–reload; the open divider reads a few counts meanwhile). With
     ``weight_from_start`` the load column holds the first weight from the logger's first row, as
     when the experimenter writes the weight beside the log: only the reading shows the landing.
+    ``ramp_s`` > 0 lets the first weight settle linearly over that many seconds (a hand-placed
+    weight; simulated as 400 equal steps) and writes a ``ramp_s`` column.
 
     Parameters
     ----------
@@ -90,6 +93,8 @@ def simulate_rig(
         raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
     if protocol not in ("from-rest", "staircase"):
         raise ValueError(f"protocol must be 'from-rest' or 'staircase', got {protocol!r}")
+    if ramp_s < 0:
+        raise ValueError(f"ramp_s must be >= 0 s, got {ramp_s!r}")
     if rest_s < 0 or (rest_s and protocol != "staircase"):
         raise ValueError(f"rest_s must be >= 0 and is for a staircase, got {rest_s!r}")
     scale = {"s": 1.0, "min": 60.0, "ms": 1e-3}
@@ -124,7 +129,9 @@ def simulate_rig(
         raise ValueError(f"force_unit must be 'g' or 'N', got {force_unit!r}")
     force_scale = 1.0 if force_unit == "g" else STANDARD_GRAVITY / 1000.0
     header = ["specimen", "sensor", "test", time_col, f"force_{force_unit}", "supply_V", "rm_ohm"]
-    header += ["adc_bits", "adc_vref_V", "adc_counts"] if reading == "adc_counts" else [reading]
+    header += ["adc_bits", "adc_vref_V"] if reading == "adc_counts" else []
+    header += ["ramp_s"] if ramp_s > 0 else []
+    header += [reading]
     lines = [",".join(header)]
     truth = {
         "rig": setup | {"weights_g": list(setup["weights_g"])},
@@ -134,6 +141,7 @@ def simulate_rig(
         "protocol": protocol,
         "rest_s": float(rest_s),
         "weight_from_start": bool(weight_from_start),
+        "ramp_s": float(ramp_s),
         "effects": effect_params,
         "specimens": {},
         "seed": seed,
@@ -159,16 +167,26 @@ def simulate_rig(
                 if rest_s and k < len(grams) - 1:
                     step_at.append(starts[k] + held)
                     step_g.append(-g)
+            if ramp_s > 0:  # the first weight settles over ramp_s
+                fine = 400
+                step_at = list(ramp_s * np.arange(fine) / fine) + step_at[1:]
+                step_g = [step_g[0] / fine] * fine + step_g[1:]
             area = sensor.area_m2
             load = np.array(step_g) * STANDARD_GRAVITY / 1000.0 / area
+            t_on = np.maximum(since[on], 0.0)[None]
+            steps = (np.array(step_at)[None], load[None])
+            momentary = load_of_steps(*steps, t_on)
+            if ramp_s > 0:  # the load itself rises linearly; the creep follows the 400 steps
+                rising = t_on < ramp_s
+                momentary[rising] = load[:fine].sum() * np.maximum(t_on[rising] / ramp_s, 1e-3)
             current = solve_current(
                 params,
                 supply,
-                None,
-                np.maximum(since[on], 0.0)[None],
+                momentary,
+                t_on,
                 effects=names,
                 extra_series=rm,
-                load_steps=(np.array(step_at)[None], load[None]),
+                load_steps=steps,
             ).current[0]
             vout = np.empty(since.size)
             vout[on] = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(on.sum()))
@@ -180,7 +198,7 @@ def simulate_rig(
             prefix = f"{name},{sensor.name},{label}"
             extra = (
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
-            )
+            ) + (f",{ramp_s!r}" if ramp_s > 0 else "")
             lines += [
                 f"{prefix},{tt / scale[time_unit]:.9g},{f:g},{supply!r},{rm!r}{extra},{r}"
                 for tt, f, r in zip(logger_t, force, column, strict=True)

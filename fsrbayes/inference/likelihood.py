@@ -34,6 +34,7 @@ import numpy as np
 from scipy import special
 
 from ..data.creep import CreepData
+from ..physics.sensor import load_of_steps
 from ..utils import HALF_LOG_2PI
 
 __all__ = [
@@ -106,14 +107,33 @@ def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
     return tuple(np.concatenate(parts) for parts in zip(*out, strict=True))
 
 
+RAMP_STEPS = 16
+"""Steps that stand for a loading ramp: each 1/16 of the load, at the start of its 1/16."""
+
+
+def _history(test):
+    """Return a test's load steps, its first loading spread over its ramp (``ramp_s``).
+
+    A linear ramp is :data:`RAMP_STEPS` equal steps at ramp_s·k/n (k = 0 … n − 1): its strain
+    to first order in ramp_s/n, with a nonzero load from t = 0 on.
+    """
+    at, size = test.load_steps or (np.zeros(1), np.array([test.stress_Pa]))
+    if test.ramp_s <= 0:
+        return at, size
+    ramp_at = test.ramp_s * np.arange(RAMP_STEPS) / RAMP_STEPS
+    ramp_size = np.full(RAMP_STEPS, size[0] / RAMP_STEPS)
+    return np.concatenate([ramp_at, at[1:]]), np.concatenate([ramp_size, size[1:]])
+
+
 def load_step_arrays(tests):
     """Return (step_time, step_size), each (C, K), of tests whose load changes; None if none does.
 
-    A test holding one load is the single step (0, ``stress_Pa``); padding steps have size 0.
+    A test holding one load is the single step (0, ``stress_Pa``); a loading ramp (``ramp_s``)
+    becomes :data:`RAMP_STEPS` steps; padding steps have size 0.
     """
-    if all(t.load_steps is None for t in tests):
+    if all(t.load_steps is None and t.ramp_s <= 0 for t in tests):
         return None
-    histories = [t.load_steps or (np.zeros(1), np.array([t.stress_Pa])) for t in tests]
+    histories = [_history(t) for t in tests]
     n_steps = max(h[0].size for h in histories)
     step_time, step_size = np.zeros((len(tests), n_steps)), np.zeros((len(tests), n_steps))
     for i, (at, size) in enumerate(histories):
@@ -172,6 +192,7 @@ def _pack_rig(cls, tests, max_samples, bins_per_decade):
         scatter,
         quant,
         *(steps or (None, None)),
+        np.array([t.ramp_s for t in tests]) if any(t.ramp_s > 0 for t in tests) else None,
     )
 
 
@@ -207,6 +228,8 @@ class SpecimenData:
         Time (s) and signed size (Pa) of each test's load steps when the load changes within a
         test (padding: size 0); ``stress_Pa`` is then the first load. None: one step of
         ``stress_Pa`` at t = 0.
+    ramp_s : ndarray, shape (C,), optional
+        Each test's loading ramp in s (its first :data:`RAMP_STEPS` steps stand for it).
     """
 
     specimen: str
@@ -223,6 +246,7 @@ class SpecimenData:
     quant_var: np.ndarray = None
     step_time: np.ndarray = None
     step_size: np.ndarray = None
+    ramp_s: np.ndarray = None
 
     @classmethod
     def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
@@ -243,6 +267,7 @@ class SpecimenData:
             or t.quantum_A > 0
             or t.time_s.size > max_samples
             or t.load_steps is not None
+            or t.ramp_s > 0
             for t in tests
         )
         if rig:
@@ -325,6 +350,26 @@ class SpecimenData:
         """
         return None if self.step_time is None else (self.step_time, self.step_size)
 
+    def load_at(self, time_s):
+        """Return the momentary load in Pa of every test at ``time_s`` (C, T).
+
+        The steps' load, with a loading ramp rising linearly — floored at its first step's load
+        (1/:data:`RAMP_STEPS` of the weight), below which the contact law describes no contact.
+        """
+        time_s = np.broadcast_to(
+            np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
+        )
+        if self.step_time is None:
+            return np.broadcast_to(self.stress_Pa[:, None], time_s.shape)
+        load = load_of_steps(self.step_time, self.step_size, time_s)
+        if self.ramp_s is not None:
+            for i in np.flatnonzero(self.ramp_s > 0):
+                ramp, weight = self.ramp_s[i], self.step_size[i, :RAMP_STEPS].sum()
+                rising = time_s[i] < ramp
+                share = np.clip(time_s[i][rising] / ramp, 1.0 / RAMP_STEPS, 1.0)
+                load[i, rising] = weight * share
+        return load
+
     def series(self):
         """Series resistance of each test's circuit, shape (C,) (zeros at constant voltage)."""
         if self.extra_series is None:
@@ -355,6 +400,7 @@ class SpecimenData:
             self.quant_var,
             self.step_time,
             self.step_size,
+            self.ramp_s,
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())

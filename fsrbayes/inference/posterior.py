@@ -177,16 +177,17 @@ class LogPosterior(PriorScaledTarget):
         """
         params = {k: v[:, None, None] for k, v in self.parameters(x).items()}
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
+        steps = self.data.load_steps()
         solution = solve_current(
             params,
             self.data.voltage_V[:, None],
-            self.data.stress_Pa[:, None],
+            self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time),
             time,
             rheology=self.family,
             tunneling=self.tunneling,
             effects=self.effect_objects,
             extra_series=0.0 if self.data.extra_series is None else self.data.series()[:, None],
-            load_steps=self.data.load_steps(),
+            load_steps=steps,
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)

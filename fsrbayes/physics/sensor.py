@@ -230,9 +230,9 @@ def solve_current(
     :class:`~fsrbayes.physics.effects.Effect` objects. ``extra_series`` (Ω) is a resistance in
     series with the sensor (a divider's fixed resistor; ``voltage`` is then the supply).
     ``load_steps`` = (step_time, step_size), each (C, K), replaces the single step by a load
-    that changes in steps (a staircase, an unloading): ``stress`` is then ignored, the strain
-    follows by superposition (:func:`strain_of_steps`) and the contact and area laws see the
-    momentary load (:func:`load_of_steps`); ``time`` must then be (C, T).
+    that changes in steps (a staircase, an unloading): the strain follows by superposition
+    (:func:`strain_of_steps`) and the contact and area laws see the momentary load ``stress``
+    (C, T), by default the steps' own (:func:`load_of_steps`); ``time`` must then be (C, T).
 
     Returns
     -------
@@ -252,7 +252,8 @@ def solve_current(
             np.asarray(time, dtype=float), (step_time.shape[0], np.shape(time)[-1])
         )
         strain = strain_of_steps(params, step_time, step_size, time, family, effects)
-        stress = load_of_steps(step_time, step_size, time)
+        if stress is None:
+            stress = load_of_steps(step_time, step_size, time)
     return _solve_model(
         params, voltage, stress, strain, family, tunneling, effects, time, extra_series
     )
