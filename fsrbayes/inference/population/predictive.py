@@ -225,17 +225,10 @@ def drift_groups(
     return groups
 
 
-def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_grid=161):
-    """Return the sourcing voltage minimising |drift(time)| of a new specimen at one stress.
+def _drift_over_voltages(specimens, stress_Pa, v_range, time_s, n_grid):
+    """Return (VMIN, VMAX, grid, drift): each new specimen's drift on log-spaced voltages.
 
-    Each specimen's |drift| is evaluated on ``n_grid`` log-spaced voltages in ``v_range`` and
-    the minimum refined by a parabola through it and its neighbours (in log V).
-
-    Returns
-    -------
-    dict
-        ``{stress_Pa, v_range, median, q05, q95, at_boundary, drift_at_optimum: {q05, q50, q95}}``:
-        voltages in V, ``at_boundary`` the share of specimens whose optimum is an end of the range.
+    Specimens that leave the model's domain anywhere on the grid are dropped.
     """
     v_min, v_max = (float(v) for v in v_range)
     if not 0 < v_min < v_max:
@@ -248,6 +241,22 @@ def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_gri
         raise ValueError(
             f"no new specimen stays inside the model's domain over {v_min:g}–{v_max:g} V"
         )
+    return v_min, v_max, grid, drift
+
+
+def optimal_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_grid=161):
+    """Return the sourcing voltage minimising |drift(time)| of a new specimen at one stress.
+
+    Each specimen's |drift| is evaluated on ``n_grid`` log-spaced voltages in ``v_range`` and
+    the minimum refined by a parabola through it and its neighbours (in log V).
+
+    Returns
+    -------
+    dict
+        ``{stress_Pa, v_range, median, q05, q95, at_boundary, drift_at_optimum: {q05, q50, q95}}``:
+        voltages in V, ``at_boundary`` the share of specimens whose optimum is an end of the range.
+    """
+    v_min, v_max, grid, drift = _drift_over_voltages(specimens, stress_Pa, v_range, time_s, n_grid)
     size = np.abs(drift)
     best = np.argmin(size, axis=1)
     inner = np.clip(best, 1, n_grid - 2)
@@ -305,17 +314,7 @@ def zero_drift_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_
         of the root among them — None when fewer than half have one (a median of a minority
         would describe the exception, not the population).
     """
-    v_min, v_max = (float(v) for v in v_range)
-    if not 0 < v_min < v_max:
-        raise ValueError(f"voltage range must be 0 < VMIN < VMAX, got {v_range!r}")
-    grid = np.geomspace(v_min, v_max, n_grid)
-    grid[[0, -1]] = v_min, v_max
-    drift = specimens.drift(grid, [stress_Pa], time_s)[..., 0].reshape(-1, n_grid)
-    drift = drift[np.all(np.isfinite(drift), axis=1)]
-    if not len(drift):
-        raise ValueError(
-            f"no new specimen stays inside the model's domain over {v_min:g}–{v_max:g} V"
-        )
+    v_min, v_max, grid, drift = _drift_over_voltages(specimens, stress_Pa, v_range, time_s, n_grid)
     sign = np.sign(drift)
     change = (sign[:, :-1] * sign[:, 1:] <= 0) & (sign[:, :-1] != 0)
     has_root = change.any(axis=1)
