@@ -35,7 +35,8 @@ import numpy as np
 
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
-from .likelihood import SpecimenData, load_step_arrays
+from .likelihood import SpecimenData
+from .packing import load_step_arrays
 from .posterior import LogPosterior, noise_parameters
 
 __all__ = [

@@ -1,0 +1,163 @@
+"""Packing rig tests for the likelihood: log-spaced bins of high-rate logs, load steps, ramps.
+
+A high-rate log is reduced to log-spaced bins in time since each load step (:func:`bin_log_time`),
+whose sufficient statistics keep the likelihood exact where the model is straight across a bin;
+a test's load history (staircases, rests, a loading ramp) becomes arrays of load steps for the
+superposition in the forward model (:func:`load_step_arrays`); :func:`pack_rig` builds the
+padded arrays of :class:`~fsrbayes.inference.likelihood.SpecimenData` from them.
+"""
+
+import numpy as np
+
+__all__ = [
+    "BINS_PER_DECADE",
+    "MAX_RAW_SAMPLES",
+    "RAMP_STEPS",
+    "bin_log_time",
+    "load_step_arrays",
+    "pack_rig",
+]
+
+MAX_RAW_SAMPLES = 400
+"""Tests with more samples than this are reduced to log-spaced bins for inference."""
+BINS_PER_DECADE = 20
+"""Bins per decade of time since the load landed (12 % wide: the model is linear across one)."""
+
+
+def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
+    """Reduce one test's samples to log-spaced bins in time: sufficient statistics of each.
+
+    The first sample at t = 0 (the load's landing) keeps a bin of its own; the later ones fall
+    into bins whose edges are spaced ``bins_per_decade`` per decade from the first positive
+    time. For white noise of sd σ in the log-current and a model that is linear in t across a
+    bin, the samples' likelihood is exactly that of the bin's mean ȳ at the mean time t̄ with sd
+    σ/√n, times a factor in σ carried by the within-bin scatter S = Σ(y − ȳ)²
+    (:func:`log_likelihood_pointwise`): the posterior is unchanged by the binning.
+
+    Returns
+    -------
+    time, mean, count, scatter : ndarray
+        Per non-empty bin.
+    """
+    time_s = np.asarray(time_s, dtype=float)
+    log_current = np.asarray(log_current, dtype=float)
+    positive = time_s > 0
+    if not positive.any():
+        return time_s, log_current, np.ones(time_s.size), np.zeros(time_s.size)
+    first = time_s[positive][0]
+    index = np.full(time_s.size, -1)
+    index[positive] = np.floor(bins_per_decade * np.log10(time_s[positive] / first) + 1e-9).astype(
+        int
+    )
+    out = [
+        (
+            time_s[~positive],
+            log_current[~positive],
+            np.ones((~positive).sum()),
+            np.zeros((~positive).sum()),
+        )
+    ]
+    labels, start = np.unique(index[positive], return_index=True)
+    counts = np.diff(np.append(start, positive.sum()))
+    t, y = time_s[positive], log_current[positive]
+    sums = np.add.reduceat(y, start)
+    means = sums / counts
+    centred = y - np.repeat(means, counts)
+    out.append(
+        (
+            np.add.reduceat(t, start) / counts,
+            means,
+            counts.astype(float),
+            np.add.reduceat(centred**2, start),
+        )
+    )
+    return tuple(np.concatenate(parts) for parts in zip(*out, strict=True))
+
+
+RAMP_STEPS = 16
+"""Steps that stand for a loading ramp: each 1/16 of the load, at the start of its 1/16."""
+
+
+def _history(test):
+    """Return a test's load steps, its first loading spread over its ramp (``ramp_s``).
+
+    A linear ramp is :data:`RAMP_STEPS` equal steps at ramp_s·k/n (k = 0 … n − 1): its strain
+    to first order in ramp_s/n, with a nonzero load from t = 0 on.
+    """
+    at, size = test.load_steps or (np.zeros(1), np.array([test.stress_Pa]))
+    if test.ramp_s <= 0:
+        return at, size
+    ramp_at = test.ramp_s * np.arange(RAMP_STEPS) / RAMP_STEPS
+    ramp_size = np.full(RAMP_STEPS, size[0] / RAMP_STEPS)
+    return np.concatenate([ramp_at, at[1:]]), np.concatenate([ramp_size, size[1:]])
+
+
+def load_step_arrays(tests):
+    """Return (step_time, step_size), each (C, K), of tests whose load changes; None if none does.
+
+    A test holding one load is the single step (0, ``stress_Pa``); a loading ramp (``ramp_s``)
+    becomes :data:`RAMP_STEPS` steps; padding steps have size 0.
+    """
+    if all(t.load_steps is None and t.ramp_s <= 0 for t in tests):
+        return None
+    histories = [_history(t) for t in tests]
+    n_steps = max(h[0].size for h in histories)
+    step_time, step_size = np.zeros((len(tests), n_steps)), np.zeros((len(tests), n_steps))
+    for i, (at, size) in enumerate(histories):
+        step_time[i, : at.size], step_size[i, : size.size] = at, size
+    return step_time, step_size
+
+
+def _bin_segments(test, y, bins_per_decade):
+    """Log-spaced bins of each constant-load segment of a test, in time since its load step."""
+    if test.load_steps is None:
+        return bin_log_time(test.time_s, y, bins_per_decade)
+    edges = np.append(test.load_steps[0], np.inf)
+    parts = []
+    for start, end in zip(edges[:-1], edges[1:], strict=True):
+        inside = (test.time_s >= start) & (test.time_s < end)
+        if inside.any():
+            time, *rest = bin_log_time(test.time_s[inside] - start, y[inside], bins_per_decade)
+            parts.append((time + start, *rest))
+    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
+
+
+def pack_rig(cls, tests, max_samples, bins_per_decade):
+    """Pack tests with circuits, quantised readings, load steps or many samples (``from_tests``)."""
+    columns = []
+    for t in tests:
+        y = np.log(t.current_A)
+        if t.time_s.size > max_samples:
+            time, mean, count, scatter = _bin_segments(t, y, bins_per_decade)
+        else:
+            time, mean, count, scatter = t.time_s, y, np.ones(y.size), np.zeros(y.size)
+        quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(mean.size)
+        columns.append((time, mean, count, scatter, np.broadcast_to(quant, mean.shape)))
+    width = max(c[0].size for c in columns)
+    arrays = [np.empty((len(tests), width)) for _ in range(5)]
+    mask = np.zeros((len(tests), width), dtype=bool)
+    pad = (None, None, 1.0, 0.0, 0.0)
+    for i, column in enumerate(columns):
+        n = column[0].size
+        for array, values, fill in zip(arrays, column, pad, strict=True):
+            array[i, :n] = values
+            array[i, n:] = values[-1] if fill is None else fill
+        mask[i, :n] = True
+    time, logc, weight, scatter, quant = arrays
+    steps = load_step_arrays(tests)
+    return cls(
+        tests[0].specimen,
+        tests[0].sensor,
+        np.array([t.voltage_V for t in tests]),
+        np.array([t.stress_Pa for t in tests]),
+        time,
+        logc,
+        mask,
+        tuple(t.key for t in tests),
+        np.array([t.rm_ohm for t in tests], dtype=float),
+        weight,
+        scatter,
+        quant,
+        *(steps or (None, None)),
+        np.array([t.ramp_s for t in tests]) if any(t.ramp_s > 0 for t in tests) else None,
+    )
