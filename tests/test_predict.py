@@ -140,3 +140,18 @@ def test_predict_refuses_protocols_the_fit_cannot_answer(rig, tmp_path, capsys, 
 def test_predict_needs_a_fit(tmp_path, rig, capsys):
     assert main(["predict", str(tmp_path), str(rig["vout_V"])]) == 2
     assert "holds no posterior.nc" in capsys.readouterr().err
+
+
+def test_a_protocol_with_a_loading_ramp_is_predicted_as_it_is_fitted(tmp_path):
+    # the prediction packs a protocol as a fit does: with ramp_s the median follows the rising
+    # load through the first second (after its first 1/16, where the model's load is floored)
+    text, truth = simulate_rig(
+        1, reading="vout_V", ramp_s=1.0, weights_g=(200.0,), duration_s=10.0, rate_hz=100.0
+    )
+    path = write_rig(text, truth, tmp_path / "ramp.csv")[0]
+    fit = _point_mass_fit(tmp_path / "fit", truth, "fsr402-01")
+    (test,) = predict(fit, read_csv(path, readings="optional"), n_draws=200)["tests"]
+    t, q50 = np.asarray(test["time_s"]), np.asarray(test["q50"])
+    settling = (t > 0.2) & (t < 1.0)
+    observed = np.asarray(test["observed"])
+    assert np.abs(np.log(observed[settling] / q50[settling])).mean() < 0.02

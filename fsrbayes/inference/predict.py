@@ -29,6 +29,7 @@ the noise and the reading are drawn at every sample.
 """
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +37,6 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .packing import load_step_arrays
 from .posterior import LogPosterior, noise_parameters
 
 __all__ = [
@@ -196,20 +196,15 @@ def _predict_tests(folder, tests, n_draws, rng):
     times = [_model_times(t) for t in tests]
     width = max(t.size for t in times)
     grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
-    packed = SpecimenData(
-        tests[0].specimen,
-        tests[0].sensor,
-        np.array([t.voltage_V for t in tests]),
-        np.array([t.stress_Pa for t in tests]),
-        grid,
-        np.zeros_like(grid),
-        np.ones_like(grid, dtype=bool),
-        tuple(t.key for t in tests),
-        np.array([t.rm_ohm for t in tests]) if any(t.rm_ohm > 0 for t in tests) else None,
-        None,
-        None,
-        None,
-        *(load_step_arrays(tests) or (None, None)),
+    # the tests packed as for a fit (circuit, load steps, ramps), evaluated on the model times
+    packed = replace(
+        SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests)),
+        time_s=grid,
+        log_current=np.zeros_like(grid),
+        mask=np.ones_like(grid, dtype=bool),
+        weight=None,
+        scatter=None,
+        quant_var=None,
     )
     posterior, draws, attrs = _posterior_of(folder, packed)
     if attrs["sensor"] != tests[0].sensor:
@@ -218,8 +213,8 @@ def _predict_tests(folder, tests, n_draws, rng):
             f"protocol says {tests[0].sensor}"
         )
     # n_draws replicate readings per sample: the stored draws, subsampled or resampled
-    replace = draws.shape[0] < n_draws
-    draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=replace))]
+    resample = draws.shape[0] < n_draws
+    draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))]
     log_model = posterior.log_model_current(draws)
     params = posterior.parameters(draws)
     out = []
