@@ -55,7 +55,8 @@ def test_a_staircase_is_one_test_with_its_steps(tmp_path):
     np.testing.assert_allclose(at, [0.0, 20.0, 40.0], atol=0.05 + 1e-9)  # one sample
     np.testing.assert_allclose(np.cumsum(size), _stress(WEIGHTS), rtol=1e-6)
     assert test.stress_Pa == pytest.approx(_stress(WEIGHTS[0]), rel=1e-6)
-    np.testing.assert_allclose(test.load_at(np.array([1.0, 25.0, 59.0])), _stress(WEIGHTS))
+    load = SpecimenData.from_tests([test]).load_at(np.array([1.0, 25.0, 59.0]))[0]
+    np.testing.assert_allclose(load, _stress(WEIGHTS))
 
 
 def test_unloaded_rows_are_dropped_but_the_creep_goes_on_through_them(tmp_path):

@@ -418,10 +418,9 @@ def cmd_predict(args):
             if test["n_readings"]
             else ""
         )
-        end = -1
         print(
-            f"{test['specimen']} {label}: {result['reading']} at {test['time_s'][end]:g} s "
-            f"{test['q50'][end]:.4g} (90 %: {test['q05'][end]:.4g}..{test['q95'][end]:.4g})"
+            f"{test['specimen']} {label}: {result['reading']} at {test['time_s'][-1]:g} s "
+            f"{test['q50'][-1]:.4g} (90 %: {test['q05'][-1]:.4g}..{test['q95'][-1]:.4g})"
             f"{covered}{'' if test['fit_converged'] else ' [fit NOT converged]'}"
         )
     if result["coverage_90"] is not None:

@@ -92,14 +92,6 @@ class CreepTest:
     ramp_s: float = field(default=0.0, compare=False, repr=False)
     """Seconds the first loading takes, rising linearly from the onset (0: a step)."""
 
-    def load_at(self, time_s):
-        """Return the load in Pa at times since the onset (``stress_Pa`` without steps)."""
-        time_s = np.asarray(time_s, dtype=float)
-        if self.load_steps is None:
-            return np.where(time_s >= 0, self.stress_Pa, 0.0)
-        at, size = self.load_steps
-        return np.sum(size * (time_s[..., None] >= at), axis=-1)
-
     @property
     def key(self):
         """(specimen, voltage_V, stress_Pa, test): what identifies the test."""

@@ -286,6 +286,13 @@ def rig_tests(
     return tuple(tests)
 
 
+def _number_or_nan(field):
+    try:
+        return float(field)
+    except ValueError:
+        return np.nan
+
+
 LANDING_FRACTION = 0.1
 """A weight has landed where the current first reaches this fraction of the test's late level."""
 
@@ -300,13 +307,13 @@ def _landing(raw, idx, column, readout, decimal_comma):
     current here; the loaded rows are checked afterwards as always.
     """
     _, factor = column
-    values = np.empty(idx.size)
-    for j, i in enumerate(idx):
-        field = raw[i].strip().replace(",", ".") if decimal_comma else raw[i].strip()
-        try:
-            values[j] = float(field) * factor
-        except ValueError:
-            values[j] = np.nan
+    fields = [raw[i].strip() for i in idx]
+    if decimal_comma:
+        fields = [f.replace(",", ".") for f in fields]
+    try:
+        values = np.array(fields, dtype=float) * factor
+    except ValueError:
+        values = np.array([_number_or_nan(f) for f in fields]) * factor
     with np.errstate(divide="ignore", invalid="ignore"):
         current = np.nan_to_num(current_of(readout, values), nan=0.0, posinf=0.0)
     level = np.median(current[current.size // 2 :])

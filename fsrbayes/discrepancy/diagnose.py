@@ -304,6 +304,11 @@ def _candidates(step, model, effects, per_specimen, gap_ref):
     return out
 
 
+def _step_of(candidate):
+    """Return what :func:`~.verdict.verdict_of` reads of a greedy step's best candidate."""
+    return {k: candidate[k] for k in ("effect", "log_bf", "gap_after", "checks_fail")}
+
+
 def diagnose(
     data,
     base="burgers",
@@ -405,18 +410,10 @@ def diagnose(
     step_candidates = candidates
     if in_band and candidates:
         # The gap cannot see everything the evidence sees: the best candidate is still weighed.
-        best = candidates[0]
-        steps.append({k: best[k] for k in ("effect", "log_bf", "gap_after", "checks_fail")})
+        steps.append(_step_of(candidates[0]))
     while not in_band and step_candidates and len(steps) < MAX_EFFECTS:
         best = step_candidates[0]
-        steps.append(
-            {
-                "effect": best["effect"],
-                "log_bf": best["log_bf"],
-                "gap_after": best["gap_after"],
-                "checks_fail": best["checks_fail"],
-            }
-        )
+        steps.append(_step_of(best))
         verdict, _, _ = verdict_of(gap_before, True, band, steps, threshold)
         remaining.remove(best["effect"])
         if verdict != "partially-explained" or not remaining or len(steps) == MAX_EFFECTS:

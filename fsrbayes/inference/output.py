@@ -145,7 +145,11 @@ def summary(result, tree):
     data = posterior.data
     drift = tree.posterior_predictive["drift_3600"].values
     observed = tree.constant_data["observed_drift_3600"].values
-    segments = segment_drifts(posterior, result.draws(400).reshape(-1, posterior.ndim))
+    segments = (
+        [None] * data.n_tests
+        if data.step_time is None
+        else segment_drifts(posterior, result.draws(400).reshape(-1, posterior.ndim))
+    )
     tests = [
         {
             "specimen": data.specimen,
