@@ -1,6 +1,6 @@
 """Vectorised current solver versus a per-point ``scipy.optimize.brentq`` loop.
 
-The smooth law is timed with both engines (compiled, numpy) in the same run.
+Both laws are timed with both engines (compiled, numpy) in the same run.
 
 The per-point loop is how a Matlab ``fzero`` script solves the implicit equation
 V = V_bulk + 2·Rc·I(V_bulk): one scalar root-find per (voltage, stress, time) point, calling
@@ -57,7 +57,12 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
     v, rs, s, phi, a, vth = _workload(params, n_walkers, rng)
     n = v.size
     rows = []
-    for law, engine in (("smooth", "compiled"), ("smooth", "numpy"), ("paper", "numpy")):
+    for law, engine in (
+        ("smooth", "compiled"),
+        ("smooth", "numpy"),
+        ("paper", "compiled"),
+        ("paper", "numpy"),
+    ):
         threshold = vth if law == "paper" else None
         solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine)
         seconds = _time(

@@ -271,7 +271,23 @@ def test_compiled_engine_matches_the_numpy_reference_point_by_point(rng):
     assert compiled.iterations == reference.iterations
 
 
-def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng):
+def test_compiled_paper_law_matches_the_numpy_reference_point_by_point(rng):
+    """Every branch of the paper law: eq. 9's closed form, eqs. 10 and 11, the jump points,
+    roots past eq. 11's peak, thresholds that are NaN or not below Va."""
+    inputs = _hostile_inputs(rng, 20000)
+    threshold = np.exp(rng.normal(np.log(0.07), 0.6, 20000))
+    threshold[rng.random(20000) < 0.01] = np.nan
+    compiled = solve_bulk(*inputs, law="paper", threshold=threshold)
+    reference = solve_bulk(*inputs, law="paper", threshold=threshold, engine="numpy")
+    assert set(np.unique(reference.regime)) == {0, 1, 2, 3, 5}
+    past_peak = ~reference.valid & (inputs[0] > 0) & tl.smooth_law_is_valid(inputs[2], inputs[3])
+    assert past_peak.sum() > 10
+    _assert_same_solution(compiled, reference)
+    assert compiled.iterations == reference.iterations
+
+
+@pytest.mark.parametrize("law", ["smooth", "paper"])
+def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng, law):
     """Walkers × tests × times, as the likelihood calls it: along a row only the gap creeps and
     Newton starts from the previous sample's root; the answer must not depend on that start."""
     walkers = {k: v * np.exp(0.2 * rng.standard_normal((6, 1, 1))) for k, v in a201.items()}
@@ -280,15 +296,23 @@ def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng):
     t = np.concatenate([[0.0], np.geomspace(1, 3600, 40)])
     s, area, series = sensor_state(walkers, sigma, creep_strain(sigma, t, walkers))
     args = (voltage, series, s, walkers["Va"], area)
-    compiled = solve_bulk(*args)
+    threshold = walkers["Vth"] if law == "paper" else None
+    compiled = solve_bulk(*args, law=law, threshold=threshold)
+    above_va = 4 if law == "smooth" else 3
     assert (
         compiled.valid.mean() > 0.9
-        and (compiled.regime == 4).any()
+        and (compiled.regime == above_va).any()
         and (compiled.regime == 2).any()
     )
-    _assert_same_solution(compiled, solve_bulk(*args, engine="numpy"))
+    _assert_same_solution(compiled, solve_bulk(*args, law=law, threshold=threshold, engine="numpy"))
     # Time reversed: the warm starts come from the other side.
-    backwards = solve_bulk(*(np.broadcast_to(x, s.shape)[..., ::-1] for x in args))
+    if threshold is not None:
+        args = (*args, threshold)
+    backwards = solve_bulk(
+        *(np.broadcast_to(x, s.shape)[..., ::-1] for x in args[:5]),
+        law=law,
+        threshold=None if threshold is None else np.broadcast_to(threshold, s.shape)[..., ::-1],
+    )
     _assert_same_solution(
         backwards,
         compiled.__class__(

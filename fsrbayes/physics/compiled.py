@@ -1,13 +1,14 @@
-"""The smooth law's bulk-voltage solver compiled point by point with numba.
+"""The bulk-voltage solver of both tunneling laws compiled point by point with numba.
 
 The same algorithm as :mod:`fsrbayes.physics.solver` (bracketed Newton in the logit
-ℓ = log(V_bulk/(V − V_bulk)) of eqs. 19–21, eq. 10 below Va, the shortened-barrier forward
-law above it, bisection when a step leaves the bracket, the last step below ``finish`` taken
-without another evaluation), written as one loop over points instead of chains of numpy
-operations on masked arrays. Each point stops at its own convergence, nothing is allocated
-per iteration, and the transcendental functions run back to back, so it is several times faster
-than the numpy version (BENCHMARKS.md), which stays the reference
-(``solve_bulk(..., engine="numpy")``) and the paper law's solver.
+ℓ = log(V_bulk/(V − V_bulk)) of eqs. 19–21, bisection when a step leaves the bracket, the last
+step below ``finish`` taken without another evaluation) for the smooth law (eq. 10 below Va,
+the shortened-barrier forward law above it) and the paper law (eq. 9's closed-form root below
+Vth, eq. 10, the corrected eq. 11 up to its peak, the jump points between them), written as one
+loop over points instead of chains of numpy operations on masked arrays. Each point stops at its
+own convergence, nothing is allocated per iteration, and the transcendental functions run back
+to back, so it is faster than the numpy version (BENCHMARKS.md), which stays the reference
+(``solve_bulk(..., engine="numpy")``).
 
 The results agree with the numpy solver to rounding (the tests compare both on random and
 edge-case inputs); regimes and validity are decided by the same comparisons, so they agree
@@ -16,7 +17,7 @@ installation compiles for a few seconds, later processes load the cache.
 
 References
 ----------
-Paredes-Madrid et al. 2017, eqs. (10), (19)–(21); Simmons 1963, eqs. (20), (27)–(28).
+Paredes-Madrid et al. 2017, eqs. (9)–(11), (19)–(21); Simmons 1963, eqs. (20), (27)–(28), (30).
 """
 
 import math
@@ -27,7 +28,7 @@ import numpy as np
 from . import tunneling as tl
 from .constants import CURRENT_SCALE, KAPPA
 
-__all__ = ["solve_smooth"]
+__all__ = ["solve_compiled"]
 
 _SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = (
     float(tl.SQRT_HALF),
@@ -35,8 +36,10 @@ _SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = (
     float(tl.OPACITY_LIMIT),
 )
 _LOG_CURRENT_SCALE = math.log(CURRENT_SCALE)
+_PEAK_TABLE = np.stack(tl.PAPER_PEAK_TABLE)
 _LOG_TWO = math.log(2.0)
-_INVALID, _OHMIC, _INTERMEDIATE, _FORWARD = 0, 1, 2, 4
+_INVALID, _OHMIC, _INTERMEDIATE, _HIGH, _FORWARD, _JUMP = range(6)
+"""The solver's regime codes (``solver.REGIMES``); a branch is named by its regime."""
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 """numpy's error model: x/0 gives ±inf or NaN, as in the numpy solver, instead of raising."""
 
@@ -54,6 +57,9 @@ _intermediate = numba.njit(**_JIT)(tl.evaluate_intermediate)
 compiled."""
 _forward = numba.njit(**_JIT)(tl.evaluate_forward)
 """The smooth law above Va — :func:`~fsrbayes.physics.tunneling.evaluate_forward` compiled."""
+_high = numba.njit(**_JIT)(tl.evaluate_high_voltage)
+"""The paper law above Va, eq. 11 corrected —
+:func:`~fsrbayes.physics.tunneling.evaluate_high_voltage` compiled."""
 
 
 @numba.njit(**_JIT)
@@ -85,9 +91,12 @@ def _forward_constants(ks, va, sqrt_va, log_va, log_pre10):
 
 
 @numba.njit(**_JIT)
-def _evaluate(forward, x, log_x, c0, c1, c2, c3):
-    if forward:
+def _evaluate(branch, x, log_x, c0, c1, c2, c3):
+    """(log I, d log I/dV) of the branch named by its regime code."""
+    if branch == _FORWARD:
         return _forward(x, log_x, c0, c1, c2, c3)
+    if branch == _HIGH:
+        return _high(x, log_x, c0, c1, c2)
     return _intermediate(x, log_x, c0, c1, c2)
 
 
@@ -112,7 +121,7 @@ def _fallback(lo, hi):
 
 
 @numba.njit(**_JIT)
-def _newton(forward, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_iter):
+def _newton(branch, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_iter):
     """Bracketed Newton in ℓ on one branch for one point: (x, log I, ℓ at the root, iterations).
 
     ``c0`` already holds log(R_s), so h = log I − log(V − x) (``solver._newton_block``).
@@ -125,7 +134,7 @@ def _newton(forward, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_it
         share = 1.0 / (1.0 + odds_inv)
         rest = odds_inv * share
         x = v * share
-        log_i, slope = _evaluate(forward, x, log_v - log_odds, c0, c1, c2, c3)
+        log_i, slope = _evaluate(branch, x, log_v - log_odds, c0, c1, c2, c3)
         h = log_i - log_v + ell + log_odds
         if h > 0:
             hi = ell
@@ -205,7 +214,7 @@ def _solve_row_point(
                 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity))
             )
         x, log_i, ell, its = _newton(
-            False,
+            _INTERMEDIATE,
             v,
             log_v,
             0.0,
@@ -221,24 +230,166 @@ def _solve_row_point(
     else:
         log_pre, g, log_w_offset, rho = _forward_constants(ks, va, sqrt_va, log_va, log_pre10)
         x, log_i, ell, its = _newton(
-            True, v, log_v, va, v, start, log_pre + log_rs, g, log_w_offset, rho, finish, max_iter
+            _FORWARD,
+            v,
+            log_v,
+            va,
+            v,
+            start,
+            log_pre + log_rs,
+            g,
+            log_w_offset,
+            rho,
+            finish,
+            max_iter,
         )
     return log_i - log_rs, x, regime, ell, its
 
 
 @numba.njit(**_JIT)
-def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_bulk, regime):
+def _peak_voltage(ks, sqrt_va, va, peak_log_b, peak_log_u):
+    """Return where eq. 11 stops increasing, but not below Va (``tunneling.paper_peak_voltage``).
+
+    np.interp on the table, its bin found from the log-uniform grid instead of by bisection.
+    """
+    log_b = math.log((2.0 / 2.96) * ks * sqrt_va)
+    last = peak_log_b.size - 1
+    position = (log_b - peak_log_b[0]) / (peak_log_b[last] - peak_log_b[0]) * last
+    if not position > 0:
+        log_u = peak_log_u[0]
+    elif position >= last:
+        log_u = peak_log_u[last]
+    else:
+        j = min(int(position), last - 1)
+        while j > 0 and peak_log_b[j] > log_b:
+            j -= 1
+        while j < last - 1 and peak_log_b[j + 1] <= log_b:
+            j += 1
+        slope = (peak_log_u[j + 1] - peak_log_u[j]) / (peak_log_b[j + 1] - peak_log_b[j])
+        log_u = slope * (log_b - peak_log_b[j]) + peak_log_u[j]
+    return max(va * math.exp(log_u), va)
+
+
+@numba.njit(**_JIT)
+def _paper_branch_h(branch, x, v, log_rs, c0, c1, c2):
+    """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch (``solver._branch_h``)."""
+    return log_rs + _evaluate(branch, x, _log(x), c0, c1, c2, 0.0)[0] - _log(v - x)
+
+
+@numba.njit(**_JIT)
+def _solve_paper_point(
+    v,
+    log_v,
+    rs,
+    log_rs,
+    va,
+    sqrt_va,
+    log_va,
+    log_a,
+    vth,
+    s,
+    warm_ell,
+    warm_regime,
+    peak_table,
+    finish,
+    max_iter,
+):
+    """One valid point with V > 0 of the paper law: (|I|, V_bulk, regime, ℓ, iterations).
+
+    The decisions of ``solver._solve_block`` for ``law="paper"``, in the same order: eq. 9's
+    closed-form root if it lies below Vth; else the branch holding the root from the sign of
+    eq. 10's h at Va; the jump point if h is already ≥ 0 at the branch's lower end; outside
+    the domain if the root lies past eq. 11's peak; else Newton on the branch, warm-started
+    from the previous point's root on the same branch.
+    """
+    ks = KAPPA * s
+    opacity = ks * sqrt_va
+    log_pre10 = _log_prefactor_10(log_a, s)
+    log_g9 = _log_ohmic_conductance(opacity, log_pre10)
+    log_pre_high = log_pre10 + math.log(0.55) - log_va
+    c_high = (2.0 / 2.96) * ks * va * sqrt_va
+    if rs == 0:
+        # No series resistance: the whole voltage is across the bulk.
+        if v < vth:
+            return v * math.exp(log_g9), v, _OHMIC, math.nan, 0
+        if v < va:
+            return (
+                math.exp(_intermediate(v, log_v, log_pre10, ks, va)[0]),
+                v,
+                _INTERMEDIATE,
+                math.nan,
+                0,
+            )
+        if v > _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1]):
+            return math.nan, math.nan, _INVALID, math.nan, 0
+        return math.exp(_high(v, log_v, log_pre_high, c_high, va)[0]), v, _HIGH, math.nan, 0
+    conductance = math.exp(log_g9)
+    x_ohmic = v / (1.0 + rs * conductance)
+    if x_ohmic < vth:  # eq. 9 is linear: its root is closed form
+        return x_ohmic * conductance, x_ohmic, _OHMIC, math.nan, 0
+    h10_va = math.inf
+    if v > va:
+        h10_va = _paper_branch_h(_INTERMEDIATE, va, v, log_rs, log_pre10, ks, va)
+    peak = math.nan
+    if h10_va >= 0:
+        branch, lower, upper, c0, c1 = _INTERMEDIATE, vth, min(v, va), log_pre10, ks
+    elif h10_va < 0:
+        peak = _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1])
+        branch, lower, upper, c0, c1 = _HIGH, va, min(v, peak), log_pre_high, c_high
+    else:
+        return math.nan, math.nan, _INVALID, math.nan, 0
+    if _paper_branch_h(branch, lower, v, log_rs, c0, c1, va) >= 0:
+        # The circuit line passes the law's jump: the current is set by the series resistance.
+        return (v - lower) / rs, lower, _JUMP, math.nan, 0
+    if branch == _HIGH and v > peak and _paper_branch_h(_HIGH, peak, v, log_rs, c0, c1, va) < 0:
+        return math.nan, math.nan, _INVALID, math.nan, 0
+    start = warm_ell
+    if warm_regime != branch:
+        start = -(log_rs + log_g9 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
+    x, log_i, ell, its = _newton(
+        branch, v, log_v, lower, upper, start, c0 + log_rs, c1, va, 0.0, finish, max_iter
+    )
+    return math.exp(log_i - log_rs), x, branch, ell, its
+
+
+@numba.njit(**_JIT)
+def _solve_short_smooth(v, log_v, s, va, sqrt_va, log_va, log_a):
+    """Solve the smooth law with no series resistance: (|I|, regime) at V_bulk = V."""
+    log_pre10 = _log_prefactor_10(log_a, s)
+    if v <= va:
+        return math.exp(_intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]), _INTERMEDIATE
+    constants = _forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10)
+    return math.exp(_forward(v, log_v, *constants)[0]), _FORWARD
+
+
+@numba.njit(**_JIT)
+def _solve_all(
+    voltage,
+    rs_in,
+    s_in,
+    va_in,
+    a_in,
+    vth_in,
+    paper,
+    peak_table,
+    finish,
+    max_iter,
+    current,
+    v_bulk,
+    regime,
+):
     """Fill ``current``, ``v_bulk``, ``regime`` point by point; returns the most iterations.
 
-    A *row* is a run of consecutive points sharing V, R_s, Va and A (one creep test of one
-    walker: only the gap s creeps along it). Row constants are computed once, and each point
-    starts Newton from the previous point's root when both lie on the same branch: the gap moves
-    little between samples, so Newton needs about two evaluations instead of four. The warm
-    start changes the result only at rounding level (Newton's last step leaves ~finish²).
+    A *row* is a run of consecutive points sharing V, R_s, Va, A (and Vth for the paper law):
+    one creep test of one walker, along which only the gap s creeps. Row constants are computed
+    once, and each point starts Newton from the previous point's root when both lie on the same
+    branch: the gap moves little between samples, so Newton needs about two evaluations instead
+    of four. The warm start changes the result only at rounding level (Newton's last step leaves
+    ~finish²).
     """
     iterations = 0
     n = voltage.size
-    v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = math.nan
+    v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = vth = math.nan
     row_ok = False
     warm_ell, warm_regime = math.nan, -1
     for i in range(n):
@@ -248,6 +399,7 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
             and rs == rs_in[i - 1]
             and va == va_in[i - 1]
             and a == a_in[i - 1]
+            and (not paper or vth_in[i] == vth_in[i - 1])
         ):
             v = abs(voltage[i])
             sign = 1.0 if voltage[i] > 0 else (-1.0 if voltage[i] < 0 else 0.0)
@@ -260,6 +412,9 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
                 and va > 0
                 and math.isfinite(va)
             )
+            if paper:
+                vth = vth_in[i]
+                row_ok = row_ok and math.isfinite(vth) and vth > 0 and vth < va
             if row_ok:
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
                 log_v, log_rs = _log(v), _log(rs)
@@ -274,61 +429,77 @@ def _solve_all(voltage, rs_in, s_in, va_in, a_in, finish, max_iter, current, v_b
             log_g9 = _log_ohmic_conductance(KAPPA * s * sqrt_va, _log_prefactor_10(log_a, s))
             current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, _OHMIC
             continue
-        if rs == 0:
-            # No series resistance: the whole voltage is across the bulk.
-            log_pre10 = _log_prefactor_10(log_a, s)
-            if v <= va:
-                log_i = _intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]
-                regime[i] = _INTERMEDIATE
-            else:
-                log_i = _forward(
-                    v, log_v, *_forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10)
-                )[0]
-                regime[i] = _FORWARD
-            current[i], v_bulk[i] = sign * math.exp(log_i), sign * v
-            continue
-        log_i, x, point_regime, ell, its = _solve_row_point(
-            v,
-            log_v,
-            log_rs,
-            log_v_minus_va,
-            s,
-            va,
-            sqrt_va,
-            log_va,
-            log_a,
-            warm_ell,
-            warm_regime,
-            finish,
-            max_iter,
-        )
+        if paper:
+            magnitude, x, point_regime, ell, its = _solve_paper_point(
+                v,
+                log_v,
+                rs,
+                log_rs,
+                va,
+                sqrt_va,
+                log_va,
+                log_a,
+                vth,
+                s,
+                warm_ell,
+                warm_regime,
+                peak_table,
+                finish,
+                max_iter,
+            )
+        elif rs == 0:
+            magnitude, point_regime = _solve_short_smooth(v, log_v, s, va, sqrt_va, log_va, log_a)
+            x, ell, its = v, math.nan, 0
+        else:
+            log_i, x, point_regime, ell, its = _solve_row_point(
+                v,
+                log_v,
+                log_rs,
+                log_v_minus_va,
+                s,
+                va,
+                sqrt_va,
+                log_va,
+                log_a,
+                warm_ell,
+                warm_regime,
+                finish,
+                max_iter,
+            )
+            magnitude = math.exp(log_i)
         regime[i] = point_regime
         if point_regime == _INVALID:
             current[i], v_bulk[i] = math.nan, math.nan
             warm_ell, warm_regime = math.nan, -1
             continue
-        current[i], v_bulk[i] = sign * math.exp(log_i), sign * x
-        warm_ell, warm_regime = ell, point_regime
-        iterations = max(iterations, its)
+        current[i], v_bulk[i] = sign * magnitude, sign * x
+        if its > 0:
+            warm_ell, warm_regime = ell, point_regime
+            iterations = max(iterations, its)
     return iterations
 
 
-def solve_smooth(voltage, series_resistance, gap, barrier, area, finish, max_iter):
-    """Solve the smooth law's circuit equation on flat float64 arrays of equal length.
+def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, finish, max_iter):
+    """Solve the circuit equation point by point on flat float64 arrays of equal length.
 
-    Returns (current, v_bulk, regime, iterations) as :func:`~fsrbayes.physics.solver.solve_bulk`
-    fills them: NaN current and V_bulk where the regime is invalid (0).
+    ``threshold`` (Vth, V) selects the paper law; None the smooth law. Returns (current, v_bulk,
+    regime, iterations) as :func:`~fsrbayes.physics.solver.solve_bulk` fills them: NaN current
+    and V_bulk where the regime is invalid (0).
     """
     n = voltage.size
     current = np.empty(n)
     v_bulk = np.empty(n)
     regime = np.empty(n, dtype=np.int8)
+    paper = threshold is not None
     iterations = _solve_all(
         voltage,
         series_resistance,
         gap,
         barrier,
         area,
+        threshold if paper else voltage,
+        paper,
+        _PEAK_TABLE,
         float(finish),
         int(max_iter),
         current,

@@ -231,10 +231,9 @@ def solve_bulk(
     max_iter : int
         Hard cap on the iterations (bisection guarantees progress).
     engine : {"compiled", "numpy"}
-        For the smooth law, ``"compiled"`` solves point by point in numba
-        (:mod:`fsrbayes.physics.compiled`, several times faster); ``"numpy"`` runs this module's
-        array version, the reference the compiled one is tested against. The paper law is
-        always solved in numpy.
+        ``"compiled"`` solves point by point in numba (:mod:`fsrbayes.physics.compiled`, faster);
+        ``"numpy"`` runs this module's array version, the reference the compiled one is tested
+        against.
 
     Returns
     -------
@@ -254,8 +253,8 @@ def solve_bulk(
     flat = [np.ascontiguousarray(x).ravel() for x in arrays]
     if law != "paper":
         flat.append(None)
-    if law == "smooth" and engine == "compiled":
-        current, v_bulk, regime, iterations = compiled.solve_smooth(*flat[:5], finish, max_iter)
+    if engine == "compiled":
+        current, v_bulk, regime, iterations = compiled.solve_compiled(*flat, finish, max_iter)
     else:
         current, v_bulk, regime, iterations = _solve_blocks(flat, law, finish, max_iter)
     valid = regime != INVALID

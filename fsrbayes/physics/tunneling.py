@@ -96,17 +96,6 @@ def evaluate_intermediate(v_bulk, log_v, log_prefactor, ks, barrier):
     return log_current, slope
 
 
-def _high_voltage_terms(v_bulk, c, barrier):
-    """Forward and reverse terms of eq. 11 (corrected) and their V-derivatives."""
-    q = np.sqrt(1.0 + 2.0 * v_bulk / barrier)
-    forward = np.exp(-c / v_bulk)
-    e_rev = np.exp(-c * q / v_bulk)
-    reverse = q * q * e_rev
-    d_forward = forward * c / v_bulk**2
-    d_reverse = e_rev * (2.0 / barrier - q * q * c * (1.0 / (barrier * q * v_bulk) - q / v_bulk**2))
-    return forward, reverse, d_forward, d_reverse
-
-
 def prepare_high_voltage(gap, barrier, area):
     """Constants of eq. 11: log(2.2 e² A/(8πh Va s²)), c = (2/2.96)κ s Va^1.5, Va."""
     return (
@@ -117,9 +106,18 @@ def prepare_high_voltage(gap, barrier, area):
 
 
 def evaluate_high_voltage(v_bulk, log_v, log_prefactor, c, barrier):
-    """Log-current and slope of the corrected eq. 11 where it is positive."""
-    forward, reverse, d_forward, d_reverse = _high_voltage_terms(v_bulk, c, barrier)
-    diff = forward - reverse
+    """Log-current and slope of the corrected eq. 11 where it is positive.
+
+    With q = sqrt(1 + 2V/Va): I ∝ V²·[e^{−c/V} − q²·e^{−c·q/V}] (forward minus reverse term).
+    Self-contained (numpy functions only), so that :mod:`fsrbayes.physics.compiled` compiles it
+    as it stands.
+    """
+    q = np.sqrt(1.0 + 2.0 * v_bulk / barrier)
+    forward = np.exp(-c / v_bulk)
+    e_rev = np.exp(-c * q / v_bulk)
+    d_forward = forward * c / v_bulk**2
+    d_reverse = e_rev * (2.0 / barrier - q * q * c * (1.0 / (barrier * q * v_bulk) - q / v_bulk**2))
+    diff = forward - q * q * e_rev
     log_current = log_prefactor + 2.0 * log_v + np.log(diff)
     slope = 2.0 / v_bulk + (d_forward - d_reverse) / diff
     return log_current, slope
@@ -240,8 +238,9 @@ def simmons_high_voltage(v_bulk, gap, barrier, area):
     """
     v_bulk = np.asarray(v_bulk, dtype=float)
     c = (2.0 / 2.96) * KAPPA * gap * barrier**1.5
-    forward, reverse, _, _ = _high_voltage_terms(v_bulk, c, barrier)
-    return 0.55 * CURRENT_SCALE * area * v_bulk**2 / (barrier * gap**2) * (forward - reverse)
+    q = np.sqrt(1.0 + 2.0 * v_bulk / barrier)
+    bracket = np.exp(-c / v_bulk) - q * q * np.exp(-c * q / v_bulk)
+    return 0.55 * CURRENT_SCALE * area * v_bulk**2 / (barrier * gap**2) * bracket
 
 
 def simmons_forward_shortened(v_bulk, gap, barrier, area):
@@ -345,7 +344,8 @@ def _tabulate_eq11_peak(n=4097, b_min=0.05, b_max=400.0):
     return np.log(b), np.log(np.sqrt(lo * hi))
 
 
-_PEAK_LOG_B, _PEAK_LOG_U = _tabulate_eq11_peak()
+PAPER_PEAK_TABLE = _tabulate_eq11_peak()
+"""(log b, log u*(b)) on a log-uniform grid of b: where eq. 11 stops increasing, V = Va·u*."""
 
 
 def paper_peak_voltage(gap, barrier):
@@ -359,4 +359,4 @@ def paper_peak_voltage(gap, barrier):
     barrier = np.asarray(barrier, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
         log_b = np.log((2.0 / 2.96) * KAPPA * gap * np.sqrt(barrier))
-    return barrier * np.exp(np.interp(log_b, _PEAK_LOG_B, _PEAK_LOG_U))
+    return barrier * np.exp(np.interp(log_b, *PAPER_PEAK_TABLE))
