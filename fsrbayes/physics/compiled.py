@@ -25,140 +25,34 @@ import math
 import numba
 import numpy as np
 
-from . import tunneling as tl
-from .constants import CURRENT_SCALE, KAPPA
+from .compiled_kernels import (
+    FORWARD,
+    HIGH,
+    INTERMEDIATE,
+    INVALID,
+    JIT,
+    JUMP,
+    OHMIC,
+    OPACITY_LIMIT,
+    PEAK_TABLE,
+    SQRT_HALF,
+    SQRT_THREE_HALVES,
+    evaluate_branch,
+    forward,
+    forward_constants,
+    high,
+    intermediate,
+    log_ohmic_conductance,
+    log_or_nan,
+    log_prefactor_10,
+    newton_in_logit,
+)
+from .constants import KAPPA
 
 __all__ = ["solve_compiled"]
 
-_SQRT_HALF, _SQRT_THREE_HALVES, _OPACITY_LIMIT = (
-    float(tl.SQRT_HALF),
-    float(tl.SQRT_THREE_HALVES),
-    float(tl.OPACITY_LIMIT),
-)
-_LOG_CURRENT_SCALE = math.log(CURRENT_SCALE)
-_PEAK_TABLE = np.stack(tl.PAPER_PEAK_TABLE)
-_LOG_TWO = math.log(2.0)
-_INVALID, _OHMIC, _INTERMEDIATE, _HIGH, _FORWARD, _JUMP = range(6)
-"""The solver's regime codes (``solver.REGIMES``); a branch is named by its regime."""
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-"""numpy's error model: x/0 gives ±inf or NaN, as in the numpy solver, instead of raising."""
 
-
-@numba.njit(**_JIT)
-def _log(x):
-    """np.log's values: −inf at 0, NaN below."""
-    if x > 0:
-        return math.log(x)
-    return -math.inf if x == 0 else math.nan
-
-
-_intermediate = numba.njit(**_JIT)(tl.evaluate_intermediate)
-"""Eq. 10: (log I, d log I/dV) at V_bulk — :func:`~fsrbayes.physics.tunneling.evaluate_intermediate`
-compiled."""
-_forward = numba.njit(**_JIT)(tl.evaluate_forward)
-"""The smooth law above Va — :func:`~fsrbayes.physics.tunneling.evaluate_forward` compiled."""
-_high = numba.njit(**_JIT)(tl.evaluate_high_voltage)
-"""The paper law above Va, eq. 11 corrected —
-:func:`~fsrbayes.physics.tunneling.evaluate_high_voltage` compiled."""
-
-
-@numba.njit(**_JIT)
-def _log_prefactor_10(log_a, s):
-    """log(A e²/(2πh s²)): eq. 10's prefactor (``tunneling.prepare_intermediate``) from log A."""
-    return _LOG_CURRENT_SCALE + log_a - 2.0 * math.log(s)
-
-
-@numba.njit(**_JIT)
-def _log_ohmic_conductance(opacity, log_pre10):
-    """Return eq. 9's log conductance.
-
-    Eq. 9's log conductance, log(0.75·κ s sqrt(Va)·A e²/(2πh s²)) − κ s sqrt(Va)
-    (``tunneling.log_ohmic_conductance``).
-    """
-    return math.log(0.75 * opacity) + log_pre10 - opacity
-
-
-@numba.njit(**_JIT)
-def _forward_constants(ks, va, sqrt_va, log_va, log_pre10):
-    """Return ``tunneling.prepare_forward``'s constants from row constants.
-
-    ``tunneling.prepare_forward`` from row constants: log(A e²/(4πh s² Va)), g = κ s Va^1.5/√2, the
-    log-w offset and ρ.
-    """
-    g = ks * va * sqrt_va * _SQRT_HALF
-    rho = 3.0 * math.exp(-ks * sqrt_va * (_SQRT_THREE_HALVES - _SQRT_HALF))
-    return log_pre10 - _LOG_TWO - log_va, g, g / va - 2.0 * log_va, rho
-
-
-@numba.njit(**_JIT)
-def _evaluate(branch, x, log_x, c0, c1, c2, c3):
-    """(log I, d log I/dV) of the branch named by its regime code."""
-    if branch == _FORWARD:
-        return _forward(x, log_x, c0, c1, c2, c3)
-    if branch == _HIGH:
-        return _high(x, log_x, c0, c1, c2)
-    return _intermediate(x, log_x, c0, c1, c2)
-
-
-@numba.njit(**_JIT)
-def _logit(x, v):
-    if x <= 0.0:
-        return -math.inf
-    if x >= v:
-        return math.inf
-    return math.log(x / (v - x))
-
-
-@numba.njit(**_JIT)
-def _fallback(lo, hi):
-    """Bisection in ℓ, or a step of 4 towards an infinite end of the bracket."""
-    finite_lo, finite_hi = math.isfinite(lo), math.isfinite(hi)
-    if finite_lo and finite_hi:
-        return 0.5 * (lo + hi)
-    if finite_lo:
-        return lo + 4.0
-    return hi - 4.0
-
-
-@numba.njit(**_JIT)
-def _newton(branch, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_iter):
-    """Bracketed Newton in ℓ on one branch for one point: (x, log I, ℓ at the root, iterations).
-
-    ``c0`` already holds log(R_s), so h = log I − log(V − x) (``solver._newton_block``).
-    """
-    lo, hi = _logit(lo_x, v), _logit(hi_x, v)
-    ell = start if (start > lo and start < hi) else _fallback(lo, hi)
-    for iteration in range(1, max_iter + 1):
-        odds_inv = math.exp(-ell)
-        log_odds = math.log(1.0 + odds_inv)
-        share = 1.0 / (1.0 + odds_inv)
-        rest = odds_inv * share
-        x = v * share
-        log_i, slope = _evaluate(branch, x, log_v - log_odds, c0, c1, c2, c3)
-        h = log_i - log_v + ell + log_odds
-        if h > 0:
-            hi = ell
-        else:
-            lo = ell
-        step = -h / (x * rest * slope + share)
-        ell_new = ell + step
-        done = (
-            (abs(step) <= finish and ell_new >= lo and ell_new <= hi)
-            or h == 0
-            or not hi > lo
-            or iteration == max_iter
-        )
-        if done:
-            ell_root = ell if h == 0 else ell_new
-            x_done = v / (1.0 + math.exp(-ell_root))
-            return x_done, log_i + slope * (x_done - x), ell_root, iteration
-        if not (ell_new > lo and ell_new < hi):
-            ell_new = _fallback(lo, hi)
-        ell = ell_new
-    return math.nan, math.nan, math.nan, max_iter
-
-
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _solve_row_point(
     v,
     log_v,
@@ -184,37 +78,37 @@ def _solve_row_point(
     """
     opacity = KAPPA * s * sqrt_va
     ks = KAPPA * s
-    log_pre10 = _log_prefactor_10(log_a, s)
-    regime = _INTERMEDIATE
+    log_pre10 = log_prefactor_10(log_a, s)
+    regime = INTERMEDIATE
     start = warm_ell
     if v > va:
         # Which side of Va holds the root: the sign of h at Va (solver._branch_h). At x = Va,
         # sqrt(Va ∓ Va/2) = sqrt(Va)·sqrt(1/2), sqrt(Va)·sqrt(3/2).
-        r_minus, r_plus = sqrt_va * _SQRT_HALF, sqrt_va * _SQRT_THREE_HALVES
+        r_minus, r_plus = sqrt_va * SQRT_HALF, sqrt_va * SQRT_THREE_HALVES
         em1 = math.expm1(-ks * va / (r_plus + r_minus))
         e_d = 1.0 + em1
         bracket = -0.5 * va * em1 - va * e_d
-        h_va = log_pre10 - ks * r_minus + _log(bracket) + log_rs - log_v_minus_va
+        h_va = log_pre10 - ks * r_minus + log_or_nan(bracket) + log_rs - log_v_minus_va
         if h_va < 0:
-            regime = _FORWARD
-            if warm_regime != _FORWARD:
+            regime = FORWARD
+            if warm_regime != FORWARD:
                 slope_va = (
                     0.5 * ((0.5 * ks * r_minus - 1.0) + e_d * (0.5 * ks * r_plus - 1.0)) / bracket
                 )
                 share, rest = va / v, (v - va) / v
                 start = math.log(share / rest) - h_va / (va * rest * slope_va + share)
         elif not h_va >= 0:
-            return math.nan, math.nan, _INVALID, math.nan, 0
-    if regime == _INTERMEDIATE:
-        if warm_regime != _INTERMEDIATE:
+            return math.nan, math.nan, INVALID, math.nan, 0
+    if regime == INTERMEDIATE:
+        if warm_regime != INTERMEDIATE:
             # The ohmic root ℓ = −log(R_s·G0), G0 eq. 10's conductance at V → 0.
             start = -(
                 log_rs
-                + _log_ohmic_conductance(opacity, log_pre10)
+                + log_ohmic_conductance(opacity, log_pre10)
                 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity))
             )
-        x, log_i, ell, its = _newton(
-            _INTERMEDIATE,
+        x, log_i, ell, its = newton_in_logit(
+            INTERMEDIATE,
             v,
             log_v,
             0.0,
@@ -228,9 +122,9 @@ def _solve_row_point(
             max_iter,
         )
     else:
-        log_pre, g, log_w_offset, rho = _forward_constants(ks, va, sqrt_va, log_va, log_pre10)
-        x, log_i, ell, its = _newton(
-            _FORWARD,
+        log_pre, g, log_w_offset, rho = forward_constants(ks, va, sqrt_va, log_va, log_pre10)
+        x, log_i, ell, its = newton_in_logit(
+            FORWARD,
             v,
             log_v,
             va,
@@ -246,7 +140,7 @@ def _solve_row_point(
     return log_i - log_rs, x, regime, ell, its
 
 
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _peak_voltage(ks, sqrt_va, va, peak_log_b, peak_log_u):
     """Return where eq. 11 stops increasing, but not below Va (``tunneling.paper_peak_voltage``).
 
@@ -270,13 +164,15 @@ def _peak_voltage(ks, sqrt_va, va, peak_log_b, peak_log_u):
     return max(va * math.exp(log_u), va)
 
 
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _paper_branch_h(branch, x, v, log_rs, c0, c1, c2):
     """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch (``solver._branch_h``)."""
-    return log_rs + _evaluate(branch, x, _log(x), c0, c1, c2, 0.0)[0] - _log(v - x)
+    return (
+        log_rs + evaluate_branch(branch, x, log_or_nan(x), c0, c1, c2, 0.0)[0] - log_or_nan(v - x)
+    )
 
 
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _solve_paper_point(
     v,
     log_v,
@@ -304,65 +200,65 @@ def _solve_paper_point(
     """
     ks = KAPPA * s
     opacity = ks * sqrt_va
-    log_pre10 = _log_prefactor_10(log_a, s)
-    log_g9 = _log_ohmic_conductance(opacity, log_pre10)
+    log_pre10 = log_prefactor_10(log_a, s)
+    log_g9 = log_ohmic_conductance(opacity, log_pre10)
     log_pre_high = log_pre10 + math.log(0.55) - log_va
     c_high = (2.0 / 2.96) * ks * va * sqrt_va
     if rs == 0:
         # No series resistance: the whole voltage is across the bulk.
         if v < vth:
-            return v * math.exp(log_g9), v, _OHMIC, math.nan, 0
+            return v * math.exp(log_g9), v, OHMIC, math.nan, 0
         if v < va:
             return (
-                math.exp(_intermediate(v, log_v, log_pre10, ks, va)[0]),
+                math.exp(intermediate(v, log_v, log_pre10, ks, va)[0]),
                 v,
-                _INTERMEDIATE,
+                INTERMEDIATE,
                 math.nan,
                 0,
             )
         if v > _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1]):
-            return math.nan, math.nan, _INVALID, math.nan, 0
-        return math.exp(_high(v, log_v, log_pre_high, c_high, va)[0]), v, _HIGH, math.nan, 0
+            return math.nan, math.nan, INVALID, math.nan, 0
+        return math.exp(high(v, log_v, log_pre_high, c_high, va)[0]), v, HIGH, math.nan, 0
     conductance = math.exp(log_g9)
     x_ohmic = v / (1.0 + rs * conductance)
     if x_ohmic < vth:  # eq. 9 is linear: its root is closed form
-        return x_ohmic * conductance, x_ohmic, _OHMIC, math.nan, 0
+        return x_ohmic * conductance, x_ohmic, OHMIC, math.nan, 0
     h10_va = math.inf
     if v > va:
-        h10_va = _paper_branch_h(_INTERMEDIATE, va, v, log_rs, log_pre10, ks, va)
+        h10_va = _paper_branch_h(INTERMEDIATE, va, v, log_rs, log_pre10, ks, va)
     peak = math.nan
     if h10_va >= 0:
-        branch, lower, upper, c0, c1 = _INTERMEDIATE, vth, min(v, va), log_pre10, ks
+        branch, lower, upper, c0, c1 = INTERMEDIATE, vth, min(v, va), log_pre10, ks
     elif h10_va < 0:
         peak = _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1])
-        branch, lower, upper, c0, c1 = _HIGH, va, min(v, peak), log_pre_high, c_high
+        branch, lower, upper, c0, c1 = HIGH, va, min(v, peak), log_pre_high, c_high
     else:
-        return math.nan, math.nan, _INVALID, math.nan, 0
+        return math.nan, math.nan, INVALID, math.nan, 0
     if _paper_branch_h(branch, lower, v, log_rs, c0, c1, va) >= 0:
         # The circuit line passes the law's jump: the current is set by the series resistance.
-        return (v - lower) / rs, lower, _JUMP, math.nan, 0
-    if branch == _HIGH and v > peak and _paper_branch_h(_HIGH, peak, v, log_rs, c0, c1, va) < 0:
-        return math.nan, math.nan, _INVALID, math.nan, 0
+        return (v - lower) / rs, lower, JUMP, math.nan, 0
+    if branch == HIGH and v > peak and _paper_branch_h(HIGH, peak, v, log_rs, c0, c1, va) < 0:
+        return math.nan, math.nan, INVALID, math.nan, 0
     start = warm_ell
     if warm_regime != branch:
         start = -(log_rs + log_g9 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
-    x, log_i, ell, its = _newton(
+    x, log_i, ell, its = newton_in_logit(
         branch, v, log_v, lower, upper, start, c0 + log_rs, c1, va, 0.0, finish, max_iter
     )
     return math.exp(log_i - log_rs), x, branch, ell, its
 
 
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _solve_short_smooth(v, log_v, s, va, sqrt_va, log_va, log_a):
     """Solve the smooth law with no series resistance: (|I|, regime) at V_bulk = V."""
-    log_pre10 = _log_prefactor_10(log_a, s)
+    log_pre10 = log_prefactor_10(log_a, s)
     if v <= va:
-        return math.exp(_intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]), _INTERMEDIATE
-    constants = _forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10)
-    return math.exp(_forward(v, log_v, *constants)[0]), _FORWARD
+        return math.exp(intermediate(v, log_v, log_pre10, KAPPA * s, va)[0]), INTERMEDIATE
+    constants = forward_constants(KAPPA * s, va, sqrt_va, log_va, log_pre10)
+    return math.exp(forward(v, log_v, *constants)[0]), FORWARD
 
 
-@numba.njit(**_JIT)
+@numba.njit(**JIT)
 def _solve_all(
     voltage,
     rs_in,
@@ -417,17 +313,17 @@ def _solve_all(
                 row_ok = row_ok and math.isfinite(vth) and vth > 0 and vth < va
             if row_ok:
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
-                log_v, log_rs = _log(v), _log(rs)
-                log_v_minus_va = _log(v - va)
+                log_v, log_rs = log_or_nan(v), log_or_nan(rs)
+                log_v_minus_va = log_or_nan(v - va)
             warm_ell, warm_regime = math.nan, -1
         s = s_in[i]
         # tunneling.smooth_law_is_valid: an opaque barrier, s > 0.
-        if not (row_ok and s > 0 and KAPPA * s * sqrt_va > _OPACITY_LIMIT):
-            current[i], v_bulk[i], regime[i] = math.nan, math.nan, _INVALID
+        if not (row_ok and s > 0 and KAPPA * s * sqrt_va > OPACITY_LIMIT):
+            current[i], v_bulk[i], regime[i] = math.nan, math.nan, INVALID
             continue
         if v == 0:
-            log_g9 = _log_ohmic_conductance(KAPPA * s * sqrt_va, _log_prefactor_10(log_a, s))
-            current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, _OHMIC
+            log_g9 = log_ohmic_conductance(KAPPA * s * sqrt_va, log_prefactor_10(log_a, s))
+            current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, OHMIC
             continue
         if paper:
             magnitude, x, point_regime, ell, its = _solve_paper_point(
@@ -468,7 +364,7 @@ def _solve_all(
             )
             magnitude = math.exp(log_i)
         regime[i] = point_regime
-        if point_regime == _INVALID:
+        if point_regime == INVALID:
             current[i], v_bulk[i] = math.nan, math.nan
             warm_ell, warm_regime = math.nan, -1
             continue
@@ -499,7 +395,7 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
         area,
         threshold if paper else voltage,
         paper,
-        _PEAK_TABLE,
+        PEAK_TABLE,
         float(finish),
         int(max_iter),
         current,
