@@ -7,6 +7,7 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.ensemble import map_settled, warmup_rounds
 from fsrbayes.inference.samplers.transport import (
     IndependenceProposal,
     MappedLogProb,
@@ -241,3 +242,48 @@ def test_linear_map_whitens_a_correlated_gaussian_in_many_dimensions():
     # the map uses 50·ndim = 1500 of the draws: sd of a log-determinant from them ≈ sqrt(2·30/1500)
     # = 0.2
     assert transport.log_det_jacobian == pytest.approx(0.5 * logdet, abs=0.6)
+
+
+def _gaussian(x):
+    return -0.5 * np.sum(np.atleast_2d(x) ** 2, axis=1)
+
+
+def _warmup_run(start_scale, seed=3):
+    """A 4-d standard normal started in a ball of radius ``start_scale`` around its centre."""
+    start = np.random.default_rng(seed).normal(size=(2, 24, 4)) * start_scale
+    settings = SamplerSettings(
+        n_ensembles=2, chunk=100, max_steps=2000, min_steps=2000, transport_rounds=2
+    )
+    return settings, run_ensembles(_gaussian, start, seed=seed, settings=settings)
+
+
+def test_a_map_fitted_before_the_walkers_spread_gets_more_warm_up_rounds():
+    """Walkers started in a ball 1e-12 wide fill the unit normal only during the first chunk: the
+    map fitted to its later half is too narrow, fails its test on the draws it produces, and
+    warm-up goes on until one passes. Walkers started at equilibrium stop at the minimum."""
+    settings, spread = _warmup_run(1.0)
+    _, narrow = _warmup_run(1e-12)
+    warmup = lambda run: run.chain.shape[1] - run.report.n_kept  # noqa: E731
+    assert warmup(spread) == 2 * settings.chunk
+    assert 2 * settings.chunk < warmup(narrow) <= settings.max_rounds * settings.chunk
+    rounds, frozen = warmup_rounds(narrow.chain, settings)
+    assert frozen and rounds * settings.chunk == warmup(narrow)
+    assert rounds == settings.max_rounds or map_settled(
+        narrow.chain[:, : rounds * settings.chunk], settings, rounds
+    )
+    for run in (spread, narrow):
+        chain, _ = run.kept()
+        assert (
+            stats.kstest(chain[:, :: int(np.ceil(run.report.tau.max()))].ravel(), "norm").pvalue
+            > 0.003
+        )
+
+
+def test_warm_up_rounds_are_decided_by_the_chain_alone():
+    """A resumed run rebuilds the same decisions from the stored chain, and deciding from a
+    prefix's answer gives the same as deciding from scratch."""
+    settings, narrow = _warmup_run(1e-12)
+    whole = warmup_rounds(narrow.chain, settings)
+    for prefix in (100, 200, 250, 300, 1000):
+        known = warmup_rounds(narrow.chain[:, :prefix], settings)
+        assert warmup_rounds(narrow.chain, settings, known) == whole

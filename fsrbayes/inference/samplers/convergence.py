@@ -80,10 +80,11 @@ class ConvergenceWarning(UserWarning):
         self.report = report
 
 
-def convergence_report(chain, settings, names=(), final=True):
+def convergence_report(chain, settings, names=(), final=True, warmup=None):
     """Return the convergence numbers of chains after the warm-up.
 
-    Convergence numbers of chains (E, steps, W, ndim) after the warm-up (``settings.warmup_steps``).
+    Convergence numbers of chains (E, steps, W, ndim) after the first ``warmup`` steps (default
+    ``settings.warmup_steps``).
 
     With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
     chain is long enough by its autocorrelation time; otherwise they are reported as NaN.
@@ -92,7 +93,7 @@ def convergence_report(chain, settings, names=(), final=True):
     from arviz_stats import rhat as az_rhat
 
     n_ens, n_steps, n_walk, ndim = chain.shape
-    kept = chain[:, settings.warmup_steps(n_steps) :]
+    kept = chain[:, settings.warmup_steps(n_steps) if warmup is None else warmup :]
     n_kept = kept.shape[1]
     with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
         tau = np.max(

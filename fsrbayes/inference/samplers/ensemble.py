@@ -7,8 +7,14 @@ judged *across* ensembles started apart (:mod:`.convergence`): split R-hat below
 Warm-up. With ``transport_rounds`` = k > 0 (the default) the first k chunks are warm-up: after each,
 a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the later half of the
 warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from then
-on; the map is frozen after the k-th chunk and only the later steps are kept: affine-invariant moves
-undo only linear correlations, and the map straightens the creep posterior's curved ridge. A share
+on: affine-invariant moves undo only linear correlations, and the map straightens the creep
+posterior's curved ridge. A map fitted to draws that have not yet spread over the posterior leaves
+heavy, stretched tails in its coordinates, where the walkers crawl (the creep benchmark's τ fell
+five-fold with a map fitted to equilibrium draws), so after the k-th chunk the map is tested on
+draws it was not fitted to — the last chunk's, which it produced: mapped back, their covariance must
+have every eigenvalue within [1/1.6, 1.6] and their mean lie within 0.25 of 0
+(:data:`MAP_CHECK`). While it fails, one more warm-up chunk runs, up to ``extra_transport_rounds``
+more. Then the map is frozen and only the later steps are kept. A share
 of independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an
 equal mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
 straightened coordinates (ensembles started in separate regions each describe their own), frozen
@@ -33,12 +39,15 @@ from .convergence import ConvergenceReport, ConvergenceWarning, convergence_repo
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = [
+    "MAP_CHECK",
     "EnsembleRun",
     "SamplerSettings",
     "ensemble_moves",
     "even_index",
+    "map_settled",
     "run_ensembles",
     "walkers_for",
+    "warmup_rounds",
 ]
 
 
@@ -91,6 +100,9 @@ class SamplerSettings:
         a share slows mixing again: walkers that reach a region the proposal under-covers wait
         there for an accepted jump, and only the ensemble moves carry them on (the share was
         chosen by the autocorrelation times in BENCHMARKS.md).
+    extra_transport_rounds : int
+        Warm-up chunks added, one at a time, while the map fails its test on the draws it produced
+        (module docstring). Warm-up never takes more than half of ``max_steps``.
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
@@ -112,10 +124,15 @@ class SamplerSettings:
     transport_rounds: int = 3
     independence_fraction: float = 0.3
     quadratic_map: bool | None = None
+    extra_transport_rounds: int = 5
 
     def __post_init__(self):
         if self.transport_rounds < 0:
             raise ValueError(f"transport_rounds must be >= 0, got {self.transport_rounds}")
+        if self.extra_transport_rounds < 0:
+            raise ValueError(
+                f"extra_transport_rounds must be >= 0, got {self.extra_transport_rounds}"
+            )
         if not 0.0 <= self.independence_fraction < 1.0:
             raise ValueError(
                 f"independence_fraction must be in [0, 1), got {self.independence_fraction}"
@@ -123,13 +140,23 @@ class SamplerSettings:
 
     @property
     def rounds(self):
-        """Transport rounds actually run: at most half the step budget goes to them."""
+        """Transport rounds always run: at most half the step budget goes to them."""
         return min(self.transport_rounds, self.max_steps // (2 * self.chunk))
 
-    def warmup_steps(self, n_steps):
-        """Return the steps discarded as warm-up out of ``n_steps``."""
-        if self.rounds:
-            return min(n_steps, self.rounds * self.chunk)
+    @property
+    def max_rounds(self):
+        """Transport rounds at most, the extra ones included (half the step budget at most)."""
+        if not self.rounds:
+            return 0
+        return min(
+            self.transport_rounds + self.extra_transport_rounds, self.max_steps // (2 * self.chunk)
+        )
+
+    def warmup_steps(self, n_steps, rounds=None):
+        """Return the steps discarded as warm-up out of ``n_steps`` (``rounds``: as run)."""
+        rounds = self.rounds if rounds is None else rounds
+        if rounds:
+            return min(n_steps, rounds * self.chunk)
         return n_steps // 2
 
     def walkers_for(self, ndim):
@@ -218,11 +245,11 @@ def _advance(
     return chain, values, sampler.backend.accepted, sampler.random_state
 
 
-def _transport_maps(chains, settings, max_draws=50000):
+def _transport_maps(chains, settings, rounds, max_draws=50000):
     """Return the ensembles' transport map and proposal for the next chunk.
 
     Return the ensembles' map (and independence proposal) for the next chunk: refitted after every
-    warm-up chunk, then frozen.
+    warm-up chunk (``rounds`` of them: :func:`warmup_rounds`), then frozen.
 
     Both are fitted to the later half of all warm-up steps so far, pooled over the ensembles (a
     growing window: the early, transient steps drop out while the draws accumulate); the
@@ -234,7 +261,7 @@ def _transport_maps(chains, settings, max_draws=50000):
     list of (TriangularMap or None, MixtureProposal or None), one per ensemble
     """
     n_ens, n_steps = chains.shape[:2]
-    rounds = min(n_steps // settings.chunk, settings.rounds)
+    rounds = min(n_steps // settings.chunk, rounds)
     if rounds == 0:
         return [(None, None)] * n_ens
     end = rounds * settings.chunk
@@ -260,6 +287,51 @@ def _transport_maps(chains, settings, max_draws=50000):
         except np.linalg.LinAlgError:
             proposal = None
     return [(transport, proposal)] * n_ens
+
+
+MAP_CHECK = (1.0 / 1.6, 1.6, 0.25)
+"""A map passes its test (module docstring) when the draws it produced, mapped back, have every
+covariance eigenvalue within the first two numbers and every mean within the third of 0."""
+
+
+def map_settled(chains, settings, rounds):
+    """Whether the map used in chunk ``rounds`` passes its test on that chunk's draws.
+
+    ``chains`` hold exactly ``rounds`` chunks; the map is rebuilt from the ones before the last.
+    """
+    transport = _transport_maps(chains[:, : (rounds - 1) * settings.chunk], settings, rounds - 1)
+    transport = transport[0][0]
+    if transport is None:
+        return False
+    last = chains[:, (rounds - 1) * settings.chunk :].reshape(-1, chains.shape[-1])
+    mapped = transport.inverse(last[even_index(len(last), 20000)])
+    low, high, shift = MAP_CHECK
+    with np.errstate(invalid="ignore"):
+        eigenvalues = np.linalg.eigvalsh(np.atleast_2d(np.cov(mapped.T)))
+        return bool(
+            np.all((eigenvalues >= low) & (eigenvalues <= high))
+            and np.all(np.abs(mapped.mean(axis=0)) <= shift)
+        )
+
+
+def warmup_rounds(chains, settings, known=None):
+    """Return (rounds, frozen): the warm-up chunks of the stored chains and whether that is final.
+
+    At least ``settings.rounds``; after each later round its map is tested (:func:`map_settled`)
+    and one more round added while it fails, up to ``settings.max_rounds``. Deterministic in the
+    chains (a resumed run decides the same); ``known``, the (rounds, frozen) of a shorter prefix of
+    the same chains, skips the decisions already taken.
+    """
+    rounds, frozen = known or (settings.rounds, settings.rounds == 0)
+    n_steps = chains.shape[1]
+    while not frozen and n_steps >= rounds * settings.chunk:
+        if rounds >= settings.max_rounds or map_settled(
+            chains[:, : rounds * settings.chunk], settings, rounds
+        ):
+            frozen = True
+        else:
+            rounds += 1
+    return rounds, frozen
 
 
 def _progress_bar(settings, done):
@@ -329,14 +401,17 @@ def run_ensembles(
     if settings.processes > 1:
         pool = fork_pool(min(settings.processes, n_ens))
     report = None
+    warmup = None
     bar = _progress_bar(settings, chains.shape[1]) if progress else None
     try:
         while True:
-            if chains.shape[1] >= settings.min_steps and chains.shape[1] > settings.warmup_steps(
-                chains.shape[1]
-            ):
+            warmup = warmup_rounds(chains, settings, warmup)
+            warmup_steps = settings.warmup_steps(chains.shape[1], warmup[0])
+            if chains.shape[1] >= settings.min_steps and chains.shape[1] > warmup_steps:
                 at_budget = chains.shape[1] >= settings.max_steps
-                report = convergence_report(chains, settings, names, final=at_budget)
+                report = convergence_report(
+                    chains, settings, names, final=at_budget, warmup=warmup_steps
+                )
                 if bar is not None:
                     bar.set_postfix_str(
                         f"τ max {report.tau.max():.0f}, kept {report.n_kept} steps", refresh=True
@@ -344,7 +419,7 @@ def run_ensembles(
                 if report.converged or at_budget:
                     break
             steps = min(settings.chunk, settings.max_steps - chains.shape[1])
-            maps = _transport_maps(chains, settings)
+            maps = _transport_maps(chains, settings, warmup[0])
             jobs = [
                 (
                     log_prob,
