@@ -1,5 +1,6 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [fit] [evidence] [dynesty] [hierarchical] [diagnose] [demo]``.
+[predict] [likelihood] [fit] [evidence] [evidence-seeds] [dynesty] [hierarchical] [diagnose]
+[demo]``.
 
 Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
 install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds), ``evidence``,
@@ -38,6 +39,7 @@ BENCHMARKS = {
     "likelihood": lambda: likelihood.report(likelihood.run()),
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
     "evidence": lambda: evidence.report(evidence.run()),
+    "evidence-seeds": lambda: evidence.report_seeds(evidence.run_seeds()),
     "dynesty": lambda: dynesty_check.report(dynesty_check.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
     "diagnose": lambda: diagnose.report(diagnose.run()),
@@ -55,7 +57,7 @@ def main(names):
         f"{platform.processor() or 'cpu n/a'}; python {platform.python_version()}, numpy "
         f"{np.__version__}"
     )
-    for name in names or [n for n in BENCHMARKS if n != "dynesty"]:
+    for name in names or [n for n in BENCHMARKS if n not in ("dynesty", "evidence-seeds")]:
         print(BENCHMARKS[name](), flush=True)
     return 0
 

@@ -155,10 +155,11 @@ def build_parser():
     cmp_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
     cmp_.add_argument(
         "--path",
-        choices=("reference", "prior"),
+        choices=("reference", "prior", "bridge"),
         default="reference",
         help="where the beta ladder starts: a reference density fitted to a pilot run (default) "
-        "or the prior (needs a far denser ladder on creep data)",
+        "or the prior (needs a far denser ladder on creep data); 'bridge': no ladder, a converged "
+        "fit per model and specimen and bridge sampling from its draws (minutes faster)",
     )
     cmp_.add_argument(
         "--temps",

@@ -28,7 +28,7 @@ def cmd_compare(args):
         raise UsageError(
             f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
         )
-    base = REFERENCED_LADDER if args.path == "reference" else LadderSettings()
+    base = LadderSettings() if args.path == "prior" else REFERENCED_LADDER
     chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
     try:
         settings = replace(

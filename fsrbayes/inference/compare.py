@@ -9,12 +9,13 @@ from the β = 1 rung is a second opinion on predictive accuracy.
 """
 
 import warnings
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 
 from ..data.sensors import load_sensor
 from ..utils import json_ready
+from .evidence.bridge import bridge_from_fit
 from .evidence.ladder import LadderSettings, log_evidence
 from .evidence.referenced import (
     MODE_SEARCH,
@@ -25,6 +26,7 @@ from .evidence.referenced import (
 from .evidence.savage_dickey import savage_dickey_posterior
 from .likelihood import SpecimenData
 from .posterior import LogPosterior
+from .samplers import ConvergenceWarning
 
 __all__ = ["KASS_RAFTERY", "compare", "strength"]
 
@@ -73,7 +75,7 @@ def _loo(posterior, draws_u):
     }
 
 
-PATHS = ("reference", "prior")
+PATHS = ("reference", "prior", "bridge")
 """Where the ladder starts: a reference density fitted to a pilot run (default; few nats to
 cross) or the prior (thousands of nats on creep data; kept for the closed-form validation)."""
 
@@ -93,6 +95,7 @@ def compare(
     pilot=None,
     search=None,
     estimator=None,
+    fit_settings=None,
 ):
     """Compare creep models on every (or the chosen) specimen by log-evidence.
 
@@ -108,9 +111,14 @@ def compare(
         Default: :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER` on the reference
         path, ``LadderSettings()`` on the prior path.
     seed : int
-    path : {"reference", "prior"}
+    path : {"reference", "prior", "bridge"}
         The ladder's β = 0 end: a Student-t reference in transport-map coordinates fitted to a
-        pilot run (:mod:`~fsrbayes.inference.evidence.referenced`), or the prior.
+        pilot run (:mod:`~fsrbayes.inference.evidence.referenced`), or the prior. ``"bridge"``
+        runs no ladder: a converged :func:`~fsrbayes.inference.fit.fit` of each model and
+        specimen, then bridge sampling from its draws
+        (:mod:`~fsrbayes.inference.evidence.bridge`); a fit that does not converge within its
+        budget falls back on the referenced ladder (``settings``) with the fit's draws as the
+        reference, and ``method`` says so.
     pilot : SamplerSettings, optional
         The reference path's pilot run (default
         :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
@@ -121,6 +129,8 @@ def compare(
         ``estimator(posterior, seed)`` → :class:`~fsrbayes.inference.evidence.EvidenceEstimate`,
         any evidence estimator; replaces the ladder chosen by ``path``/``settings``. LOO and the
         Savage–Dickey check need the estimate's ``posterior_draws`` and are left out without them.
+    fit_settings : SamplerSettings, optional
+        The fits of the ``"bridge"`` path (default :data:`~fsrbayes.inference.fit.FIT_SETTINGS`).
 
     Returns
     -------
@@ -135,7 +145,7 @@ def compare(
         raise ValueError(f"compare needs at least two models, got {models}")
     if path not in PATHS:
         raise ValueError(f"path must be one of {PATHS}, got {path!r}")
-    settings = settings or (REFERENCED_LADDER if path == "reference" else LadderSettings())
+    settings = settings or (LadderSettings() if path == "prior" else REFERENCED_LADDER)
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     out = {
         "models": {},
@@ -158,6 +168,10 @@ def compare(
             job_seed = [seed, m_index, s_index]
             if estimator is not None:
                 result = estimator(posterior, job_seed)
+            elif path == "bridge":
+                result = _fit_and_bridge(
+                    packed, chosen, model, (tunneling, likelihood), settings, fit_settings, job_seed
+                )
             elif path == "reference":
                 result = referenced_log_evidence(
                     posterior,
@@ -171,6 +185,7 @@ def compare(
             entry["per_specimen"][specimen] = {
                 "log_evidence": result.log_z,
                 "log_evidence_err": result.error,
+                "method": result.method,
                 **result.details,
             }
             if result.posterior_draws is None:
@@ -206,6 +221,36 @@ def compare(
     if burgers_draws:
         out["savage_dickey"] = _savage_dickey_check(out, burgers_draws)
     return json_ready(out)
+
+
+def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
+    """Converged fit + bridge sampling; the referenced ladder from the fit's draws otherwise."""
+    from .fit import fit
+
+    tunneling, likelihood = laws
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        result = fit(
+            packed,
+            model=model,
+            tunneling=tunneling,
+            likelihood=likelihood,
+            sensor=sensor,
+            rng=np.random.default_rng(seed),
+            settings=fit_settings,
+        )
+    if result.converged:
+        return bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
+    chain, _ = result.run.kept()
+    estimate = referenced_log_evidence(
+        result.posterior, ladder, seed=seed, draws=[e.reshape(-1, chain.shape[-1]) for e in chain]
+    ).estimate()
+    note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
+    return replace(
+        estimate,
+        method=f"{estimate.method} (fallback)",
+        details={**estimate.details, "fallback": note},
+    )
 
 
 def _savage_dickey_check(out, burgers_draws, max_draws=8000):
