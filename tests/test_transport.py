@@ -252,7 +252,12 @@ def _warmup_run(start_scale, seed=3):
     """A 4-d standard normal started in a ball of radius ``start_scale`` around its centre."""
     start = np.random.default_rng(seed).normal(size=(2, 24, 4)) * start_scale
     settings = SamplerSettings(
-        n_ensembles=2, chunk=100, max_steps=2000, min_steps=2000, transport_rounds=2
+        n_ensembles=2,
+        chunk=100,
+        max_steps=2000,
+        min_steps=2000,
+        transport_rounds=2,
+        extra_transport_rounds=5,
     )
     return settings, run_ensembles(_gaussian, start, seed=seed, settings=settings)
 

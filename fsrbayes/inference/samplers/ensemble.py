@@ -12,10 +12,10 @@ posterior's curved ridge. A map fitted to draws that have not yet spread over th
 heavy, stretched tails in its coordinates, where the walkers crawl (the creep benchmark's τ fell
 five-fold with a map fitted to equilibrium draws), so after the k-th chunk the map is tested on
 draws it was not fitted to — the last chunk's, which it produced: mapped back, their covariance must
-have every eigenvalue within [1/1.6, 1.6] and their mean lie within 0.25 of 0
-(:data:`MAP_CHECK`). While it fails, one more warm-up chunk runs, up to ``extra_transport_rounds``
-more. Then the map is frozen and only the later steps are kept. A share
-of independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an
+have every eigenvalue within [1/1.6, 1.6] and their mean lie within 0.25 of 0 (:data:`MAP_CHECK`).
+While it fails, one more warm-up chunk runs, up to ``extra_transport_rounds`` more (0 by default:
+see that attribute). Then the map is frozen and only the later steps are kept. A share of
+independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an
 equal mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
 straightened coordinates (ensembles started in separate regions each describe their own), frozen
 with the map: a walker can cross the whole posterior in one accepted step (the autocorrelation times
@@ -101,8 +101,11 @@ class SamplerSettings:
         there for an accepted jump, and only the ensemble moves carry them on (the share was
         chosen by the autocorrelation times in BENCHMARKS.md).
     extra_transport_rounds : int
-        Warm-up chunks added, one at a time, while the map fails its test on the draws it produced
-        (module docstring). Warm-up never takes more than half of ``max_steps``.
+        Warm-up chunks that may be added, one at a time, while the map fails its test on the
+        draws it produced (module docstring); warm-up never takes more than half of
+        ``max_steps``. Off by default: on the fit benchmark's Burgers posterior 5 extra rounds cut
+        τ from 55–136 to 24–35 steps, but on the evidence benchmark's Zener posterior a fit with
+        them did not converge where the default did (BENCHMARKS.md, "Speed round two").
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
@@ -124,7 +127,7 @@ class SamplerSettings:
     transport_rounds: int = 3
     independence_fraction: float = 0.3
     quadratic_map: bool | None = None
-    extra_transport_rounds: int = 5
+    extra_transport_rounds: int = 0
 
     def __post_init__(self):
         if self.transport_rounds < 0:
