@@ -72,7 +72,20 @@ def _fixed_point(log_l1, log_l2, n1_eff, max_iter=1000):
     return log_r + shift, s1
 
 
-def _relative_error(log_l1, log_l2, log_z, s1, tau_steps, shape):
+def _ensemble_tau(series):
+    """Return the integrated autocorrelation time, in steps, of a (E, S, W) series.
+
+    The largest over ensembles of emcee's walker-averaged estimate; at least 1, and the series'
+    length where no estimate is possible.
+    """
+    tau = max(
+        float(emcee.autocorr.integrated_time(e[:, :, None], c=5, tol=0, quiet=True)[0])
+        for e in series
+    )
+    return max(tau, 1.0) if np.isfinite(tau) else float(series.shape[1])
+
+
+def _relative_error(log_l1, log_l2, log_z, s1, shape):
     """Frühwirth-Schnatter's relative error of Ẑ (module docstring) and the τ of f₂ in steps.
 
     ``shape`` = (ensembles, steps, walkers) of the posterior draws, in the order of ``log_l1``.
@@ -81,13 +94,7 @@ def _relative_error(log_l1, log_l2, log_z, s1, tau_steps, shape):
     ratio2 = np.exp(log_l2 - log_z)  # (q/Z)/g at the g-draws
     f1 = ratio2 / (s1 * ratio2 + s2)
     f2 = 1.0 / (s1 * np.exp(log_l1 - log_z) + s2)
-    if tau_steps is None:
-        series = f2.reshape(shape)
-        tau_steps = max(
-            float(emcee.autocorr.integrated_time(e[:, :, None], c=5, tol=0, quiet=True)[0])
-            for e in series
-        )
-        tau_steps = max(tau_steps, 1.0) if np.isfinite(tau_steps) else float(shape[1])
+    tau_steps = _ensemble_tau(f2.reshape(shape))
     re2 = np.var(f1) / (f1.size * np.mean(f1) ** 2) + tau_steps * np.var(f2) / (
         f2.size * np.mean(f2) ** 2
     )
@@ -110,14 +117,9 @@ def _one_split(target, fit_half, bridge_half, bridge_log_q, rng, n_proposals, do
     log_g1 = reference.log_prob_w(reference.from_target(u1)) - reference.log_det_jacobian
     log_l1 = bridge_log_q.reshape(-1) - log_g1
     # N₁,eff from the draws' own autocorrelation (τ of log l₁ along each ensemble)
-    series = log_l1.reshape(n_ens, n_steps, n_walk)
-    tau = max(
-        float(emcee.autocorr.integrated_time(e[:, :, None], c=5, tol=0, quiet=True)[0])
-        for e in series
-    )
-    tau = max(tau, 1.0) if np.isfinite(tau) else float(n_steps)
+    tau = _ensemble_tau(log_l1.reshape(n_ens, n_steps, n_walk))
     log_z, s1 = _fixed_point(log_l1, log_l2, log_l1.size / tau)
-    error, tau_f2 = _relative_error(log_l1, log_l2, log_z, s1, None, (n_ens, n_steps, n_walk))
+    error, tau_f2 = _relative_error(log_l1, log_l2, log_z, s1, (n_ens, n_steps, n_walk))
     importance = float(logsumexp(log_l2) - np.log(log_l2.size))
     return {
         "log_z": float(log_z),
@@ -218,5 +220,4 @@ def bridge_from_fit(result, seed=0, **kwargs):
             f"{result.run.report.worst()}"
         )
     chain, log_prob = result.run.kept()
-    estimate = bridge_log_evidence(result.posterior, chain, log_prob, seed, **kwargs)
-    return estimate
+    return bridge_log_evidence(result.posterior, chain, log_prob, seed, **kwargs)

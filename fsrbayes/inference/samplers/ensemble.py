@@ -248,11 +248,12 @@ def _advance(
     return chain, values, sampler.backend.accepted, sampler.random_state
 
 
-def _transport_maps(chains, settings, rounds, max_draws=50000):
+def _transport_maps(chains, settings, rounds, max_draws=50000, with_proposal=True):
     """Return the ensembles' transport map and proposal for the next chunk.
 
     Return the ensembles' map (and independence proposal) for the next chunk: refitted after every
-    warm-up chunk (``rounds`` of them: :func:`warmup_rounds`), then frozen.
+    warm-up chunk (``rounds`` of them: :func:`warmup_rounds`), then frozen. ``with_proposal=False``
+    skips the proposal (the map's test needs the map only).
 
     Both are fitted to the later half of all warm-up steps so far, pooled over the ensembles (a
     growing window: the early, transient steps drop out while the draws accumulate); the
@@ -277,7 +278,7 @@ def _transport_maps(chains, settings, rounds, max_draws=50000):
             (None, None)
         ] * n_ens  # too few or degenerate draws: sample the target's own coordinates
     proposal = None
-    if settings.independence_fraction > 0:
+    if settings.independence_fraction > 0 and with_proposal:
         per_ensemble = chains[:, end // 2 : end].reshape(n_ens, -1, chains.shape[-1])
         per_ensemble = per_ensemble[
             :,
@@ -302,8 +303,9 @@ def map_settled(chains, settings, rounds):
 
     ``chains`` hold exactly ``rounds`` chunks; the map is rebuilt from the ones before the last.
     """
-    transport = _transport_maps(chains[:, : (rounds - 1) * settings.chunk], settings, rounds - 1)
-    transport = transport[0][0]
+    transport = _transport_maps(
+        chains[:, : (rounds - 1) * settings.chunk], settings, rounds - 1, with_proposal=False
+    )[0][0]
     if transport is None:
         return False
     last = chains[:, (rounds - 1) * settings.chunk :].reshape(-1, chains.shape[-1])
