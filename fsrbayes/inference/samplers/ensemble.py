@@ -9,22 +9,21 @@ a :class:`~fsrbayes.inference.samplers.transport.TriangularMap` is fitted to the
 warm-up so far (all ensembles pooled) and the walkers move in the straightened coordinates from then
 on: affine-invariant moves undo only linear correlations, and the map straightens the creep
 posterior's curved ridge. A map fitted to draws that have not yet spread over the posterior leaves
-heavy, stretched tails in its coordinates, where the walkers crawl (the creep benchmark's τ fell
-five-fold with a map fitted to equilibrium draws), so after the k-th chunk the map is tested on
-draws it was not fitted to — the last chunk's, which it produced: mapped back, their covariance must
-have every eigenvalue within [1/1.6, 1.6] and their mean lie within 0.25 of 0 (:data:`MAP_CHECK`).
-While it fails, one more warm-up chunk runs, up to ``extra_transport_rounds`` more (0 by default:
-see that attribute). Then the map is frozen and only the later steps are kept. A share of
-independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes from an
-equal mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws in the
-straightened coordinates (ensembles started in separate regions each describe their own), frozen
-with the map: a walker can cross the whole posterior in one accepted step (the autocorrelation times
-this buys are in BENCHMARKS.md). The stored chains are always in the target's own coordinates. With
-k = 0 the first half of the chain is the warm-up, at every check. Sampling goes on in chunks until
-all three criteria hold or ``max_steps`` is spent; then a :class:`ConvergenceWarning` carrying the
-numbers is issued. Each ensemble has its own seeded random state, so the same seed gives the same
-chains, and a checkpoint (written atomically after every chunk) resumes a run exactly where it
-stopped.
+heavy, stretched tails in its coordinates, where the walkers crawl, so after the k-th chunk the map
+is tested on draws it was not fitted to — the last chunk's, which it produced: mapped back, their
+covariance must have every eigenvalue within [1/1.6, 1.6] and their mean lie within 0.25 of 0
+(:data:`MAP_CHECK`). While it fails, one more warm-up chunk runs, up to ``extra_transport_rounds``
+more (0 by default: see that attribute). Then the map is frozen and only the later steps are kept. A
+share of independence Metropolis–Hastings moves (``independence_fraction``, default 0.3) proposes
+from an equal mixture of Student-t's, one fitted to each ensemble's share of the same warm-up draws
+in the straightened coordinates (ensembles started in separate regions each describe their own),
+frozen with the map: a walker can cross the whole posterior in one accepted step (the
+autocorrelation times this buys are in BENCHMARKS.md). The stored chains are always in the target's
+own coordinates. With k = 0 the first half of the chain is the warm-up, at every check. Sampling
+goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
+:class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded random
+state, so the same seed gives the same chains, and a checkpoint (written atomically after every
+chunk) resumes a run exactly where it stopped.
 """
 
 import warnings
@@ -103,9 +102,8 @@ class SamplerSettings:
     extra_transport_rounds : int
         Warm-up chunks that may be added, one at a time, while the map fails its test on the
         draws it produced (module docstring); warm-up never takes more than half of
-        ``max_steps``. Off by default: on the fit benchmark's Burgers posterior 5 extra rounds cut
-        τ from 55–136 to 24–35 steps, but on the evidence benchmark's Zener posterior a fit with
-        them did not converge where the default did (BENCHMARKS.md, "Speed round two").
+        ``max_steps``. Off by default: it speeds up some creep posteriors and kept another from
+        converging (BENCHMARKS.md, "Speed round two").
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
