@@ -29,6 +29,7 @@ from ..data.sensors import load_sensor
 from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
 from .optimize import ensemble_start, find_map, nested_starts, start_regions
+from .pinned import PinnedCoordinates
 from .posterior import LogPosterior
 from .samplers import (
     EnsembleRun,
@@ -124,6 +125,8 @@ class FitResult:
         ``"ensemble"`` or ``"tempered"``.
     evidence : EvidenceResult or None
         The tempered sampler's log-evidence (its ladders give it for free); None for ensembles.
+    coordinates : PinnedCoordinates or None
+        The coordinates the ensembles moved in, if not the prior-scaled parameters.
     """
 
     posterior: LogPosterior
@@ -133,6 +136,7 @@ class FitResult:
     optima_log_post: np.ndarray = None
     sampler: str = "ensemble"
     evidence: object = None
+    coordinates: object = None
 
     @property
     def converged(self):
@@ -192,6 +196,7 @@ def _best_draw(run):
 
 
 SAMPLERS = ("ensemble", "tempered")
+COORDINATES = ("prior", "pinned")
 
 
 def fit(
@@ -208,6 +213,7 @@ def fit(
     resume=False,
     progress=False,
     sampler=None,
+    coordinates="prior",
 ):
     """Fit one specimen's creep tests.
 
@@ -239,11 +245,18 @@ def fit(
         length run (~3 min on 2 cores for 4 tests × 12 samples with the defaults, which are too
         short to converge on creep posteriors: see that module). Default: from the type of
         ``settings``, else ``"ensemble"``.
+    coordinates : {"prior", "pinned"}
+        What the ensembles move in: the prior-scaled parameters, or the log-currents the data
+        pin in place of as many parameters (:class:`~fsrbayes.inference.pinned.PinnedCoordinates`,
+        chosen at the best optimum). The posterior is the same; the chains are stored in the
+        prior-scaled parameters either way.
 
     Returns
     -------
     FitResult
     """
+    if coordinates not in COORDINATES:
+        raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
@@ -280,7 +293,7 @@ def fit(
     if (
         resume and checkpoint is not None
     ):  # a mismatched checkpoint is refused before the MAP search
-        check_checkpoint(checkpoint, posterior.fingerprint(), settings.n_ensembles)
+        check_checkpoint(checkpoint, _fingerprint(posterior, coordinates), settings.n_ensembles)
     generator = np.random.default_rng(seed)
     optima = find_map(
         posterior,
@@ -301,6 +314,7 @@ def fit(
             for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
         ]
     )
+    pinned = PinnedCoordinates(posterior, optima[0]) if coordinates == "pinned" else None
     run = run_ensembles(
         posterior,
         start,
@@ -308,8 +322,14 @@ def fit(
         settings,
         names=posterior.names,
         checkpoint=checkpoint,
-        fingerprint=posterior.fingerprint(),
+        fingerprint=_fingerprint(posterior, coordinates),
         resume=resume,
         progress=progress,
+        coordinates=pinned,
     )
-    return FitResult(posterior, run, optima[0], seed, posterior(optima))
+    return FitResult(posterior, run, optima[0], seed, posterior(optima), coordinates=pinned)
+
+
+def _fingerprint(posterior, coordinates):
+    """Return the checkpoint's fingerprint: the posterior's, and the coordinates if not u."""
+    return posterior.fingerprint() + ("" if coordinates == "prior" else f"|{coordinates}")

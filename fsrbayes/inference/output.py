@@ -118,6 +118,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
         ),
         "fixed_parameters": json.dumps(posterior.fixed),
         "sampler": getattr(result, "sampler", "ensemble"),
+        "coordinates": json.dumps(_coordinates(result)),
     }
     tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(attrs)
@@ -186,8 +187,15 @@ def summary(result, tree):
             float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])
         ],
         "sampler": getattr(result, "sampler", "ensemble"),
+        "coordinates": _coordinates(result),
         "log_evidence": _evidence(result),
     }
+
+
+def _coordinates(result):
+    """Return what the ensembles moved in: None for the prior-scaled parameters, else a summary."""
+    coordinates = getattr(result, "coordinates", None)
+    return None if coordinates is None else coordinates.describe()
 
 
 def segment_drifts(posterior, draws):

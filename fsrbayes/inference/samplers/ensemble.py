@@ -35,6 +35,7 @@ import numpy as np
 from ..parallel import fork_pool, single_threaded_blas
 from .checkpoint import load_checkpoint, save_checkpoint
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
+from .coordinates import SampledLogProb, sampled_draws, sampled_start
 from .transport import MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = [
@@ -211,22 +212,31 @@ def _advance(
     transport=None,
     proposal=None,
     independence_fraction=0.0,
+    coordinates=None,
 ):
     """Run one ensemble for ``steps`` from a position and random state; return its new pieces.
 
-    With a ``transport`` map the walkers move in v = T⁻¹(u); positions and log-densities come
-    in and go out in u. A ``proposal`` (in v; only with a map) adds independence moves.
+    With ``coordinates`` (:mod:`.coordinates`) the walkers move in w(u), with a ``transport`` map
+    in v = T⁻¹(w) (or T⁻¹(u)); positions and log-densities come in and go out in u. A
+    ``proposal`` (in v; only with a map) adds independence moves.
     """
     n_walk, ndim = position.shape
     target = log_prob
     own_moves = getattr(log_prob, "emcee_moves", None)
-    if own_moves is not None and transport is not None:
+    if own_moves is not None and (transport is not None or coordinates is not None):
         raise ValueError(
             "a target with its own emcee moves samples its own coordinates: set transport_rounds=0"
+            " and coordinates=None"
+        )
+    if coordinates is not None:
+        target, position, log_prob_start = (
+            SampledLogProb(log_prob, coordinates),
+            sampled_start(position, coordinates),
+            None,
         )
     if transport is not None:
         target, position, log_prob_start = (
-            MappedLogProb(log_prob, transport),
+            MappedLogProb(target, transport),
             transport.inverse(position),
             None,
         )
@@ -240,20 +250,26 @@ def _advance(
     state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
     with single_threaded_blas():
         sampler.run_mcmc(state, steps, skip_initial_state_check=True)
+    if coordinates is not None:  # the blobs hold (log p_u, u) of every stored state
+        blobs = sampler.get_blobs()
+        return blobs[..., 1:], blobs[..., 0], sampler.backend.accepted, sampler.random_state
     chain, values = sampler.get_chain(), sampler.get_log_prob()
     if transport is not None:
         chain, values = transport.forward(chain), values - transport.log_det_jacobian
     return chain, values, sampler.backend.accepted, sampler.random_state
 
 
-def _transport_maps(chains, settings, rounds, max_draws=50000, with_proposal=True):
+def _transport_maps(
+    chains, settings, rounds, max_draws=50000, with_proposal=True, coordinates=None
+):
     """Return the ensembles' transport map and proposal for the next chunk.
 
     Return the ensembles' map (and independence proposal) for the next chunk: refitted after every
     warm-up chunk (``rounds`` of them: :func:`warmup_rounds`), then frozen. ``with_proposal=False``
     skips the proposal (the map's test needs the map only).
 
-    Both are fitted to the later half of all warm-up steps so far, pooled over the ensembles (a
+    Both are fitted, in the sampled ``coordinates`` if any, to the later half of all warm-up steps
+    so far, pooled over the ensembles (a
     growing window: the early, transient steps drop out while the draws accumulate); the
     ensembles share them, and stay independent once they are frozen. They are deterministic
     functions of the stored chain, so a resumed run rebuilds them exactly.
@@ -268,7 +284,9 @@ def _transport_maps(chains, settings, rounds, max_draws=50000, with_proposal=Tru
         return [(None, None)] * n_ens
     end = rounds * settings.chunk
     draws = chains[:, end // 2 : end].reshape(-1, chains.shape[-1])
-    draws = draws[np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int)]
+    draws = sampled_draws(
+        draws[np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int)], coordinates
+    )
     try:
         transport = TriangularMap.fit(draws, quadratic=settings.quadratic_map)
     except (ValueError, np.linalg.LinAlgError):
@@ -285,7 +303,9 @@ def _transport_maps(chains, settings, rounds, max_draws=50000, with_proposal=Tru
             ).astype(int),
         ]
         try:
-            proposal = MixtureProposal.fit([transport.inverse(group) for group in per_ensemble])
+            proposal = MixtureProposal.fit(
+                [transport.inverse(sampled_draws(group, coordinates)) for group in per_ensemble]
+            )
         except np.linalg.LinAlgError:
             proposal = None
     return [(transport, proposal)] * n_ens
@@ -296,18 +316,22 @@ MAP_CHECK = (1.0 / 1.6, 1.6, 0.25)
 covariance eigenvalue within the first two numbers and every mean within the third of 0."""
 
 
-def map_settled(chains, settings, rounds):
+def map_settled(chains, settings, rounds, coordinates=None):
     """Whether the map used in chunk ``rounds`` passes its test on that chunk's draws.
 
     ``chains`` hold exactly ``rounds`` chunks; the map is rebuilt from the ones before the last.
     """
     transport = _transport_maps(
-        chains[:, : (rounds - 1) * settings.chunk], settings, rounds - 1, with_proposal=False
+        chains[:, : (rounds - 1) * settings.chunk],
+        settings,
+        rounds - 1,
+        with_proposal=False,
+        coordinates=coordinates,
     )[0][0]
     if transport is None:
         return False
     last = chains[:, (rounds - 1) * settings.chunk :].reshape(-1, chains.shape[-1])
-    mapped = transport.inverse(last[even_index(len(last), 20000)])
+    mapped = transport.inverse(sampled_draws(last[even_index(len(last), 20000)], coordinates))
     low, high, shift = MAP_CHECK
     with np.errstate(invalid="ignore"):
         eigenvalues = np.linalg.eigvalsh(np.atleast_2d(np.cov(mapped.T)))
@@ -317,7 +341,7 @@ def map_settled(chains, settings, rounds):
         )
 
 
-def warmup_rounds(chains, settings, known=None):
+def warmup_rounds(chains, settings, known=None, coordinates=None):
     """Return (rounds, frozen): the warm-up chunks of the stored chains and whether that is final.
 
     At least ``settings.rounds``; after each later round its map is tested (:func:`map_settled`)
@@ -329,7 +353,7 @@ def warmup_rounds(chains, settings, known=None):
     n_steps = chains.shape[1]
     while not frozen and n_steps >= rounds * settings.chunk:
         if rounds >= settings.max_rounds or map_settled(
-            chains[:, : rounds * settings.chunk], settings, rounds
+            chains[:, : rounds * settings.chunk], settings, rounds, coordinates
         ):
             frozen = True
         else:
@@ -356,6 +380,7 @@ def run_ensembles(
     fingerprint="",
     resume=False,
     progress=False,
+    coordinates=None,
 ):
     """Sample with ``settings.n_ensembles`` emcee ensembles until convergence or the budget.
 
@@ -377,6 +402,9 @@ def run_ensembles(
     progress : bool
         Show a progress bar (tqdm, on stderr) over the step budget, updated after every chunk
         with the latest convergence numbers; it works with worker processes too.
+    coordinates : object, optional
+        Sample in other coordinates w(u) (:mod:`.coordinates`); the transport maps are fitted
+        there, the chains stored in u.
 
     Returns
     -------
@@ -408,7 +436,7 @@ def run_ensembles(
     bar = _progress_bar(settings, chains.shape[1]) if progress else None
     try:
         while True:
-            warmup = warmup_rounds(chains, settings, warmup)
+            warmup = warmup_rounds(chains, settings, warmup, coordinates)
             warmup_steps = settings.warmup_steps(chains.shape[1], warmup[0])
             if chains.shape[1] >= settings.min_steps and chains.shape[1] > warmup_steps:
                 at_budget = chains.shape[1] >= settings.max_steps
@@ -422,7 +450,7 @@ def run_ensembles(
                 if report.converged or at_budget:
                     break
             steps = min(settings.chunk, settings.max_steps - chains.shape[1])
-            maps = _transport_maps(chains, settings, warmup[0])
+            maps = _transport_maps(chains, settings, warmup[0], coordinates=coordinates)
             jobs = [
                 (
                     log_prob,
@@ -435,7 +463,12 @@ def run_ensembles(
                 for e in range(n_ens)
             ]
             extra = [
-                dict(transport=t, proposal=g, independence_fraction=settings.independence_fraction)
+                dict(
+                    transport=t,
+                    proposal=g,
+                    independence_fraction=settings.independence_fraction,
+                    coordinates=coordinates,
+                )
                 for t, g in maps
             ]
             if pool is None:

@@ -264,8 +264,17 @@ class MappedLogProb:
         return self.transport.ndim
 
     def __call__(self, v):
-        """Return the target's log-density at v, with the map's log-Jacobian."""
-        return self.log_prob(self.transport.forward(v)) + self.transport.log_det_jacobian
+        """Return the target's log-density at v, with the map's log-Jacobian.
+
+        A target returning a 2-D array (log-density, then blobs per walker) gets the Jacobian
+        added to its first column only.
+        """
+        values = self.log_prob(self.transport.forward(v))
+        if np.ndim(values) == 2:
+            values = values.copy()
+            values[:, 0] += self.transport.log_det_jacobian
+            return values
+        return values + self.transport.log_det_jacobian
 
 
 def student_t_log_density(w, dof):

@@ -1,0 +1,228 @@
+"""Sampling coordinates the data pin: the model's log-current at reference points of the data.
+
+Why. A creep test pins the sensor's current at each load and voltage to a fraction of a percent,
+while the parameters that make it up — gap s0, barrier Va, areas A0–A2, contact law Rc0, alpha,
+parallel Rpar — each stay wide: the data fix a few *nonlinear* combinations of them (log I is a
+log-sum of tunneling and contact resistances, each a power or an exponential of the parameters).
+In the prior-scaled coordinates u the posterior is then a thin, curved sheet — on a divider rig
+1e-4 prior widths thin and prior-wide along it — that affine-invariant moves cannot follow and
+a quadratic map straightens only in part.
+
+What. :class:`PinnedCoordinates` replaces K of the sampled parameters u_P by the K quantities the
+data pin hardest, y_k = log I(test c_k, t_k; u) at the first or the last sample of a test (the
+current at load and its drift), and keeps the other parameters u_F:
+
+    w = (y_1 … y_K, u_F),      log p_w(w) = log p_u(u(w)) − log|det ∂y/∂u_P|,
+
+so the priors and the posterior are unchanged; only the coordinates the walkers move in are
+new. In w the pinned directions are the y's themselves — narrow, nearly Gaussian and nearly
+independent of u_F — and what remains is the data's weak information on the other parameters.
+
+Which. At the maximum a posteriori point (the *anchor*) the Jacobian ∂y/∂u over both samples of
+every test and all non-noise parameters is factorised by QR with column pivoting; parameters
+are taken in pivot order while their pivot stays above :data:`RANK_TOLERANCE` of the largest (at
+most one per reference point), and the reference points by a second pivoted QR on those
+columns. It works for any
+sensor file, readout and load history: y is the model current the likelihood itself compares.
+
+The inverse u(w) is a K-dimensional root search, by Newton's method from the linearisation at
+the anchor (forward-difference Jacobians; the log-determinant from central differences at the
+root), steps capped at :data:`MAX_STEP` prior widths, a
+second start at the anchor's u_P if the first fails). Where no root is found the density is −inf
+— the proposal is rejected. The inverse is never needed on stored chains
+(:mod:`~fsrbayes.inference.samplers.coordinates`).
+"""
+
+import numpy as np
+import scipy.linalg
+
+from .posterior import noise_parameters
+
+__all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "MAX_STEP"]
+
+RANK_TOLERANCE = 1e-4
+"""A parameter is solved for only while the data pin it within this share of the best-pinned one
+(the singular values of the pivoted QR): the root search loses the rest to round-off."""
+MAX_STEP = 2.0
+"""Largest Newton step of a solved parameter, in prior widths (u units)."""
+FD_STEP = 1e-6
+"""Forward-difference step of the Newton iterations' Jacobian in u."""
+CENTRAL_STEP = 1e-5
+"""Central-difference step of the Jacobian in the density's log-determinant, in u: its error,
+~1e-10 from the step and ~1e-7 from the solver's ~1e-12 round-off, is small against the
+smallest pivot kept (:data:`RANK_TOLERANCE`)."""
+TOLERANCE = 1e-9
+"""Newton stops when every |y − y_target| is below this (log-current units)."""
+MAX_ITER = 30
+
+
+def _reference_times(data):
+    """Each test's first and last real sample times, shape (C, 2)."""
+    rows = np.arange(data.n_tests)
+    first = np.argmax(data.mask, axis=1)
+    last = data.mask.shape[1] - 1 - np.argmax(data.mask[:, ::-1], axis=1)
+    return np.stack([data.time_s[rows, first], data.time_s[rows, last]], axis=1)
+
+
+class PinnedCoordinates:
+    """The bijection u ↔ w = (log I at reference tests, the other parameters).
+
+    Parameters
+    ----------
+    posterior : LogPosterior
+        The target in u (prior-scaled coordinates).
+    anchor : ndarray, shape (ndim,)
+        A point in u where the data's pins are chosen and the root search is linearised (the
+        maximum a posteriori point).
+
+    Attributes
+    ----------
+    solved : tuple of str
+        The parameters replaced by log-currents, in pivot order.
+    references : tuple of (int, str)
+        Where each log-current is taken: the test (row of the data) and its ``"first"`` or
+        ``"last"`` sample.
+    names : tuple of str
+        Names of the sampled coordinates w.
+    """
+
+    def __init__(self, posterior, anchor):
+        self.posterior = posterior
+        self.anchor = np.asarray(anchor, dtype=float).copy()
+        self._times = _reference_times(posterior.data)
+        noise = set(noise_parameters(posterior.likelihood))
+        candidates = np.array([i for i, n in enumerate(posterior.names) if n not in noise])
+        jac = self._jacobian_all(self.anchor[None])[0][:, candidates]
+        if not np.isfinite(jac).all():
+            raise ValueError("the model's log-current is not finite around the anchor point")
+        _, r_cols, cols = scipy.linalg.qr(jac, pivoting=True, mode="economic")
+        pinned = np.abs(np.diag(r_cols))
+        k = int(np.count_nonzero(pinned >= RANK_TOLERANCE * pinned.max())) if pinned.size else 0
+        if k == 0:
+            raise ValueError("the data pin no parameter's log-current at the anchor point")
+        self._solved = candidates[cols[:k]]
+        _, _, rows = scipy.linalg.qr(jac[:, cols[:k]].T, pivoting=True, mode="economic")
+        self._rows = np.sort(rows[:k])
+        self._free = np.array([i for i in range(posterior.ndim) if i not in set(self._solved)])
+        self.solved = tuple(posterior.names[i] for i in self._solved)
+        self.references = tuple((int(r) // 2, ("first", "last")[r % 2]) for r in self._rows)
+        self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
+            posterior.names[i] for i in self._free
+        )
+        y0 = self.log_current(self.anchor[None])[0]
+        full = self._jacobian_all(self.anchor[None])[0][self._rows]
+        self._y0 = y0
+        self._inv_solved = np.linalg.inv(full[:, self._solved])
+        self._jac_free = full[:, self._free]
+
+    @property
+    def ndim(self):
+        """Number of coordinates."""
+        return self.posterior.ndim
+
+    def log_current(self, u):
+        """Return the pinned log-currents y(u), (W, ndim) → (W, K); NaN outside the domain."""
+        x, _ = self.posterior.prior.from_unconstrained(np.atleast_2d(u))
+        with np.errstate(all="ignore"):
+            log_current = self.posterior.log_model_current(x, self._times)
+        log_current = log_current.reshape(len(x), self._times.size)[:, self._rows]
+        return np.where(np.isfinite(log_current), log_current, np.nan)
+
+    def _jacobian_all(self, u):
+        """Return ∂ log I(every reference point)/∂u: (W, ndim) → (W, 2C, ndim), central."""
+        n = u.shape[1]
+        shifts = np.concatenate(
+            [u[None] + FD_STEP * e[:, None, :] for e in (np.eye(n), -np.eye(n))]
+        )
+        x, _ = self.posterior.prior.from_unconstrained(shifts.reshape(-1, n))
+        with np.errstate(all="ignore"):
+            log_current = self.posterior.log_model_current(x, self._times)
+        log_current = log_current.reshape(2, n, len(u), -1)
+        return np.moveaxis((log_current[0] - log_current[1]) / (2 * FD_STEP), 0, 2)
+
+    def _solved_jacobian(self, u, y=None):
+        """∂y/∂u_P at u (W, K, K): forward differences from y(u), central ones without it."""
+        k = self._solved.size
+        signs = (1.0,) if y is not None else (1.0, -1.0)
+        step = FD_STEP if y is not None else CENTRAL_STEP
+        shifted = np.repeat(u[None], k * len(signs), axis=0)
+        for i, (sign, column) in enumerate((s, c) for s in signs for c in self._solved):
+            shifted[i, :, column] += sign * step
+        y_shift = self.log_current(shifted.reshape(-1, u.shape[1])).reshape(
+            len(signs), k, len(u), -1
+        )
+        low = y[None] if y is not None else y_shift[1]
+        return np.moveaxis((y_shift[0] - low) / (len(signs) * step), 0, 2)
+
+    def to_sampled(self, u):
+        """w(u): (..., ndim) → (..., ndim)."""
+        u = np.asarray(u, dtype=float)
+        flat = u.reshape(-1, u.shape[-1])
+        w = np.concatenate([self.log_current(flat), flat[:, self._free]], axis=1)
+        return w.reshape(u.shape)
+
+    def from_sampled(self, w):
+        """u(w) and log|det du/dw| = −log|det ∂y/∂u_P|: (W, ndim) → ((W, ndim), (W,)).
+
+        Rows without a root found have u NaN and log_det −inf.
+        """
+        w = np.atleast_2d(np.asarray(w, dtype=float))
+        k = self._solved.size
+        target, free = w[:, :k], w[:, k:]
+        u = np.full(w.shape, np.nan)
+        u[:, self._free] = free
+        log_det = np.full(len(w), -np.inf)
+        linear = (
+            self.anchor[self._solved]
+            + (target - self._y0 - (free - self.anchor[self._free]) @ self._jac_free.T)
+            @ self._inv_solved.T
+        )
+        todo = np.isfinite(w).all(axis=1)
+        for start in (linear, np.broadcast_to(self.anchor[self._solved], linear.shape)):
+            rows = np.flatnonzero(todo & ~np.isfinite(log_det))
+            if not rows.size:
+                break
+            trial = u[rows].copy()
+            trial[:, self._solved] = start[rows]
+            found, solution, det = self._newton(trial, target[rows])
+            u[rows[found]] = solution[found]
+            log_det[rows[found]] = det[found]
+        return u, log_det
+
+    def _newton(self, u, target):
+        """Newton on y(u_P, u_F) = target from u; returns (found, u, −log|det ∂y/∂u_P|)."""
+        n = len(u)
+        found = np.zeros(n, dtype=bool)
+        log_det = np.full(n, -np.inf)
+        active = np.arange(n)
+        for _ in range(MAX_ITER):
+            y = self.log_current(u[active])
+            residual = target[active] - y
+            finite = np.isfinite(residual).all(axis=1)
+            done = finite & (
+                np.abs(np.where(finite[:, None], residual, 0.0)).max(axis=1) <= TOLERANCE
+            )
+            found[active[done]] = True
+            going = finite & ~done
+            if not going.any():
+                break
+            jac = self._solved_jacobian(u[active[going]], y[going])
+            usable = np.isfinite(jac).all(axis=(1, 2))
+            usable[usable] = np.linalg.slogdet(jac[usable])[0] != 0
+            step = np.linalg.solve(jac[usable], residual[going][usable][..., None])[..., 0]
+            step *= np.minimum(1.0, MAX_STEP / np.abs(step).max(axis=1))[:, None]
+            active = active[going][usable]
+            u[active[:, None], self._solved[None]] += step
+        if found.any():
+            sign, log_abs = np.linalg.slogdet(self._solved_jacobian(u[found]))
+            log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
+            found &= np.isfinite(log_det)
+        return found, u, log_det
+
+    def describe(self):
+        """Return a JSON-ready summary: the solved parameters and their reference tests."""
+        return {
+            "solved": list(self.solved),
+            "reference_tests": [c for c, _ in self.references],
+            "reference_time_s": [float(self._times.flat[r]) for r in self._rows],
+        }
