@@ -1,10 +1,11 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [fit] [evidence] [evidence-seeds] [dynesty] [hierarchical] [diagnose]
-[demo]``.
+[predict] [likelihood] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty] [hierarchical]
+[diagnose] [demo]``.
 
 Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
-install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds), ``evidence``,
-``hierarchical``, ``diagnose`` and ``demo`` take minutes.
+install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds, in both
+coordinates), ``rig-fit`` (the divider rig in both coordinates), ``evidence``, ``hierarchical``,
+``diagnose`` and ``demo`` take minutes.
 """
 
 import os
@@ -26,6 +27,7 @@ from benchmarks import (  # noqa: E402
     hierarchical,
     likelihood,
     predict,
+    rig_fit,
     rig_read,
     solver,
 )  # noqa: E402
@@ -38,6 +40,7 @@ BENCHMARKS = {
     "predict": lambda: predict.report(predict.run()),
     "likelihood": lambda: likelihood.report(likelihood.run()),
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
+    "rig-fit": lambda: rig_fit.report(rig_fit.run()),
     "evidence": lambda: evidence.report(evidence.run()),
     "evidence-seeds": lambda: evidence.report_seeds(evidence.run_seeds()),
     "dynesty": lambda: dynesty_check.report(dynesty_check.run()),

@@ -20,9 +20,10 @@ from fsrbayes.inference.samplers import ConvergenceWarning
 
 TARGET_S = 120.0
 SEEDS = (1, 2, 3, 4, 5)
+COORDINATES = ("prior", "pinned")
 
 
-def run(max_steps=20000, processes=None, seed=1):
+def run(max_steps=20000, processes=None, seed=1, coordinates="prior"):
     """Fit a simulated A201 specimen with the fit's defaults; return time and convergence."""
     sim = synthetic.simulate(
         "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=61, seed=5
@@ -35,37 +36,44 @@ def run(max_steps=20000, processes=None, seed=1):
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fit(sim.data, rng=seed, settings=settings)
+        result = fit(sim.data, rng=seed, settings=settings, coordinates=coordinates)
     return {
         "seconds": time.perf_counter() - start,
         "converged": result.converged,
         "seed": seed,
         "steps": result.run.report.n_steps,
         "report": result.run.report.worst(),
+        "tau_max": float(np.nanmax(result.run.report.tau)),
+        "coordinates": coordinates,
         "processes": settings.processes,
     }
 
 
-def run_seeds(seeds=SEEDS, **kwargs):
-    """:func:`run` for each seed, one after the other."""
-    return [run(seed=seed, **kwargs) for seed in seeds]
+def run_seeds(seeds=SEEDS, coordinates=COORDINATES, **kwargs):
+    """:func:`run` for each seed and each of ``coordinates``, one after the other (side by side)."""
+    return [run(seed=seed, coordinates=c, **kwargs) for seed in seeds for c in coordinates]
 
 
 def report(r):
     state = "converged" if r["converged"] else "NOT converged"
     return (
-        f"Burgers fit, 9 tests x 61 samples, seed {r['seed']}, {r['processes']} processes: "
-        f"{r['seconds']:.0f} s, {r['steps']} steps, {state} ({r['report']}); target <= "
+        f"Burgers fit, 9 tests x 61 samples, {r['coordinates']} coordinates, seed {r['seed']}, "
+        f"{r['processes']} processes: {r['seconds']:.0f} s, {r['steps']} steps, tau max "
+        f"{r['tau_max']:.0f}, {state} ({r['report']}); target <= "
         f"{TARGET_S:.0f} s"
     )
 
 
 def report_seeds(rows):
-    seconds = np.array([r["seconds"] for r in rows])
     lines = [report(r) for r in rows]
-    lines.append(
-        f"over {len(rows)} seeds: median {np.median(seconds):.0f} s, range "
-        f"{seconds.min():.0f}-{seconds.max():.0f} s, {int(np.sum(seconds <= TARGET_S))} within "
-        f"{TARGET_S:.0f} s, {sum(r['converged'] for r in rows)} converged"
-    )
+    for coordinates in dict.fromkeys(r["coordinates"] for r in rows):
+        these = [r for r in rows if r["coordinates"] == coordinates]
+        seconds = np.array([r["seconds"] for r in these])
+        taus = np.array([r["tau_max"] for r in these])
+        lines.append(
+            f"{coordinates} coordinates over {len(these)} seeds: median {np.median(seconds):.0f} s,"
+            f" range {seconds.min():.0f}-{seconds.max():.0f} s, tau max median "
+            f"{np.median(taus):.0f}, {int(np.sum(seconds <= TARGET_S))} within {TARGET_S:.0f} s, "
+            f"{sum(r['converged'] for r in these)} converged"
+        )
     return "\n".join(lines)

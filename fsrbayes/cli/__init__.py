@@ -8,6 +8,7 @@ import sys
 
 from .._version import __version__
 from ..data.sensors import available_sensors
+from ..inference.fit import COORDINATES, FIT_COORDINATES
 from ..inference.parallel import JobError
 from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
@@ -93,6 +94,16 @@ def build_parser():
     )
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
+    fit_.add_argument(
+        "--coordinates",
+        choices=COORDINATES,
+        default=FIT_COORDINATES,
+        help=(
+            "what the ensembles move in: the prior-scaled parameters, or the log-currents the data "
+            "pin in place of as many parameters (same posterior); auto (default): pinned for a "
+            "divider circuit or a high-rate log, else prior"
+        ),
+    )
     fit_.add_argument(
         "--sampler",
         choices=("ensemble", "tempered"),

@@ -81,6 +81,7 @@ def cmd_fit(args):
                 checkpoint=checkpoint,
                 resume=args.resume,
                 progress=args.progress,
+                coordinates=args.coordinates,
             )
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
@@ -193,6 +194,7 @@ def _fit_hierarchical(args, data, settings, out):
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
                 rng=args.seed,
+                coordinates=args.coordinates,
             )
             failed = [s for s in part.specimens if s not in fits]
             if len(fits) < 2:

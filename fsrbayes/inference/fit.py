@@ -48,6 +48,8 @@ __all__ = [
     "MAP_ITERATIONS",
     "SAMPLERS",
     "FIT_SETTINGS",
+    "COORDINATES",
+    "FIT_COORDINATES",
 ]
 
 MAP_STARTS = 8
@@ -196,7 +198,12 @@ def _best_draw(run):
 
 
 SAMPLERS = ("ensemble", "tempered")
-COORDINATES = ("prior", "pinned")
+COORDINATES = ("auto", "prior", "pinned")
+FIT_COORDINATES = "auto"
+"""What :func:`fit` samples in by default (``coordinates``): ``"auto"`` picks ``"pinned"`` for a
+rig's data — a divider circuit or a binned high-rate log, whose posteriors are too thin for the
+prior-scaled parameters — and ``"prior"`` otherwise, where pinning lowers τ but costs more time
+than it saves (BENCHMARKS.md)."""
 
 
 def fit(
@@ -213,7 +220,7 @@ def fit(
     resume=False,
     progress=False,
     sampler=None,
-    coordinates="prior",
+    coordinates=None,
 ):
     """Fit one specimen's creep tests.
 
@@ -245,19 +252,24 @@ def fit(
         length run (~3 min on 2 cores for 4 tests × 12 samples with the defaults, which are too
         short to converge on creep posteriors: see that module). Default: from the type of
         ``settings``, else ``"ensemble"``.
-    coordinates : {"prior", "pinned"}
+    coordinates : {"auto", "prior", "pinned"}, optional
         What the ensembles move in: the prior-scaled parameters, or the log-currents the data
         pin in place of as many parameters (:class:`~fsrbayes.inference.pinned.PinnedCoordinates`,
-        chosen at the best optimum). The posterior is the same; the chains are stored in the
-        prior-scaled parameters either way.
+        chosen at the best optimum); ``"auto"`` (the default) as :data:`FIT_COORDINATES` says.
+        The posterior is the same; the chains are stored in the prior-scaled parameters either
+        way. Ensemble sampler only.
 
     Returns
     -------
     FitResult
     """
+    coordinates = FIT_COORDINATES if coordinates is None else coordinates
     if coordinates not in COORDINATES:
         raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
     packed = SpecimenData.select(data, specimen)
+    if coordinates == "auto":
+        rig = packed.extra_series is not None or packed.weight is not None
+        coordinates = "pinned" if rig else "prior"
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
         packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood

@@ -229,11 +229,8 @@ def _advance(
             " and coordinates=None"
         )
     if coordinates is not None:
-        target, position, log_prob_start = (
-            SampledLogProb(log_prob, coordinates),
-            sampled_start(position, coordinates),
-            None,
-        )
+        target = SampledLogProb(log_prob, coordinates)
+        position, log_prob_start = sampled_start(position, coordinates), None
     if transport is not None:
         target, position, log_prob_start = (
             MappedLogProb(target, transport),
