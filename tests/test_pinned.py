@@ -155,7 +155,7 @@ def test_round_trip_and_the_jacobian_of_the_inverse(pinned, rig_posterior):
 
 def test_a_fit_in_pinned_coordinates_stores_the_posterior_in_its_own(tmp_path):
     small = syn.simulate(
-        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=5, seed=2
     )
     fast = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=200)
     with warnings.catch_warnings():
