@@ -22,8 +22,8 @@ Which. At the maximum a posteriori point (the *anchor*) the Jacobian ∂y/∂u o
 every test and all non-noise parameters is factorised by QR with column pivoting; parameters
 are taken in pivot order while their pivot stays above :data:`RANK_TOLERANCE` of the largest (at
 most one per reference point), and the reference points by a second pivoted QR on those
-columns. It works for any
-sensor file, readout and load history: y is the model current the likelihood itself compares.
+columns. It works for any sensor file, readout and load history: y is the model current the
+likelihood itself compares.
 
 The inverse u(w) is a K-dimensional root search, by Newton's method from the linearisation at
 the anchor (forward-difference Jacobians, steps capped at :data:`MAX_STEP` prior widths, at most
@@ -93,7 +93,9 @@ class PinnedCoordinates:
         self._times = _reference_times(posterior.data)
         noise = set(noise_parameters(posterior.likelihood))
         candidates = np.array([i for i, n in enumerate(posterior.names) if n not in noise])
-        jac = self._jacobian_all(self.anchor[None])[0][:, candidates]
+        everywhere = np.arange(self._times.size)
+        full = self._jacobian(self.anchor[None], np.arange(posterior.ndim), everywhere)[0]
+        jac = full[:, candidates]
         if not np.isfinite(jac).all():
             raise ValueError("the model's log-current is not finite around the anchor point")
         _, r_cols, cols = scipy.linalg.qr(jac, pivoting=True, mode="economic")
@@ -110,47 +112,38 @@ class PinnedCoordinates:
         self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
             posterior.names[i] for i in self._free
         )
-        y0 = self.log_current(self.anchor[None])[0]
-        full = self._jacobian_all(self.anchor[None])[0][self._rows]
-        self._y0 = y0
-        self._inv_solved = np.linalg.inv(full[:, self._solved])
-        self._jac_free = full[:, self._free]
+        self._y0 = self.log_current(self.anchor[None])[0]
+        self._inv_solved = np.linalg.inv(full[self._rows][:, self._solved])
+        self._jac_free = full[self._rows][:, self._free]
 
     @property
     def ndim(self):
         """Number of coordinates."""
         return self.posterior.ndim
 
-    def log_current(self, u):
-        """Return the pinned log-currents y(u), (W, ndim) → (W, K); NaN outside the domain."""
+    def log_current(self, u, rows=None):
+        """Return the pinned log-currents y(u), (W, ndim) → (W, K); NaN outside the domain.
+
+        ``rows``: other reference points (indices into every test's first and last sample).
+        """
         x, _ = self.posterior.prior.from_unconstrained(np.atleast_2d(u))
         with np.errstate(all="ignore"):
             log_current = self.posterior.log_model_current(x, self._times)
-        log_current = log_current.reshape(len(x), self._times.size)[:, self._rows]
+        rows = self._rows if rows is None else rows
+        log_current = log_current.reshape(len(x), self._times.size)[:, rows]
         return np.where(np.isfinite(log_current), log_current, np.nan)
 
-    def _jacobian_all(self, u):
-        """Return ∂ log I(every reference point)/∂u: (W, ndim) → (W, 2C, ndim), central."""
-        n = u.shape[1]
-        shifts = np.concatenate(
-            [u[None] + FD_STEP * e[:, None, :] for e in (np.eye(n), -np.eye(n))]
-        )
-        x, _ = self.posterior.prior.from_unconstrained(shifts.reshape(-1, n))
-        with np.errstate(all="ignore"):
-            log_current = self.posterior.log_model_current(x, self._times)
-        log_current = log_current.reshape(2, n, len(u), -1)
-        return np.moveaxis((log_current[0] - log_current[1]) / (2 * FD_STEP), 0, 2)
+    def _jacobian(self, u, columns, rows=None, y=None, step=FD_STEP):
+        """∂y/∂u[columns] at u, (W, ndim) → (W, rows, columns).
 
-    def _solved_jacobian(self, u, y=None):
-        """∂y/∂u_P at u (W, K, K): forward differences from y(u), central ones without it."""
-        k = self._solved.size
+        Forward differences from y = y(u) when it is given, central ones otherwise.
+        """
         signs = (1.0,) if y is not None else (1.0, -1.0)
-        step = FD_STEP if y is not None else CENTRAL_STEP
-        shifted = np.repeat(u[None], k * len(signs), axis=0)
-        for i, (sign, column) in enumerate((s, c) for s in signs for c in self._solved):
+        shifted = np.repeat(u[None], len(columns) * len(signs), axis=0)
+        for i, (sign, column) in enumerate((s, c) for s in signs for c in columns):
             shifted[i, :, column] += sign * step
-        y_shift = self.log_current(shifted.reshape(-1, u.shape[1])).reshape(
-            len(signs), k, len(u), -1
+        y_shift = self.log_current(shifted.reshape(-1, u.shape[1]), rows).reshape(
+            len(signs), len(columns), len(u), -1
         )
         low = y[None] if y is not None else y_shift[1]
         return np.moveaxis((y_shift[0] - low) / (len(signs) * step), 0, 2)
@@ -203,7 +196,7 @@ class PinnedCoordinates:
             going = finite & ~done
             if not going.any():
                 break
-            jac = self._solved_jacobian(u[active[going]], y[going])
+            jac = self._jacobian(u[active[going]], self._solved, y=y[going])
             usable = np.isfinite(jac).all(axis=(1, 2))
             usable[usable] = np.linalg.slogdet(jac[usable])[0] != 0
             step = np.linalg.solve(jac[usable], residual[going][usable][..., None])[..., 0]
@@ -211,7 +204,8 @@ class PinnedCoordinates:
             active = active[going][usable]
             u[active[:, None], self._solved[None]] += step
         if found.any():
-            sign, log_abs = np.linalg.slogdet(self._solved_jacobian(u[found]))
+            jacobian = self._jacobian(u[found], self._solved, step=CENTRAL_STEP)
+            sign, log_abs = np.linalg.slogdet(jacobian)
             log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
             found &= np.isfinite(log_det)
         return found, u, log_det
