@@ -25,21 +25,13 @@ from fsrbayes.inference.pinned import PinnedCoordinates
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from fsrbayes.inference.samplers.coordinates import SampledLogProb
+from tests.test_transport import BEND, WIDTH, Banana
 
-BEND, WIDTH = 1.0, 0.05
-
-
-def banana(x):
-    """x0 ~ N(0, 1), x1 | x0 ~ N(BEND·(x0² − 1), WIDTH²), x2 ~ N(0, 1)."""
-    x = np.atleast_2d(x)
-    ridge = x[:, 1] - BEND * (x[:, 0] ** 2 - 1.0)
-    return -0.5 * (x[:, 0] ** 2 + (ridge / WIDTH) ** 2 + x[:, 2] ** 2)
+banana = Banana()
 
 
 class Straightened:
     """w = (x0, (x1 − BEND·(x0² − 1))/WIDTH, x2): the banana becomes a unit normal."""
-
-    calls = 0
 
     def to_sampled(self, x):
         x = np.asarray(x, dtype=float)
@@ -48,7 +40,6 @@ class Straightened:
         return w
 
     def from_sampled(self, w):
-        Straightened.calls += 1
         x = np.atleast_2d(w).copy()
         x[:, 1] = BEND * (x[:, 0] ** 2 - 1.0) + WIDTH * x[:, 1]
         return x, np.full(len(x), np.log(WIDTH))
