@@ -9,54 +9,23 @@ parameters' 90 % intervals hold the simulated truth.
 """
 
 import os
-import tempfile
-import time
-import warnings
 from dataclasses import replace
-from pathlib import Path
 
-import numpy as np
-
-from fsrbayes.data.csvio import read_csv
-from fsrbayes.data.rigsim import simulate_rig, write_rig
-from fsrbayes.inference.fit import FIT_SETTINGS, fit
-from fsrbayes.inference.samplers import ConvergenceWarning
+from fsrbayes.inference.fit import FIT_SETTINGS
+from validation.rig_coverage import rig_replication
 
 COORDINATES = ("prior", "pinned")
 
 
 def run(seed=3, fit_seed=1, coordinates=COORDINATES, max_steps=20000):
     """Simulate the rig, fit it in each of ``coordinates``; one result dict per fit."""
-    text, truth = simulate_rig(1, seed=seed)
-    with tempfile.TemporaryDirectory() as folder:
-        data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
-    params = next(iter(truth["specimens"].values()))["params"]
     settings = replace(
         FIT_SETTINGS, max_steps=max_steps, processes=min(FIT_SETTINGS.n_ensembles, os.cpu_count())
     )
-    rows = []
-    for chosen in coordinates:
-        start = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            result = fit(data, rng=fit_seed, settings=settings, coordinates=chosen)
-        seconds = time.perf_counter() - start
-        draws = result.draws().reshape(-1, result.posterior.ndim)
-        low, high = np.percentile(draws, [5, 95], axis=0)
-        physical = [i for i, n in enumerate(result.posterior.names) if n != "sigma_rel"]
-        inside = sum(low[i] <= params[result.posterior.names[i]] <= high[i] for i in physical)
-        rows.append(
-            {
-                "coordinates": chosen,
-                "seconds": seconds,
-                "steps": result.run.report.n_steps,
-                "tau_max": float(np.nanmax(result.run.report.tau)),
-                "converged": result.converged,
-                "inside_90": f"{inside}/{len(physical)}",
-                "report": result.run.report.worst(),
-            }
-        )
-    return rows
+    return [
+        rig_replication(seed, fit_seed=fit_seed, coordinates=chosen, settings=settings)
+        for chosen in coordinates
+    ]
 
 
 def report(rows):
@@ -64,6 +33,6 @@ def report(rows):
         f"divider rig fit (4 tests x 10 min at 100 Hz, 10-bit ADC), {r['coordinates']} "
         f"coordinates: {r['seconds']:.0f} s, {r['steps']} steps, tau max {r['tau_max']:.0f}, "
         f"{'converged' if r['converged'] else 'NOT converged'} ({r['report']}); truth inside the "
-        f"90 % interval for {r['inside_90']} physical parameters"
+        f"90 % interval for {sum(r['inside'].values())}/{len(r['inside'])} physical parameters"
         for r in rows
     )

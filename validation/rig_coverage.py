@@ -28,25 +28,39 @@ from fsrbayes.inference.samplers import ConvergenceWarning
 __all__ = ["rig_replication", "format_coverage"]
 
 
-def rig_replication(seed):
-    """Simulate and fit one rig; return its per-parameter coverage and convergence."""
+def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None):
+    """Simulate and fit one rig; return its per-parameter coverage and convergence.
+
+    ``fit_seed`` (default: ``seed``), ``coordinates`` and ``settings`` (default: the fit's, on
+    two processes) are passed to :func:`~fsrbayes.inference.fit.fit`.
+    """
     text, truth = simulate_rig(1, seed=seed)
     with tempfile.TemporaryDirectory() as folder:
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
     params = next(iter(truth["specimens"].values()))["params"]
+    settings = settings or replace(FIT_SETTINGS, processes=2)
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fit(data, rng=seed, settings=replace(FIT_SETTINGS, processes=2))
+        result = fit(
+            data,
+            rng=seed if fit_seed is None else fit_seed,
+            settings=settings,
+            coordinates=coordinates,
+        )
+    seconds = time.perf_counter() - start
     draws = result.draws().reshape(-1, result.posterior.ndim)
     low, high = np.percentile(draws, [5, 95], axis=0)
     names = [n for n in result.posterior.names if n != "sigma_rel"]
     index = {n: i for i, n in enumerate(result.posterior.names)}
     return {
         "seed": seed,
+        "coordinates": "prior" if result.coordinates is None else "pinned",
         "converged": bool(result.converged),
-        "seconds": time.perf_counter() - start,
+        "seconds": seconds,
+        "steps": result.run.report.n_steps,
         "tau_max": float(np.nanmax(result.run.report.tau)),
+        "report": result.run.report.worst(),
         "inside": {n: bool(low[index[n]] <= params[n] <= high[index[n]]) for n in names},
     }
 
@@ -72,4 +86,4 @@ if __name__ == "__main__":
         rows.append(rig_replication(seed))
         print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
     print(format_coverage(rows))
-    print(json.dumps(rows))
+    print(json.dumps([{k: v for k, v in r.items() if k != "report"} for r in rows]))
