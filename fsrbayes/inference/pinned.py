@@ -53,8 +53,9 @@ smallest pivot kept (:data:`RANK_TOLERANCE`)."""
 TOLERANCE = 1e-9
 """Newton stops when every |y − y_target| is below this (log-current units)."""
 MAX_ITER = 12
-"""Newton iterations per start: on the benchmark specimen no root needed more than 8 (from a
-start 1 prior width away in the free parameters); rows without a root would spend the rest."""
+"""Newton iterations per root search: Newton converges quadratically once near a root, so a row
+still unsolved after this many has none nearby and stops costing model evaluations
+(BENCHMARKS.md, "Coordinates the data pin")."""
 
 
 def _reference_times(data):
