@@ -35,8 +35,9 @@ from pathlib import Path
 import numpy as np
 
 from . import plots
+from .data.embedded import default_data
 from .data.sensors import load_sensor
-from .data.synthetic import PAPER_VOLTAGES, default_data
+from .data.synthetic import PAPER_VOLTAGES
 from .discrepancy import diagnose
 from .inference.compare import strength
 from .inference.evidence.laplace import LocalDraws, laplace_fit

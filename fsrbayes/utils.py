@@ -12,6 +12,7 @@ __all__ = [
     "HALF_LOG_2PI",
     "atomic_path",
     "codes_of",
+    "first_sign_change",
     "json_ready",
     "logsumexp",
     "write_json_atomic",
@@ -38,6 +39,26 @@ def logsumexp(values, axis=0):
     top = np.where(np.isfinite(top), top, 0.0)
     with np.errstate(divide="ignore"):
         return np.log(np.sum(np.exp(values - top), axis=axis)) + np.squeeze(top, axis=axis)
+
+
+def first_sign_change(x, values):
+    """Return where each row of ``values`` first changes sign along ``x`` (NaN: it never does).
+
+    ``values`` has shape (..., n) over the increasing grid ``x`` (n,). A change is a pair of
+    neighbours whose product is ≤ 0 with the first non-zero; the crossing is interpolated
+    linearly between them.
+    """
+    x = np.asarray(x, dtype=float)
+    values = np.asarray(values, dtype=float)
+    sign = np.sign(values)
+    change = (sign[..., :-1] * sign[..., 1:] <= 0) & (sign[..., :-1] != 0)
+    first = np.argmax(change, axis=-1)[..., None]
+    y0 = np.take_along_axis(values, first, axis=-1)[..., 0]
+    y1 = np.take_along_axis(values, first + 1, axis=-1)[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.clip(np.where(y1 != y0, y0 / (y0 - y1), 0.0), 0.0, 1.0)
+    x0, x1 = x[first[..., 0]], x[first[..., 0] + 1]
+    return np.where(change.any(axis=-1), x0 + w * (x1 - x0), np.nan)
 
 
 @contextmanager

@@ -165,17 +165,6 @@ def test_paper_protocol_preset():
     assert max(t.voltage_V for t in paper_law.data) == 6.0  # 7.5 and 9 V are past the eq. 11 peak
 
 
-def test_embedded_default_data():
-    data = syn.default_data()
-    truth = syn.default_truth()
-    assert data.sensors == ["a201", "fsr402"] and len(data.specimens) == 32
-    assert len(data) == 2 * 16 * 3 * 11 and data.n_rows == len(data) * 25
-    assert set(truth["specimens"]) == set(data.specimens) and truth["effects"] == []
-    clean = syn.noiseless_current(truth)
-    ratio = np.concatenate([np.log(t.current_A / clean[t.key]) for t in data])
-    assert ratio.std() == pytest.approx(0.005, rel=0.1)  # 0.5 % noise (stored to 6 digits)
-
-
 def test_cli_simulate_writes_data_and_truth(tmp_path):
     args = [
         sys.executable,

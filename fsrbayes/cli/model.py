@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
-from ..data import csvio, synthetic
+from ..data import csvio, embedded, synthetic
 from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
@@ -138,7 +138,7 @@ def _figure7(time_s, out):
 
 def _default_data_drift(time_s):
     """Print and return the observed drift spread of the embedded data (Figures 10/11 preview)."""
-    data = synthetic.default_data()
+    data = embedded.default_data()
     print(f"\n{data.summary()}")
     print(
         f"observed drift({time_s:g} s) in % over the specimens at 4.9 N: median [25 %, 75 %] per "

@@ -21,7 +21,6 @@ The same seed gives the same bytes.
 
 import json
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +31,6 @@ from ..physics.parameters import population_scatter
 from ..physics.sensor import current as model_current
 from ..utils import atomic_path
 from .creep import CreepData, CreepTest
-from .csvio import read_csv
 from .csvwrite import write_csv
 from .sensors import load_sensor
 
@@ -45,13 +43,12 @@ __all__ = [
     "parse_effect",
     "effect_parameters",
     "draw_specimens",
+    "time_grid",
     "simulate",
     "paper_protocol",
     "write_simulation",
     "load_truth",
     "noiseless_current",
-    "default_data",
-    "default_truth",
 ]
 
 POPULATION_SCATTER = population_scatter()
@@ -164,7 +161,8 @@ def draw_specimens(sensor, n, rng, scatter=1.0):
     return out
 
 
-def _time_grid(duration, samples, spacing):
+def time_grid(duration, samples, spacing):
+    """Sample times from 0 to ``duration`` s: ``"linear"`` or ``"log"`` (0, then log-spaced)."""
     if samples < 3:
         raise ValueError(f"a creep test needs at least 3 samples, got {samples}")
     if duration <= 0:
@@ -284,7 +282,7 @@ def simulate(
         if value < 0:
             raise ValueError(f"{label} must be >= 0, got {value}")
     rng = np.random.default_rng(seed)
-    times = _time_grid(duration, samples, spacing)
+    times = time_grid(duration, samples, spacing)
     tests, specimens, rf_map, protocol = [], {}, {}, {}
     effect_names, effect_params = (), {}
     for name in names:
@@ -437,43 +435,3 @@ def load_truth(path):
         if key not in truth:
             raise ValueError(f"{path}: not an fsrbayes truth file (no {key!r})")
     return truth
-
-
-DEFAULT_DATA = "paper_protocol.csv.gz"
-DEFAULT_TRUTH = "paper_protocol.truth.json"
-
-
-def _default_path(name):
-    return resources.files("fsrbayes.data") / "default" / name
-
-
-def default_data():
-    """Return the embedded default data set: :func:`paper_protocol` for both sensors, seed 2017.
-
-    Both sensors, 16 specimens each, the paper's forces and voltage lists, an hour sampled at
-    25 log-spaced times, current readout, 0.5 % noise, no hidden effect; stored to 6
-    significant digits. Rebuild with ``python -m fsrbayes.data.synthetic``.
-    """
-    with resources.as_file(_default_path(DEFAULT_DATA)) as path:
-        data = read_csv(path)
-    return CreepData(data.tests, "fsrbayes default data (paper protocol, seed 2017)")
-
-
-def default_truth():
-    """Return the truth of :func:`default_data`."""
-    with resources.as_file(_default_path(DEFAULT_TRUTH)) as path:
-        return load_truth(path)
-
-
-def build_default(folder):
-    """Write the embedded default data set into ``folder`` (what ships in the package)."""
-    sim = paper_protocol(("a201", "fsr402"), samples=25, spacing="log", seed=2017)
-    return write_simulation(
-        sim, Path(folder) / DEFAULT_DATA, Path(folder) / DEFAULT_TRUTH, digits=6
-    )
-
-
-if __name__ == "__main__":
-    import sys
-
-    print(build_default(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "default"))

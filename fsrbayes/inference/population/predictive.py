@@ -21,6 +21,7 @@ import numpy as np
 from ...physics.constants import DRIFT_TIME_S
 from ...physics.models import parse_model
 from ...physics.sensor import solve_current
+from ...utils import first_sign_change
 from ..posterior import noise_parameters
 from ..samplers import even_index
 
@@ -315,16 +316,8 @@ def zero_drift_voltage(specimens, stress_Pa, v_range, *, time_s=DRIFT_TIME_S, n_
         would describe the exception, not the population).
     """
     v_min, v_max, grid, drift = _drift_over_voltages(specimens, stress_Pa, v_range, time_s, n_grid)
-    sign = np.sign(drift)
-    change = (sign[:, :-1] * sign[:, 1:] <= 0) & (sign[:, :-1] != 0)
-    has_root = change.any(axis=1)
-    first = np.argmax(change, axis=1)
-    rows = np.arange(len(drift))
-    y0, y1 = drift[rows, first], drift[rows, first + 1]
-    log_v = np.log(grid)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w = np.where(y1 != y0, y0 / (y0 - y1), 0.0)
-    roots = np.exp(log_v[first] + np.clip(w, 0.0, 1.0) * (log_v[first + 1] - log_v[first]))
+    roots = np.exp(first_sign_change(np.log(grid), drift))
+    has_root = np.isfinite(roots)
     share = float(np.mean(has_root))
     q = np.quantile(roots[has_root], [0.05, 0.5, 0.95]) if share >= 0.5 else [None] * 3
     return {
