@@ -11,6 +11,7 @@ matplotlib.use("Agg", force=False)
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import FuncFormatter  # noqa: E402
 
 from .physics.parameters import physical_parameters  # noqa: E402
 
@@ -19,6 +20,7 @@ __all__ = [
     "band_plot",
     "drift_3600_plot",
     "population_drift_plot",
+    "drift_curves_plot",
     "diagnosis_drift_plot",
     "diagnosis_misfit_plot",
     "diagnosis_discrepancy_plot",
@@ -118,6 +120,10 @@ PANELS_PER_ROW = 4
 """Population box plots wrap after this many panels (eleven voltages in one row were unreadable)."""
 
 
+SYMLOG_SPAN = 10.0
+"""Drift range (percentage points) beyond which the box plots switch to a symlog axis."""
+
+
 def population_drift_plot(groups, observed=None, by="voltage"):
     """Box plots of a new specimen's drift (the stand-ins for the paper's Figures 10, 11, 13, 14).
 
@@ -127,6 +133,8 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     quantiles carries its 90 % credible interval over the hyper-posterior as a thin bar. Observed
     per-specimen drifts are drawn beside each box. The y-range covers the whiskers and the
     observations; quantile intervals reaching beyond it are cut there and marked with an arrow head.
+    A range wider than :data:`SYMLOG_SPAN` is drawn on a symlog axis (linear within ±1 %), and
+    zero drift is marked.
 
     Parameters
     ----------
@@ -194,6 +202,13 @@ def population_drift_plot(groups, observed=None, by="voltage"):
         if lo < low:
             ax.plot(x, low, "v", color="C1", ms=3, clip_on=False)
     axes[0, 0].set_ylim(low, high)
+    if high - low > SYMLOG_SPAN:
+        # Drifts of tens of % at low voltage beside fractions of a % at high voltage: a scale
+        # linear within ±1 % and logarithmic beyond keeps both, and their sign, readable.
+        axes[0, 0].set_yscale("symlog", linthresh=1.0, linscale=1.0)
+        axes[0, 0].yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    for ax in axes.flat[: len(panels)]:
+        ax.axhline(0.0, color="0.6", lw=0.8, ls="--", zorder=0)
     for row in axes:
         row[0].set_ylabel(f"drift({groups[0].get('time_s', 3600):g} s) (%)")
     what = "as measured" if groups[0].get("as_measured") else "noise-free"
@@ -210,6 +225,24 @@ def population_drift_plot(groups, observed=None, by="voltage"):
     if observed is not None:
         last.plot([], [], "k.", label="observed specimens")
     last.legend(fontsize=6, loc="best")
+    fig.tight_layout()
+    return fig, axes
+
+
+def drift_curves_plot(times, drift, voltages, stresses):
+    """drift(t) curves, one panel per stress and one curve per voltage (the paper's Figure 7).
+
+    ``times`` (T,) in s; ``drift`` (S, V, T) in %; ``voltages`` in V and ``stresses`` in Pa name
+    the curves and the panels.
+    """
+    fig, axes = plt.subplots(1, len(stresses), figsize=(3.2 * len(stresses), 3.2), sharey=True)
+    axes = np.atleast_1d(axes)
+    for ax, stress, panel in zip(axes, stresses, drift, strict=True):
+        for k, (volts, curve) in enumerate(zip(voltages, panel, strict=True)):
+            ax.plot(np.asarray(times) / 60.0, curve, color=f"C{k}", label=f"{volts:g} V")
+        ax.set(title=f"{stress / 1e3:.0f} kPa", xlabel="time (min)")
+    axes[0].set_ylabel("drift(t) (%)")
+    axes[-1].legend(fontsize=7, title="V_FSR", title_fontsize=7)
     fig.tight_layout()
     return fig, axes
 

@@ -16,9 +16,6 @@ from ..physics.tunneling import paper_peak_voltage
 from ..utils import write_json_atomic
 from .common import UsageError, floats, writable
 
-FIGURE7_STRESSES = (50e3, 100e3, 150e3, 200e3)
-FIGURE7_VOLTAGES = (0.03, 0.22, 0.4, 2.0)
-
 
 def _drift_table(params, voltages, stresses, time_s, tunneling):
     table = fsr.drift(
@@ -70,25 +67,27 @@ def cmd_demo(args):
         echo=lambda line: print(line, flush=True),
     )
     print("\nSummary")
-    for sensor, e in results["evidence"].items():
+    for sensor, entry in results["sensors"].items():
+        d, b = entry["diagnose"], entry["bayes_factor"]
+        named = " + ".join(d["effects"]) if d["effects"] else "nothing"
         print(
-            f"  {sensor}: Burgers over Zener ln B = {e['log_bf_burgers_over_zener']:.1f} (Laplace, "
-            f"summed over {len(e['per_specimen'])} specimens): {e['preferred']}, {e['strength']}"
+            f"  {sensor}: diagnose {d['verdict']} (names {named}), gap {d['gap_before']:.2f} -> "
+            f"{d['gap_after']:.2f}; Burgers over Zener ln B = {b['log_bf_burgers_over_zener']:.1f} "
+            f"(Laplace): {b['preferred']}, {b['strength']}"
         )
-    for sensor, pop in results["population"].items():
-        best = ", ".join(
-            f"{o['stress_Pa'] / 1e3:.0f} kPa: {o['median']:.2g} V" for o in pop["optimal_voltage"]
-        )
-        print(f"  {sensor}: optimal sourcing voltage (new specimen, median) {best}")
-    d = results["diagnose"]
-    print(
-        f"  diagnose ({', '.join(d['specimens'])}): verdict {d['verdict']}"
-        + (f" ({d['effect']})" if d["effect"] else "")
-        + f", gap {d['gap_before']:.2f}"
-    )
+        for z in entry["zero_drift_voltage"]:
+            where = (
+                f"median {z['q50']:.2f} V (90 %: {z['q05']:.2f}-{z['q95']:.2f} V)"
+                if z["q50"] is not None
+                else "no median (fewer than half have a root)"
+            )
+            print(
+                f"    {z['stress_Pa'] / 1e3:.0f} kPa: P(zero drift in range) = "
+                f"{z['p_root_in_range']:.2f}, {where}"
+            )
     for note in results["warnings"]:
         print(f"  note: {note}")
-    print(f"report: {results['report']} ({results['seconds']:.0f} s)")
+    print(f"report: {results['report']} ({results['runtime_s']:.0f} s)")
     return 0
 
 
@@ -100,7 +99,7 @@ def _figure7(time_s, out):
     """
     sensor = load_sensor("a201")
     params = dict(sensor.params)
-    voltages, stresses = np.array(FIGURE7_VOLTAGES), np.array(FIGURE7_STRESSES)
+    voltages, stresses = np.array(synthetic.FIGURE7_VOLTAGES), np.array(synthetic.FIGURE7_STRESSES)
     print(f"fsrbayes {__version__} demo: the paper's Figure 7 from Table 1 ({sensor.description}),")
     print("Burgers creep k2 = 10 k1, b2 = 5000 k1, b1 = 70e3 k1; drift(3600 s) in %:\n")
     results = {}

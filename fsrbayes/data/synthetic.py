@@ -38,6 +38,8 @@ __all__ = [
     "POPULATION_SCATTER",
     "PAPER_FORCES_N",
     "PAPER_VOLTAGES",
+    "FIGURE7_STRESSES",
+    "FIGURE7_VOLTAGES",
     "EFFECT_DEFAULTS",
     "Simulation",
     "parse_effect",
@@ -63,6 +65,11 @@ PAPER_VOLTAGES = {
     "fsr402": (0.1, 0.2, 0.5, 0.75, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0),
 }
 """Section 4.2: the sourcing voltages of each sensor's creep tests."""
+
+FIGURE7_STRESSES = (50e3, 100e3, 150e3, 200e3)
+"""The four stresses of the paper's Figure 7 (Pa)."""
+FIGURE7_VOLTAGES = (0.03, 0.22, 0.4, 2.0)
+"""The four sourcing voltages of the paper's Figure 7 (V)."""
 
 EFFECT_DEFAULTS = {
     "area-creep": {"area_creep": -12.0},

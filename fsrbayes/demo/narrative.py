@@ -1,0 +1,107 @@
+"""The demo's report: Markdown with the figures by path (embedded when converted to HTML)."""
+
+from .study import DEGRADED_LOSS, RECOMMENDED_V
+
+__all__ = ["narrative"]
+
+
+def _percent(value):
+    return "–" if value is None else f"{100 * value:.0f} %"
+
+
+def _volts(value):
+    return "–" if value is None else f"{value:.2f} V"
+
+
+def _diagnose_lines(sensor, d):
+    named = " + ".join(d["effects"]) if d["effects"] else "nothing"
+    lines = [
+        f"**{sensor}** — `diagnose` on {', '.join(d['specimens'])} ({d['n_tests']} creep tests, "
+        f"candidates: {', '.join(d['tried'])}): verdict **{d['verdict']}**, names {named}; gap "
+        f"{d['gap_before']:.2f} → {d['gap_after']:.2f} (an adequate model stays below "
+        f"{d['band']:.2f}).",
+        "",
+        "| step | effect | ln B over the model before it (Laplace, screening) | gap after |",
+        "|---|---|---|---|",
+    ]
+    for c in d["candidates"]:
+        lines.append(f"| {c['step']} | {c['effect']} | {c['log_bf']:.1f} | {c['gap_after']:.2f} |")
+    return lines + [""]
+
+
+def narrative(results, figures, plan):
+    """Return the report's Markdown.
+
+    Parameters
+    ----------
+    results : dict
+        The content of ``results.json`` so far.
+    figures : list of (path, caption)
+    plan : DemoPlan
+    """
+    lines = [
+        "# fsrbayes demo: FSR creep, the Bayesian way",
+        "",
+        f"Data: {results['data']} — simulated to behave like the paper's measurements: on the A201 "
+        "a path loss above an onset voltage that differs between specimens (3.0–4.6 V) and a "
+        "negative creep of the tunneling area, neither of them in the model; on the FSR 402 the "
+        "model's own physics. Plan `"
+        f"{plan.name}`: {results['n_specimens']} specimens ({plan.specimens_per_sensor} per "
+        f"sensor), {results['n_tests']} creep tests; run time {results['runtime_s']:.0f} s.",
+        "",
+        "Posteriors here are Laplace approximations at the maximum a posteriori point with draws "
+        "from a short ensemble run there, and evidences are Laplace evidences (no Monte-Carlo "
+        "error bar): fast screening numbers. `fsrbayes fit` gives converged emcee posteriors "
+        "(R-hat, ESS) and `fsrbayes compare` evidences with error bars.",
+        "",
+        "## What the model misses",
+        "",
+    ]
+    for sensor, s in results["sensors"].items():
+        lines += _diagnose_lines(sensor, s["diagnose"])
+    lines += [
+        "## Zener or Burgers?",
+        "",
+        "| sensor | ln B (Burgers over Zener, base models), summed over specimens | verdict |",
+        "|---|---|---|",
+    ]
+    for sensor, s in results["sensors"].items():
+        b = s["bayes_factor"]
+        lines.append(
+            f"| {sensor} | {b['log_bf_burgers_over_zener']:.1f} | "
+            f"{b['preferred']}: {b['strength']} |"
+        )
+    lines += [
+        "",
+        "## The paper's open question: where is drift(3600 s) zero?",
+        "",
+        f"For a new specimen of the population (the extended model's two-stage population "
+        f"posterior): the share whose drift changes sign inside the measured voltage range, and "
+        f"where. A specimen *degrades* at a voltage when the path loss takes ≥ "
+        f"{100 * DEGRADED_LOSS:.0f} % of its current.",
+        "",
+        "| sensor | stress | P(root in range) | zero-drift voltage, median (90 %) | "
+        "P(degrades there) |",
+        "|---|---|---|---|---|",
+    ]
+    for sensor, s in results["sensors"].items():
+        for z in s["zero_drift_voltage"]:
+            interval = (
+                f"{_volts(z['q50'])} ({_volts(z['q05'])} – {_volts(z['q95'])})"
+                if z["q50"] is not None
+                else "– (fewer than half have one)"
+            )
+            lines.append(
+                f"| {sensor} | {z['stress_Pa'] / 1e3:.0f} kPa | {z['p_root_in_range']:.2f} | "
+                f"{interval} | {_percent(z['p_degrade'])} |"
+            )
+    lines.append("")
+    for sensor, s in results["sensors"].items():
+        lines.append(
+            f"- {sensor}: P(a new specimen degrades at the paper's {RECOMMENDED_V:g} V) = "
+            f"{_percent(s['p_degrade_at_2V'])}"
+            + (" (the model holds no degradation)" if s["p_degrade_at_2V"] is None else "")
+        )
+    lines += ["", "## Figures", ""]
+    lines += [f"![{caption}]({path})" for path, caption in figures]
+    return "\n".join(lines) + "\n"

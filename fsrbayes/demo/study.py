@@ -1,0 +1,203 @@
+"""The demo's computations: diagnose each sensor, fit its specimens, pool them, answer the question.
+
+Every function here works on one sensor's share of the data; :mod:`.run` strings them together.
+"""
+
+import time
+
+import numpy as np
+
+from ..data.sensors import load_sensor
+from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES, PAPER_VOLTAGES
+from ..discrepancy import diagnose
+from ..inference.evidence.laplace import laplace_fit
+from ..inference.likelihood import SpecimenData
+from ..inference.output import save_population
+from ..inference.parallel import single_threaded_blas
+from ..inference.population.model import Population
+from ..inference.population.predictive import (
+    ForwardTemplate,
+    drift_groups,
+    new_specimens,
+    zero_drift_voltage,
+)
+from ..inference.population.routes import two_stage
+from ..inference.posterior import LogPosterior
+from ..physics.constants import DRIFT_TIME_S
+from ..physics.sensor import drift as model_drift
+
+__all__ = [
+    "DEGRADED_LOSS",
+    "RECOMMENDED_V",
+    "degradation_share",
+    "diagnose_sensor",
+    "figure7_curves",
+    "fit_specimen",
+    "population",
+    "run_job",
+    "zero_drift",
+]
+
+DEGRADED_LOSS = 0.01
+"""A new specimen *degrades* at a voltage when the ``voltage-degradation`` effect takes at least
+this much of its log-current (1 %) once grown in full: deg_amp·S(V) ≥ 0.01."""
+
+RECOMMENDED_V = 2.0
+"""The paper's recommendation: keep V_FSR below 2 V to avoid sensitivity degradation (§4.4)."""
+
+
+def figure7_curves(n_times=121, tunneling="smooth"):
+    """Return the paper's Figure 7: the A201's drift(t) from Table 1, per stress and voltage.
+
+    Returns
+    -------
+    times : ndarray (T,)
+        0 to 3600 s.
+    drift : ndarray (S, V, T)
+        drift(t) in % (eq. 22) at :data:`FIGURE7_STRESSES` × :data:`FIGURE7_VOLTAGES`.
+    """
+    params = dict(load_sensor("a201").params)
+    times = np.linspace(0.0, DRIFT_TIME_S, n_times)
+    volts = np.array(FIGURE7_VOLTAGES)[None, :, None]
+    stresses = np.array(FIGURE7_STRESSES)[:, None, None]
+    return times, model_drift(params, volts, stresses, times, tunneling=tunneling)
+
+
+def diagnose_sensor(job):
+    """Run :func:`fsrbayes.diagnose` on one sensor's first specimens (a worker job)."""
+    data, sensor, plan, seed = job
+    chosen = data.select(sensor=sensor).specimens[: plan.diagnose_specimens]
+    with single_threaded_blas():
+        diagnosis = diagnose(
+            data.select(sensor=sensor),
+            effects=plan.diagnose_effects,
+            specimens=chosen,
+            n_draws=plan.n_draws,
+            n_starts=plan.n_starts,
+            processes=1,
+            seed=seed,
+        )
+    return sensor, diagnosis
+
+
+def fit_specimen(job):
+    """Laplace fits (evidence) and local draws of one specimen under each of ``models``.
+
+    ``models`` maps a role (``"base"``, ``"zener"``, ``"extended"``) to a model name; draws are
+    taken for every role but ``"zener"``, whose fit serves only the Bayes factor.
+    """
+    data, specimen, models, plan, seed = job
+    rng = np.random.default_rng(seed)
+    packed = SpecimenData.select(data, specimen)
+    sensor = load_sensor(packed.sensor)
+    started = time.perf_counter()
+    out = {"specimen": specimen, "sensor": packed.sensor, "posterior": {}, "draws": {}, "log_z": {}}
+    with single_threaded_blas():
+        for role, model in models.items():
+            posterior = LogPosterior.for_sensor(packed, sensor, model=model)
+            fit = laplace_fit(posterior, rng, n_starts=plan.n_starts)
+            out["log_z"][role] = fit.log_evidence
+            if role != "zener":
+                out["posterior"][role] = posterior
+                out["draws"][role] = fit.local_draws(rng, plan.n_draws, steps=plan.draw_steps)
+    out["seconds"] = time.perf_counter() - started
+    return out
+
+
+def run_job(job):
+    """Run one of the demo's worker jobs: ``("diagnose", …)`` or ``("fit", …)``.
+
+    One pool takes both kinds, so the specimens' fits fill the cores while a long diagnosis runs.
+    """
+    kind, payload = job
+    if kind == "diagnose":
+        return kind, diagnose_sensor(payload)
+    return kind, fit_specimen(payload)
+
+
+def population(fits, role, data, plan, seed, folder=None):
+    """Two-stage population posterior of one sensor's specimens under one model, and new specimens.
+
+    Returns
+    -------
+    dict
+        ``specimens`` (:class:`~fsrbayes.inference.population.predictive.NewSpecimens`),
+        ``groups`` (drift(3600 s) quantiles of a new specimen as measured, per voltage and stress
+        of the data), ``model``, ``effective_draws_min`` and, with ``folder``, ``population`` (the
+        ``population.nc`` summary written there).
+    """
+    posterior = fits[0]["posterior"][role]
+    pool = Population(posterior.prior)
+    hier = two_stage(
+        [f["draws"][role][:, pool.index] for f in fits],
+        pool,
+        n_draws=plan.n_draws,
+        settings=plan.hyper,
+        seed=seed,
+    )
+    hier.specimens = [f["specimen"] for f in fits]
+    template = ForwardTemplate.from_posterior(posterior)
+    specimens = new_specimens(
+        pool,
+        hier.hyper_draws(),
+        template,
+        n_hyper=plan.n_hyper,
+        n_per_hyper=plan.n_per_hyper,
+        seed=seed,
+    )
+    volts = np.unique([t.voltage_V for t in data.tests])
+    stresses = np.unique([t.stress_Pa for t in data.tests])
+    noise = float(np.median([posterior.parameters(f["draws"][role])["sigma_rel"] for f in fits]))
+    out = {
+        "model": posterior.model,
+        "specimens": specimens,
+        "groups": drift_groups(
+            specimens, volts, stresses, time_s=DRIFT_TIME_S, noise_rel=noise, seed=seed
+        ),
+        "effective_draws_min": float(np.min(hier.effective_draws)),
+        "noise_rel": noise,
+    }
+    if folder is not None:
+        observed = [
+            {
+                "specimen": t.specimen,
+                "voltage_V": t.voltage_V,
+                "stress_Pa": t.stress_Pa,
+                "observed_drift_3600": t.observed_drift(DRIFT_TIME_S),
+            }
+            for t in data.tests
+        ]
+        out["population"] = save_population(hier, template, observed, folder, noise_rel=noise)
+    return out
+
+
+def degradation_share(specimens, voltage_V):
+    """Return the share of new specimens that degrade at ``voltage_V`` (:data:`DEGRADED_LOSS`).
+
+    None when the model has no ``voltage-degradation`` (it then predicts none).
+    """
+    params = specimens.params
+    if "deg_amp" not in params or "voltage-degradation" not in specimens.template.model:
+        return None
+    switch = np.clip((voltage_V - params["deg_onset"]) / params["deg_width"], 0.0, 1.0)
+    return float(np.mean(params["deg_amp"] * switch >= DEGRADED_LOSS))
+
+
+def zero_drift(specimens, sensor, stresses):
+    """Answer the paper's open question per stress: the voltage of zero drift(3600 s).
+
+    Returns
+    -------
+    list of dict
+        :func:`~fsrbayes.inference.population.predictive.zero_drift_voltage` per stress over the
+        sensor's measured voltage range, each with ``p_degrade`` — the share of new specimens that
+        degrade at the median zero-drift voltage (None without a median or a degradation).
+    """
+    volts = PAPER_VOLTAGES[sensor]
+    out = []
+    for stress in stresses:
+        entry = zero_drift_voltage(specimens, stress, (min(volts), max(volts)))
+        at = entry["q50"]
+        entry["p_degrade"] = None if at is None else degradation_share(specimens, at)
+        out.append(entry)
+    return out
