@@ -71,3 +71,26 @@ def test_quick_demo_writes_the_report_and_results(tmp_path):
     assert "open question" in html
     assert (out / "figure7_drift.json").is_file()
     assert not list(out.rglob("*.tmp"))
+
+
+def test_degradation_share_counts_specimens_losing_a_percent_at_the_voltage():
+    from types import SimpleNamespace
+
+    from fsrbayes.demo.study import DEGRADED_LOSS, degradation_share
+
+    params = {
+        "deg_amp": np.array([[0.05, 0.05, 0.005, 0.05]]),
+        "deg_onset": np.array([[3.0, 4.0, 3.0, 1.9]]),
+        "deg_width": np.array([[0.5, 0.5, 0.5, 0.5]]),
+    }
+    specimens = SimpleNamespace(
+        params=params, template=SimpleNamespace(model="burgers+voltage-degradation")
+    )
+    # at 3.5 V: the first is half switched on (2.5 % lost), the second not yet, the third loses
+    # only 0.25 % (< DEGRADED_LOSS), the fourth is fully on
+    assert DEGRADED_LOSS == 0.01
+    assert degradation_share(specimens, 3.5) == 0.5
+    assert degradation_share(specimens, 1.95) == 0.0  # the fourth loses 0.5 % ...
+    assert degradation_share(specimens, 2.2) == 0.25  # ... and 3 % here
+    base = SimpleNamespace(params=params, template=SimpleNamespace(model="burgers"))
+    assert degradation_share(base, 3.5) is None  # the model holds no degradation

@@ -188,13 +188,20 @@ def test_no_candidate_that_helps_is_unexplained():
     )
 
 
-def test_the_band_narrows_with_more_tests_and_sits_above_the_null_mean():
+def test_the_band_follows_the_null_gap_of_more_tests_and_more_specimens():
     from fsrbayes.discrepancy import gap_band
-    from fsrbayes.discrepancy.gaps import GAP_NULL_MEAN_SQUARE
+    from fsrbayes.discrepancy.gaps import GAP_NULL_OVERFIT
 
-    assert gap_band(9) > gap_band(54) > gap_band(10_000) > np.sqrt(GAP_NULL_MEAN_SQUARE)
+    # one specimen: more tests leave less of the misfit to the fit, the null gap² rises towards 1
+    assert gap_band(9) < gap_band(33) < gap_band(10_000) < np.sqrt(1 + 1.645 * 0.1) + 1e-9
+    # the same tests per specimen over more specimens: the null mean stays, the spread narrows
+    assert gap_band(33 * 16, 16) < gap_band(33)
+    assert gap_band(33 * 16, 16) > np.sqrt(1 - GAP_NULL_OVERFIT / 33)
+    assert gap_band(9, quantile=0.99) > gap_band(9)
     with pytest.raises(ValueError, match="n_tests must be >= 1"):
         gap_band(0)
+    with pytest.raises(ValueError, match="n_specimens must be in 1..n_tests"):
+        gap_band(9, 10)
 
 
 def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path):

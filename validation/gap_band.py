@@ -3,12 +3,14 @@
 Each null data set is simulated by the virtual test bench from the base model itself (Burgers,
 smooth law, no effect, white log-normal noise) and diagnosed with no candidate effect, which fits
 the base model and computes its gap. Over ``n_sets`` sets per design this gives the null
-distribution of gap²; its mean m and its spread s·(1/√n_tests) set
-``fsrbayes.discrepancy.gaps.GAP_NULL_MEAN_SQUARE`` and ``GAP_NULL_SD_SQUARE``, and the study
-reports how often the band G0(n) = √(m + 1.645·s/√n) holds the null gap, and how often a check
-fails (each makes ``diagnose`` refuse to call the data adequate).
+distribution of gap² for n tests of k specimens; least squares over the designs fit its mean
+1 − a·k/n and its variance b²/k + c²/n (``fsrbayes.discrepancy.gaps.GAP_NULL_OVERFIT``,
+``GAP_NULL_SPREAD_FLOOR``, ``GAP_NULL_SPREAD_TEST``), and the study reports how often the band
+G0 = √(mean + 1.645·sd) holds the null gap, and how often a check fails (each makes ``diagnose``
+refuse to call the data adequate). The designs run from 3 voltages × 3 forces per specimen to the
+paper's whole protocol of one specimen (11 voltages × 3 forces, 25 log-spaced samples).
 
-Run: ``python -m validation.gap_band [n_sets]`` (about 5 minutes for 20 sets per design on 2 cores);
+Run: ``python -m validation.gap_band [n_sets]`` (about 25 minutes, 16 sets per design, 2 cores);
 ``python -m validation.gap_band n_sets --candidates`` diagnoses the null sets with the whole
 catalogue and reports how often an effect is named (about a minute per set and specimen).
 """
@@ -18,13 +20,15 @@ import time
 
 import numpy as np
 
-from fsrbayes.data.synthetic import simulate
+from fsrbayes.data.synthetic import PAPER_VOLTAGES, simulate
 from fsrbayes.discrepancy import diagnose, gap_band
 
 DESIGNS = (
     {"sensor": "a201", "n_specimens": 1, "voltages": (0.5, 2.0, 4.5), "samples": 31},
     {"sensor": "a201", "n_specimens": 2, "voltages": (0.5, 2.0, 4.5), "samples": 31},
     {"sensor": "fsr402", "n_specimens": 1, "voltages": (0.5, 2.0, 6.0), "samples": 31},
+    {"sensor": "a201", "n_specimens": 1, "voltages": PAPER_VOLTAGES["a201"], "samples": 25},
+    {"sensor": "fsr402", "n_specimens": 1, "voltages": PAPER_VOLTAGES["fsr402"], "samples": 25},
 )
 
 
@@ -62,23 +66,31 @@ def null_gaps(design, n_sets, seed=0, processes=2, effects=()):
 
 
 def summarise(per_design):
-    """Fit m and s to the null gap² of every design; the band's coverage with them."""
+    """Fit a, b, c to the null gap² of every design; the band's coverage with them."""
     squares = {name: np.array([r["gap"] ** 2 for r in rows]) for name, rows in per_design.items()}
-    n_tests = {name: rows[0]["n_tests"] for name, rows in per_design.items()}
-    m = float(np.mean(np.concatenate(list(squares.values()))))
-    s = float(np.mean([squares[k].std(ddof=1) * np.sqrt(n_tests[k]) for k in squares]))
-    lines = [f"null gap²: mean m = {m:.3f}, spread s = {s:.3f} (per √n_tests)"]
-    for name, rows in per_design.items():
-        band = float(np.sqrt(m + 1.645 * s / np.sqrt(n_tests[name])))
+    n = np.array([rows[0]["n_tests"] for rows in per_design.values()], dtype=float)
+    k = np.array([rows[0]["design"]["n_specimens"] for rows in per_design.values()], dtype=float)
+    means = np.array([v.mean() for v in squares.values()])
+    variances = np.array([v.var(ddof=1) for v in squares.values()])
+    a = float(np.sum((1 - means) * k / n) / np.sum((k / n) ** 2))
+    (b2, c2), *_ = np.linalg.lstsq(np.c_[1 / k, 1 / n], variances, rcond=None)
+    b, c = float(np.sqrt(max(b2, 0.0))), float(np.sqrt(max(c2, 0.0)))
+    lines = [
+        f"null gap²: mean 1 - a*k/n with a = {a:.3f}; sd sqrt(b²/k + c²/n), b = {b:.3f}, "
+        f"c = {c:.3f}"
+    ]
+    for (name, rows), n_i, k_i in zip(per_design.items(), n, k, strict=True):
+        sd = np.sqrt(b**2 / k_i + c**2 / n_i)
+        band = float(np.sqrt(1 - a * k_i / n_i + 1.645 * sd))
         gaps = np.array([r["gap"] for r in rows])
         checks = np.array([r["failed_checks"] > 0 for r in rows])
         lines.append(
-            f"{name}: {len(rows)} sets, {n_tests[name]} tests; gap {gaps.mean():.3f} ± "
-            f"{gaps.std(ddof=1):.3f} (max {gaps.max():.3f}); band with m, s: {band:.3f}, holds "
+            f"{name}: {len(rows)} sets, {int(n_i)} tests; gap {gaps.mean():.3f} ± "
+            f"{gaps.std(ddof=1):.3f} (max {gaps.max():.3f}); band with a, b, c: {band:.3f}, holds "
             f"{np.mean(gaps <= band):.2f}; a check failed in {checks.mean():.2f}; refused "
             f"(gap out of band or a check failed) {np.mean((gaps > band) | checks):.2f}"
         )
-    return m, s, "\n".join(lines)
+    return (a, b, c), "\n".join(lines)
 
 
 def main(n_sets=20, candidates=False):
@@ -87,6 +99,7 @@ def main(n_sets=20, candidates=False):
     for design in DESIGNS:
         name = (
             f"{design['sensor']} {design['n_specimens']} specimen(s) x {len(design['voltages'])} V"
+            f" x {design['samples']} samples"
         )
         per_design[name] = null_gaps(design, n_sets, effects=None if candidates else ())
         print(name, [round(r["gap"], 3) for r in per_design[name]], flush=True)
@@ -94,9 +107,12 @@ def main(n_sets=20, candidates=False):
             named = [r["effects"] for r in per_design[name] if r["effects"]]
             best = [r["best_log_bf"] for r in per_design[name]]
             print(f"  named: {len(named)}/{n_sets} {named}; best ln B max {max(best):.1f}")
-    m, s, text = summarise(per_design)
+    _, text = summarise(per_design)
     print(text)
-    print(f"current band at 9 tests: {gap_band(9):.3f}; {time.perf_counter() - started:.0f} s")
+    print(
+        f"current band at 9 tests: {gap_band(9):.3f}, at 33: {gap_band(33):.3f}; "
+        f"{time.perf_counter() - started:.0f} s"
+    )
 
 
 if __name__ == "__main__":

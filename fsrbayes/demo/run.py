@@ -54,14 +54,18 @@ def run_demo(out, plan=FULL, *, processes=None, seed=2017, echo=print):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         results = _run(Path(out), plan, processes, seed, echo)
-    notes = [
+    results["warnings"] = list(dict.fromkeys(results["warnings"] + _fsrbayes_warnings(caught)))
+    write_json_atomic(Path(out) / "results.json", json_ready(results))
+    return results
+
+
+def _fsrbayes_warnings(caught):
+    """Fsrbayes' own warnings (convergence, reweighting) among caught ones, as lines."""
+    return [
         f"{w.category.__name__}: {w.message}"
         for w in caught
         if w.category.__module__.startswith("fsrbayes")
     ]
-    results["warnings"] = list(dict.fromkeys(notes))
-    write_json_atomic(Path(out) / "results.json", json_ready(results))
-    return results
 
 
 def _bayes_factor(fits):
@@ -133,8 +137,19 @@ def _band_figure(sensor, fit, role, folder):
     return [(path, caption)]
 
 
-def _sensor(sensor, data, fits, diagnosis, plan, seed, out):
-    """Return one sensor's contract entry and figures: populations before/after, the question."""
+def _sensor(job):
+    """Return one sensor's contract entry and figures: populations before/after, the question.
+
+    A worker job: ``(sensor, data, fits, diagnosis, plan, seed, out)``.
+    """
+    sensor, data, fits, diagnosis, plan, seed, out = job
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        entry, figures = _sensor_study(sensor, data, fits, diagnosis, plan, seed, out)
+    return entry, figures, _fsrbayes_warnings(caught)
+
+
+def _sensor_study(sensor, data, fits, diagnosis, plan, seed, out):
     folder = out / sensor
     folder.mkdir(exist_ok=True)
     roles = ["base"] + (["extended"] if "extended" in fits[0]["draws"] else [])
@@ -237,6 +252,7 @@ def _run(out, plan, processes, seed, echo):
         "n_specimens": len(data.specimens),
         "n_tests": len(data.tests),
         "sensors": {},
+        "warnings": [],
     }
     path = out / "figure7.png"
     plots.save_figure(
@@ -250,9 +266,12 @@ def _run(out, plan, processes, seed, echo):
             "and is never negative",
         )
     ]
-    for sensor in data.sensors:
-        say(f"{sensor}: population posteriors (two-stage), new specimens, zero-drift voltage")
-        entry, made = _sensor(
+    say(
+        "population posteriors (two-stage), new specimens, zero-drift voltage: "
+        + ", ".join(data.sensors)
+    )
+    jobs = [
+        (
             sensor,
             data.select(sensor=sensor),
             [f for f in fits if f["sensor"] == sensor],
@@ -261,8 +280,15 @@ def _run(out, plan, processes, seed, echo):
             seed,
             out,
         )
+        for sensor in data.sensors
+    ]
+    done = map_jobs(
+        _sensor, jobs, processes=processes, on_result=lambda k, r: say(f"  {jobs[k][0]} done")
+    )
+    for sensor, (entry, made, caught) in zip(data.sensors, done, strict=True):
         results["sensors"][sensor] = entry
         figures += made
+        results["warnings"] += caught  # raised in a worker
     results["runtime_s"] = time.perf_counter() - started
     text = narrative(results, [(p.relative_to(out), c) for p, c in figures], plan)
     with atomic_path(out / "report.md") as tmp:

@@ -266,8 +266,8 @@ EVIDENCE_METHOD = (
     "ranks candidates, labelled as an approximation"
 )
 BAND_METHOD = (
-    "95th percentile of the gap of the base model fitted to data it generated, by the number of "
-    "creep tests (fsrbayes.discrepancy.checks.gap_band)"
+    "95th percentile of the gap of the base model fitted to data it generated, by the numbers of "
+    "creep tests and specimens (fsrbayes.discrepancy.gap_band)"
 )
 
 
@@ -403,7 +403,7 @@ def diagnose(
     base_checks = [d.base_checks for d in rounds[0]]
     gap_before = gap(base_checks)
     findings = failed_checks(base_checks)
-    band = gap_band(int(sum(len(c.test_keys) for c in base_checks)))
+    band = gap_band(int(sum(len(c.test_keys) for c in base_checks)), len(base_checks))
     candidates = _candidates(1, base, effects, rounds[0], gap_before)
     steps, model, remaining = [], base, list(effects)
     in_band = not findings["failed"] and gap_before <= band

@@ -1,0 +1,51 @@
+"""The full demo on the shipped data tells the story the data hold (slow: ~15 minutes).
+
+The shipped data come from the paper-like bench, whose mechanisms are not the model's; the truth
+file says which catalogue effects stand for them and where the population's drift(3600 s) is zero.
+The demo must find those, and must not find anything on the FSR 402's side that is not there.
+"""
+
+import numpy as np
+import pytest
+
+from fsrbayes.data.embedded import default_truth
+from fsrbayes.demo import FULL, run_demo
+from fsrbayes.discrepancy.verdict import closes
+
+
+@pytest.fixture(scope="module")
+def full(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo-full")
+    return run_demo(out, FULL, processes=2, echo=lambda line: None)
+
+
+@pytest.mark.slow
+def test_the_a201_diagnosis_names_the_truths_mechanisms_and_halves_the_gap(full):
+    truth = default_truth()
+    d = full["sensors"]["a201"]["diagnose"]
+    allowed = {name for names in truth["catalogue_equivalents"].values() for name in names}
+    assert d["verdict"] == "missing-effect"
+    assert "voltage-degradation" in d["effects"] and set(d["effects"]) <= allowed
+    assert closes(d["gap_after"], d["gap_before"], d["band"])
+
+
+@pytest.mark.slow
+def test_the_fsr402_shows_no_negative_drift_and_no_effect(full):
+    entry = full["sensors"]["fsr402"]
+    assert not entry["diagnose"]["effects"]
+    for group in entry["groups"]["base"]:
+        assert group["new_specimen"]["q05"] > -0.5  # as measured: noise alone spreads it a little
+    assert all(z["p_root_in_range"] < 0.05 for z in entry["zero_drift_voltage"])
+
+
+@pytest.mark.slow
+def test_the_a201_zero_drift_voltage_is_in_range_and_consistent_with_the_truth(full):
+    truth = default_truth()["zero_drift_voltage"]["a201"]
+    found = full["sensors"]["a201"]["zero_drift_voltage"]
+    for z, t in zip(found, truth, strict=True):
+        assert z["stress_Pa"] == pytest.approx(t["stress_Pa"])
+        assert z["p_root_in_range"] >= 0.5
+        assert 0.1 < z["q50"] < 9.0
+        assert z["q05"] <= t["q50"] <= z["q95"]  # the truth's median inside the 90 % interval
+    assert full["sensors"]["a201"]["p_degrade_at_2V"] < 0.05
+    assert np.isfinite(full["runtime_s"])
