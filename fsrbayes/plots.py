@@ -5,9 +5,12 @@ Every function takes an ArviZ DataTree written by :func:`fsrbayes.inference.outp
 the layers below.
 """
 
+import os
+
 import matplotlib
 
-matplotlib.use("Agg", force=False)
+if "MPLBACKEND" not in os.environ:  # a notebook's kernel sets it: keep its inline figures
+    matplotlib.use("Agg", force=False)
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402

@@ -5,8 +5,9 @@ Run from the repository root after a change that alters what a notebook shows::
     python notebooks/execute.py              # every notebook
     python notebooks/execute.py 02 04        # those whose names start so
 
-Each notebook runs in a fresh kernel of this interpreter in a temporary folder (what it writes
-is thrown away); a notebook that fails is left unchanged and the script exits with status 1.
+Each notebook runs in a fresh kernel of this interpreter (matplotlib's inline backend, so the
+figures are stored) in a temporary folder (what it writes is thrown away); a notebook that fails
+is left unchanged and the script exits with status 1.
 """
 
 import os
@@ -39,7 +40,6 @@ def execute(path):
 
 
 def main(prefixes):
-    os.environ.setdefault("MPLBACKEND", "Agg")
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
     paths = sorted(HERE.glob("*.ipynb"))
     if prefixes:

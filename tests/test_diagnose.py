@@ -190,10 +190,11 @@ def test_no_candidate_that_helps_is_unexplained():
 
 def test_the_band_follows_the_null_gap_of_more_tests_and_more_specimens():
     from fsrbayes.discrepancy import gap_band
-    from fsrbayes.discrepancy.gaps import GAP_NULL_OVERFIT
+    from fsrbayes.discrepancy.gaps import GAP_NULL_OVERFIT, GAP_NULL_SPREAD_FLOOR
 
     # one specimen: more tests leave less of the misfit to the fit, the null gap² rises towards 1
-    assert gap_band(9) < gap_band(33) < gap_band(10_000) < np.sqrt(1 + 1.645 * 0.1) + 1e-9
+    top = np.sqrt(1 + 1.645 * GAP_NULL_SPREAD_FLOOR * 1.01)  # and the spread to its floor
+    assert gap_band(9) < gap_band(33) < gap_band(10_000) < top
     # the same tests per specimen over more specimens: the null mean stays, the spread narrows
     assert gap_band(33 * 16, 16) < gap_band(33)
     assert gap_band(33 * 16, 16) > np.sqrt(1 - GAP_NULL_OVERFIT / 33)

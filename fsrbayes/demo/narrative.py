@@ -47,7 +47,8 @@ def narrative(results, figures, plan):
         "negative creep of the tunneling area, neither of them in the model; on the FSR 402 the "
         "model's own physics. Plan `"
         f"{plan.name}`: {results['n_specimens']} specimens ({plan.specimens_per_sensor} per "
-        f"sensor), {results['n_tests']} creep tests; run time {results['runtime_s']:.0f} s.",
+        f"sensor, of the 16 shipped — sized so the study runs in about a quarter of an hour on two "
+        f"cores), {results['n_tests']} creep tests; run time {results['runtime_s']:.0f} s.",
         "",
         "Posteriors here are Laplace approximations at the maximum a posteriori point with draws "
         "from a short ensemble run there, and evidences are Laplace evidences (no Monte-Carlo "

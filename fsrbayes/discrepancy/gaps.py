@@ -97,16 +97,16 @@ def failed_checks(checks, alpha=0.01):
     }
 
 
-GAP_NULL_OVERFIT = 2.2
+GAP_NULL_OVERFIT = 2.25
 """a in E[gap²] = 1 − a·k/n for the base model fitted to data it generated (n tests, k specimens):
 each specimen's fitted parameters absorb about a of its tests' quarter distances d²."""
 
-GAP_NULL_SPREAD_FLOOR = 0.098
+GAP_NULL_SPREAD_FLOOR = 0.101
 """b in sd(gap²) = √(b²/k + c²/n): the part of the spread shared by a specimen's tests (one
 noise realisation and one fit behind all of them), which more tests of the specimen do not
 average away."""
 
-GAP_NULL_SPREAD_TEST = 0.365
+GAP_NULL_SPREAD_TEST = 0.335
 """c in sd(gap²) = √(b²/k + c²/n): the part that averages over tests."""
 
 
