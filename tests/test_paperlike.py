@@ -127,3 +127,27 @@ def test_first_sign_change_interpolates_and_reports_none():
     values = np.array([[2.0, 1.0, -1.0, -2.0], [1.0, 2.0, 3.0, 4.0], [0.0, -1.0, 1.0, 2.0]])
     roots = first_sign_change(x, values)
     assert roots[0] == pytest.approx(1.5) and np.isnan(roots[1]) and roots[2] == pytest.approx(1.5)
+
+
+def test_cli_simulate_paper_like_writes_data_and_truth(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    out = tmp_path / "pl.csv"
+    args = [sys.executable, "-m", "fsrbayes", "simulate", "--preset", "paper-like"]
+    run = subprocess.run(
+        [*args, "--sensor", "a201", "--specimens", "1", "--seed", "3", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "path-loss" in run.stdout
+    truth = json.loads((tmp_path / "pl.truth.json").read_text())
+    assert truth["bench"] == "paper-like" and list(truth["specimens"]) == ["a201-01"]
+    refused = subprocess.run(
+        [*args, "--effect", "area-creep", "-o", str(out)], capture_output=True, text=True
+    )
+    assert refused.returncode == 2 and "drop --effect" in refused.stderr
+    assert "Traceback" not in refused.stderr

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
-from ..data import csvio, embedded, synthetic
+from ..data import csvio, embedded, paperlike, synthetic
 from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
@@ -214,10 +214,15 @@ def cmd_simulate(args):
         seed=args.seed,
         scatter=args.scatter,
     )
-    if args.preset == "paper":
-        for flag in ("voltages", "stresses", "forces"):
+    if args.preset:
+        for flag in ("voltages", "stresses", "forces", "effect"):
             if getattr(args, flag) is not None:
-                raise UsageError(f"--preset paper fixes the protocol; drop --{flag}")
+                raise UsageError(f"--preset {args.preset} fixes the protocol; drop --{flag}")
+    if args.preset == "paper-like":
+        sim = paperlike.simulate_paper_like(
+            sensors, n_specimens=args.specimens or 16, samples=args.samples or 25, seed=args.seed
+        )
+    elif args.preset == "paper":
         sim = synthetic.paper_protocol(
             sensors,
             samples=args.samples or 361,
@@ -239,8 +244,13 @@ def cmd_simulate(args):
         )
     csv_path, truth_path = synthetic.write_simulation(sim, out, args.truth, digits=args.digits)
     print(sim.data.summary().replace(sim.data.source, str(csv_path), 1))
-    effects = ", ".join(sim.truth["effects"]) or "none"
-    print(f"hidden effects: {effects}; truth written to {truth_path}")
+    if args.preset == "paper-like":
+        hidden = "; ".join(f"{k}: {v}" for k, v in sim.truth["mechanisms"].items())
+        print(f"hidden mechanisms (not catalogue effects): {hidden}")
+        print(f"truth written to {truth_path}")
+    else:
+        effects = ", ".join(sim.truth["effects"]) or "none"
+        print(f"hidden effects: {effects}; truth written to {truth_path}")
     return 0
 
 
