@@ -72,6 +72,15 @@ def narrative(results, figures, plan):
             f"| {sensor} | {b['log_bf_burgers_over_zener']:.1f} | "
             f"{b['preferred']}: {b['strength']} |"
         )
+    for s in results["sensors"].values():
+        check = s["bayes_factor"].get("crosscheck")
+        if check:
+            lines += [
+                "",
+                f"Cross-check on {check['specimen']}: Laplace ln B = {check['laplace']:.1f}; "
+                f"from converged emcee fits of both models, {check['method']}: ln B = "
+                f"{check['log_bf_burgers_over_zener']:.1f} ± {check['err']:.1f}.",
+            ]
     lines += [
         "",
         "## The paper's open question: where is drift(3600 s) zero?",

@@ -41,6 +41,9 @@ class DemoPlan:
         Specimens per sensor in the ``diagnose`` run.
     diagnose_effects : tuple, optional
         Catalogue effects tried (default: every one).
+    crosscheck_sensor : str, optional
+        The sensor whose first specimen's Laplace Bayes factor is checked against bridge sampling
+        from converged emcee fits (None: no check).
     """
 
     name: str
@@ -58,11 +61,15 @@ class DemoPlan:
     n_per_hyper: int = 50
     diagnose_specimens: int = 1
     diagnose_effects: tuple = None
+    crosscheck_sensor: str = None
 
 
-FULL = DemoPlan("full", specimens_per_sensor=4, diagnose_effects=PAPER_HYPOTHESES)
+FULL = DemoPlan(
+    "full", specimens_per_sensor=4, diagnose_effects=PAPER_HYPOTHESES, crosscheck_sensor="fsr402"
+)
 """Four specimens per sensor at all eleven voltages (264 creep tests); diagnose on one specimen per
-sensor with the paper's hypotheses (:data:`PAPER_HYPOTHESES`)."""
+sensor with the paper's hypotheses (:data:`PAPER_HYPOTHESES`); the Laplace Bayes factor of the
+first FSR 402 specimen checked by bridge sampling."""
 
 QUICK = DemoPlan(
     "quick",

@@ -140,12 +140,17 @@ def _band_figure(sensor, fit, role, folder):
 def _sensor(job):
     """Return one sensor's contract entry and figures: populations before/after, the question.
 
-    A worker job: ``(sensor, data, fits, diagnosis, plan, seed, out)``.
+    A worker job: ``(sensor, data, fits, diagnosis, crosscheck, plan, seed, out)``.
     """
-    sensor, data, fits, diagnosis, plan, seed, out = job
+    sensor, data, fits, diagnosis, check, plan, seed, out = job
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         entry, figures = _sensor_study(sensor, data, fits, diagnosis, plan, seed, out)
+    if check is not None:
+        entry["bayes_factor"]["crosscheck"] = {
+            **check,
+            "laplace": entry["bayes_factor"]["per_specimen"][check["specimen"]],
+        }
     return entry, figures, _fsrbayes_warnings(caught)
 
 
@@ -184,7 +189,12 @@ def _sensor_study(sensor, data, fits, diagnosis, plan, seed, out):
 def _report_result(say):
     def report(index, result):
         kind, value = result
-        if kind == "diagnose":
+        if kind == "crosscheck":
+            say(
+                f"  {value['specimen']}: ln B Burgers/Zener by bridge sampling "
+                f"{value['log_bf_burgers_over_zener']:+.1f} ± {value['err']:.1f}"
+            )
+        elif kind == "diagnose":
             sensor, d = value
             named = f" ({' + '.join(d.effects)})" if d.effects else ""
             say(f"  {sensor}: {d.verdict}{named}, gap {d.gap_before:.2f} -> {d.gap_after:.2f}")
@@ -205,12 +215,16 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
     specimens = list(data.specimens)
     sensor_of = {s: data.select(specimen=s).sensors[0] for s in specimens}
     first = [("diagnose", (data, sensor, plan, seed)) for sensor in data.sensors]
+    if plan.crosscheck_sensor in data.sensors:
+        chosen = data.select(sensor=plan.crosscheck_sensor).specimens[0]
+        first.append(("crosscheck", (data.select(specimen=chosen), chosen, seed)))
     first += [
         ("fit", (data.select(specimen=s), s, {"base": BASE, "zener": "zener"}, plan, [seed, k]))
         for k, s in enumerate(specimens)
     ]
     done = map_jobs(run_job, first, processes=processes, on_result=_report_result(say))
     diagnoses = dict(value for kind, value in done if kind == "diagnose")
+    checks = {sensor_of[v["specimen"]]: v for kind, v in done if kind == "crosscheck"}
     fits = {value["specimen"]: value for kind, value in done if kind == "fit"}
     extended = {
         sensor: "+".join([BASE, *d.effects]) for sensor, d in diagnoses.items() if d.effects
@@ -230,7 +244,7 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
         for key in ("posterior", "draws", "log_z"):
             fit[key].update(value[key])
         fit["seconds"] += value["seconds"]
-    return diagnoses, [fits[s] for s in specimens]
+    return diagnoses, [fits[s] for s in specimens], checks
 
 
 def _run(out, plan, processes, seed, echo):
@@ -245,7 +259,7 @@ def _run(out, plan, processes, seed, echo):
         f"{len(data.specimens)} specimens, {len(data.tests)} creep tests ({plan.name} plan): "
         "diagnose each sensor; Burgers and Zener fits"
     )
-    diagnoses, fits = _diagnose_and_fit(data, plan, processes, seed, say)
+    diagnoses, fits, checks = _diagnose_and_fit(data, plan, processes, seed, say)
     results = {
         "data": data.source,
         "plan": plan.name,
@@ -276,6 +290,7 @@ def _run(out, plan, processes, seed, echo):
             data.select(sensor=sensor),
             [f for f in fits if f["sensor"] == sensor],
             diagnoses[sensor],
+            checks.get(sensor),
             plan,
             seed,
             out,

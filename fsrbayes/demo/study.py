@@ -10,6 +10,7 @@ import numpy as np
 from ..data.sensors import load_sensor
 from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES, PAPER_VOLTAGES
 from ..discrepancy import diagnose
+from ..inference.compare import compare
 from ..inference.evidence.laplace import laplace_fit
 from ..inference.likelihood import SpecimenData
 from ..inference.output import save_population
@@ -29,6 +30,7 @@ from ..physics.sensor import drift as model_drift
 __all__ = [
     "DEGRADED_LOSS",
     "RECOMMENDED_V",
+    "crosscheck",
     "degradation_share",
     "diagnose_sensor",
     "figure7_curves",
@@ -104,14 +106,37 @@ def fit_specimen(job):
     return out
 
 
-def run_job(job):
-    """Run one of the demo's worker jobs: ``("diagnose", …)`` or ``("fit", …)``.
+def crosscheck(job):
+    """Burgers over Zener on one specimen by bridge sampling from converged emcee fits.
 
-    One pool takes both kinds, so the specimens' fits fill the cores while a long diagnosis runs.
+    The demo's Bayes factors are Laplace screening numbers; this is the number with an honest
+    error bar they are checked against (:func:`fsrbayes.inference.compare.compare`,
+    ``path="bridge"``).
+    """
+    data, specimen, seed = job
+    with single_threaded_blas():
+        result = compare(
+            data, ("zener", "burgers"), [specimen], path="bridge", with_loo=False, seed=seed
+        )
+    burgers, zener = result["models"]["burgers"], result["models"]["zener"]
+    return {
+        "specimen": specimen,
+        "log_bf_burgers_over_zener": burgers["log_evidence"] - zener["log_evidence"],
+        "err": float(np.hypot(burgers["log_evidence_err"], zener["log_evidence_err"])),
+        "method": burgers["per_specimen"][specimen]["method"],
+    }
+
+
+def run_job(job):
+    """Run one of the demo's worker jobs: ``("diagnose" | "fit" | "crosscheck", payload)``.
+
+    One pool takes every kind, so the specimens' fits fill the cores while a long diagnosis runs.
     """
     kind, payload = job
     if kind == "diagnose":
         return kind, diagnose_sensor(payload)
+    if kind == "crosscheck":
+        return kind, crosscheck(payload)
     return kind, fit_specimen(payload)
 
 
