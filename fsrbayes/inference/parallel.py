@@ -93,7 +93,7 @@ def _kill_workers(pool):
 
 
 def _run_local(function, jobs, workers, emit):
-    """Run in a local process pool, emitting (index, result or exception) in job order.
+    """Run in a local process pool, emitting (index, result or exception) as jobs finish.
 
     Jobs lost to a dead worker (the pool breaks for every job still running or queued) are
     retried each alone in a fresh single-worker pool, so one job that kills its worker cannot
@@ -103,8 +103,9 @@ def _run_local(function, jobs, workers, emit):
     with concurrent.futures.ProcessPoolExecutor(
         max_workers=min(workers, len(jobs)), initializer=_default_sigterm
     ) as pool:
-        futures = [pool.submit(function, job) for job in jobs]
-        for index, future in enumerate(futures):
+        futures = {pool.submit(function, job): index for index, job in enumerate(jobs)}
+        for future in concurrent.futures.as_completed(futures):
+            index = futures[future]
             try:
                 emit(index, future.result())
             except BrokenProcessPool:
@@ -113,7 +114,7 @@ def _run_local(function, jobs, workers, emit):
                 lost.append(index)
             except Exception as exc:  # noqa: BLE001 - a job's own error is reported under its label
                 emit(index, exc)
-    for index in lost:
+    for index in sorted(lost):
         with concurrent.futures.ProcessPoolExecutor(
             max_workers=1, initializer=_default_sigterm
         ) as pool:
@@ -168,8 +169,8 @@ def map_jobs(
     processes : int, optional
         Local worker processes (default: the CPU count; 1 runs in this process).
     on_result : callable, optional
-        Called as ``on_result(index, result)`` for each job that returned, in job order as
-        results arrive: progress display.
+        Called as ``on_result(index, result)`` for each job that returned, as the jobs finish:
+        progress display.
     labels : sequence of str, optional
         A name per job for error messages (e.g. the specimen); default ``job <index>``.
     errors : {"raise", "keep"}
@@ -192,9 +193,9 @@ def map_jobs(
 
     def emit(index, value):
         if isinstance(value, BaseException):
-            causes.append(value)
+            causes.append((index, value))
             value = JobFailure(labels[index], _describe(value))
-            failures.append(value)
+            failures.append((index, value))
         elif on_result is not None:
             on_result(index, value)
         results[index] = value
@@ -215,8 +216,8 @@ def map_jobs(
         _run_here(function, jobs, emit, stop_early=errors == "raise")
     else:
         _run_local(function, jobs, workers, emit)
-    if failures and errors == "raise":
-        raise JobError(failures) from causes[0]
+    if failures and errors == "raise":  # named in job order, whatever order they finished in
+        raise JobError([f for _, f in sorted(failures)]) from min(causes)[1]
     return results
 
 
