@@ -82,6 +82,7 @@ def test_degradation_share_counts_specimens_losing_a_percent_at_the_voltage():
         "deg_amp": np.array([[0.05, 0.05, 0.005, 0.05]]),
         "deg_onset": np.array([[3.0, 4.0, 3.0, 1.9]]),
         "deg_width": np.array([[0.5, 0.5, 0.5, 0.5]]),
+        "deg_tau": np.array([[600.0, 600.0, 600.0, 600.0]]),
     }
     specimens = SimpleNamespace(
         params=params, template=SimpleNamespace(model="burgers+voltage-degradation")

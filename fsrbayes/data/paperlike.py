@@ -43,7 +43,14 @@ from ..physics.sensor import current as model_current
 from ..utils import first_sign_change
 from .creep import CreepData, CreepTest
 from .sensors import load_sensor
-from .synthetic import PAPER_FORCES_N, PAPER_VOLTAGES, Simulation, draw_specimens, time_grid
+from .synthetic import (
+    PAPER_FORCES_N,
+    PAPER_VOLTAGES,
+    Simulation,
+    decade_feedback,
+    draw_specimens,
+    time_grid,
+)
 
 __all__ = [
     "CATALOGUE_EQUIVALENTS",
@@ -270,7 +277,7 @@ def simulate_paper_like(
             for i, v in enumerate(volts):
                 for j, sigma in enumerate(loads):
                     key = (specimen, float(v), float(sigma), "")
-                    rf_map[key] = float(10.0 ** np.floor(np.log10(5.0 / noisy[i, j, 0])))
+                    rf_map[key] = decade_feedback(noisy[i, j, 0])
                     tests.append(
                         CreepTest(
                             specimen,

@@ -44,6 +44,7 @@ __all__ = [
     "Simulation",
     "parse_effect",
     "effect_parameters",
+    "decade_feedback",
     "draw_specimens",
     "time_grid",
     "simulate",
@@ -194,6 +195,11 @@ def _specimen_grid(params, volts, loads, times, rheology, tunneling, effects):
     )
 
 
+def decade_feedback(first_current_A):
+    """Feedback resistor (a power of ten, Ω) that puts |V_o| = I·R_f between 0.5 and 5 V."""
+    return float(10.0 ** np.floor(np.log10(5.0 / first_current_A)))
+
+
 def noiseless_current(truth):
     """Regenerate every test's noiseless current from a truth dict, exactly as simulated.
 
@@ -320,7 +326,7 @@ def simulate(
                 for j, sigma in enumerate(loads):
                     key = (specimen, float(v), float(sigma), "")
                     reading = noisy[i, j]
-                    rf = float(10.0 ** np.floor(np.log10(5.0 / reading[0])))
+                    rf = decade_feedback(reading[0])
                     offset = amp_offset_V * rng.standard_normal() if amp_offset_V > 0 else 0.0
                     if offset:
                         reading = reading - offset / rf  # eq. 23 with V_o = −I·R_f + offset

@@ -21,6 +21,7 @@ from .study import (
     RECOMMENDED_V,
     degradation_share,
     figure7_curves,
+    observed_drifts,
     population,
     run_job,
     zero_drift,
@@ -98,10 +99,10 @@ def _diagnose_summary(diagnosis, tried):
 
 
 def _observed(data):
+    rows = observed_drifts(data)
     return {
-        "voltage_V": np.array([t.voltage_V for t in data.tests]),
-        "stress_Pa": np.array([t.stress_Pa for t in data.tests]),
-        "observed_drift_3600": np.array([t.observed_drift() for t in data.tests]),
+        key: np.array([row[key] for row in rows])
+        for key in ("voltage_V", "stress_Pa", "observed_drift_3600")
     }
 
 

@@ -25,6 +25,7 @@ from ..inference.population.predictive import (
 from ..inference.population.routes import two_stage
 from ..inference.posterior import LogPosterior
 from ..physics.constants import DRIFT_TIME_S
+from ..physics.effects import EFFECTS
 from ..physics.sensor import drift as model_drift
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "RECOMMENDED_V",
     "crosscheck",
     "degradation_share",
+    "observed_drifts",
     "diagnose_sensor",
     "figure7_curves",
     "fit_specimen",
@@ -140,6 +142,19 @@ def run_job(job):
     return kind, fit_specimen(payload)
 
 
+def observed_drifts(data):
+    """Each test's measured drift(3600 s), as the population output and box plots take it."""
+    return [
+        {
+            "specimen": t.specimen,
+            "voltage_V": t.voltage_V,
+            "stress_Pa": t.stress_Pa,
+            "observed_drift_3600": t.observed_drift(DRIFT_TIME_S),
+        }
+        for t in data.tests
+    ]
+
+
 def population(fits, role, data, plan, seed, folder=None):
     """Two-stage population posterior of one sensor's specimens under one model, and new specimens.
 
@@ -183,16 +198,9 @@ def population(fits, role, data, plan, seed, folder=None):
         "noise_rel": noise,
     }
     if folder is not None:
-        observed = [
-            {
-                "specimen": t.specimen,
-                "voltage_V": t.voltage_V,
-                "stress_Pa": t.stress_Pa,
-                "observed_drift_3600": t.observed_drift(DRIFT_TIME_S),
-            }
-            for t in data.tests
-        ]
-        out["population"] = save_population(hier, template, observed, folder, noise_rel=noise)
+        out["population"] = save_population(
+            hier, template, observed_drifts(data), folder, noise_rel=noise
+        )
     return out
 
 
@@ -201,11 +209,11 @@ def degradation_share(specimens, voltage_V):
 
     None when the model has no ``voltage-degradation`` (it then predicts none).
     """
-    params = specimens.params
-    if "deg_amp" not in params or "voltage-degradation" not in specimens.template.model:
+    if "voltage-degradation" not in specimens.template.model:
         return None
-    switch = np.clip((voltage_V - params["deg_onset"]) / params["deg_width"], 0.0, 1.0)
-    return float(np.mean(params["deg_amp"] * switch >= DEGRADED_LOSS))
+    # the catalogue's own current factor, grown in full (t → ∞): exp(−deg_amp·S(V))
+    factor = EFFECTS["voltage-degradation"].current_factor(specimens.params, voltage_V, np.inf)
+    return float(np.mean(-np.log(factor) >= DEGRADED_LOSS))
 
 
 def zero_drift(specimens, sensor, stresses):
