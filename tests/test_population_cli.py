@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import pytest
+import xarray as xr
 
 from fsrbayes.data import synthetic
 from fsrbayes.data.csvwrite import write_csv
@@ -61,6 +62,13 @@ def test_hierarchical_fit_writes_specimens_and_population(hierarchical_fit):
     assert all(
         v["draw_error_mean"] > 0 and v["error_mean"] >= v["mcse_mean"] for v in hyper.values()
     )
+    # nothing of ArviZ's about dimension names reaches the terminal; the effective draws are kept
+    # per specimen, not as a one-draw sample statistic
+    assert "UserWarning" not in run.stderr and "dimension" not in run.stderr, run.stderr
+    with xr.open_datatree(out / "population.nc", engine="h5netcdf") as tree:
+        kept = tree["constant_data"]["effective_draws"]
+        assert list(kept["fitted_specimen"].values) == ["a201-01", "a201-02", "a201-03"]
+        assert (kept.values > 0).all()
 
 
 # slow (~80 s, 2 processes): the joint route's sampler is checked against the closed form in the

@@ -290,9 +290,10 @@ def population_datatree(result, template, observed, *, noise_rel=None, max_draws
 
     Groups: ``posterior`` (hyper-parameters mu_<p>, omega_<p>; chain = ensemble),
     ``constant_data`` (every specimen's observed drift(3600 s) per test with its voltage and
-    stress, for the box-plot figures), ``sample_stats`` (two-stage: effective draws per
-    specimen). Attributes name the sensor, model, tunneling law, likelihood, route and the
-    population parameters — enough for ``fsrbayes drift`` to rebuild new specimens.
+    stress, for the box-plot figures; two-stage: each specimen's median effective number of draws
+    after reweighting, along ``fitted_specimen``). Attributes name the sensor, model, tunneling
+    law, likelihood, route and the population parameters — enough for ``fsrbayes drift`` to
+    rebuild new specimens.
 
     Parameters
     ----------
@@ -324,14 +325,12 @@ def population_datatree(result, template, observed, *, noise_rel=None, max_draws
         },
     }
     dims = {k: ["test"] for k in groups["constant_data"]}
+    coords = {}
     if result.effective_draws is not None:
-        groups["sample_stats"] = {
-            "effective_draws": np.broadcast_to(
-                result.effective_draws, (n_ens, 1, len(result.effective_draws))
-            )
-        }
-        dims["effective_draws"] = ["specimen_index"]
-    tree = from_dict(groups, dims=dims)
+        groups["constant_data"]["effective_draws"] = np.asarray(result.effective_draws, dtype=float)
+        dims["effective_draws"] = ["fitted_specimen"]
+        coords["fitted_specimen"] = [str(s) for s in result.specimens]
+    tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(
         {
             "sensor": template.sensor,
