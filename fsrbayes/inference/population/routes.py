@@ -18,11 +18,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...physics.models import model_components, register_components
-from ...utils import logsumexp
 from ..fit import FIT_SETTINGS, fit
 from ..optimize import find_map, laplace_start
 from ..parallel import JobFailure, map_jobs, single_threaded_blas
 from ..samplers import SamplerSettings, even_index, run_ensembles
+from .coordinates import NonCentredCoordinates
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .model import JointTarget, Population, TwoStageTarget
 
@@ -156,7 +156,7 @@ class HierarchicalResult:
         return out
 
 
-def _sample(target, seed, settings, start, progress):
+def _sample(target, seed, settings, start, progress, coordinates=None):
     rng = np.random.default_rng(seed)
     n_walk = _walkers(target, settings)
     if start is None:
@@ -170,6 +170,7 @@ def _sample(target, seed, settings, start, progress):
         names=target.names,
         fingerprint=target.fingerprint(),
         progress=progress,
+        coordinates=coordinates,
     )
 
 
@@ -197,10 +198,9 @@ def two_stage(
     seed=0,
     min_effective=MIN_EFFECTIVE_DRAWS,
     progress=False,
+    coordinates="non-centred",
 ):
-    """Compute the population posterior from independent per-specimen fits.
-
-    Compute the population posterior from independent per-specimen fits, by reweighting their draws.
+    """Compute the population posterior from per-specimen fits by reweighting their draws.
 
     Parameters
     ----------
@@ -215,6 +215,11 @@ def two_stage(
     seed : int
     min_effective : float
         Warn (:class:`ReweightingWarning`) when a specimen's effective draws fall below this.
+    coordinates : {"non-centred", "prior"}
+        Where the walkers move: each centre μ_p measured from the specimens' mean in units of
+        √(ω_p² + v_p) (:mod:`~.coordinates`; no funnel between centre and spread, which matters
+        with few specimens), or the hyper-prior's own scaled coordinates. The posterior is the
+        same; only the mixing differs.
 
     Returns
     -------
@@ -236,8 +241,15 @@ def two_stage(
         draws = [_thin(np.asarray(d, dtype=float), n_draws) for d in fits]
         labels = [str(j) for j in range(len(draws))]
     target = TwoStageTarget(population, draws)
+    if coordinates not in ("non-centred", "prior"):
+        raise ValueError(f"coordinates must be 'non-centred' or 'prior', got {coordinates!r}")
+    sampled = (
+        NonCentredCoordinates.from_draws(population, draws)
+        if coordinates == "non-centred"
+        else None
+    )
     settings = settings or SamplerSettings()
-    run = _sample(target, seed, settings, None, progress)
+    run = _sample(target, seed, settings, None, progress, sampled)
     result = HierarchicalResult(
         population, target, run, seed, "two-stage", labels, specimen_draws=full
     )
@@ -277,13 +289,23 @@ def draw_error(result, n_boot=100, max_draws=2000, seed=0):
     target = result.target
     hyper = result.hyper_draws(max_draws)
     log_w = target.log_weights(hyper)  # (H, J, S)
-    base = logsumexp(log_w, axis=2).sum(axis=1)
+    peak = log_w.max(axis=2, keepdims=True)
+    scaled = np.exp(log_w - peak)  # a resample's Σ_s w_s is these times each draw's count
+    base = (np.log(scaled.sum(axis=2)) + peak[..., 0]).sum(axis=1)
     rng = np.random.default_rng(seed)
+    n_spec, n_draws = target.n_specimens, target.n_draws
+    counts = np.zeros((n_boot, n_spec, n_draws))
+    for b in range(n_boot):
+        pick = rng.integers(0, n_draws, (n_spec, n_draws))
+        for j in range(n_spec):
+            counts[b, j] = np.bincount(pick[j], minlength=n_draws)
+    log_like = np.zeros((n_boot, len(hyper)))
+    for j in range(n_spec):
+        with np.errstate(divide="ignore"):
+            log_like += np.log(counts[:, j] @ scaled[:, j].T) + peak[:, j, 0]
     means = []
-    for _ in range(n_boot):
-        pick = rng.integers(0, target.n_draws, (target.n_specimens, target.n_draws))
-        log_like = logsumexp(np.take_along_axis(log_w, pick[None], axis=2), axis=2).sum(axis=1)
-        weight = np.exp(log_like - base - np.max(log_like - base))
+    for row in log_like:
+        weight = np.exp(row - base - np.max(row - base))
         means.append(weight @ hyper / weight.sum())
     return np.std(means, axis=0)
 
