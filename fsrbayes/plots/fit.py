@@ -1,0 +1,174 @@
+"""Figures of one specimen's fit: corner plot, credible bands, drift(3600 s), SBC, predictions.
+
+Each function takes what the fit wrote (an ArviZ DataTree from
+:func:`fsrbayes.inference.output.to_datatree`, read back from ``posterior.nc`` or not) or a result
+object, and returns ``(fig, axes)``.
+"""
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..physics.parameters import physical_parameters
+
+__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "sbc_rank_plot", "predict_plot"]
+
+
+def corner_plot(tree, names=None):
+    """Corner plot (``corner``) of the physical parameters, log10 of the positive ones."""
+    import corner
+
+    post = tree.posterior
+    names = [n for n in (names or physical_parameters()) if n in post.data_vars]
+    columns, labels = [], []
+    for name in names:
+        values = post[name].values.ravel()
+        if np.all(values > 0) and name not in ("A2", "alpha", "n"):
+            columns.append(np.log10(values))
+            labels.append(f"log10 {name}")
+        else:
+            columns.append(values)
+            labels.append(name)
+    fig = corner.corner(
+        np.column_stack(columns),
+        labels=labels,
+        quantiles=[0.05, 0.5, 0.95],
+        show_titles=False,
+        label_kwargs={"fontsize": 8},
+    )
+    return fig, np.array(fig.axes).reshape(len(names), len(names))
+
+
+def _test_label(tree, i):
+    v = float(tree.constant_data["voltage_V"].values[i])
+    s = float(tree.constant_data["stress_Pa"].values[i])
+    return f"{v:g} V, {s / 1e3:.3g} kPa"
+
+
+def band_plot(tree, kind="drift", max_tests=12):
+    """Per test: 50 % and 90 % credible bands of drift(t) (or of I(t)) over the measured points."""
+    n_tests = tree.constant_data["voltage_V"].size
+    shown = min(n_tests, max_tests)
+    cols = min(3, shown)
+    rows = int(np.ceil(shown / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    observed = tree.observed_data["current"].values
+    time = tree.constant_data["time_s"].values
+    index = tree.constant_data["test_index"].values
+    for i, ax in enumerate(axes.ravel()):
+        if i >= shown:
+            ax.set_visible(False)
+            continue
+        mask = index == i
+        t, current = time[mask], observed[mask]
+        if kind == "drift":
+            grid = tree.posterior_predictive["drift_time"].values
+            draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
+            y, points, label = grid, 100 * (current / current[0] - 1), "drift (%)"
+        else:
+            draws = tree.posterior_predictive["current"].values[..., mask].reshape(-1, mask.sum())
+            y, points, label = t, current, "current (A)"
+        for (lo, hi), alpha in (((5, 95), 0.25), ((25, 75), 0.45)):
+            ax.fill_between(
+                y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0
+            )
+        ax.plot(y, np.median(draws, axis=0), "C0", lw=1)
+        ax.plot(t, points, "k.", ms=3)
+        ax.set(title=_test_label(tree, i), xlabel="time (s)", ylabel=label)
+    fig.suptitle(f"{tree.attrs.get('specimen', '')}: 50 % and 90 % credible bands", fontsize=10)
+    fig.tight_layout()
+    return fig, axes
+
+
+def drift_3600_plot(tree):
+    """Plot the predictive drift(3600 s) per test (median, 50 % and 90 %) with the observed one."""
+    drift = tree.posterior_predictive["drift_3600"].values.reshape(
+        -1, tree.constant_data["voltage_V"].size
+    )
+    observed = tree.constant_data["observed_drift_3600"].values
+    x = np.arange(drift.shape[1])
+    fig, ax = plt.subplots(figsize=(max(5, 0.6 * x.size + 2), 3.5))
+    q05, q25, q50, q75, q95 = np.percentile(drift, [5, 25, 50, 75, 95], axis=0)
+    ax.vlines(x, q05, q95, color="C0", lw=1, label="90 %")
+    ax.vlines(x, q25, q75, color="C0", lw=4, label="50 %")
+    ax.plot(x, q50, "o", color="C0", ms=4, label="median")
+    ax.plot(x, observed, "kx", label="observed")
+    ax.set_xticks(x, [_test_label(tree, i) for i in x], rotation=60, ha="right", fontsize=7)
+    ax.set(ylabel="drift(3600 s) (%)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig, ax
+
+
+def sbc_rank_plot(result, bins=10, per_row=4):
+    """Rank histograms of a simulation-based calibration (Talts et al. 2018, Figure 1 style).
+
+    One panel per quantity: counts of the truth's rank in ``bins`` equal bins, the grey band a
+    calibrated histogram's bars stay in with 99 % probability each (Binomial(N, 1/B)), the line
+    its mean N/B, and the panel's χ² uniformity p-value.
+
+    Parameters
+    ----------
+    result : fsrbayes.inference.calibration.SBCResult
+    """
+    counts = result.histogram(bins)
+    p_values = result.uniformity(bins)["chi2"]
+    low, high = result.band(bins)
+    n_q = len(result.names)
+    n_cols = min(per_row, n_q)
+    n_rows = -(-n_q // n_cols)
+    fig, axes = plt.subplots(
+        n_rows, n_cols, figsize=(3.0 * n_cols, 2.3 * n_rows), sharex=True, squeeze=False
+    )
+    edges = np.arange(bins + 1)
+    for q, ax in enumerate(axes.flat):
+        if q >= n_q:
+            ax.set_visible(False)
+            continue
+        ax.axhspan(low, high, color="0.85", zorder=0)
+        ax.axhline(result.n_reps / bins, color="0.5", lw=0.8, zorder=1)
+        ax.stairs(
+            counts[:, q],
+            edges,
+            fill=True,
+            color="C0" if p_values[q] >= 0.01 / n_q else "C3",
+            alpha=0.8,
+        )
+        ax.set_title(f"{result.names[q]}\np = {p_values[q]:.2f}", fontsize=8)
+        ax.set_xticks([0, bins], ["0", f"{result.n_draws}"])
+        ax.set_ylim(0, max(high, counts.max()) * 1.15)
+        ax.tick_params(labelsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("rank of the truth", fontsize=8)
+    fig.suptitle(
+        f"SBC: {result.n_reps} replications, {result.n_draws} posterior draws each; grey: 99 % "
+        "band of a calibrated bin",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    return fig, axes
+
+
+def predict_plot(prediction, max_tests=12):
+    """Per protocol test: the predictive reading's 50 % and 90 % bands and any logged readings."""
+    tests = prediction["tests"][:max_tests]
+    cols = min(3, len(tests))
+    rows = int(np.ceil(len(tests) / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    unit = f"{prediction['reading']} ({prediction['reading_unit']})"
+    for ax, test in zip(axes.ravel(), tests, strict=False):
+        t = np.asarray(test["time_s"])
+        for (lo, hi), alpha in ((("q05", "q95"), 0.25), (("q25", "q75"), 0.45)):
+            ax.fill_between(t, test[lo], test[hi], color="C0", alpha=alpha, lw=0, step="mid")
+        ax.plot(t, test["q50"], "C0", lw=1)
+        if test["observed"] is not None:
+            ax.plot(t, test["observed"], "k.", ms=2)
+        covered = "" if test["coverage_90"] is None else f"; {test['coverage_90']:.0%} in 90 %"
+        label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
+        ax.set(title=f"{test['specimen']} {label}{covered}", xlabel="time (s)", ylabel=unit)
+        if t.size and t.min() > 0:
+            ax.set_xscale("log")
+    for ax in axes.ravel()[len(tests) :]:
+        ax.set_visible(False)
+    fig.suptitle("posterior predictive reading: 50 % and 90 % bands", fontsize=10)
+    fig.tight_layout()
+    return fig, axes
