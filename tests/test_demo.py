@@ -62,7 +62,9 @@ def test_quick_demo_writes_the_report_and_results(tmp_path):
     assert a201["diagnose"]["gap_after"] < a201["diagnose"]["gap_before"]
     assert (out / "a201" / "drift_by_voltage_extended.png").is_file()
     assert all(z["p_root_in_range"] >= 0.5 for z in a201["zero_drift_voltage"])
-    assert a201["p_degrade_at_2V"] == 0.0
+    # truth: no specimen degrades below 3.0 V; a population from the quick plan's few specimens
+    # may put a sliver of its spread there
+    assert a201["p_degrade_at_2V"] < 0.02
     assert fsr402["diagnose"]["verdict"] == "adequate" and fsr402["diagnose"]["effects"] == []
     assert all(z["p_root_in_range"] < 0.5 for z in fsr402["zero_drift_voltage"])
     assert fsr402["p_degrade_at_2V"] is None  # the model holds no degradation

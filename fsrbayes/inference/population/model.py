@@ -237,6 +237,38 @@ class TwoStageTarget(PriorScaledTarget):
         """Monte-Carlo variance of the estimated log L(Λ) (delta method): Σ_j (1/ESS_j − 1/S)."""
         return np.sum(1.0 / self.effective_draws(hyper) - 1.0 / self.n_draws, axis=-1)
 
+    def resampled_mean_error(self, hyper, n_boot=100, seed=0):
+        """Return the sd of the hyper-posterior means over resamples of each specimen's draws.
+
+        Each specimen's S draws are resampled with replacement ``n_boot`` times; the
+        hyper-posterior under each resampled likelihood L_b is the one sampled (``hyper``, (H, 2P))
+        importance-reweighted by L_b(Λ)/L(Λ). A resample's Σ_s w_s is Σ_s n_s w_s with n_s its
+        count of draw s, so every resample costs one matrix product per specimen.
+
+        Returns
+        -------
+        ndarray (2P,)
+        """
+        log_w = self.log_weights(hyper)  # (H, J, S)
+        peak = log_w.max(axis=2, keepdims=True)
+        scaled = np.exp(log_w - peak)
+        base = (np.log(scaled.sum(axis=2)) + peak[..., 0]).sum(axis=1)
+        rng = np.random.default_rng(seed)
+        counts = np.zeros((n_boot, self.n_specimens, self.n_draws))
+        for b in range(n_boot):
+            pick = rng.integers(0, self.n_draws, (self.n_specimens, self.n_draws))
+            for j in range(self.n_specimens):
+                counts[b, j] = np.bincount(pick[j], minlength=self.n_draws)
+        log_like = np.zeros((n_boot, len(hyper)))
+        for j in range(self.n_specimens):
+            with np.errstate(divide="ignore"):
+                log_like += np.log(counts[:, j] @ scaled[:, j].T) + peak[:, j, 0]
+        means = []
+        for row in log_like:
+            weight = np.exp(row - base - np.max(row - base))
+            means.append(weight @ hyper / weight.sum())
+        return np.std(means, axis=0)
+
     def fingerprint(self):
         """Return a string that changes with the target (checkpoints)."""
         digest = hashlib.sha256(self.features.tobytes() + self.offset.tobytes())

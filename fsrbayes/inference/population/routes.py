@@ -286,28 +286,7 @@ def draw_error(result, n_boot=100, max_draws=2000, seed=0):
     -------
     ndarray (2P,)
     """
-    target = result.target
-    hyper = result.hyper_draws(max_draws)
-    log_w = target.log_weights(hyper)  # (H, J, S)
-    peak = log_w.max(axis=2, keepdims=True)
-    scaled = np.exp(log_w - peak)  # a resample's Σ_s w_s is these times each draw's count
-    base = (np.log(scaled.sum(axis=2)) + peak[..., 0]).sum(axis=1)
-    rng = np.random.default_rng(seed)
-    n_spec, n_draws = target.n_specimens, target.n_draws
-    counts = np.zeros((n_boot, n_spec, n_draws))
-    for b in range(n_boot):
-        pick = rng.integers(0, n_draws, (n_spec, n_draws))
-        for j in range(n_spec):
-            counts[b, j] = np.bincount(pick[j], minlength=n_draws)
-    log_like = np.zeros((n_boot, len(hyper)))
-    for j in range(n_spec):
-        with np.errstate(divide="ignore"):
-            log_like += np.log(counts[:, j] @ scaled[:, j].T) + peak[:, j, 0]
-    means = []
-    for row in log_like:
-        weight = np.exp(row - base - np.max(row - base))
-        means.append(weight @ hyper / weight.sum())
-    return np.std(means, axis=0)
+    return result.target.resampled_mean_error(result.hyper_draws(max_draws), n_boot, seed)
 
 
 def joint(
