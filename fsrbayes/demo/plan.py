@@ -4,7 +4,10 @@ from dataclasses import dataclass, field
 
 from ..inference.samplers import SamplerSettings
 
-__all__ = ["DemoPlan", "FULL", "QUICK", "PAPER_HYPOTHESES", "subset"]
+__all__ = ["DemoPlan", "FULL", "QUICK", "PAPER_HYPOTHESES", "FIGURE12", "subset"]
+
+FIGURE12 = {"a201": ((1.0, 2.0, 6.0, 9.0), 210.8e3), "fsr402": ((0.2, 2.0, 3.0, 7.0), 65.6e3)}
+"""The paper's Figure 12: per sensor, the voltages (V) and stress (Pa) of its drift(t) curves."""
 
 PAPER_HYPOTHESES = (
     "area-creep",

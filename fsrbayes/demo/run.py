@@ -16,11 +16,12 @@ from ..inference.parallel import map_jobs
 from ..report import embed_figure, markdown_to_html, write_diagnosis_report
 from ..utils import atomic_path, json_ready, write_json_atomic
 from .narrative import narrative
-from .plan import FULL, subset
+from .plan import FIGURE12, FULL, subset
 from .study import (
     RECOMMENDED_V,
     degradation_share,
     figure7_curves,
+    figure12_tests,
     observed_drifts,
     population,
     run_job,
@@ -125,17 +126,39 @@ def _box_figures(sensor, pops, data, folder):
     return made
 
 
-def _band_figure(sensor, fit, role, folder):
-    tree = to_datatree(LocalDraws(fit["posterior"][role], fit["draws"][role]))
+def _fit_figures(sensor, fit, roles, folder):
+    """Draw the first specimen's credible drift bands and its Figure 12 curves before/after."""
+    trees = {
+        role: to_datatree(LocalDraws(fit["posterior"][role], fit["draws"][role])) for role in roles
+    }
+    final = trees[roles[-1]]
     with atomic_path(folder / f"posterior_{fit['specimen']}.nc") as tmp:
-        tree.to_netcdf(tmp, engine="h5netcdf")
-    path = folder / f"drift_bands_{fit['specimen']}.png"
-    plots.save_figure(plots.band_plot(tree, "drift", max_tests=6)[0], path)
-    caption = (
-        f"{sensor}, specimen {fit['specimen']} ({fit['posterior'][role].model}): 50 % and 90 % "
-        "credible drift bands over the measured drift (first six tests)"
+        final.to_netcdf(tmp, engine="h5netcdf")
+    bands = folder / f"drift_bands_{fit['specimen']}.png"
+    plots.save_figure(plots.band_plot(final, "drift", max_tests=6)[0], bands)
+    made = [
+        (
+            bands,
+            f"{sensor}, specimen {fit['specimen']} ({fit['posterior'][roles[-1]].model}): 50 % and "
+            "90 % credible drift bands over the measured drift (first six tests)",
+        )
+    ]
+    tests = figure12_tests(fit["posterior"][roles[0]].data, *FIGURE12[sensor])
+    curves = folder / f"drift_time_{fit['specimen']}.png"
+    titles = [
+        f"{fit['posterior'][role].model} ({'before' if role == 'base' else 'after'})"
+        for role in roles
+    ]
+    plots.save_figure(plots.drift_time_plot([trees[r] for r in roles], titles, tests)[0], curves)
+    made.append(
+        (
+            curves,
+            f"{sensor}, specimen {fit['specimen']}: drift(t) at the voltages of the paper's Figure "
+            "12 and the stress nearest its, measured and predicted, before and after the named "
+            "effects",
+        )
     )
-    return [(path, caption)]
+    return made
 
 
 def _sensor(job):
@@ -183,7 +206,7 @@ def _sensor_study(sensor, data, fits, diagnosis, plan, seed, out):
         "groups": {role: pops[role]["groups"] for role in roles},
     }
     figures = _box_figures(sensor, pops, data, folder)
-    figures += _band_figure(sensor, fits[0], roles[-1], folder)
+    figures += _fit_figures(sensor, fits[0], roles, folder)
     return entry, figures
 
 

@@ -36,6 +36,7 @@ __all__ = [
     "observed_drifts",
     "diagnose_sensor",
     "figure7_curves",
+    "figure12_tests",
     "fit_specimen",
     "population",
     "run_job",
@@ -65,6 +66,18 @@ def figure7_curves(n_times=121, tunneling="smooth"):
     volts = np.array(FIGURE7_VOLTAGES)[None, :, None]
     stresses = np.array(FIGURE7_STRESSES)[:, None, None]
     return times, model_drift(params, volts, stresses, times, tunneling=tunneling)
+
+
+def figure12_tests(data, voltages, stress_Pa):
+    """Return the tests of one packed specimen nearest the paper's Figure 12 conditions.
+
+    The tests at the measured stress nearest ``stress_Pa``, and among them the one nearest each
+    of ``voltages`` (each test once, in voltage order).
+    """
+    stresses, volts = np.asarray(data.stress_Pa), np.asarray(data.voltage_V)
+    at = np.flatnonzero(stresses == stresses[np.argmin(np.abs(stresses - stress_Pa))])
+    chosen = {int(at[np.argmin(np.abs(np.log(volts[at] / v)))]) for v in voltages}
+    return sorted(chosen, key=lambda i: volts[i])
 
 
 def diagnose_sensor(job):

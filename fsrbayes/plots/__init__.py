@@ -25,7 +25,14 @@ from .diagnosis import (  # noqa: E402
     diagnosis_misfit_plot,
     diagnosis_residual_plot,
 )
-from .fit import band_plot, corner_plot, drift_3600_plot, predict_plot, sbc_rank_plot  # noqa: E402
+from .fit import (  # noqa: E402
+    band_plot,
+    corner_plot,
+    drift_3600_plot,
+    drift_time_plot,
+    predict_plot,
+    sbc_rank_plot,
+)
 from .population import (  # noqa: E402
     PANELS_PER_ROW,
     SYMLOG_SPAN,
@@ -38,6 +45,7 @@ __all__ = [
     "SYMLOG_SPAN",
     "corner_plot",
     "band_plot",
+    "drift_time_plot",
     "drift_3600_plot",
     "population_drift_plot",
     "drift_curves_plot",

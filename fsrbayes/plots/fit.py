@@ -10,7 +10,14 @@ import numpy as np
 
 from ..physics.parameters import physical_parameters
 
-__all__ = ["corner_plot", "band_plot", "drift_3600_plot", "sbc_rank_plot", "predict_plot"]
+__all__ = [
+    "corner_plot",
+    "band_plot",
+    "drift_time_plot",
+    "drift_3600_plot",
+    "sbc_rank_plot",
+    "predict_plot",
+]
 
 
 def corner_plot(tree, names=None):
@@ -75,6 +82,53 @@ def band_plot(tree, kind="drift", max_tests=12):
         ax.plot(t, points, "k.", ms=3)
         ax.set(title=_test_label(tree, i), xlabel="time (s)", ylabel=label)
     fig.suptitle(f"{tree.attrs.get('specimen', '')}: 50 % and 90 % credible bands", fontsize=10)
+    fig.tight_layout()
+    return fig, axes
+
+
+def drift_time_plot(trees, titles, tests):
+    """Drift(t) of chosen tests of one specimen, one panel per model (the paper's Figure 12).
+
+    Parameters
+    ----------
+    trees : sequence of DataTree
+        Fits of the same specimen under different models (same tests).
+    titles : sequence of str
+        One per panel.
+    tests : sequence of int
+        Test indices to draw, one colour each (typically one stress, several voltages).
+
+    Each test: the measured drift I(t)/I(t₀) − 1 (eq. 22) as points, the posterior median and
+    its 90 % credible band as a line and a shaded band.
+    """
+    fig, axes = plt.subplots(
+        1, len(trees), figsize=(4.8 * len(trees), 3.6), sharey=True, squeeze=False
+    )
+    for ax, tree, title in zip(axes[0], trees, titles, strict=True):
+        grid = tree.posterior_predictive["drift_time"].values
+        observed = tree.observed_data["current"].values
+        time = tree.constant_data["time_s"].values
+        index = tree.constant_data["test_index"].values
+        for k, i in enumerate(tests):
+            draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
+            low, high = np.percentile(draws, [5, 95], axis=0)
+            ax.fill_between(grid, low, high, color=f"C{k}", alpha=0.25, lw=0)
+            volts = float(tree.constant_data["voltage_V"].values[i])
+            ax.plot(grid, np.median(draws, axis=0), color=f"C{k}", lw=1.2, label=f"{volts:g} V")
+            mask = index == i
+            ax.plot(
+                time[mask], 100 * (observed[mask] / observed[mask][0] - 1), ".", color=f"C{k}", ms=4
+            )
+        ax.axhline(0.0, color="0.5", lw=0.6)
+        ax.set(title=title, xlabel="time (s)")
+    stress = float(trees[0].constant_data["stress_Pa"].values[tests[0]])
+    axes[0, 0].set_ylabel("drift (%)")
+    axes[0, 0].legend(fontsize=8, title=f"{stress / 1e3:.3g} kPa", title_fontsize=8)
+    fig.suptitle(
+        f"{trees[0].attrs.get('specimen', '')}: measured drift (points), posterior median and "
+        "90 % band",
+        fontsize=10,
+    )
     fig.tight_layout()
     return fig, axes
 
