@@ -1,11 +1,12 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
 [predict] [likelihood] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty] [hierarchical]
-[diagnose] [demo]``.
+[population-sizes] [diagnose] [demo]``.
 
 Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
 install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds, in both
 coordinates), ``rig-fit`` (the divider rig in both coordinates), ``evidence``, ``hierarchical``,
-``diagnose`` and ``demo`` take minutes.
+``population-sizes`` (3, 6, 16 specimens' hyper-posteriors in both coordinates), ``diagnose`` and
+``demo`` take minutes.
 """
 
 import os
@@ -26,6 +27,7 @@ from benchmarks import (  # noqa: E402
     fit,
     hierarchical,
     likelihood,
+    population_sizes,
     predict,
     rig_fit,
     rig_read,
@@ -45,6 +47,7 @@ BENCHMARKS = {
     "evidence-seeds": lambda: evidence.report_seeds(evidence.run_seeds()),
     "dynesty": lambda: dynesty_check.report(dynesty_check.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
+    "population-sizes": lambda: population_sizes.report(population_sizes.run()),
     "diagnose": lambda: diagnose.report(diagnose.run()),
     "demo": lambda: demo.report(demo.run()),
 }
