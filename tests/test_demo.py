@@ -97,3 +97,17 @@ def test_degradation_share_counts_specimens_losing_a_percent_at_the_voltage():
     assert degradation_share(specimens, 2.2) == 0.25  # ... and 3 % here
     base = SimpleNamespace(params=params, template=SimpleNamespace(model="burgers"))
     assert degradation_share(base, 3.5) is None  # the model holds no degradation
+
+
+def test_figure12_tests_pick_the_nearest_stress_then_each_nearest_voltage_once():
+    from types import SimpleNamespace
+
+    from fsrbayes.demo.plan import FIGURE12
+    from fsrbayes.demo.study import figure12_tests
+
+    volts = [0.2, 1.0, 6.0] * 3
+    stresses = [46.8e3] * 3 + [117e3] * 3 + [234e3] * 3
+    data = SimpleNamespace(voltage_V=np.array(volts), stress_Pa=np.array(stresses))
+    # 210.8 kPa is nearest 234 kPa; 1 and 2 V both land on the 1 V test, 6 and 9 V on 6 V
+    assert figure12_tests(data, *FIGURE12["a201"]) == [7, 8]
+    assert figure12_tests(data, (0.2, 7.0), 50e3) == [0, 2]
