@@ -69,8 +69,10 @@ def test_quick_demo_writes_the_report_and_results(tmp_path):
     assert all(z["p_root_in_range"] < 0.5 for z in fsr402["zero_drift_voltage"])
     assert fsr402["p_degrade_at_2V"] is None  # the model holds no degradation
     html = (out / "report.html").read_text()
-    assert html.count("data:image/png;base64,") == 9 and "Zener or Burgers" in html
+    # Figure 7; per sensor its box plots, credible bands and Figure 12 (before/after)
+    assert html.count("data:image/png;base64,") == 11 and "Zener or Burgers" in html
     assert "open question" in html
+    assert html.count("max R-hat") == 2  # each population run's convergence, stated
     assert (out / "figure7_drift.json").is_file()
     assert not list(out.rglob("*.tmp"))
 

@@ -112,6 +112,25 @@ def narrative(results, figures, plan):
             f"{_percent(s['p_degrade_at_2V'])}"
             + (" (the model holds no degradation)" if s["p_degrade_at_2V"] is None else "")
         )
+    sensors = results["sensors"]
+    lines += [
+        "",
+        "The population posteriors are emcee runs (two-stage, non-centred hyper-parameters), "
+        "checked for convergence (split R-hat across ensembles < 1.01, bulk ESS ≥ 400, 50 τ):",
+        "",
+    ]
+    lines += [f"- {name}: {_convergence(s.get('population'))}" for name, s in sensors.items()]
     lines += ["", "## Figures", ""]
     lines += [f"![{caption}]({path})" for path, caption in figures]
     return "\n".join(lines) + "\n"
+
+
+def _convergence(population):
+    """One line on a population run's convergence from its summary (``save_population``)."""
+    if not population or not population.get("hyper_parameters"):
+        return "no population run"
+    hyper = population["hyper_parameters"].values()
+    r_hat = max(v["r_hat"] for v in hyper if v["r_hat"] is not None)
+    ess = min(v["ess_bulk"] for v in hyper if v["ess_bulk"] is not None)
+    state = "converged" if population["converged"] else "**not converged** (step budget reached)"
+    return f"{state}; max R-hat {r_hat:.4f}, min bulk ESS {ess:.0f}"
