@@ -158,7 +158,7 @@ def _funnel(n_parameters=8, n_draws=300, seed=4):
 
 def test_non_centred_coordinates_are_an_exact_bijection_with_its_jacobian():
     population, draws, _, _ = _funnel(n_parameters=3)
-    coordinates = NonCentredCoordinates.from_draws(population, draws)
+    coordinates = NonCentredCoordinates.for_target(TwoStageTarget(population, draws))
     u = np.random.default_rng(0).normal(0.0, 1.5, (5, 6))
     w = coordinates.to_sampled(u)
     back, log_det = coordinates.from_sampled(w)

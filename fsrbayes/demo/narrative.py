@@ -116,7 +116,8 @@ def narrative(results, figures, plan):
     lines += [
         "",
         "The population posteriors are emcee runs (two-stage, non-centred hyper-parameters), "
-        "checked for convergence (split R-hat across ensembles < 1.01, bulk ESS ≥ 400, 50 τ):",
+        f"checked for convergence (split R-hat across ensembles < {plan.hyper.rhat_target:g}, "
+        f"bulk ESS ≥ {plan.hyper.ess_target:.0f}, {plan.hyper.tau_factor:.0f} τ):",
         "",
     ]
     lines += [f"- {name}: {_convergence(s.get('population'))}" for name, s in sensors.items()]

@@ -107,6 +107,11 @@ def _observed(data):
     }
 
 
+def _when(role):
+    """Return "before" for the base model, "after" for one with the named effects."""
+    return "before" if role == "base" else "after"
+
+
 def _box_figures(sensor, pops, data, folder):
     """Box plots by voltage and by stress for each model (before/after the named effects)."""
     observed = _observed(data)
@@ -118,7 +123,7 @@ def _box_figures(sensor, pops, data, folder):
             made.append(
                 (
                     path,
-                    f"{sensor}, {pop['model']} ({'before' if role == 'base' else 'after'} the "
+                    f"{sensor}, {pop['model']} ({_when(role)} the "
                     f"named effects): drift(3600 s) of a new specimen as measured against {by}, "
                     f"the measured specimens beside the boxes ({figure})",
                 )
@@ -145,10 +150,7 @@ def _fit_figures(sensor, fit, roles, folder):
     ]
     tests = figure12_tests(fit["posterior"][roles[0]].data, *FIGURE12[sensor])
     curves = folder / f"drift_time_{fit['specimen']}.png"
-    titles = [
-        f"{fit['posterior'][role].model} ({'before' if role == 'base' else 'after'})"
-        for role in roles
-    ]
+    titles = [f"{fit['posterior'][role].model} ({_when(role)})" for role in roles]
     plots.save_figure(plots.drift_time_plot([trees[r] for r in roles], titles, tests)[0], curves)
     made.append(
         (

@@ -51,6 +51,15 @@ def _test_label(tree, i):
     return f"{v:g} V, {s / 1e3:.3g} kPa"
 
 
+def _drift_of_test(tree, i):
+    """Test i's drift(t) (%): time grid, posterior draws (N, grid), sample times, measured drift."""
+    grid = tree.posterior_predictive["drift_time"].values
+    draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
+    mask = tree.constant_data["test_index"].values == i
+    current = tree.observed_data["current"].values[mask]
+    return grid, draws, tree.constant_data["time_s"].values[mask], 100 * (current / current[0] - 1)
+
+
 def band_plot(tree, kind="drift", max_tests=12):
     """Per test: 50 % and 90 % credible bands of drift(t) (or of I(t)) over the measured points."""
     n_tests = tree.constant_data["voltage_V"].size
@@ -65,15 +74,14 @@ def band_plot(tree, kind="drift", max_tests=12):
         if i >= shown:
             ax.set_visible(False)
             continue
-        mask = index == i
-        t, current = time[mask], observed[mask]
         if kind == "drift":
-            grid = tree.posterior_predictive["drift_time"].values
-            draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
-            y, points, label = grid, 100 * (current / current[0] - 1), "drift (%)"
+            y, draws, t, points = _drift_of_test(tree, i)
+            label = "drift (%)"
         else:
+            mask = index == i
+            t, points, label = time[mask], observed[mask], "current (A)"
             draws = tree.posterior_predictive["current"].values[..., mask].reshape(-1, mask.sum())
-            y, points, label = t, current, "current (A)"
+            y = t
         for (lo, hi), alpha in (((5, 95), 0.25), ((25, 75), 0.45)):
             ax.fill_between(
                 y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0
@@ -105,20 +113,13 @@ def drift_time_plot(trees, titles, tests):
         1, len(trees), figsize=(4.8 * len(trees), 3.6), sharey=True, squeeze=False
     )
     for ax, tree, title in zip(axes[0], trees, titles, strict=True):
-        grid = tree.posterior_predictive["drift_time"].values
-        observed = tree.observed_data["current"].values
-        time = tree.constant_data["time_s"].values
-        index = tree.constant_data["test_index"].values
         for k, i in enumerate(tests):
-            draws = tree.posterior_predictive["drift"].values[..., i, :].reshape(-1, grid.size)
+            grid, draws, time, measured = _drift_of_test(tree, i)
             low, high = np.percentile(draws, [5, 95], axis=0)
             ax.fill_between(grid, low, high, color=f"C{k}", alpha=0.25, lw=0)
             volts = float(tree.constant_data["voltage_V"].values[i])
             ax.plot(grid, np.median(draws, axis=0), color=f"C{k}", lw=1.2, label=f"{volts:g} V")
-            mask = index == i
-            ax.plot(
-                time[mask], 100 * (observed[mask] / observed[mask][0] - 1), ".", color=f"C{k}", ms=4
-            )
+            ax.plot(time, measured, ".", color=f"C{k}", ms=4)
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set(title=title, xlabel="time (s)")
     stress = float(trees[0].constant_data["stress_Pa"].values[tests[0]])

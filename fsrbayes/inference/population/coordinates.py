@@ -36,15 +36,12 @@ class NonCentredCoordinates:
         self.population = population
         self.centre = np.asarray(centre, dtype=float)
         self.variance = np.asarray(variance, dtype=float)
-        mu_dists = population.hyper_prior.dists[: population.size]
-        self.mu_centre = np.array([d.args["mu"] for d in mu_dists])
-        self.mu_scale = np.array([d.args["sigma"] for d in mu_dists])
 
     @classmethod
-    def from_draws(cls, population, draws):
-        """Coordinates centred on per-specimen draws of the population parameters (each (S, P))."""
-        z = np.stack([population.to_z(np.asarray(d, dtype=float))[0] for d in draws])
-        return cls(population, z.mean(axis=(0, 1)), z.var(axis=1).mean(axis=0))
+    def for_target(cls, target):
+        """Coordinates centred on the specimens' draws a :class:`~.model.TwoStageTarget` holds."""
+        z = target.coordinates()
+        return cls(target.population, z.mean(axis=(0, 1)), z.var(axis=1).mean(axis=0))
 
     def _spread(self, u_omega):
         """√(ω² + v) from the ω block of u, (…, P)."""
@@ -58,7 +55,7 @@ class NonCentredCoordinates:
         """Return w from u, (…, 2P) → (…, 2P)."""
         u = np.asarray(u, dtype=float)
         p = self.population.size
-        mu = self.mu_centre + self.mu_scale * u[..., :p]
+        mu = self.population.centre + self.population.scale * u[..., :p]
         w_mu = (mu - self.centre) / self._spread(u[..., p:])
         return np.concatenate([w_mu, u[..., p:]], axis=-1)
 
@@ -67,8 +64,9 @@ class NonCentredCoordinates:
         w = np.asarray(w, dtype=float)
         p = self.population.size
         spread = self._spread(w[..., p:])
-        u_mu = (self.centre + w[..., :p] * spread - self.mu_centre) / self.mu_scale
+        centre, scale = self.population.centre, self.population.scale  # μ's hyper-prior
+        u_mu = (self.centre + w[..., :p] * spread - centre) / scale
         with np.errstate(divide="ignore", invalid="ignore"):
-            log_det = np.sum(np.log(spread / self.mu_scale), axis=-1)
+            log_det = np.sum(np.log(spread / scale), axis=-1)
         log_det = np.where(np.isfinite(log_det), log_det, -np.inf)
         return np.concatenate([u_mu, w[..., p:]], axis=-1), log_det

@@ -228,6 +228,11 @@ class TwoStageTarget(PriorScaledTarget):
             np.isnan(log_like), -np.inf, log_like
         )
 
+    def coordinates(self):
+        """Each specimen's draws in population coordinates z, shape (J, S, P)."""
+        p = self.population.size
+        return self.features[:, p:].reshape(self.n_specimens, self.n_draws, p)
+
     def effective_draws(self, hyper):
         """Return each specimen's effective draws (Σw)²/Σw² at hyper-parameters (W, 2P) → (W, J)."""
         log_w = self.log_weights(hyper)

@@ -243,11 +243,7 @@ def two_stage(
     target = TwoStageTarget(population, draws)
     if coordinates not in ("non-centred", "prior"):
         raise ValueError(f"coordinates must be 'non-centred' or 'prior', got {coordinates!r}")
-    sampled = (
-        NonCentredCoordinates.from_draws(population, draws)
-        if coordinates == "non-centred"
-        else None
-    )
+    sampled = NonCentredCoordinates.for_target(target) if coordinates == "non-centred" else None
     settings = settings or SamplerSettings()
     run = _sample(target, seed, settings, None, progress, sampled)
     result = HierarchicalResult(
