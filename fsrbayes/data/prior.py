@@ -39,6 +39,62 @@ def _log_scale(dist):
 
 
 @dataclass(frozen=True)
+class _Transforms:
+    """Index groups and constants of :meth:`JointPrior.from_unconstrained`."""
+
+    affine: np.ndarray
+    mu: np.ndarray
+    sigma: np.ndarray
+    log: np.ndarray
+    centre: np.ndarray
+    scale: np.ndarray
+    bounded: np.ndarray
+    lower: np.ndarray
+    width: np.ndarray
+    log_bounded: np.ndarray
+    log_jac_terms: tuple
+
+
+def _transforms(prior):
+    """Group the parameters of ``prior`` by their transform to u (module docstring)."""
+    groups = {"affine": [], "log": [], "bounded": []}
+    terms = []  # log|dx/du| term by term: ("const", value) or (column, index)
+    for i, d in enumerate(prior.dists):
+        a = d.args
+        if d.kind == "normal":
+            groups["affine"].append((i, a["mu"], a["sigma"]))
+            terms.append(("const", np.log(a["sigma"])))
+        elif d.kind in _LOG_KINDS:
+            centre, scale = _log_scale(d)
+            terms += [("log", len(groups["log"])), ("const", np.log(scale))]
+            groups["log"].append((i, centre, scale))
+        else:
+            lo, hi, log = a["lower"], a["upper"], d.kind == "loguniform"
+            lower, width = (np.log(lo), np.log(hi) - np.log(lo)) if log else (lo, hi - lo)
+            j = len(groups["bounded"])
+            terms += [("inner", j)] if log else []
+            terms += [("const", np.log(width)), ("p", j), ("q", j)]
+            groups["bounded"].append((i, lower, width, log))
+
+    def column(name, k, dtype=float):
+        return np.array([row[k] for row in groups[name]], dtype=dtype)
+
+    return _Transforms(
+        affine=column("affine", 0, int),
+        mu=column("affine", 1),
+        sigma=column("affine", 2),
+        log=column("log", 0, int),
+        centre=column("log", 1),
+        scale=column("log", 2),
+        bounded=column("bounded", 0, int),
+        lower=column("bounded", 1),
+        width=column("bounded", 2),
+        log_bounded=column("bounded", 3, bool),
+        log_jac_terms=tuple(terms),
+    )
+
+
+@dataclass(frozen=True)
 class JointPrior:
     """Independent priors over named parameters.
 
@@ -61,6 +117,7 @@ class JointPrior:
             raise ValueError(
                 f"fixed parameters {fixed} are not sampled; leave them out of the joint prior"
             )
+        object.__setattr__(self, "_transforms", _transforms(self))
 
     @classmethod
     def from_priors(cls, priors, names):
@@ -86,34 +143,34 @@ class JointPrior:
         return np.where(np.isnan(total), -np.inf, total)
 
     def from_unconstrained(self, u):
-        """x(u) and log|dx/du| summed over parameters; u (…, ndim)."""
+        """x(u) and log|dx/du| summed over parameters; u (…, ndim).
+
+        Vectorised by transform (affine, log-affine, logistic, log-logistic); log|dx/du| adds the
+        parameters' terms one by one in the order of the module docstring's formulas, so the sum
+        does not depend on how the parameters are grouped.
+        """
         u = np.asarray(u, dtype=float)
+        t = self._transforms
         x = np.empty_like(u)
-        log_jac = np.zeros(u.shape[:-1])
         with np.errstate(all="ignore"):  # inf/NaN coordinates map to inf/NaN, caught as −inf later
-            for i, d in enumerate(self.dists):
-                ui, a = u[..., i], d.args
-                if d.kind == "normal":
-                    x[..., i] = a["mu"] + a["sigma"] * ui
-                    log_jac = log_jac + np.log(a["sigma"])
-                elif d.kind in _LOG_KINDS:
-                    centre, scale = _log_scale(d)
-                    log_x = centre + scale * ui
-                    x[..., i] = np.exp(log_x)
-                    log_jac = log_jac + log_x + np.log(scale)
-                else:
-                    lo, hi = a["lower"], a["upper"]
-                    log_p = -np.logaddexp(0.0, -ui)
-                    log_q = -np.logaddexp(0.0, ui)
-                    p = np.exp(log_p)
-                    if d.kind == "loguniform":
-                        width = np.log(hi) - np.log(lo)
-                        log_x = np.log(lo) + width * p
-                        x[..., i] = np.exp(log_x)
-                        log_jac = log_jac + log_x + np.log(width) + log_p + log_q
-                    else:
-                        x[..., i] = lo + (hi - lo) * p
-                        log_jac = log_jac + np.log(hi - lo) + log_p + log_q
+            if t.affine.size:
+                x[..., t.affine] = t.mu + t.sigma * u[..., t.affine]
+            columns = {}
+            if t.log.size:
+                columns["log"] = t.centre + t.scale * u[..., t.log]
+                x[..., t.log] = np.exp(columns["log"])
+            if t.bounded.size:
+                ub = u[..., t.bounded]
+                columns["p"] = -np.logaddexp(0.0, -ub)
+                columns["q"] = -np.logaddexp(0.0, ub)
+                inner = t.lower + t.width * np.exp(columns["p"])
+                x[..., t.bounded] = np.where(t.log_bounded, np.exp(inner), inner)
+                columns["inner"] = inner
+            log_jac = np.zeros(u.shape[:-1])
+            for term in t.log_jac_terms:  # parameter by parameter, as the formulas add up
+                log_jac = log_jac + (
+                    term[1] if term[0] == "const" else columns[term[0]][..., term[1]]
+                )
         return x, log_jac
 
     def to_unconstrained(self, x):

@@ -175,7 +175,9 @@ class LogPosterior(PriorScaledTarget):
 
         −inf where the parameters leave the model's validity domain.
         """
-        params = {k: v[:, None, None] for k, v in self.parameters(x).items()}
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        params = {name: x[:, i, None, None] for i, name in enumerate(self.names)}
+        params.update(self.fixed)  # scalars broadcast against every walker
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
         steps = self.data.load_steps()
         solution = solve_current(
