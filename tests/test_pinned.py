@@ -8,6 +8,7 @@ posterior's own.
 
 import json
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -109,6 +110,27 @@ def test_pinned_coordinates_solve_for_what_the_rig_pins(pinned, rig_posterior):
     described = pinned.describe()
     assert described["solved"] == list(pinned.solved)
     assert len(described["reference_time_s"]) == len(pinned.solved)
+
+
+def test_the_model_at_a_few_tests_is_the_model_at_those_points(rig_posterior):
+    posterior, best = rig_posterior
+    rig = posterior.data  # a divider circuit
+    staircase = replace(  # and a second load step halfway through every test
+        rig,
+        step_time=np.column_stack([np.zeros(rig.n_tests), rig.time_s[:, rig.time_s.shape[1] // 2]]),
+        step_size=np.column_stack([rig.stress_Pa, 0.5 * rig.stress_Pa]),
+    )
+    u = best + 0.01 * np.random.default_rng(4).standard_normal((3, posterior.ndim))
+    x, _ = posterior.prior.from_unconstrained(u)
+    tests, columns = np.array([2, 0, 2, 1]), np.array([5, 0, -1, -3])
+    for data in (rig, staircase):
+        full = LogPosterior(data, posterior.prior, posterior.fixed).log_model_current(x)
+        few = data.take(tests, data.time_s[tests, columns][:, None])
+        assert few.n_tests == 4 and few.time_s.shape == (4, 1)
+        at_few = LogPosterior(few, posterior.prior, posterior.fixed).log_model_current(x)
+        assert np.isfinite(at_few).all()
+        assert np.allclose(at_few[..., 0], full[:, tests, columns], rtol=0, atol=1e-10)
+    assert not np.allclose(full[:, 0, 0] - full[:, 0, -1], 0.0)  # the staircase shows
 
 
 def test_round_trip_and_the_jacobian_of_the_inverse(pinned, rig_posterior):

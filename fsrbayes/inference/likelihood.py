@@ -234,6 +234,33 @@ class SpecimenData:
                 load[i, rising] = weight * share
         return load
 
+    def take(self, tests, time_s):
+        """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).
+
+        For evaluating the model at a few points (the readings become NaN placeholders): each
+        row keeps its test's voltage, load, load steps, ramp and circuit.
+        """
+        tests = np.asarray(tests, dtype=int)
+        time_s = np.asarray(time_s, dtype=float).reshape(tests.size, -1)
+
+        def rows(array):
+            return None if array is None else array[tests]
+
+        return SpecimenData(
+            self.specimen,
+            self.sensor,
+            self.voltage_V[tests],
+            self.stress_Pa[tests],
+            time_s,
+            np.full(time_s.shape, np.nan),
+            np.ones(time_s.shape, dtype=bool),
+            tuple(self.test_keys[i] for i in tests) if self.test_keys else (),
+            extra_series=rows(self.extra_series),
+            step_time=rows(self.step_time),
+            step_size=rows(self.step_size),
+            ramp_s=rows(self.ramp_s),
+        )
+
     def series(self):
         """Series resistance of each test's circuit, shape (C,) (zeros at constant voltage)."""
         if self.extra_series is None:

@@ -25,9 +25,10 @@ most one per reference point), and the reference points by a second pivoted QR o
 columns. It works for any sensor file, readout and load history: y is the model current the
 likelihood itself compares.
 
-The inverse u(w) is a K-dimensional root search, by Newton's method from the linearisation at
-the anchor (forward-difference Jacobians, steps capped at :data:`MAX_STEP` prior widths, at most
-:data:`MAX_ITER` iterations); the log-determinant comes from central differences at the root.
+The inverse u(w) is a K-dimensional root search, by Broyden's method from the linearisation at
+the anchor (the anchor's inverse Jacobian updated by every step, steps capped at :data:`MAX_STEP`
+prior widths, at most :data:`MAX_ITER` iterations), with the model evaluated at the K reference
+points only; the log-determinant comes from forward differences at the root.
 Where no root is found the density is −inf — the proposal is rejected. The inverse is never
 needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 """
@@ -35,7 +36,7 @@ needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 import numpy as np
 import scipy.linalg
 
-from .posterior import noise_parameters
+from .posterior import LogPosterior, noise_parameters
 
 __all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "MAX_STEP"]
 
@@ -43,19 +44,16 @@ RANK_TOLERANCE = 1e-4
 """A parameter is solved for only while the data pin it within this share of the best-pinned one
 (the singular values of the pivoted QR): the root search loses the rest to round-off."""
 MAX_STEP = 2.0
-"""Largest Newton step of a solved parameter, in prior widths (u units)."""
-FD_STEP = 1e-6
-"""Forward-difference step of the Newton iterations' Jacobian in u."""
-CENTRAL_STEP = 1e-5
-"""Central-difference step of the Jacobian in the density's log-determinant, in u: its error,
-~1e-10 from the step and ~1e-7 from the solver's ~1e-12 round-off, is small against the
-smallest pivot kept (:data:`RANK_TOLERANCE`)."""
+"""Largest root-search step of a solved parameter, in prior widths (u units)."""
+FD_STEP = 3e-6
+"""Finite-difference step in u of the Jacobians: forward differences from the root for the
+density's log-determinant (error ~1e-5 nats on posterior draws, from the step's truncation and
+the solver's ~1e-12 round-off), central ones at the anchor."""
 TOLERANCE = 1e-9
-"""Newton stops when every |y − y_target| is below this (log-current units)."""
-MAX_ITER = 12
-"""Newton iterations per root search: Newton converges quadratically once near a root, so a row
-still unsolved after this many has none nearby and stops costing model evaluations
-(BENCHMARKS.md, "Coordinates the data pin")."""
+"""The root search stops when every |y − y_target| is below this (log-current units)."""
+MAX_ITER = 16
+"""Iterations per root search: Broyden's method converges superlinearly near a root, so a row
+still unsolved after this many has none nearby and stops costing model evaluations."""
 
 
 def _reference_times(data):
@@ -113,6 +111,15 @@ class PinnedCoordinates:
         self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
             posterior.names[i] for i in self._free
         )
+        data = posterior.data.take(self._rows // 2, self._times.flat[self._rows])
+        self._at_references = LogPosterior(
+            data,
+            posterior.prior,
+            posterior.fixed,
+            model=posterior.model,
+            tunneling=posterior.tunneling,
+            likelihood=posterior.likelihood,
+        )
         self._y0 = self.log_current(self.anchor[None])[0]
         self._inv_solved = np.linalg.inv(full[self._rows][:, self._solved])
         self._jac_free = full[self._rows][:, self._free]
@@ -129,9 +136,13 @@ class PinnedCoordinates:
         """
         x, _ = self.posterior.prior.from_unconstrained(np.atleast_2d(u))
         with np.errstate(all="ignore"):
+            if rows is None:  # the model at the K reference points only
+                return self._finite(self._at_references.log_model_current(x)[..., 0])
             log_current = self.posterior.log_model_current(x, self._times)
-        rows = self._rows if rows is None else rows
-        log_current = log_current.reshape(len(x), self._times.size)[:, rows]
+        return self._finite(log_current.reshape(len(x), self._times.size)[:, rows])
+
+    @staticmethod
+    def _finite(log_current):
         return np.where(np.isfinite(log_current), log_current, np.nan)
 
     def _jacobian(self, u, columns, rows=None, y=None, step=FD_STEP):
@@ -175,41 +186,66 @@ class PinnedCoordinates:
         rows = np.flatnonzero(np.isfinite(w).all(axis=1))
         trial = u[rows].copy()
         trial[:, self._solved] = linear[rows]
-        found, solution, det = self._newton(trial, target[rows])
+        found, solution, det = self._root(trial, target[rows])
         u[rows[found]] = solution[found]
         log_det[rows[found]] = det[found]
         return u, log_det
 
-    def _newton(self, u, target):
-        """Newton on y(u_P, u_F) = target from u; returns (found, u, −log|det ∂y/∂u_P|)."""
-        n = len(u)
+    def _root(self, u, target):
+        """Solve y(u_P, u_F) = target from u; return (found, u, −log|det ∂y/∂u_P| at the root).
+
+        Broyden's method: the inverse Jacobian starts as the anchor's and each iteration updates
+        it from the step it took (one model evaluation per iteration, against K + 1 for Newton's
+        finite differences); a step into the model's invalid domain is halved. The Jacobian of
+        the log-determinant is taken at the root by forward differences.
+        """
+        n, k = len(u), self._solved.size
         found = np.zeros(n, dtype=bool)
-        log_det = np.full(n, -np.inf)
-        active = np.arange(n)
-        for _ in range(MAX_ITER):
-            y = self.log_current(u[active])
-            residual = target[active] - y
-            finite = np.isfinite(residual).all(axis=1)
-            done = finite & (
-                np.abs(np.where(finite[:, None], residual, 0.0)).max(axis=1) <= TOLERANCE
-            )
+        inverse = np.repeat(self._inv_solved[None], n, axis=0)
+        y = self.log_current(u)
+        active = np.flatnonzero(np.isfinite(y).all(axis=1))
+        step = np.zeros((n, k))
+        shrink = np.ones(n)
+        for iteration in range(MAX_ITER + 1):
+            residual = target[active] - y[active]
+            done = np.abs(residual).max(axis=1) <= TOLERANCE
             found[active[done]] = True
-            going = finite & ~done
-            if not going.any():
+            active, residual = active[~done], residual[~done]
+            if not active.size or iteration == MAX_ITER:
                 break
-            jac = self._jacobian(u[active[going]], self._solved, y=y[going])
-            usable = np.isfinite(jac).all(axis=(1, 2))
-            usable[usable] = np.linalg.slogdet(jac[usable])[0] != 0
-            step = np.linalg.solve(jac[usable], residual[going][usable][..., None])[..., 0]
-            step *= np.minimum(1.0, MAX_STEP / np.abs(step).max(axis=1))[:, None]
-            active = active[going][usable]
-            u[active[:, None], self._solved[None]] += step
+            step[active] = np.einsum("nij,nj->ni", inverse[active], residual) * shrink[active, None]
+            step[active] *= np.minimum(1.0, MAX_STEP / np.abs(step[active]).max(axis=1))[:, None]
+            trial = u[active].copy()
+            trial[:, self._solved] += step[active]
+            y_trial = self.log_current(trial)
+            moved = np.isfinite(y_trial).all(axis=1)
+            shrink[active] = np.where(moved, 1.0, 0.5 * shrink[active])  # retried shorter
+            self._broyden(
+                inverse, active[moved], step[active[moved]], y_trial[moved] - y[active[moved]]
+            )
+            u[active[moved]] = trial[moved]
+            y[active[moved]] = y_trial[moved]
+        log_det = np.full(n, -np.inf)
         if found.any():
-            jacobian = self._jacobian(u[found], self._solved, step=CENTRAL_STEP)
+            jacobian = self._jacobian(u[found], self._solved, y=y[found])
             sign, log_abs = np.linalg.slogdet(jacobian)
             log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
             found &= np.isfinite(log_det)
         return found, u, log_det
+
+    @staticmethod
+    def _broyden(inverse, rows, step, change):
+        """Broyden's ("good") update of the inverse Jacobians ``inverse[rows]`` in place."""
+        h_change = np.einsum("nij,nj->ni", inverse[rows], change)
+        step_h = np.einsum("ni,nij->nj", step, inverse[rows])
+        denominator = np.einsum("ni,ni->n", step, h_change)
+        ok = np.abs(denominator) > 1e-300
+        update = (
+            (step - h_change)[:, :, None]
+            * step_h[:, None, :]
+            / np.where(ok, denominator, 1.0)[:, None, None]
+        )
+        inverse[rows[ok]] += update[ok]
 
     def describe(self):
         """Return a JSON-ready summary: the solved parameters and their reference tests."""
