@@ -7,7 +7,6 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.samplers.ensemble import map_settled, warmup_rounds
 from fsrbayes.inference.samplers.transport import (
     IndependenceProposal,
     MappedLogProb,
@@ -15,6 +14,7 @@ from fsrbayes.inference.samplers.transport import (
     TriangularMap,
     student_t_log_density,
 )
+from fsrbayes.inference.samplers.warmup import map_settled, warmup_rounds
 
 BEND, WIDTH = 1.0, 0.05
 

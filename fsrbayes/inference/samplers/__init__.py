@@ -4,7 +4,8 @@
 R-hat across ensembles, the kept chain's length in autocorrelation times and the bulk ESS all
 hold (:mod:`.convergence`, :class:`SamplerSettings`), with checkpoints (:mod:`.checkpoint`);
 :mod:`.transport` straightens the posterior during warm-up and supplies the independence
-proposals.
+proposals, :mod:`.warmup` fits and tests them round by round, and :mod:`.coordinates` samples a
+target in coordinates of the caller's choosing.
 """
 
 from .checkpoint import CheckpointMismatch, check_checkpoint

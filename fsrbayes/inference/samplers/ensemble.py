@@ -35,8 +35,9 @@ import numpy as np
 from ..parallel import fork_pool, single_threaded_blas
 from .checkpoint import load_checkpoint, save_checkpoint
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
-from .coordinates import SampledLogProb, sampled_draws, sampled_start
-from .transport import MappedLogProb, MixtureProposal, TriangularMap
+from .coordinates import SampledLogProb, sampled_start
+from .transport import MappedLogProb
+from .warmup import MAP_CHECK, even_index, map_settled, transport_maps, warmup_rounds
 
 __all__ = [
     "MAP_CHECK",
@@ -51,11 +52,6 @@ __all__ = [
 ]
 
 
-def even_index(length, n):
-    """Return at most ``n`` evenly spaced, distinct indices into ``length`` items (ends kept)."""
-    return np.unique(np.linspace(0, length - 1, min(n, length)).round().astype(int))
-
-
 def walkers_for(n_walkers, ndim):
     """Walkers per ensemble: ``n_walkers`` checked (even, >= 2·ndim), or max(32, 4·ndim)."""
     if n_walkers is not None:
@@ -63,6 +59,10 @@ def walkers_for(n_walkers, ndim):
             raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {n_walkers}")
         return n_walkers
     return max(32, 4 * ndim + (4 * ndim) % 2)
+
+
+TRANSPORT_ROUNDS = 3
+"""Warm-up rounds by default (``SamplerSettings.transport_rounds`` None)."""
 
 
 @dataclass(frozen=True)
@@ -88,10 +88,11 @@ class SamplerSettings:
     processes : int
         Worker processes running ensembles side by side (1: in this process). Each ensemble
         carries its own random state, so the chains are the same either way.
-    transport_rounds : int
+    transport_rounds : int or None
         Warm-up chunks, each followed by a refit of every ensemble's transport map (module
         docstring), at most half of ``max_steps``; 0 samples the target's coordinates directly and
-        discards the first half of the chain.
+        discards the first half of the chain. None: :data:`TRANSPORT_ROUNDS`, unless the caller
+        knows better for its coordinates (a fit in pinned coordinates runs one).
     independence_fraction : float
         Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
         fitted to each ensemble's warm-up draws in the map's coordinates,
@@ -123,13 +124,13 @@ class SamplerSettings:
     ess_target: float = 400.0
     de_fraction: float = 0.8
     processes: int = 1
-    transport_rounds: int = 3
+    transport_rounds: int | None = None
     independence_fraction: float = 0.3
     quadratic_map: bool | None = None
     extra_transport_rounds: int = 0
 
     def __post_init__(self):
-        if self.transport_rounds < 0:
+        if self.transport_rounds is not None and self.transport_rounds < 0:
             raise ValueError(f"transport_rounds must be >= 0, got {self.transport_rounds}")
         if self.extra_transport_rounds < 0:
             raise ValueError(
@@ -143,7 +144,12 @@ class SamplerSettings:
     @property
     def rounds(self):
         """Transport rounds always run: at most half the step budget goes to them."""
-        return min(self.transport_rounds, self.max_steps // (2 * self.chunk))
+        return min(self.warmup_chunks, self.max_steps // (2 * self.chunk))
+
+    @property
+    def warmup_chunks(self):
+        """``transport_rounds``, or :data:`TRANSPORT_ROUNDS` where it is None."""
+        return TRANSPORT_ROUNDS if self.transport_rounds is None else self.transport_rounds
 
     @property
     def max_rounds(self):
@@ -151,7 +157,7 @@ class SamplerSettings:
         if not self.rounds:
             return 0
         return min(
-            self.transport_rounds + self.extra_transport_rounds, self.max_steps // (2 * self.chunk)
+            self.warmup_chunks + self.extra_transport_rounds, self.max_steps // (2 * self.chunk)
         )
 
     def warmup_steps(self, n_steps, rounds=None):
@@ -256,108 +262,6 @@ def _advance(
     return chain, values, sampler.backend.accepted, sampler.random_state
 
 
-def _transport_maps(
-    chains, settings, rounds, max_draws=50000, with_proposal=True, coordinates=None
-):
-    """Return the ensembles' transport map and proposal for the next chunk.
-
-    Return the ensembles' map (and independence proposal) for the next chunk: refitted after every
-    warm-up chunk (``rounds`` of them: :func:`warmup_rounds`), then frozen. ``with_proposal=False``
-    skips the proposal (the map's test needs the map only).
-
-    Both are fitted, in the sampled ``coordinates`` if any, to the later half of all warm-up steps
-    so far, pooled over the ensembles (a
-    growing window: the early, transient steps drop out while the draws accumulate); the
-    ensembles share them, and stay independent once they are frozen. They are deterministic
-    functions of the stored chain, so a resumed run rebuilds them exactly.
-
-    Returns
-    -------
-    list of (TriangularMap or None, MixtureProposal or None), one per ensemble
-    """
-    n_ens, n_steps = chains.shape[:2]
-    rounds = min(n_steps // settings.chunk, rounds)
-    if rounds == 0:
-        return [(None, None)] * n_ens
-    end = rounds * settings.chunk
-    draws = chains[:, end // 2 : end].reshape(-1, chains.shape[-1])
-    draws = sampled_draws(
-        draws[np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int)], coordinates
-    )
-    try:
-        transport = TriangularMap.fit(draws, quadratic=settings.quadratic_map)
-    except (ValueError, np.linalg.LinAlgError):
-        return [
-            (None, None)
-        ] * n_ens  # too few or degenerate draws: sample the target's own coordinates
-    proposal = None
-    if settings.independence_fraction > 0 and with_proposal:
-        per_ensemble = chains[:, end // 2 : end].reshape(n_ens, -1, chains.shape[-1])
-        per_ensemble = per_ensemble[
-            :,
-            np.linspace(
-                0, per_ensemble.shape[1] - 1, min(per_ensemble.shape[1], max_draws // n_ens)
-            ).astype(int),
-        ]
-        try:
-            proposal = MixtureProposal.fit(
-                [transport.inverse(sampled_draws(group, coordinates)) for group in per_ensemble]
-            )
-        except np.linalg.LinAlgError:
-            proposal = None
-    return [(transport, proposal)] * n_ens
-
-
-MAP_CHECK = (1.0 / 1.6, 1.6, 0.25)
-"""A map passes its test (module docstring) when the draws it produced, mapped back, have every
-covariance eigenvalue within the first two numbers and every mean within the third of 0."""
-
-
-def map_settled(chains, settings, rounds, coordinates=None):
-    """Whether the map used in chunk ``rounds`` passes its test on that chunk's draws.
-
-    ``chains`` hold exactly ``rounds`` chunks; the map is rebuilt from the ones before the last.
-    """
-    transport = _transport_maps(
-        chains[:, : (rounds - 1) * settings.chunk],
-        settings,
-        rounds - 1,
-        with_proposal=False,
-        coordinates=coordinates,
-    )[0][0]
-    if transport is None:
-        return False
-    last = chains[:, (rounds - 1) * settings.chunk :].reshape(-1, chains.shape[-1])
-    mapped = transport.inverse(sampled_draws(last[even_index(len(last), 20000)], coordinates))
-    low, high, shift = MAP_CHECK
-    with np.errstate(invalid="ignore"):
-        eigenvalues = np.linalg.eigvalsh(np.atleast_2d(np.cov(mapped.T)))
-        return bool(
-            np.all((eigenvalues >= low) & (eigenvalues <= high))
-            and np.all(np.abs(mapped.mean(axis=0)) <= shift)
-        )
-
-
-def warmup_rounds(chains, settings, known=None, coordinates=None):
-    """Return (rounds, frozen): the warm-up chunks of the stored chains and whether that is final.
-
-    At least ``settings.rounds``; after each later round its map is tested (:func:`map_settled`)
-    and one more round added while it fails, up to ``settings.max_rounds``. Deterministic in the
-    chains (a resumed run decides the same); ``known``, the (rounds, frozen) of a shorter prefix of
-    the same chains, skips the decisions already taken.
-    """
-    rounds, frozen = known or (settings.rounds, settings.rounds == 0)
-    n_steps = chains.shape[1]
-    while not frozen and n_steps >= rounds * settings.chunk:
-        if rounds >= settings.max_rounds or map_settled(
-            chains[:, : rounds * settings.chunk], settings, rounds, coordinates
-        ):
-            frozen = True
-        else:
-            rounds += 1
-    return rounds, frozen
-
-
 def _progress_bar(settings, done):
     from tqdm.auto import tqdm
 
@@ -447,7 +351,7 @@ def run_ensembles(
                 if report.converged or at_budget:
                     break
             steps = min(settings.chunk, settings.max_steps - chains.shape[1])
-            maps = _transport_maps(chains, settings, warmup[0], coordinates=coordinates)
+            maps = transport_maps(chains, settings, warmup[0], coordinates=coordinates)
             jobs = [
                 (
                     log_prob,
