@@ -100,8 +100,8 @@ def build_parser():
         default=FIT_COORDINATES,
         help=(
             "what the ensembles move in: the prior-scaled parameters, or the log-currents the data "
-            "pin in place of as many parameters (same posterior); auto (default): pinned for a "
-            "divider circuit or a high-rate log, else prior"
+            "pin in place of as many parameters (same posterior); auto (default): pinned where "
+            "the data pin a parameter's current, else prior"
         ),
     )
     fit_.add_argument(

@@ -21,7 +21,7 @@ near 0 takes the last ensemble's start when its Laplace mass is within 10 nats o
 """
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -50,6 +50,7 @@ __all__ = [
     "FIT_SETTINGS",
     "COORDINATES",
     "FIT_COORDINATES",
+    "PINNED_TRANSPORT_ROUNDS",
 ]
 
 MAP_STARTS = 8
@@ -67,6 +68,11 @@ FIT_SETTINGS = SamplerSettings(n_ensembles=2)
 criteria and budget. More ensembles cost more per step on 2 cores and, on bent ridges, converged
 less often within the budget (BENCHMARKS.md). The validations (SBC, recovery, the population
 study) run two ensembles too."""
+
+PINNED_TRANSPORT_ROUNDS = 1
+"""Warm-up rounds of a fit in pinned coordinates whose settings leave ``transport_rounds`` None:
+there the posterior is close to Gaussian and one round's transport map does as well as three (τ
+≈ 10–20 either way), so the warm-up shrinks from 1,500 to 500 steps (BENCHMARKS.md)."""
 
 
 class DesignWarning(UserWarning):
@@ -200,10 +206,11 @@ def _best_draw(run):
 SAMPLERS = ("ensemble", "tempered")
 COORDINATES = ("auto", "prior", "pinned")
 FIT_COORDINATES = "auto"
-"""What :func:`fit` samples in by default (``coordinates``): ``"auto"`` picks ``"pinned"`` for a
-rig's data — a divider circuit or a binned high-rate log, whose posteriors are too thin for the
-prior-scaled parameters — and ``"prior"`` otherwise, where pinning lowers τ but costs more time
-than it saves (BENCHMARKS.md)."""
+"""What :func:`fit` samples in by default (``coordinates``): ``"auto"`` is ``"pinned"`` — the
+data's log-currents in place of the parameters they pin, where the creep posterior's thin,
+curved ridges become nearly Gaussian directions (τ 5–15× lower than in the prior-scaled
+parameters, the fit about twice as fast: BENCHMARKS.md) — and ``"prior"`` where the data pin no
+parameter's current at the optimum."""
 
 
 def fit(
@@ -267,9 +274,6 @@ def fit(
     if coordinates not in COORDINATES:
         raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
     packed = SpecimenData.select(data, specimen)
-    if coordinates == "auto":
-        rig = packed.extra_series is not None or packed.weight is not None
-        coordinates = "pinned" if rig else "prior"
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
         packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood
@@ -326,7 +330,9 @@ def fit(
             for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
         ]
     )
-    pinned = PinnedCoordinates(posterior, optima[0]) if coordinates == "pinned" else None
+    pinned = _pinned(posterior, optima[0], coordinates)
+    if pinned is not None and settings.transport_rounds is None:
+        settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)
     run = run_ensembles(
         posterior,
         start,
@@ -340,6 +346,18 @@ def fit(
         coordinates=pinned,
     )
     return FitResult(posterior, run, optima[0], seed, posterior(optima), coordinates=pinned)
+
+
+def _pinned(posterior, anchor, coordinates):
+    """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none)."""
+    if coordinates == "prior":
+        return None
+    try:
+        return PinnedCoordinates(posterior, anchor)
+    except ValueError:
+        if coordinates == "pinned":
+            raise
+        return None
 
 
 def _fingerprint(posterior, coordinates):
