@@ -184,3 +184,25 @@ def test_a_fit_in_pinned_coordinates_stores_the_posterior_in_its_own(tmp_path):
     assert info["coordinates"]["solved"] == list(result.coordinates.solved)
     with pytest.raises(ValueError, match="coordinates must be one of"):
         fsrbayes.fit(small.data, coordinates="pinnned")
+
+
+def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_cannot(monkeypatch):
+    from fsrbayes.inference import fit as fit_module
+
+    small = syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=5, seed=2
+    )
+    budget = SamplerSettings(n_ensembles=2, chunk=50, max_steps=300, min_steps=300)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fsrbayes.fit(small.data, rng=7, settings=budget)
+    assert isinstance(result.coordinates, PinnedCoordinates)
+    assert result.run.report.n_kept == 250  # one 50-step warm-up round, not three
+
+    def no_pins(*args):
+        raise ValueError("the data pin no parameter's log-current at the anchor point")
+
+    monkeypatch.setattr(fit_module, "PinnedCoordinates", no_pins)
+    assert fit_module._pinned(result.posterior, result.map_u, "auto") is None
+    with pytest.raises(ValueError, match="pin no parameter"):
+        fit_module._pinned(result.posterior, result.map_u, "pinned")
