@@ -70,9 +70,12 @@ less often within the budget (BENCHMARKS.md). The validations (SBC, recovery, th
 study) run two ensembles too."""
 
 PINNED_TRANSPORT_ROUNDS = 1
-"""Warm-up rounds of a fit in pinned coordinates whose settings leave ``transport_rounds`` None:
-there the posterior is close to Gaussian and one round's transport map does as well as three (τ
-≈ 10–20 either way), so the warm-up shrinks from 1,500 to 500 steps (BENCHMARKS.md)."""
+"""Warm-up rounds of a fit in pinned coordinates of plain data (one reading per sample at a
+constant sourcing voltage) whose settings leave ``transport_rounds`` None: there the posterior is
+close to Gaussian and one round's transport map does as well as three (τ ≈ 10–20 either way), so
+the warm-up shrinks from 1,500 to 500 steps. A divider rig's posterior is not: with one round its
+fit did not converge in 20,000 steps (τ 409) where three rounds converged in 5,500 (τ 70), so rig
+data keep three (BENCHMARKS.md)."""
 
 
 class DesignWarning(UserWarning):
@@ -331,7 +334,7 @@ def fit(
         ]
     )
     pinned = _pinned(posterior, optima[0], coordinates)
-    if pinned is not None and settings.transport_rounds is None:
+    if pinned is not None and packed.plain and settings.transport_rounds is None:
         settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)
     run = run_ensembles(
         posterior,
