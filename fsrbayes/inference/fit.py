@@ -72,10 +72,8 @@ study) run two ensembles too."""
 PINNED_TRANSPORT_ROUNDS = 1
 """Warm-up rounds of a fit in pinned coordinates of plain data (one reading per sample at a
 constant sourcing voltage) whose settings leave ``transport_rounds`` None: there the posterior is
-close to Gaussian and one round's transport map does as well as three (τ ≈ 10–20 either way), so
-the warm-up shrinks from 1,500 to 500 steps. A divider rig's posterior is not: with one round its
-fit did not converge in 20,000 steps (τ 409) where three rounds converged in 5,500 (τ 70), so rig
-data keep three (BENCHMARKS.md)."""
+close to Gaussian and one round's transport map does as well as three. A divider rig's posterior
+is not, so rig data keep three (BENCHMARKS.md, "Pinned coordinates by default")."""
 
 
 class DesignWarning(UserWarning):
@@ -211,9 +209,8 @@ COORDINATES = ("auto", "prior", "pinned")
 FIT_COORDINATES = "auto"
 """What :func:`fit` samples in by default (``coordinates``): ``"auto"`` is ``"pinned"`` — the
 data's log-currents in place of the parameters they pin, where the creep posterior's thin,
-curved ridges become nearly Gaussian directions (τ 5–15× lower than in the prior-scaled
-parameters, the fit about twice as fast: BENCHMARKS.md) — and ``"prior"`` where the data pin no
-parameter's current at the optimum."""
+curved ridges become nearly Gaussian directions (BENCHMARKS.md) — and ``"prior"`` where the data
+pin no parameter's current at the optimum."""
 
 
 def fit(
