@@ -202,7 +202,19 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     def no_pins(*args):
         raise ValueError("the data pin no parameter's log-current at the anchor point")
 
+    # a start the pinned coordinates cannot hold — walkers whose root search back from the
+    # log-currents fails, as where the model is far from the data — falls back too
+    rng = np.random.default_rng(3)
+    near = result.map_u + 0.01 * rng.standard_normal((2, 20, result.posterior.ndim))
+    far = result.map_u + 5.0 * rng.standard_normal((2, 20, result.posterior.ndim))
+    undefined = np.full_like(near, np.nan)
+    posterior, anchor = result.posterior, result.map_u
+    assert isinstance(fit_module._pinned(posterior, anchor, "auto", near), PinnedCoordinates)
+    assert fit_module._pinned(posterior, anchor, "auto", far) is None
+    with pytest.raises(ValueError, match="no start position maps to the pinned coordinates"):
+        fit_module._pinned(posterior, anchor, "pinned", undefined)
+
     monkeypatch.setattr(fit_module, "PinnedCoordinates", no_pins)
-    assert fit_module._pinned(result.posterior, result.map_u, "auto") is None
+    assert fit_module._pinned(posterior, anchor, "auto", near) is None
     with pytest.raises(ValueError, match="pin no parameter"):
-        fit_module._pinned(result.posterior, result.map_u, "pinned")
+        fit_module._pinned(posterior, anchor, "pinned", near)

@@ -36,6 +36,7 @@ from .samplers import (
     SamplerSettings,
     check_checkpoint,
     even_index,
+    round_trips,
     run_ensembles,
 )
 
@@ -330,7 +331,7 @@ def fit(
             for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
         ]
     )
-    pinned = _pinned(posterior, optima[0], coordinates)
+    pinned = _pinned(posterior, optima[0], coordinates, start)
     if pinned is not None and packed.plain and settings.transport_rounds is None:
         settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)
     run = run_ensembles(
@@ -348,16 +349,31 @@ def fit(
     return FitResult(posterior, run, optima[0], seed, posterior(optima), coordinates=pinned)
 
 
-def _pinned(posterior, anchor, coordinates):
-    """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none)."""
+def _pinned(posterior, anchor, coordinates, start):
+    """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none).
+
+    ``"auto"`` also falls back where fewer than ndim + 1 of an ensemble's ``start`` positions
+    (E, W, ndim) map to the pinned coordinates and back (a model far from the data: a sharp,
+    strongly curved posterior where the root search from the optimum fails). The others would
+    start on copies of those, and stretch moves never leave the affine hull of the start.
+    """
     if coordinates == "prior":
         return None
     try:
-        return PinnedCoordinates(posterior, anchor)
+        pinned = PinnedCoordinates(posterior, anchor)
     except ValueError:
         if coordinates == "pinned":
             raise
         return None
+    held = min(round_trips(walkers, pinned)[1].sum() for walkers in start)
+    if coordinates == "auto" and held <= posterior.ndim:
+        return None
+    if held == 0:
+        raise ValueError(
+            "coordinates='pinned': no start position maps to the pinned coordinates and back "
+            "(the model is far from the data here); fit with coordinates='auto' or 'prior'"
+        )
+    return pinned
 
 
 def _fingerprint(posterior, coordinates):

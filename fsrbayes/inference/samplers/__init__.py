@@ -10,6 +10,7 @@ target in coordinates of the caller's choosing.
 
 from .checkpoint import CheckpointMismatch, check_checkpoint
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
+from .coordinates import round_trips
 from .ensemble import (
     EnsembleRun,
     SamplerSettings,
@@ -28,6 +29,7 @@ __all__ = [
     "IndependenceProposal",
     "MappedLogProb",
     "MixtureProposal",
+    "round_trips",
     "SamplerSettings",
     "TriangularMap",
     "check_checkpoint",

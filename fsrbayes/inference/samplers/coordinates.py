@@ -14,7 +14,7 @@ chain emcee keeps of them is already in u.
 
 import numpy as np
 
-__all__ = ["SampledLogProb", "sampled_draws", "sampled_start"]
+__all__ = ["SampledLogProb", "round_trips", "sampled_draws", "sampled_start"]
 
 
 class SampledLogProb:
@@ -55,6 +55,19 @@ def sampled_draws(draws, coordinates):
     return sampled[np.isfinite(sampled).all(axis=1)]
 
 
+def round_trips(position, coordinates):
+    """Return the images of ``position`` (W, ndim) in w, and which of them map back to it.
+
+    A position has no image (NaN) outside the model's domain, and maps back to another point
+    where a costly inverse finds a second branch or none.
+    """
+    sampled = coordinates.to_sampled(position)
+    back, log_det = coordinates.from_sampled(np.where(np.isfinite(sampled), sampled, 0.0))
+    with np.errstate(invalid="ignore"):
+        same = np.isfinite(log_det) & (np.abs(back - position).max(axis=1) <= 1e-6)
+    return sampled, same & np.isfinite(sampled).all(axis=1)
+
+
 def sampled_start(position, coordinates):
     """Walker positions (W, ndim) in the sampled coordinates.
 
@@ -63,14 +76,9 @@ def sampled_start(position, coordinates):
     is replaced by the image of another walker, in turn: every walker then starts where the
     inverse holds. The start of a chain is arbitrary, so its distribution is unchanged.
     """
-    sampled = coordinates.to_sampled(position)
-    back, log_det = coordinates.from_sampled(np.where(np.isfinite(sampled), sampled, 0.0))
-    with np.errstate(invalid="ignore"):
-        same = np.isfinite(log_det) & (np.abs(back - position).max(axis=1) <= 1e-6)
-    sampled[~same] = np.nan
-    good = np.flatnonzero(np.isfinite(sampled).all(axis=1))
+    sampled, same = round_trips(position, coordinates)
+    good, bad = np.flatnonzero(same), np.flatnonzero(~same)
     if not good.size:
         raise ValueError("no walker of the start lies where the sampled coordinates are defined")
-    bad = np.flatnonzero(~np.isfinite(sampled).all(axis=1))
     sampled[bad] = sampled[good[np.arange(bad.size) % good.size]]
     return sampled
