@@ -144,7 +144,7 @@ def test_predict_needs_a_fit(tmp_path, rig, capsys):
 
 def test_a_protocol_with_a_loading_ramp_is_predicted_as_it_is_fitted(tmp_path):
     # the prediction packs a protocol as a fit does: with ramp_s the median follows the rising
-    # load through the first second (after its first 1/16, where the model's load is floored)
+    # load through the first second
     text, truth = simulate_rig(
         1, reading="vout_V", ramp_s=1.0, weights_g=(200.0,), duration_s=10.0, rate_hz=100.0
     )
@@ -155,3 +155,28 @@ def test_a_protocol_with_a_loading_ramp_is_predicted_as_it_is_fitted(tmp_path):
     settling = (t > 0.2) & (t < 1.0)
     observed = np.asarray(test["observed"])
     assert np.abs(np.log(observed[settling] / q50[settling])).mean() < 0.02
+
+
+def test_a_fitted_ramp_reaches_the_protocols_that_do_not_give_one(tmp_path):
+    # a fit that sampled the ramp predicts a protocol without a ramp_s column with its draws'
+    # ramp; the step a fit without one assumes misses the first second
+    text, truth = simulate_rig(
+        1,
+        reading="vout_V",
+        ramp_s=1.0,
+        ramp_column=False,
+        weights_g=(200.0,),
+        duration_s=10.0,
+        rate_hz=100.0,
+    )
+    protocol = read_csv(write_rig(text, truth, tmp_path / "ramp.csv")[0], readings="optional")
+    params = {**truth["specimens"]["fsr402-01"]["params"], "sigma_rel": truth["rig"]["noise_rel"]}
+    misses = {}
+    for ramp in ("fitted", "given"):
+        given = {"ramp_s": 1.0} if ramp == "fitted" else {}
+        fit = write_point_fit(tmp_path / ramp, params | given, "fsr402-01", "fsr402", ramp=ramp)
+        (test,) = predict(fit, protocol, n_draws=200)["tests"]
+        t, q50 = np.asarray(test["time_s"]), np.asarray(test["q50"])
+        settling = (t > 0.2) & (t < 1.0)
+        misses[ramp] = np.abs(np.log(np.asarray(test["observed"])[settling] / q50[settling]))
+    assert misses["fitted"].mean() < 0.02 < 0.1 < misses["given"].mean()

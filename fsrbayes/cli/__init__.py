@@ -10,6 +10,7 @@ from .._version import __version__
 from ..data.sensors import available_sensors
 from ..inference.fit import COORDINATES, FIT_COORDINATES
 from ..inference.parallel import JobError
+from ..inference.posterior import RAMPS
 from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .bench import add_bench_commands
@@ -86,6 +87,16 @@ def build_parser():
     )
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fit_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
+    fit_.add_argument(
+        "--ramp",
+        choices=RAMPS,
+        default="given",
+        help=(
+            "each test's first loading: a step at the onset or the ramp_s column (given, "
+            "default), or a linear ramp whose length is sampled, one per specimen (fitted: "
+            "hand-placed weights whose settling nobody measured)"
+        ),
+    )
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")

@@ -126,6 +126,18 @@ def add_bench_commands(sub):
         default=0.0,
         help="staircase: seconds unloaded between weights (default 0: no unloading)",
     )
+    rig.add_argument(
+        "--ramp",
+        type=float,
+        default=0.0,
+        help="seconds the first weight takes to settle, rising linearly (default 0: a step); "
+        "written in a ramp_s column unless --hide-ramp",
+    )
+    rig.add_argument(
+        "--hide-ramp",
+        action="store_true",
+        help="leave the ramp_s column out: the ramp is in the readings only (fit --ramp fitted)",
+    )
     rig.add_argument("--time-unit", choices=("s", "min", "ms"), default="s")
     rig.add_argument(
         "--effect", action="append", metavar="NAME[=params]", help="hide an effect, as in simulate"

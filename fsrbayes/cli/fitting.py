@@ -76,6 +76,7 @@ def cmd_fit(args):
                 model=args.model,
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
+                ramp=args.ramp,
                 rng=args.seed,
                 settings=settings,
                 checkpoint=checkpoint,
@@ -150,6 +151,7 @@ def _check_space(args, data, specimens, settings, out):
             model=args.model,
             tunneling=args.tunneling,
             likelihood=args.likelihood,
+            ramp=args.ramp,
         ).ndim
         need += fit_output_bytes(part.n_rows, len(part.tests), ndim, settings)
     enough_space(
@@ -193,6 +195,7 @@ def _fit_hierarchical(args, data, settings, out):
                 model=args.model,
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
+                ramp=args.ramp,
                 rng=args.seed,
                 coordinates=args.coordinates,
             )

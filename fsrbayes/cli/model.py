@@ -273,6 +273,8 @@ def cmd_simulate_rig(args):
             effects=args.effect or (),
             protocol=args.protocol,
             rest_s=args.rest,
+            ramp_s=args.ramp,
+            ramp_column=not args.hide_ramp,
             sensor=args.sensor,
             weights_g=tuple(floats(args.weights_g, "weights-g")),
             supply_V=args.supply_v,

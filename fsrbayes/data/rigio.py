@@ -254,6 +254,9 @@ def rig_tests(
                     "ramp_s",
                 )
 
+        if required:  # a weight still settling: its first rows may read an open circuit
+            before = keep if not changes.size else keep[keep < idx[changes[0]]]
+            keep = keep[_settling(raw, before, renamed_reading, readout, decimal_comma) :]
         if keep.size < 3:
             raise DataError(
                 f"{what} has {keep.size} loaded sample(s); a creep test needs at least 3",
@@ -322,6 +325,26 @@ def _landing(raw, idx, column, readout, decimal_comma):
         return 0
     both = high[:-1] & high[1:]
     return int(np.argmax(both)) if both.any() else 0
+
+
+def _settling(raw, rows, column, readout, decimal_comma):
+    """Return how many of a loading's first rows read an open circuit (no current at all).
+
+    A hand-placed weight settles over a fraction of a second: a 10-bit divider reads 0 counts (a
+    resistance ``inf``) on the first rows the load column already marks as loaded. Those rows
+    say only that the current was below one step; they are left out of the test (its time still
+    counts from the onset) rather than refused. A zero reading later in the test is still an
+    error.
+    """
+    _, factor = column
+    fields = [raw[i].strip() for i in rows]
+    if decimal_comma:
+        fields = [f.replace(",", ".") for f in fields]
+    values = np.array([_number_or_nan(f) for f in fields]) * factor
+    with np.errstate(divide="ignore", invalid="ignore"):
+        current = current_of(readout, values)
+    open_circuit = np.array([bool(f) for f in fields]) & ~(current > 0) & ~np.isnan(values)
+    return int(np.argmin(open_circuit)) if not open_circuit.all() else open_circuit.size
 
 
 def _check_rm(rm, line_no, path):

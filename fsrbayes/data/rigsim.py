@@ -54,6 +54,7 @@ def simulate_rig(
     rest_s=0.0,
     weight_from_start=False,
     ramp_s=0.0,
+    ramp_column=True,
     **rig,
 ):
     """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
@@ -65,7 +66,8 @@ def simulate_rig(
     ``weight_from_start`` the load column holds the first weight from the logger's first row, as
     when the experimenter writes the weight beside the log: only the reading shows the landing.
     ``ramp_s`` > 0 lets the first weight settle linearly over that many seconds (a hand-placed
-    weight; simulated as 400 equal steps) and writes a ``ramp_s`` column.
+    weight; simulated as 400 equal steps) and writes a ``ramp_s`` column — unless ``ramp_column``
+    is False: the ramp is then in the readings only, as in a log whose ramps nobody measured.
 
     Parameters
     ----------
@@ -130,7 +132,8 @@ def simulate_rig(
     force_scale = 1.0 if force_unit == "g" else STANDARD_GRAVITY / 1000.0
     header = ["specimen", "sensor", "test", time_col, f"force_{force_unit}", "supply_V", "rm_ohm"]
     header += ["adc_bits", "adc_vref_V"] if reading == "adc_counts" else []
-    header += ["ramp_s"] if ramp_s > 0 else []
+    written_ramp = ramp_s > 0 and ramp_column
+    header += ["ramp_s"] if written_ramp else []
     header += [reading]
     lines = [",".join(header)]
     truth = {
@@ -198,7 +201,7 @@ def simulate_rig(
             prefix = f"{name},{sensor.name},{label}"
             extra = (
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
-            ) + (f",{ramp_s!r}" if ramp_s > 0 else "")
+            ) + (f",{ramp_s!r}" if written_ramp else "")
             lines += [
                 f"{prefix},{tt / scale[time_unit]:.9g},{f:g},{supply!r},{rm!r}{extra},{r}"
                 for tt, f, r in zip(logger_t, force, column, strict=True)

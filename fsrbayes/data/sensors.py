@@ -16,10 +16,15 @@ from ..physics.parameters import PARAMETERS
 from .distributions import make_distribution
 from .prior import JointPrior
 
-__all__ = ["Sensor", "load_sensor", "available_sensors", "models_directory"]
+__all__ = ["RIG_PRIORS", "Sensor", "load_sensor", "available_sensors", "models_directory"]
 
 
 REQUIRED_SENSOR_KEYS = ("name", "description", "area_m2")
+
+RIG_PRIORS = {"ramp_s": {"dist": "lognormal", "median": 0.2, "sigma": 1.5}}
+"""Priors of the rig's nuisance parameters, for sensor files that give none: the loading ramp of
+a hand-placed dead weight (median 0.2 s, 90 % between 0.017 and 2.4 s), sampled only when a fit
+asks for it (``fit(..., ramp="fitted")``)."""
 
 
 def models_directory():
@@ -161,6 +166,8 @@ def _parse(path, raw):
         name: make_distribution(spec, f"{where}: priors.{name}")
         for name, spec in priors_raw.items()
     }
+    for name, spec in RIG_PRIORS.items():
+        priors.setdefault(name, make_distribution(spec, f"fsrbayes rig prior {name}"))
     for name, dist in priors.items():
         lo, hi = dist.support
         if name in params and not (lo <= params[name] <= hi):

@@ -229,6 +229,7 @@ def fit(
     progress=False,
     sampler=None,
     coordinates=None,
+    ramp="given",
 ):
     """Fit one specimen's creep tests.
 
@@ -266,6 +267,12 @@ def fit(
         chosen at the best optimum); ``"auto"`` (the default) as :data:`FIT_COORDINATES` says.
         The posterior is the same; the chains are stored in the prior-scaled parameters either
         way. Ensemble sampler only.
+    ramp : {"given", "fitted"}
+        How each test's first loading reaches its weight: a step at the onset or the ramp of
+        the data's ``ramp_s`` column (``"given"``), or a linear ramp whose length ``ramp_s`` —
+        one per specimen, shared by its tests — is sampled with its prior (``"fitted"``; for
+        hand-placed weights whose settling nobody measured; refused when the data give
+        ``ramp_s``).
 
     Returns
     -------
@@ -277,7 +284,7 @@ def fit(
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
-        packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood
+        packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood, ramp=ramp
     )
     sampler, settings = _sampler_and_settings(sampler, settings)
     for note in design_warnings(posterior):

@@ -39,6 +39,7 @@ from ..utils import HALF_LOG_2PI
 from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
+    RAMP_FLOOR,
     RAMP_STEPS,
     bin_log_time,
     load_step_arrays,
@@ -217,8 +218,8 @@ class SpecimenData:
     def load_at(self, time_s):
         """Return the momentary load in Pa of every test at ``time_s`` (C, T).
 
-        The steps' load, with a loading ramp rising linearly — floored at its first step's load
-        (1/:data:`RAMP_STEPS` of the weight), below which the contact law describes no contact.
+        The steps' load, with a loading ramp rising linearly from the onset (held at
+        :data:`RAMP_FLOOR` of the weight at least, where the contact law would diverge).
         """
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
@@ -230,9 +231,43 @@ class SpecimenData:
             for i in np.flatnonzero(self.ramp_s > 0):
                 ramp, weight = self.ramp_s[i], self.step_size[i, :RAMP_STEPS].sum()
                 rising = time_s[i] < ramp
-                share = np.clip(time_s[i][rising] / ramp, 1.0 / RAMP_STEPS, 1.0)
+                share = np.clip(time_s[i][rising] / ramp, RAMP_FLOOR, 1.0)
                 load[i, rising] = weight * share
         return load
+
+    def ramped(self, ramp_s, time_s):
+        """Load steps and momentary load with every test's first loading spread over ``ramp_s``.
+
+        A sampled loading ramp (one length per parameter set, broadcasting as (W, 1, 1)): each
+        test's first load step becomes :data:`RAMP_STEPS` equal steps at ramp_s·k/n for the
+        creep, and the contact and area laws see the load rise linearly — as a ramp given in the
+        data (:meth:`load_at`).
+
+        Returns
+        -------
+        (step_time, step_size) : ndarray, shapes (W, C, K) and (C, K)
+            For :func:`~fsrbayes.physics.sensor.solve_current`'s ``load_steps``.
+        load : ndarray, shape (W, C, T)
+        """
+        ramp = np.asarray(ramp_s, dtype=float).reshape(-1, 1, 1)
+        time_s = np.broadcast_to(
+            np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
+        )
+        at, size = self.load_steps() or (
+            np.zeros((self.n_tests, 1)),
+            self.stress_Pa[:, None].astype(float),
+        )
+        weight = size[:, :1]
+        rising = np.broadcast_to(np.arange(RAMP_STEPS) / RAMP_STEPS, (self.n_tests, RAMP_STEPS))
+        step_time = np.concatenate(
+            [rising * ramp, np.broadcast_to(at[:, 1:], (ramp.shape[0], *at[:, 1:].shape))],
+            axis=-1,
+        )
+        parts = np.repeat(weight / RAMP_STEPS, RAMP_STEPS, axis=1)
+        step_size = np.concatenate([parts, size[:, 1:]], axis=1)
+        share = np.clip(time_s / ramp, RAMP_FLOOR, 1.0)
+        load = np.where(time_s < ramp, weight * share, load_of_steps(at, size, time_s))
+        return (step_time, step_size), load
 
     def take(self, tests, time_s):
         """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).

@@ -12,6 +12,7 @@ import numpy as np
 __all__ = [
     "BINS_PER_DECADE",
     "MAX_RAW_SAMPLES",
+    "RAMP_FLOOR",
     "RAMP_STEPS",
     "bin_log_time",
     "load_step_arrays",
@@ -75,7 +76,12 @@ def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
 
 
 RAMP_STEPS = 16
-"""Steps that stand for a loading ramp: each 1/16 of the load, at the start of its 1/16."""
+"""Steps that stand for a loading ramp in the creep: each 1/16 of the load, at the start of its
+1/16."""
+
+RAMP_FLOOR = 1e-3
+"""The momentary load of a ramp is held at this share of the weight at least: at the very onset
+the linear rise is 0, where the contact law Rc ∝ σ^−α (eq. 5) diverges."""
 
 
 def _history(test):

@@ -14,7 +14,12 @@ from ..physics.models import model_family, model_parameters, parse_model
 from ..physics.sensor import solve_current
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 
-__all__ = ["LogPosterior", "PriorScaledTarget", "noise_parameters"]
+__all__ = ["LogPosterior", "PriorScaledTarget", "RAMPS", "noise_parameters", "nuisance_parameters"]
+
+RAMPS = ("given", "fitted")
+"""How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
+of the data's ``ramp_s`` column; ``"fitted"`` — a linear ramp whose length ``ramp_s`` (one per
+specimen, shared by its tests) is sampled with its prior."""
 
 
 def noise_parameters(likelihood):
@@ -23,6 +28,13 @@ def noise_parameters(likelihood):
         raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
     extra = {"student": ("nu",), "ar1": ("noise_tau",)}.get(likelihood, ())
     return ("sigma_rel", *extra)
+
+
+def nuisance_parameters(likelihood, ramp="given"):
+    """Return the likelihood's parameters (:func:`noise_parameters`), then ``ramp_s`` if fitted."""
+    if ramp not in RAMPS:
+        raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
+    return noise_parameters(likelihood) + (("ramp_s",) if ramp == "fitted" else ())
 
 
 class PriorScaledTarget:
@@ -126,17 +138,42 @@ class LogPosterior(PriorScaledTarget):
         overlap = sorted(set(prior.names) & set(self.fixed))
         if overlap:
             raise ValueError(f"parameter(s) {overlap} are both sampled and fixed")
+        if "ramp_s" in self.fixed:
+            raise ValueError(
+                "ramp_s cannot be a fixed parameter: give a known loading ramp in the data's "
+                "ramp_s column, or sample it (ramp='fitted')"
+            )
+        self._ramp_limit = None
+        if "ramp_s" in prior.names:
+            if data.ramp_s is not None and np.any(data.ramp_s > 0):
+                raise ValueError(
+                    "the data give the loading ramp (ramp_s column); a fitted ramp (--ramp "
+                    "fitted, ramp='fitted') is for data that do not: use the column, or drop it"
+                )
+            # the ramp ends before any test's load changes again
+            later = np.zeros(0)
+            if data.step_time is not None:
+                later = data.step_time[:, 1:][data.step_size[:, 1:] != 0]
+            self._ramp_limit = float(np.min(later, initial=np.inf))
 
     @classmethod
     def for_sensor(
-        cls, data, sensor, *, model="burgers", tunneling="smooth", likelihood="gaussian", beta=1.0
+        cls,
+        data,
+        sensor,
+        *,
+        model="burgers",
+        tunneling="smooth",
+        likelihood="gaussian",
+        beta=1.0,
+        ramp="given",
     ):
         """Build the posterior of a specimen from a sensor file's priors.
 
         Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at
-        defaults.
+        defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`).
         """
-        prior = sensor.prior_for(model, noise_parameters(likelihood))
+        prior = sensor.prior_for(model, nuisance_parameters(likelihood, ramp))
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
         return cls(
             data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
@@ -180,10 +217,14 @@ class LogPosterior(PriorScaledTarget):
         params.update(self.fixed)  # scalars broadcast against every walker
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
         steps = self.data.load_steps()
+        if self._ramp_limit is not None:  # a sampled ramp
+            steps, load = self.data.ramped(params["ramp_s"], time)
+        else:
+            load = self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time)
         solution = solve_current(
             params,
             self.data.voltage_V[:, None],
-            self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time),
+            load,
             time,
             rheology=self.family,
             tunneling=self.tunneling,
@@ -193,7 +234,10 @@ class LogPosterior(PriorScaledTarget):
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)
-        return np.where(solution.valid & (solution.current > 0), log_current, -np.inf)
+        valid = solution.valid & (solution.current > 0)
+        if self._ramp_limit is not None:  # a ramp ends before the load changes again
+            valid &= params["ramp_s"] < self._ramp_limit
+        return np.where(valid, log_current, -np.inf)
 
     def drift_percent(self, x, time_s=DRIFT_TIME_S):
         """Return the model drift(t) of every test at ``time_s`` (eq. 22).

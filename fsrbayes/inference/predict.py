@@ -37,7 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .posterior import LogPosterior, noise_parameters
+from .posterior import LogPosterior, nuisance_parameters
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -104,7 +104,8 @@ def _posterior_of(folder, packed):
     attrs = tree.attrs
     sensor = load_sensor(attrs["sensor"])
     likelihood = attrs["likelihood"]
-    prior = sensor.prior_for(attrs["fsrbayes_model"], noise_parameters(likelihood))
+    ramp = "fitted" if "ramp_s" in tree.posterior else "given"
+    prior = sensor.prior_for(attrs["fsrbayes_model"], nuisance_parameters(likelihood, ramp))
     posterior = LogPosterior(
         packed,
         prior,
@@ -359,7 +360,15 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
 
 
 def write_point_fit(
-    folder, params, specimen, sensor, *, model="burgers", likelihood="gaussian", n_draws=100
+    folder,
+    params,
+    specimen,
+    sensor,
+    *,
+    model="burgers",
+    likelihood="gaussian",
+    n_draws=100,
+    ramp="given",
 ):
     """Write a fit folder whose posterior is a point mass at ``params`` (for :func:`predict`).
 
@@ -378,6 +387,8 @@ def write_point_fit(
         A catalogue sensor or a sensor file's path.
     model, likelihood : str
     n_draws : int
+    ramp : {"given", "fitted"}
+        ``"fitted"``: ``params`` holds a loading ramp ``ramp_s``, as a fit with a fitted ramp.
 
     Returns
     -------
@@ -391,7 +402,7 @@ def write_point_fit(
     one = np.ones((1, 3))
     dummy = SpecimenData(specimen, sensor, np.ones(1), np.ones(1), one, 0 * one, one > 0)
     names = LogPosterior.for_sensor(
-        dummy, load_sensor(sensor), model=model, likelihood=likelihood
+        dummy, load_sensor(sensor), model=model, likelihood=likelihood, ramp=ramp
     ).names
     missing = [n for n in names if n not in params]
     if missing:

@@ -96,6 +96,9 @@ for _entry in (
     Parameter("sigma_rel", "–", "nuisance", None, "relative noise of the current (sd of its log)"),
     Parameter("nu", "–", "nuisance", None, "Student-t degrees of freedom"),
     Parameter("noise_tau", "s", "nuisance", None, "correlation time of AR(1) measurement noise"),
+    Parameter(
+        "ramp_s", "s", "nuisance", None, "loading ramp: the weight's load rises linearly over it"
+    ),
 ):
     register_parameter(_entry)
 

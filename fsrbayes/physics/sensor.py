@@ -188,6 +188,8 @@ def strain_of_steps(params, step_time, step_size, time, family, effects=()):
         Parameters, broadcasting with ``time`` (e.g. (W, 1, 1) against (C, T)).
     step_time, step_size : ndarray, shape (C, K)
         Time (s) and size (Pa, signed) of each test's load steps; padding steps have size 0.
+        Either may carry leading axes that broadcast with the parameters' (a sampled loading
+        ramp: step times (W, C, K)).
     time : ndarray, shape (C, T)
 
     Returns
@@ -197,8 +199,8 @@ def strain_of_steps(params, step_time, step_size, time, family, effects=()):
     law = _creep_law(family)
     strain = 0.0
     for k in range(step_time.shape[-1]):
-        since = time - step_time[:, k : k + 1]
-        size = step_size[:, k : k + 1]
+        since = time - step_time[..., k : k + 1]
+        size = step_size[..., k : k + 1]
         strain = strain + law.creep_strain(size, since, params)
         for effect in effects:
             extra = effect.extra_strain(params, size, since)
@@ -209,7 +211,8 @@ def strain_of_steps(params, step_time, step_size, time, family, effects=()):
 
 def load_of_steps(step_time, step_size, time):
     """Return the momentary stress Σ_k Δσ_k·[t ≥ τ_k] of step loads, shaped like ``time``."""
-    return np.sum(step_size[:, None, :] * (time[..., None] >= step_time[:, None, :]), axis=-1)
+    on = time[..., None] >= step_time[..., None, :]
+    return np.sum(step_size[..., None, :] * on, axis=-1)
 
 
 def solve_current(
@@ -249,7 +252,7 @@ def solve_current(
     else:
         step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
         time = np.broadcast_to(
-            np.asarray(time, dtype=float), (step_time.shape[0], np.shape(time)[-1])
+            np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1])
         )
         strain = strain_of_steps(params, step_time, step_size, time, family, effects)
         if stress is None:
