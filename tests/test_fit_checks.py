@@ -82,6 +82,8 @@ def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
             "1",
             "--max-steps",
             "2000",
+            "--coordinates",  # the checks, not the sampler: the quicker coordinates for a misfit
+            "prior",
             "--no-plots",
         ],
         capture_output=True,

@@ -36,8 +36,9 @@ from ..posterior import PriorScaledTarget
 
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
-NOISE_PARAMETERS = ("sigma_rel", "nu")
-"""Per-specimen nuisance parameters: not pooled across specimens."""
+NOISE_PARAMETERS = ("sigma_rel", "nu", "ramp_s")
+"""Per-specimen nuisance parameters: not pooled across specimens (a fitted loading ramp is the
+experimenter's hand, not the sensor)."""
 
 _QUANTILES = (np.arange(4000) + 0.5) / 4000
 
