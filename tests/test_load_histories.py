@@ -216,6 +216,16 @@ def test_a_loading_ramp_given_in_ramp_s_is_inside_the_model(tmp_path):
     assert np.abs(ramped[~early].mean()) < 5e-4
     stepped = residual(test.__class__(**{**test.__dict__, "ramp_s": 0.0}))
     assert np.abs(stepped[early]).mean() > 10 * 0.002
+    # drift counts from the ramp's end, when the weight is on (from the onset it would be the
+    # rise of the ramp itself: millions of percent), in the model as in the readings
+    from fsrbayes.data.creep import observed_drift
+
+    packed = SpecimenData.from_tests([test], max_samples=10**6)
+    posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"))
+    x = np.array([[params[n] for n in posterior.names]])
+    model = posterior.drift_percent(x, 15.0)[0, 0]
+    seen = observed_drift(test.time_s, test.current_A, 15.0, start_s=1.0)
+    assert abs(model) < 5.0 and model == pytest.approx(seen, abs=0.5)
     # the ramp is one loading: no segments of its own in summary.json
     from fsrbayes.inference.output import segment_drifts
 

@@ -35,11 +35,15 @@ class DataError(ValueError):
         self.path, self.line, self.column = str(path), line, column
 
 
-def observed_drift(time_s, current_A, at_s=3600.0):
-    """Return the measured drift in % (eq. 22) at ``at_s``, interpolated; NaN past the end."""
-    if at_s > time_s[-1]:
+def observed_drift(time_s, current_A, at_s=3600.0, start_s=0.0):
+    """Return the measured drift in % (eq. 22) at ``at_s``, interpolated; NaN past the end.
+
+    Counted from ``start_s`` (the end of a loading ramp; 0: the first sample), t = at_s after it.
+    """
+    if start_s + at_s > time_s[-1]:
         return float("nan")
-    return float(100.0 * (np.interp(at_s, time_s, current_A) / current_A[0] - 1.0))
+    start = current_A[0] if start_s <= time_s[0] else np.interp(start_s, time_s, current_A)
+    return float(100.0 * (np.interp(start_s + at_s, time_s, current_A) / start - 1.0))
 
 
 @dataclass(frozen=True)

@@ -37,10 +37,9 @@ def _predictive(result, draws, rng, n_grid=61):
     )
     grid = np.linspace(0.0, max(DRIFT_TIME_S, float(data.time_s.max())), n_grid)
     times = np.concatenate([grid, [DRIFT_TIME_S]])
-    log_on_grid = posterior.log_model_current(
-        flat, np.broadcast_to(times, (data.n_tests, times.size))
-    )
-    start = posterior.log_model_current(flat, np.zeros((data.n_tests, 1)))
+    loaded = posterior.loading_end(flat)[:, None]  # drift counts from the weight being on
+    log_on_grid = posterior.log_model_current(flat, loaded + times)
+    start = posterior.log_model_current(flat, loaded)
     drift = 100.0 * np.expm1(log_on_grid - start)
     shape = draws.shape[:2]
     return (
@@ -51,13 +50,15 @@ def _predictive(result, draws, rng, n_grid=61):
     )
 
 
-def _observed_drift(data):
+def _observed_drift(data, loaded):
+    """Each test's measured drift(3600 s) counted from ``loaded`` (C,), its loading's end."""
     return np.array(
         [
             observed_drift(
                 data.time_s[i][data.mask[i]],
                 np.exp(data.log_current[i][data.mask[i]]),
                 DRIFT_TIME_S,
+                start_s=loaded[i],
             )
             for i in range(data.n_tests)
         ]
@@ -90,7 +91,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
             "stress_Pa": data.stress_Pa,
             "time_s": data.time_s[data.mask],
             "test_index": test_index,
-            "observed_drift_3600": _observed_drift(data),
+            "observed_drift_3600": _observed_drift(data, posterior.loading_end(flat)),
         },
         "sample_stats": {"lp": log_post},
     }
@@ -202,7 +203,8 @@ def segment_drifts(posterior, draws):
     """Drift over each constant-load segment of the tests whose load changes.
 
     For a staircase or a load–unload–reload test a single drift(3600 s) means nothing; per
-    loaded segment — from its load step to its last sample — the model's drift 100·(I(end) −
+    loaded segment — from its load step (the first from its loading ramp's end) to its last
+    sample — the model's drift 100·(I(end) −
     I(start))/I(start) (eq. 22 within the segment; median and 5–95 % over ``draws``) and the
     observed one from the segment's first and last points.
 
@@ -216,6 +218,7 @@ def segment_drifts(posterior, draws):
     if data.step_time is None:
         return [None] * data.n_tests
     rows, times = [], np.zeros((data.n_tests, 2 * data.step_time.shape[1]))
+    loaded = posterior.loading_end(draws)  # the first segment counts from its ramp's end
     for i in range(data.n_tests):
         at, size = data.step_time[i], data.step_size[i]
         t, y = data.time_s[i][data.mask[i]], data.log_current[i][data.mask[i]]
@@ -226,10 +229,11 @@ def segment_drifts(posterior, draws):
         ends = np.append(at[1:], np.inf)
         found = []
         for k in np.flatnonzero((size != 0) & (loads > 0)):
-            inside = (t >= at[k]) & (t < ends[k])
+            begin = max(at[k], loaded[i]) if k == 0 else at[k]
+            inside = (t >= begin) & (t < ends[k])
             if inside.sum() >= 2:
                 first, last = np.flatnonzero(inside)[[0, -1]]
-                found.append((k, at[k], t[last], loads[k], 100.0 * np.expm1(y[last] - y[first])))
+                found.append((k, begin, t[last], loads[k], 100.0 * np.expm1(y[last] - y[first])))
         rows.append(found if (size != 0).sum() > 1 else None)
         for j, (_, start, end, _, _) in enumerate(found):
             times[i, 2 * j : 2 * j + 2] = (start, end)

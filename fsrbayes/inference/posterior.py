@@ -239,12 +239,26 @@ class LogPosterior(PriorScaledTarget):
             valid &= params["ramp_s"] < self._ramp_limit
         return np.where(valid, log_current, -np.inf)
 
+    def loading_end(self, x=None):
+        """Return when each test's first loading is complete, shape (C,): its ramp's end, or 0.
+
+        A ramp given in the data ends at its ``ramp_s``; a sampled one at the longest ``ramp_s``
+        among the parameter sets ``x`` (W, ndim), so that every draw has its weight on.
+        """
+        end = np.zeros(self.data.n_tests) if self.data.ramp_s is None else self.data.ramp_s
+        if self._ramp_limit is not None and x is not None:
+            ramps = np.atleast_2d(np.asarray(x, dtype=float))[:, self.names.index("ramp_s")]
+            end = np.full(self.data.n_tests, float(np.max(ramps)))
+        return np.asarray(end, dtype=float)
+
     def drift_percent(self, x, time_s=DRIFT_TIME_S):
         """Return the model drift(t) of every test at ``time_s`` (eq. 22).
 
-        Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C).
+        Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C),
+        with t = 0 at the end of the loading (:meth:`loading_end`; the load's onset for a step).
         """
-        times = np.broadcast_to(np.array([0.0, float(time_s)]), (self.data.n_tests, 2))
+        start = self.loading_end(x)
+        times = np.column_stack([start, start + float(time_s)])
         log_current = self.log_model_current(x, times)
         with np.errstate(invalid="ignore"):
             return 100.0 * np.expm1(log_current[..., 1] - log_current[..., 0])
