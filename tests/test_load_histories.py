@@ -189,18 +189,10 @@ def test_a_loading_ramp_given_in_ramp_s_is_inside_the_model(tmp_path):
     # a weight that settles over 1 s, logged at 100 Hz: with ramp_s read, the model follows the
     # first second (the load rising linearly; the creep of 16 steps against the bench's 400)
     # from its first sample on; as a step, it misses the whole second
-    text, truth = simulate_rig(
-        1, reading="vout_V", ramp_s=1.0, weights_g=(200.0,), duration_s=20.0, rate_hz=100.0, seed=6
-    )
-    # the bench's own onset (a ramp makes the instant matter: one sample late is 1 % of the
+    # with the bench's own onset (a ramp makes the instant matter: one sample late is 1 % of the
     # weight at the start of the ramp)
-    text = "\n".join(
-        f"{row},onset_s" if k == 0 else f"{row},{truth['onset_s']!r}"
-        for k, row in enumerate(text.strip().splitlines())
-    )
-    path = tmp_path / "ramp.csv"
-    path.write_text(text + "\n")
-    (test,) = read_csv(path).tests
+    data, truth = _hidden_ramp(tmp_path, 1.0, column=True, name="ramp.csv")
+    (test,) = data.tests
     assert test.ramp_s == 1.0 and test.load_steps is None and test.onset_source == "onset_s"
     params = {**truth["specimens"][test.specimen]["params"], "sigma_rel": 0.002}
     early = test.time_s < 1.0

@@ -309,16 +309,8 @@ def _landing(raw, idx, column, readout, decimal_comma):
     row already reaches it (the logger started after the landing). Unparsable fields count as no
     current here; the loaded rows are checked afterwards as always.
     """
-    _, factor = column
-    fields = [raw[i].strip() for i in idx]
-    if decimal_comma:
-        fields = [f.replace(",", ".") for f in fields]
-    try:
-        values = np.array(fields, dtype=float) * factor
-    except ValueError:
-        values = np.array([_number_or_nan(f) for f in fields]) * factor
-    with np.errstate(divide="ignore", invalid="ignore"):
-        current = np.nan_to_num(current_of(readout, values), nan=0.0, posinf=0.0)
+    _, current = _lenient_currents(raw, idx, column, readout, decimal_comma)
+    current = np.nan_to_num(current, nan=0.0, posinf=0.0)
     level = np.median(current[current.size // 2 :])
     high = current >= LANDING_FRACTION * level
     if high[0]:  # loaded from the first row: nothing to find
@@ -336,15 +328,26 @@ def _settling(raw, rows, column, readout, decimal_comma):
     counts from the onset) rather than refused. A zero reading later in the test is still an
     error.
     """
+    values, current = _lenient_currents(raw, rows, column, readout, decimal_comma)
+    open_circuit = ~(current > 0) & ~np.isnan(values)
+    return int(np.argmin(open_circuit)) if not open_circuit.all() else open_circuit.size
+
+
+def _lenient_currents(raw, rows, column, readout, decimal_comma):
+    """Return the reading on ``rows`` in SI units and its current, unparsable fields as NaN.
+
+    For finding where a loading starts before the loaded rows are checked as always.
+    """
     _, factor = column
     fields = [raw[i].strip() for i in rows]
     if decimal_comma:
         fields = [f.replace(",", ".") for f in fields]
-    values = np.array([_number_or_nan(f) for f in fields]) * factor
+    try:
+        values = np.array(fields, dtype=float) * factor
+    except ValueError:
+        values = np.array([_number_or_nan(f) for f in fields]) * factor
     with np.errstate(divide="ignore", invalid="ignore"):
-        current = current_of(readout, values)
-    open_circuit = np.array([bool(f) for f in fields]) & ~(current > 0) & ~np.isnan(values)
-    return int(np.argmin(open_circuit)) if not open_circuit.all() else open_circuit.size
+        return values, current_of(readout, values)
 
 
 def _check_rm(rm, line_no, path):

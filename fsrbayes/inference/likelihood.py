@@ -39,11 +39,12 @@ from ..utils import HALF_LOG_2PI
 from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
-    RAMP_FLOOR,
     RAMP_STEPS,
     bin_log_time,
     load_step_arrays,
     pack_rig,
+    ramp_load,
+    ramp_steps,
 )
 
 __all__ = [
@@ -218,8 +219,8 @@ class SpecimenData:
     def load_at(self, time_s):
         """Return the momentary load in Pa of every test at ``time_s`` (C, T).
 
-        The steps' load, with a loading ramp rising linearly from the onset (held at
-        :data:`RAMP_FLOOR` of the weight at least, where the contact law would diverge).
+        The steps' load, with a loading ramp rising linearly from the onset
+        (:func:`~.packing.ramp_load`).
         """
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
@@ -229,10 +230,8 @@ class SpecimenData:
         load = load_of_steps(self.step_time, self.step_size, time_s)
         if self.ramp_s is not None:
             for i in np.flatnonzero(self.ramp_s > 0):
-                ramp, weight = self.ramp_s[i], self.step_size[i, :RAMP_STEPS].sum()
-                rising = time_s[i] < ramp
-                share = np.clip(time_s[i][rising] / ramp, RAMP_FLOOR, 1.0)
-                load[i, rising] = weight * share
+                weight = self.step_size[i, :RAMP_STEPS].sum()
+                load[i] = ramp_load(load[i], weight, self.ramp_s[i], time_s[i])
         return load
 
     def ramped(self, ramp_s, time_s):
@@ -249,7 +248,7 @@ class SpecimenData:
             For :func:`~fsrbayes.physics.sensor.solve_current`'s ``load_steps``.
         load : ndarray, shape (W, C, T)
         """
-        ramp = np.asarray(ramp_s, dtype=float).reshape(-1, 1, 1)
+        ramp = np.asarray(ramp_s, dtype=float).reshape(-1, 1)
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
         )
@@ -257,17 +256,8 @@ class SpecimenData:
             np.zeros((self.n_tests, 1)),
             self.stress_Pa[:, None].astype(float),
         )
-        weight = size[:, :1]
-        rising = np.broadcast_to(np.arange(RAMP_STEPS) / RAMP_STEPS, (self.n_tests, RAMP_STEPS))
-        step_time = np.concatenate(
-            [rising * ramp, np.broadcast_to(at[:, 1:], (ramp.shape[0], *at[:, 1:].shape))],
-            axis=-1,
-        )
-        parts = np.repeat(weight / RAMP_STEPS, RAMP_STEPS, axis=1)
-        step_size = np.concatenate([parts, size[:, 1:]], axis=1)
-        share = np.clip(time_s / ramp, RAMP_FLOOR, 1.0)
-        load = np.where(time_s < ramp, weight * share, load_of_steps(at, size, time_s))
-        return (step_time, step_size), load
+        load = ramp_load(load_of_steps(at, size, time_s), size[:, :1], ramp[..., None], time_s)
+        return ramp_steps(at, size, ramp), load
 
     def take(self, tests, time_s):
         """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).

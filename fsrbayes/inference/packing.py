@@ -14,6 +14,8 @@ __all__ = [
     "MAX_RAW_SAMPLES",
     "RAMP_FLOOR",
     "RAMP_STEPS",
+    "ramp_load",
+    "ramp_steps",
     "bin_log_time",
     "load_step_arrays",
     "pack_rig",
@@ -84,18 +86,39 @@ RAMP_FLOOR = 1e-3
 the linear rise is 0, where the contact law Rc ∝ σ^−α (eq. 5) diverges."""
 
 
-def _history(test):
-    """Return a test's load steps, its first loading spread over its ramp (``ramp_s``).
+def ramp_steps(at, size, ramp_s):
+    """Return load steps (time, size) with the first loading spread over a ramp of ``ramp_s``.
 
     A linear ramp is :data:`RAMP_STEPS` equal steps at ramp_s·k/n (k = 0 … n − 1): its strain
-    to first order in ramp_s/n, with a nonzero load from t = 0 on.
+    to first order in ramp_s/n, with a nonzero load from t = 0 on. ``at`` and ``size`` are
+    (..., K) with the first loading first; ``ramp_s`` broadcasts against their leading axes (a
+    ramp per parameter set: (W, 1) against (C, K) gives step times (W, C, n + K − 1)).
     """
+    rising = np.asarray(ramp_s, dtype=float)[..., None] * (np.arange(RAMP_STEPS) / RAMP_STEPS)
+    later = at[..., 1:]
+    lead = np.broadcast_shapes(rising.shape[:-1], later.shape[:-1])
+    parts = [np.broadcast_to(a, lead + a.shape[-1:]) for a in (rising, later)]
+    times = np.concatenate(parts, axis=-1)
+    parts = np.repeat(size[..., :1] / RAMP_STEPS, RAMP_STEPS, axis=-1)
+    return times, np.concatenate([parts, size[..., 1:]], axis=-1)
+
+
+def ramp_load(load, weight, ramp_s, time_s):
+    """Return the momentary ``load`` with the first loading rising linearly over ``ramp_s``.
+
+    Before ``ramp_s`` the load is ``weight``·t/ramp_s, held at :data:`RAMP_FLOOR` of it at least;
+    all arguments broadcast.
+    """
+    share = np.clip(time_s / ramp_s, RAMP_FLOOR, 1.0)
+    return np.where(time_s < ramp_s, weight * share, load)
+
+
+def _history(test):
+    """Return a test's load steps, its first loading spread over its ramp (``ramp_s``)."""
     at, size = test.load_steps or (np.zeros(1), np.array([test.stress_Pa]))
     if test.ramp_s <= 0:
         return at, size
-    ramp_at = test.ramp_s * np.arange(RAMP_STEPS) / RAMP_STEPS
-    ramp_size = np.full(RAMP_STEPS, size[0] / RAMP_STEPS)
-    return np.concatenate([ramp_at, at[1:]]), np.concatenate([ramp_size, size[1:]])
+    return ramp_steps(at, size, test.ramp_s)
 
 
 def load_step_arrays(tests):
