@@ -98,3 +98,4 @@ def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
     assert not checks["passed"]
     failed = {f["check"] for f in checks["failed"]}
     assert failed & {"residual_autocorrelation", "noise_level"}, failed
+    assert "loading_misfit" not in failed  # a slow swing is not the loading's

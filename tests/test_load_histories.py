@@ -7,6 +7,7 @@ from fsrbayes.data import read_csv
 from fsrbayes.data.readouts import STANDARD_GRAVITY
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference import ConvergenceWarning
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import predict, write_point_fit
@@ -272,6 +273,30 @@ def test_a_fitted_ramp_is_the_given_ramp_at_its_value_and_the_data_find_it(tmp_p
     # and read as a step (no ramp) the same data fit far worse
     step = LogPosterior.for_sensor(SpecimenData.select(hidden), sensor)
     assert step.log_likelihood_pointwise(at(step, [0]))[0].sum() < log_like.max() - 1000
+
+
+def test_the_fit_checks_point_a_hidden_ramp_at_the_loading_and_not_a_given_one(tmp_path):
+    """A 0.3 s hand-placed ramp fitted as a step: the misfit sits in the loading's first seconds,
+    and the checks say so first, with the way out; the same rig with its ramp given passes."""
+    import fsrbayes
+    from fsrbayes.discrepancy import fit_checks
+    from fsrbayes.inference import SamplerSettings
+
+    # the checks read the posterior predictive: a short run in prior-scaled parameters suffices
+    settings = SamplerSettings(
+        n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1
+    )
+    for given in (False, True):
+        data, _ = _hidden_ramp(tmp_path, 0.3, column=given, name=f"ramp-{given}.csv")
+        with pytest.warns(ConvergenceWarning):
+            result = fsrbayes.fit(data, rng=1, settings=settings, coordinates="prior")
+        checks = fit_checks(result, 0)
+        if given:
+            assert checks["passed"] and checks["loading_ratio"] < 3.0, checks
+        else:
+            assert checks["loading_ratio"] > 30.0, checks
+            assert checks["failed"][0]["check"] == "loading_misfit"
+            assert "--ramp fitted" in checks["failed"][0]["message"]
 
 
 def test_a_fitted_ramp_is_refused_where_the_data_give_it_and_ends_before_the_next_load(tmp_path):

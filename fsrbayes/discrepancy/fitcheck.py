@@ -14,7 +14,12 @@ wide and wrong together. :func:`fit_checks` looks for that in three ways:
 - the residuals' lag-1 autocorrelation within tests: about 0 for white noise; large for a smooth
   misfit — or for correlated measurement noise, which the white-noise likelihood does not model
   either (fit with ``likelihood="ar1"``: the residuals are then whitened by the fitted noise
-  model before these two statistics).
+  model before these two statistics);
+- where the misfit sits in time: standardised residuals whose mean square within the first
+  :data:`LOADING_WINDOW_S` of the loadings is :data:`LOADING_RATIO_LIMIT` times that of the rest
+  point at the loading itself — most often a weight placed by hand, whose load rises over a
+  fraction of a second that the model takes as a step (fit its length: ``ramp="fitted"``), or a
+  process faster than the model's creep.
 
 The command line's ``fsrbayes fit`` runs them on every fitted specimen, warns on stderr when one
 fails and records them as ``checks`` in ``summary.json``.
@@ -25,12 +30,42 @@ import numpy as np
 from .checks import predictive_checks
 from .gaps import failed_checks
 
-__all__ = ["AUTOCORRELATION_LIMIT", "NOISE_RATIO_LIMIT", "fit_checks"]
+__all__ = [
+    "AUTOCORRELATION_LIMIT",
+    "LOADING_RATIO_LIMIT",
+    "LOADING_WINDOW_S",
+    "NOISE_RATIO_LIMIT",
+    "fit_checks",
+]
 
 NOISE_RATIO_LIMIT = 2.0
 """Fitted noise more than this many times the sample-to-sample scatter fails the check."""
 AUTOCORRELATION_LIMIT = 0.5
 """A lag-1 autocorrelation of the standardised residuals above this fails the check."""
+
+
+LOADING_WINDOW_S = 2.0
+"""Seconds after each test's loading (its end, for a ramp) that the loading check sets apart."""
+LOADING_RATIO_LIMIT = 10.0
+"""Residuals in the loading window this many times larger (in mean square) fail the check."""
+LOADING_MIN_SAMPLES = 5
+"""Samples needed on each side of the window before the loading check compares them."""
+
+
+def _loading_ratio(residual, time_s, start_s):
+    """Return the loading window's mean square residual over the later samples'.
+
+    Residuals (C, T) within :data:`LOADING_WINDOW_S` after ``start_s`` (C,) against those after;
+    NaN when either side has fewer than :data:`LOADING_MIN_SAMPLES`.
+    """
+    since = time_s - np.asarray(start_s, dtype=float)[:, None]
+    finite = np.isfinite(residual)
+    early = finite & (since >= 0.0) & (since <= LOADING_WINDOW_S)
+    late = finite & (since > LOADING_WINDOW_S)
+    if early.sum() < LOADING_MIN_SAMPLES or late.sum() < LOADING_MIN_SAMPLES:
+        return float("nan")
+    late_square = np.mean(residual[late] ** 2)
+    return float(np.mean(residual[early] ** 2) / late_square) if late_square > 0 else np.inf
 
 
 def _residual_statistics(residual):
@@ -64,7 +99,9 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
     -------
     dict
         JSON-ready: ``passed`` (bool), ``failed`` (a list of ``{check, …, message}``),
-        ``noise_over_scatter``, ``residual_lag1_autocorrelation``, ``n_checks``, ``alpha``.
+        ``noise_over_scatter``, ``residual_lag1_autocorrelation``, ``loading_ratio`` (NaN
+        where the data have too few samples in or after the loading window), ``n_checks``,
+        ``alpha``.
     """
     rng = np.random.default_rng(rng)
     posterior = result.posterior
@@ -93,11 +130,32 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
                 "structure the model misses, or correlated measurement noise",
             }
         )
+    loading = _loading_ratio(
+        checks.innovation_observed, posterior.data.time_s, posterior.loading_end(draws)
+    )
+    if loading > LOADING_RATIO_LIMIT:  # first: the one failure that names its likely cause
+        failed.insert(
+            0,
+            {
+                "check": "loading_misfit",
+                "loading_ratio": loading,
+                "message": f"the misfit sits in the first {LOADING_WINDOW_S:g} s of the loadings "
+                f"(residuals {np.sqrt(loading):.0f}x larger there than later): "
+                + (
+                    "a weight placed by hand rises over a fraction of a second; fit its length "
+                    "(fsrbayes fit --ramp fitted, or a ramp_s column)"
+                    if "ramp_s" not in posterior.names and posterior.data.ramp_s is None
+                    else "the loading's ramp is not the bench's, or a process faster than the "
+                    "model's creep"
+                ),
+            },
+        )
     return {
         "passed": not failed,
         "failed": failed,
         "noise_over_scatter": ratio,
         "residual_lag1_autocorrelation": lag1,
+        "loading_ratio": loading,
         "n_checks": found["n_checks"],
         "alpha": alpha,
     }
