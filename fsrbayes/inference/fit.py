@@ -28,7 +28,7 @@ import numpy as np
 from ..data.sensors import load_sensor
 from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
-from .optimize import ensemble_start, find_map, nested_starts, start_regions
+from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
 from .pinned import PinnedCoordinates
 from .posterior import LogPosterior
 from .samplers import (
@@ -57,12 +57,6 @@ __all__ = [
 MAP_STARTS = 8
 """Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
 
-MAP_ITERATIONS = 200
-"""L-BFGS-B iterations per start in :func:`fit` before the whitened polish.
-
-In prior-scaled coordinates L-BFGS-B crawls along the ridges and the polish walks them, so a
-short first phase finds the same optima sooner (BENCHMARKS.md, "MAP search"). :func:`fit` runs
-the starts in its worker processes with BLAS on one thread."""
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2)
 """The per-specimen fit's default: two ensembles (one per core on a 2-core machine), the default

@@ -16,6 +16,7 @@ from scipy import optimize
 from .parallel import fork_pool, single_threaded_blas
 
 __all__ = [
+    "MAP_ITERATIONS",
     "NESTED_DEPTH",
     "NegativeLogPosterior",
     "ensemble_start",
@@ -27,6 +28,14 @@ __all__ = [
     "separate_regions",
     "start_regions",
 ]
+
+
+MAP_ITERATIONS = 200
+"""L-BFGS-B iterations per start before the whitened polish, in :func:`~.fit.fit` and
+:func:`~.evidence.laplace.laplace_fit`.
+
+In prior-scaled coordinates L-BFGS-B crawls along the creep posterior's ridges and the polish
+walks them, so a short first phase finds the same optima sooner (BENCHMARKS.md, "MAP search")."""
 
 
 class NegativeLogPosterior:

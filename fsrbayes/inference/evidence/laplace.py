@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...utils import HALF_LOG_2PI
-from ..optimize import find_map, polish, root_covariance
+from ..optimize import MAP_ITERATIONS, find_map, polish, root_covariance
 from ..samplers import ensemble_moves
 from .estimate import EvidenceEstimate
 
@@ -165,7 +165,9 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
     posterior : PriorScaledTarget
     rng : int or numpy.random.Generator, optional
     n_starts : int
-        Optimisations from the best prior draws (:func:`~fsrbayes.inference.fit.find_map`).
+        Optimisations from the best prior draws (:func:`~fsrbayes.inference.optimize.find_map`,
+        a short L-BFGS-B phase of :data:`~fsrbayes.inference.optimize.MAP_ITERATIONS` and the
+        whitened polish, as in a fit).
     base : LaplaceFit, optional
         Fit of a model nested in this one (same data): the optimisation is also started at
         its optimum with the extra parameters at ``null`` and at prior draws (the best
@@ -179,7 +181,7 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
     LaplaceFit
     """
     rng = np.random.default_rng(rng)
-    optima = find_map(posterior, rng, n_starts=n_starts)
+    optima = find_map(posterior, rng, n_starts=n_starts, maxiter=MAP_ITERATIONS)
     u_best = optima[0]
     value = posterior(u_best)
     if base is not None:
