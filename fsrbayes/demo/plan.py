@@ -57,7 +57,7 @@ class DemoPlan:
     draw_steps: int = 400
     hyper: SamplerSettings = field(
         default_factory=lambda: SamplerSettings(
-            n_ensembles=2, chunk=500, max_steps=3000, min_steps=1000, transport_rounds=2
+            n_ensembles=2, chunk=500, max_steps=6000, min_steps=1000, transport_rounds=2
         )
     )
     n_hyper: int = 100
