@@ -2,7 +2,7 @@
 
 A sampler can converge perfectly on a model that misses the data: the noise term then absorbs
 the misfit, the fitted noise is far larger than the measurement's, and the credible bands are
-wide and wrong together. :func:`fit_checks` looks for that in three ways:
+wide and wrong together. :func:`fit_checks` looks for that in four ways:
 
 - the posterior predictive checks of :mod:`.checks` (drift(3600 s), early- vs late-time
   residuals, the trend over ln t, the quarter means, LOO-PIT and the trends over stress and
