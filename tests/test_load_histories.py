@@ -7,7 +7,7 @@ from fsrbayes.data import read_csv
 from fsrbayes.data.readouts import STANDARD_GRAVITY
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference import ConvergenceWarning
+from fsrbayes.inference import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import predict, write_point_fit
@@ -280,7 +280,6 @@ def test_the_fit_checks_point_a_hidden_ramp_at_the_loading_and_not_a_given_one(t
     and the checks say so first, with the way out; the same rig with its ramp given passes."""
     import fsrbayes
     from fsrbayes.discrepancy import fit_checks
-    from fsrbayes.inference import SamplerSettings
 
     # the checks read the posterior predictive: a short run in prior-scaled parameters suffices
     settings = SamplerSettings(
