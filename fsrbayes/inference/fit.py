@@ -43,6 +43,7 @@ from .samplers import (
 __all__ = [
     "FitResult",
     "fit",
+    "sample_posterior",
     "design_warnings",
     "DesignWarning",
     "MAP_STARTS",
@@ -194,6 +195,13 @@ def _sampler_and_settings(sampler, settings):
     return sampler, settings
 
 
+def _seed(rng):
+    """Return an int seed from an int, a Generator or None (same seed, same chains)."""
+    if isinstance(rng, (int, np.integer)):
+        return int(rng)
+    return int(np.random.default_rng(rng).integers(2**31))
+
+
 def _best_draw(run):
     e, t, w = np.unravel_index(np.argmax(run.log_prob), run.log_prob.shape)
     return run.chain[e, t, w]
@@ -283,11 +291,7 @@ def fit(
     sampler, settings = _sampler_and_settings(sampler, settings)
     for note in design_warnings(posterior):
         warnings.warn(DesignWarning(note), stacklevel=2)
-    seed = (
-        int(rng)
-        if isinstance(rng, (int, np.integer))
-        else int(np.random.default_rng(rng).integers(2**31))
-    )
+    seed = _seed(rng)
     if sampler == "tempered":
         if checkpoint is not None or resume:
             raise ValueError(
@@ -308,18 +312,65 @@ def fit(
             "tempered",
             evidence,
         )
-    if (
-        resume and checkpoint is not None
-    ):  # a mismatched checkpoint is refused before the MAP search
+    return sample_posterior(
+        posterior,
+        rng=seed,
+        settings=settings,
+        coordinates=coordinates,
+        checkpoint=checkpoint,
+        resume=resume,
+        progress=progress,
+    )
+
+
+def sample_posterior(
+    posterior,
+    *,
+    optima=None,
+    rng=None,
+    settings=None,
+    coordinates=None,
+    checkpoint=None,
+    resume=False,
+    progress=False,
+):
+    """Sample a built log-posterior with emcee ensembles until convergence (:func:`fit`'s core).
+
+    Parameters
+    ----------
+    posterior : LogPosterior
+    optima : array_like, shape (K, ndim), optional
+        Maximum-a-posteriori points in the unconstrained parameters, best first, that an earlier
+        search found (e.g. a :func:`~fsrbayes.inference.evidence.laplace.laplace_fit`'s mode);
+        the ensembles start around them and no new search runs. Default: :data:`MAP_STARTS`
+        optimisations as in :func:`fit`.
+    rng : int or numpy.random.Generator, optional
+    settings : SamplerSettings, optional
+        Default :data:`FIT_SETTINGS`.
+    coordinates, checkpoint, resume, progress
+        As in :func:`fit`.
+
+    Returns
+    -------
+    FitResult
+    """
+    settings = FIT_SETTINGS if settings is None else settings
+    coordinates = FIT_COORDINATES if coordinates is None else coordinates
+    if coordinates not in COORDINATES:
+        raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+    seed = _seed(rng)
+    if resume and checkpoint is not None:  # a mismatched checkpoint is refused before any search
         check_checkpoint(checkpoint, _fingerprint(posterior, coordinates), settings.n_ensembles)
     generator = np.random.default_rng(seed)
-    optima = find_map(
-        posterior,
-        generator,
-        n_starts=max(MAP_STARTS, settings.n_ensembles),
-        maxiter=MAP_ITERATIONS,
-        processes=settings.processes,
-    )
+    if optima is None:
+        optima = find_map(
+            posterior,
+            generator,
+            n_starts=max(MAP_STARTS, settings.n_ensembles),
+            maxiter=MAP_ITERATIONS,
+            processes=settings.processes,
+        )
+    optima = np.atleast_2d(np.asarray(optima, dtype=float))
     n_walk = settings.walkers_for(posterior.ndim)
     # Ensembles start in the separate regions in turn (module docstring); the mixture
     # independence proposal carries walkers between regions.
@@ -333,7 +384,7 @@ def fit(
         ]
     )
     pinned = _pinned(posterior, optima[0], coordinates, start)
-    if pinned is not None and packed.plain and settings.transport_rounds is None:
+    if pinned is not None and posterior.data.plain and settings.transport_rounds is None:
         settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)
     run = run_ensembles(
         posterior,
