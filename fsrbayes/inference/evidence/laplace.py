@@ -157,7 +157,7 @@ def _nested_starts(posterior, base, null, rng, n_extra=32):
     return posterior.prior.to_unconstrained(x)
 
 
-def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
+def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None, guess=None):
     """MAP search and Laplace approximation of a posterior.
 
     Parameters
@@ -175,6 +175,11 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
     null : mapping, optional
         Null values of the extra parameters (e.g. ``Effect.null``); the others start at their
         prior median.
+    guess : mapping, optional
+        With ``base``: values of extra parameters for one more start at the base fit's optimum,
+        always polished — e.g. another specimen's fitted effect. An onset voltage's likelihood
+        holds a local optimum between each pair of test voltages, and the best of a few prior
+        draws can lie in the wrong one.
 
     Returns
     -------
@@ -186,8 +191,12 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None):
     value = posterior(u_best)
     if base is not None:
         starts = _nested_starts(posterior, base, dict(null or {}), rng)
+        chosen = list(np.argsort(posterior(starts))[::-1][:n_starts])
+        if guess:
+            starts = np.vstack([starts, _nested_starts(posterior, base, dict(guess), rng, 0)])
+            chosen.append(len(starts) - 1)
         values = posterior(starts)
-        for index in np.argsort(values)[::-1][:n_starts]:
+        for index in chosen:
             if not np.isfinite(values[index]):
                 continue
             u_nested, v_nested = polish(posterior, starts[index], values[index], rounds=6)
