@@ -72,7 +72,16 @@ def test_quick_demo_writes_the_report_and_results(tmp_path):
     # Figure 7; per sensor its box plots, credible bands and Figure 12 (before/after)
     assert html.count("data:image/png;base64,") == 11 and "Zener or Burgers" in html
     assert "open question" in html
-    assert html.count("max R-hat") == 2  # each population run's convergence, stated
+    assert html.count("max R-hat 1.") == 2  # each population run's convergence, stated
+    # the quick plan's specimen posteriors are labelled as the approximations they are
+    assert "quick look" in html and "not converged runs" in html
+    for sensor, entry in results["sensors"].items():
+        roles = ["base", "extended"] if entry["diagnose"]["effects"] else ["base"]
+        assert [(r["specimen"], r["role"]) for r in entry["fits"]] == [
+            (s, role) for s in sorted({r["specimen"] for r in entry["fits"]}) for role in roles
+        ], sensor
+        for row in entry["fits"]:
+            assert "n_steps" not in row and row["method"].startswith("short run")
     assert (out / "figure7_drift.json").is_file()
     assert not list(out.rglob("*.tmp"))
 
@@ -113,3 +122,27 @@ def test_figure12_tests_pick_the_nearest_stress_then_each_nearest_voltage_once()
     # 210.8 kPa is nearest 234 kPa; 1 and 2 V both land on the 1 V test, 6 and 9 V on 6 V
     assert figure12_tests(data, *FIGURE12["a201"]) == [7, 8]
     assert figure12_tests(data, (0.2, 7.0), 50e3) == [0, 2]
+
+
+def test_the_full_plans_specimen_posteriors_are_converged_emcee_runs_from_the_laplace_mode():
+    """The full plan's per-specimen fits run emcee to convergence and report it (one FSR 402
+    specimen's 33 tests, the base model only)."""
+    from dataclasses import replace
+
+    from fsrbayes.data.embedded import default_data
+    from fsrbayes.demo.plan import FULL, subset
+    from fsrbayes.demo.study import fit_specimen
+    from fsrbayes.discrepancy import gap_band
+
+    data = subset(default_data(), replace(FULL, specimens_per_sensor=1)).select(sensor="fsr402")
+    (specimen,) = data.specimens
+    out = fit_specimen((data, specimen, {"base": "burgers"}, FULL, [1, 2]))
+    assert set(out["log_z"]) == {"base"} and np.isfinite(out["log_z"]["base"])
+    report = out["convergence"]["base"]
+    assert report["converged"] and max(report["rhat"]) < 1.01 and min(report["ess_bulk"]) >= 400
+    assert report["n_kept"] >= 50 * max(report["tau"])
+    assert out["result"]["base"].converged
+    assert out["draws"]["base"].shape == (FULL.n_draws, out["posterior"]["base"].ndim)
+    # the FSR 402's data hold the model's own physics: the converged posterior fits them, its
+    # gap below the band an adequate model stays below
+    assert out["gap"]["base"] < gap_band(len(data.tests))

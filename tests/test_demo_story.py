@@ -30,6 +30,20 @@ def test_the_a201_diagnosis_names_the_truths_mechanisms_and_halves_the_gap(full)
 
 
 @pytest.mark.slow
+def test_every_specimen_posterior_is_a_converged_emcee_run_and_the_effects_shrink_each_gap(full):
+    for sensor, entry in full["sensors"].items():
+        for row in entry["fits"]:
+            assert row["converged"] and row["max_rhat"] < 1.01, (sensor, row)
+            assert row["min_ess_bulk"] >= 400 and row["n_steps"] >= 50 * row["max_tau"]
+    rows = full["sensors"]["a201"]["fits"]
+    before = {r["specimen"]: r["gap"] for r in rows if r["role"] == "base"}
+    after = {r["specimen"]: r["gap"] for r in rows if r["role"] == "extended"}
+    assert before.keys() == after.keys() and len(after) == FULL.specimens_per_sensor
+    band = full["sensors"]["a201"]["diagnose"]["band"]
+    assert all(closes(after[s], before[s], band) for s in after), (before, after)
+
+
+@pytest.mark.slow
 def test_the_fsr402_shows_no_negative_drift_and_no_effect(full):
     entry = full["sensors"]["fsr402"]
     assert not entry["diagnose"]["effects"]

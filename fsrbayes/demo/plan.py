@@ -34,6 +34,10 @@ class DemoPlan:
         Sensor → the sourcing voltages kept (default: all eleven of the paper's).
     n_draws : int
         Posterior draws per specimen.
+    converged_fits : bool
+        Per-specimen posteriors (base and extended models) from emcee ensembles run until
+        convergence, started at the Laplace fit's mode; False: a short run at the mode
+        (``draw_steps``), a labelled approximation.
     n_starts, draw_steps : int
         MAP optimisations per Laplace fit, and steps of the short ensemble run at the mode.
     hyper : SamplerSettings
@@ -53,6 +57,7 @@ class DemoPlan:
     specimens_per_sensor: int
     voltages: dict = None
     n_draws: int = 400
+    converged_fits: bool = True
     n_starts: int = 2
     draw_steps: int = 400
     hyper: SamplerSettings = field(
@@ -79,6 +84,7 @@ QUICK = DemoPlan(
     specimens_per_sensor=2,
     voltages={"a201": (0.2, 1.0, 6.0), "fsr402": (0.2, 1.0, 5.0)},
     n_draws=200,
+    converged_fits=False,
     n_starts=1,
     draw_steps=200,
     hyper=SamplerSettings(
@@ -88,7 +94,8 @@ QUICK = DemoPlan(
     n_per_hyper=40,
     diagnose_effects=("voltage-degradation",),
 )
-"""A look in about a minute: two specimens per sensor at three voltages, one effect diagnosed."""
+"""A look in about a minute: two specimens per sensor at three voltages, one effect diagnosed;
+per-specimen posteriors from a short run at the Laplace mode (labelled as such)."""
 
 
 def subset(data, plan):

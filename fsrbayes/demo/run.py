@@ -10,7 +10,6 @@ from .. import plots
 from ..data.embedded import default_data
 from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES
 from ..inference.compare import strength
-from ..inference.evidence.laplace import LocalDraws
 from ..inference.output import to_datatree
 from ..inference.parallel import map_jobs
 from ..report import embed_figure, markdown_to_html, write_diagnosis_report
@@ -134,7 +133,7 @@ def _box_figures(sensor, pops, data, folder):
 def _fit_figures(sensor, fit, roles, folder):
     """Draw the first specimen's credible drift bands and its Figure 12 curves before/after."""
     trees = {
-        role: to_datatree(LocalDraws(fit["posterior"][role], fit["draws"][role])) for role in roles
+        role: to_datatree(fit["result"][role], max_draws=len(fit["draws"][role])) for role in roles
     }
     final = trees[roles[-1]]
     with atomic_path(folder / f"posterior_{fit['specimen']}.nc") as tmp:
@@ -204,12 +203,38 @@ def _sensor_study(sensor, data, fits, diagnosis, plan, seed, out):
         "p_degrade_at_zero_drift": middle["p_degrade"],
         "p_degrade_at_2V": degradation_share(final["specimens"], RECOMMENDED_V),
         "population": final.get("population"),
+        "fits": _fit_table(fits, roles),
         "effective_draws_min": {role: pops[role]["effective_draws_min"] for role in roles},
         "groups": {role: pops[role]["groups"] for role in roles},
     }
     figures = _box_figures(sensor, pops, data, folder)
     figures += _fit_figures(sensor, fits[0], roles, folder)
     return entry, figures
+
+
+def _fit_table(fits, roles):
+    """Per specimen and model: how its posterior was drawn, its convergence and its gap."""
+    rows = []
+    for fit in fits:
+        for role in roles:
+            report = fit["convergence"][role]
+            row = {
+                "specimen": fit["specimen"],
+                "role": role,
+                "model": fit["posterior"][role].model,
+                "method": "emcee (converged run)" if report else "short run at the Laplace mode",
+                "gap": fit["gap"][role],
+            }
+            if report:
+                row.update(
+                    converged=report["converged"],
+                    n_steps=report["n_steps"],
+                    max_rhat=float(np.nanmax(report["rhat"])),
+                    min_ess_bulk=float(np.nanmin(report["ess_bulk"])),
+                    max_tau=float(np.nanmax(report["tau"])),
+                )
+            rows.append(row)
+    return rows
 
 
 def _report_result(say):
@@ -227,9 +252,29 @@ def _report_result(say):
         else:
             z = value["log_z"]
             bf = f", ln B Burgers/Zener {z['base'] - z['zener']:+.1f}" if "zener" in z else ""
-            say(f"  {value['specimen']}: {', '.join(z)}{bf} ({value['seconds']:.0f} s)")
+            runs = [
+                f"{role} {'converged' if r['converged'] else 'NOT converged'} in {r['n_steps']}"
+                for role, r in value["convergence"].items()
+                if r
+            ]
+            runs = f"; emcee {', '.join(runs)} steps" if runs else ""
+            say(f"  {value['specimen']}: {', '.join(z)}{bf}{runs} ({value['seconds']:.0f} s)")
 
     return report
+
+
+def _effect_guess(diagnosis):
+    """Return the named effects' parameters as ``diagnose`` fitted them (medians, per step).
+
+    Every specimen's extended fit also starts there: the onset of a voltage degradation has a
+    local optimum between each pair of test voltages.
+    """
+    guess = {}
+    for step, effect in enumerate(diagnosis.effects, start=1):
+        for c in diagnosis.as_dict()["candidates"]:
+            if c["step"] == step and c["effect"] == effect:
+                guess.update({name: p["median"] for name, p in c["parameters"].items()})
+    return guess
 
 
 def _diagnose_and_fit(data, plan, processes, seed, say):
@@ -255,10 +300,18 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
     extended = {
         sensor: "+".join([BASE, *d.effects]) for sensor, d in diagnoses.items() if d.effects
     }
+    guesses = {sensor: _effect_guess(diagnoses[sensor]) for sensor in extended}
     second = [
         (
             "fit",
-            (data.select(specimen=s), s, {"extended": extended[sensor_of[s]]}, plan, [seed, k, 1]),
+            (
+                data.select(specimen=s),
+                s,
+                {"extended": extended[sensor_of[s]]},
+                plan,
+                [seed, k, 1],
+                (fits[s]["laplace"]["base"], guesses[sensor_of[s]]),
+            ),
         )
         for k, s in enumerate(specimens)
         if sensor_of[s] in extended
@@ -267,7 +320,7 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
         say("fits with the named effects: " + "; ".join(f"{k}: {v}" for k, v in extended.items()))
     for _, value in map_jobs(run_job, second, processes=processes, on_result=_report_result(say)):
         fit = fits[value["specimen"]]
-        for key in ("posterior", "draws", "log_z"):
+        for key in ("posterior", "draws", "result", "convergence", "gap", "laplace", "log_z"):
             fit[key].update(value[key])
         fit["seconds"] += value["seconds"]
     return diagnoses, [fits[s] for s in specimens], checks

@@ -9,9 +9,10 @@ import numpy as np
 
 from ..data.sensors import load_sensor
 from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES, PAPER_VOLTAGES
-from ..discrepancy import diagnose
+from ..discrepancy import diagnose, gap, predictive_checks
 from ..inference.compare import compare
-from ..inference.evidence.laplace import laplace_fit
+from ..inference.evidence.laplace import LocalDraws, laplace_fit
+from ..inference.fit import sample_posterior
 from ..inference.likelihood import SpecimenData
 from ..inference.output import save_population
 from ..inference.parallel import single_threaded_blas
@@ -26,6 +27,7 @@ from ..inference.population.routes import two_stage
 from ..inference.posterior import LogPosterior
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS
+from ..physics.models import parse_model
 from ..physics.sensor import drift as model_drift
 
 __all__ = [
@@ -98,25 +100,61 @@ def diagnose_sensor(job):
 
 
 def fit_specimen(job):
-    """Laplace fits (evidence) and local draws of one specimen under each of ``models``.
+    """Laplace fits (evidence) and posterior draws of one specimen under each of ``models``.
 
-    ``models`` maps a role (``"base"``, ``"zener"``, ``"extended"``) to a model name; draws are
-    taken for every role but ``"zener"``, whose fit serves only the Bayes factor.
+    ``models`` maps a role (``"base"``, ``"zener"``, ``"extended"``) to a model name. Every role
+    gets a Laplace fit (its log-evidence screens Burgers against Zener) — the ``"extended"`` one
+    also started from the job's optional sixth item ``(base_fit, guess)``: the specimen's base
+    :class:`LaplaceFit` with the named effects at their null values (as ``diagnose`` does) and at
+    ``guess`` (the diagnosed specimen's effect parameters); every role but
+    ``"zener"`` also gets posterior draws — with ``plan.converged_fits`` from emcee ensembles run
+    until convergence (:func:`~fsrbayes.inference.fit.sample_posterior`, started at the Laplace
+    mode), else from a short run at the mode — and the gap of its predictive checks
+    (:func:`~fsrbayes.discrepancy.gap`).
+
+    Returns
+    -------
+    dict
+        ``posterior``, ``draws`` (S, ndim), ``result`` (a :class:`~fsrbayes.inference.fit.FitResult`
+        or :class:`~fsrbayes.inference.evidence.laplace.LocalDraws`), ``convergence`` (the run's
+        report as a dict, or None) and ``gap`` per role; ``laplace`` and ``log_z`` per role;
+        ``seconds``.
     """
-    data, specimen, models, plan, seed = job
+    data, specimen, models, plan, seed, *nested = job
     rng = np.random.default_rng(seed)
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(packed.sensor)
     started = time.perf_counter()
-    out = {"specimen": specimen, "sensor": packed.sensor, "posterior": {}, "draws": {}, "log_z": {}}
+    out = {"specimen": specimen, "sensor": packed.sensor, "log_z": {}}
+    keys = ("posterior", "draws", "result", "convergence", "gap", "laplace")
+    out.update({key: {} for key in keys})
     with single_threaded_blas():
         for role, model in models.items():
             posterior = LogPosterior.for_sensor(packed, sensor, model=model)
-            fit = laplace_fit(posterior, rng, n_starts=plan.n_starts)
-            out["log_z"][role] = fit.log_evidence
-            if role != "zener":
-                out["posterior"][role] = posterior
-                out["draws"][role] = fit.local_draws(rng, plan.n_draws, steps=plan.draw_steps)
+            base, guess = nested[0] if nested and role == "extended" else (None, None)
+            null = {}
+            for effect in parse_model(model)[1]:
+                null.update(EFFECTS[effect].null)
+            fit = laplace_fit(
+                posterior, rng, n_starts=plan.n_starts, base=base, null=null, guess=guess
+            )
+            out["log_z"][role], out["laplace"][role] = fit.log_evidence, fit
+            if role == "zener":
+                continue
+            if plan.converged_fits:
+                result = sample_posterior(posterior, optima=fit.u_map[None], rng=rng)
+                draws = result.draws(plan.n_draws).reshape(-1, posterior.ndim)
+                out["convergence"][role] = result.run.report.as_dict()
+            else:
+                draws = fit.local_draws(rng, plan.n_draws, steps=plan.draw_steps)
+                result = LocalDraws(posterior, draws)
+                out["convergence"][role] = None
+            out["posterior"][role], out["draws"][role], out["result"][role] = (
+                posterior,
+                draws,
+                result,
+            )
+            out["gap"][role] = gap([predictive_checks(posterior, draws, rng)])
     out["seconds"] = time.perf_counter() - started
     return out
 
