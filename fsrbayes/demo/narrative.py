@@ -1,5 +1,6 @@
 """The demo's report: Markdown with the figures by path (embedded when converted to HTML)."""
 
+from ..inference.fit import FIT_SETTINGS
 from .study import DEGRADED_LOSS, RECOMMENDED_V
 
 __all__ = ["narrative"]
@@ -141,12 +142,13 @@ def _method_paragraph(plan):
     if plan.converged_fits:
         return (
             "Every specimen's posterior shown here (base and extended models) is an emcee run "
-            "until convergence (two ensembles started at the Laplace mode; split R-hat across "
-            "ensembles < 1.01, kept chain ≥ 50 τ, bulk ESS ≥ 400; table below), and so are the "
-            f"population posteriors. The {evidences}, cross-checked below against bridge sampling "
-            "from converged fits; `diagnose` screens its candidates with Laplace fits and short "
-            "runs at their modes, and the gaps in the table below are recomputed from the "
-            "converged posteriors."
+            f"until convergence ({FIT_SETTINGS.n_ensembles} ensembles started at the Laplace "
+            f"mode; split R-hat across ensembles < {FIT_SETTINGS.rhat_target:g}, kept chain ≥ "
+            f"{FIT_SETTINGS.tau_factor:.0f} τ, bulk ESS ≥ {FIT_SETTINGS.ess_target:.0f}; table "
+            f"below), and so are the population posteriors. The {evidences}, cross-checked "
+            "below against bridge sampling from converged fits; `diagnose` screens its "
+            "candidates with Laplace fits and short runs at their modes, and the gaps in the "
+            "table below are recomputed from the converged posteriors."
         )
     return (
         f"Plan `{plan.name}` is a quick look: the specimens' posteriors are Laplace "

@@ -270,8 +270,9 @@ def _effect_guess(diagnosis):
     local optimum between each pair of test voltages.
     """
     guess = {}
+    candidates = diagnosis.as_dict()["candidates"]
     for step, effect in enumerate(diagnosis.effects, start=1):
-        for c in diagnosis.as_dict()["candidates"]:
+        for c in candidates:
             if c["step"] == step and c["effect"] == effect:
                 guess.update({name: p["median"] for name, p in c["parameters"].items()})
     return guess

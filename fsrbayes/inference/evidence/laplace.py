@@ -191,11 +191,12 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None, guess=
     value = posterior(u_best)
     if base is not None:
         starts = _nested_starts(posterior, base, dict(null or {}), rng)
-        chosen = list(np.argsort(posterior(starts))[::-1][:n_starts])
-        if guess:
-            starts = np.vstack([starts, _nested_starts(posterior, base, dict(guess), rng, 0)])
-            chosen.append(len(starts) - 1)
         values = posterior(starts)
+        chosen = list(np.argsort(values)[::-1][:n_starts])
+        if guess:
+            extra = _nested_starts(posterior, base, dict(guess), rng, 0)
+            starts, values = np.vstack([starts, extra]), np.append(values, posterior(extra))
+            chosen.append(len(starts) - 1)
         for index in chosen:
             if not np.isfinite(values[index]):
                 continue
