@@ -222,7 +222,7 @@ def _fit_table(fits, roles):
                 "specimen": fit["specimen"],
                 "role": role,
                 "model": fit["posterior"][role].model,
-                "method": "emcee (converged run)" if report else "short run at the Laplace mode",
+                "method": "emcee until convergence" if report else "short run at the Laplace mode",
                 "gap": fit["gap"][role],
             }
             if report:
