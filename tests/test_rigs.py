@@ -255,8 +255,8 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     """A gain drift hidden in a one-supply divider log: the diagnosis names it or a
     stress-independent change of the sensor's area, and says that the other would do as well —
     one supply voltage and a narrow load range give the data no lever to tell them apart (their
-    ln B differ by ~1.5 of ~2,378 nats, and which one leads moved with the CPU's floating
-    point). Named, the gain drift is the rig's."""
+    ln B differ by ~1.5 of ~2,378 nats, so which one leads is floating-point detail). Named,
+    the gain drift is the rig's."""
     from fsrbayes.discrepancy import diagnose
 
     text, truth = simulate_rig(
