@@ -44,6 +44,17 @@ def test_every_specimen_posterior_is_a_converged_emcee_run_and_the_effects_shrin
 
 
 @pytest.mark.slow
+def test_the_laplace_bayes_factor_agrees_with_stepping_stone_and_bridge_on_one_specimen(full):
+    check = full["sensors"]["fsr402"]["bayes_factor"]["crosscheck"]
+    assert check["converged"] and check["method"].startswith("stepping-stone")
+    bridge = check["bridge"]
+    assert 0 < check["err"] < 0.1 and 0 < bridge["err"] < 0.1
+    difference = check["log_bf_burgers_over_zener"] - bridge["log_bf_burgers_over_zener"]
+    assert abs(difference) < 4 * np.hypot(check["err"], bridge["err"]), check
+    assert abs(check["laplace"] - check["log_bf_burgers_over_zener"]) < 1.0, check  # the screen
+
+
+@pytest.mark.slow
 def test_the_fsr402_shows_no_negative_drift_and_no_effect(full):
     entry = full["sensors"]["fsr402"]
     assert not entry["diagnose"]["effects"]

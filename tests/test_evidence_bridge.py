@@ -1,4 +1,4 @@
-"""Bridge sampling from a fit's draws against closed-form evidences."""
+"""Evidence from a fit's draws (bridge sampling, referenced stepping-stone) against closed forms."""
 
 import warnings
 
@@ -7,6 +7,8 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.evidence.bridge import bridge_from_fit, bridge_log_evidence
+from fsrbayes.inference.evidence.ladder import LadderSettings
+from fsrbayes.inference.evidence.referenced import referenced_from_fit
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from validation.closed_form import BentRidge, LinearGaussian
 
@@ -50,9 +52,8 @@ def test_error_bars_from_exact_draws_cover_the_exact_log_z_at_their_nominal_rate
     assert np.mean(z <= 2.0) >= stats.binom(20, 0.9545).ppf(0.005) / 20, z
 
 
-@pytest.mark.parametrize("problem", ["linear-gaussian", "bent-ridge"])
-def test_bridge_from_emcee_ensembles_agrees_with_the_exact_log_z(problem):
-    """Autocorrelated draws of converged ensembles, on a round and on a kinked posterior."""
+def _converged_run(problem):
+    """Converged emcee ensembles on a closed-form problem, the target and its exact log Z."""
     rng = np.random.default_rng(7)
     if problem == "linear-gaussian":
         target = Posterior(LinearGaussian(10, seed=3))
@@ -66,12 +67,37 @@ def test_bridge_from_emcee_ensembles_agrees_with_the_exact_log_z(problem):
         settings, truth = SamplerSettings(n_ensembles=2, quadratic_map=False), 0.0
     run = run_ensembles(target, start, seed=5, settings=settings)
     assert run.report.converged, run.report.worst()
+    return run, target, truth
+
+
+@pytest.mark.parametrize("problem", ["linear-gaussian", "bent-ridge"])
+def test_bridge_from_emcee_ensembles_agrees_with_the_exact_log_z(problem):
+    """Autocorrelated draws of converged ensembles, on a round and on a kinked posterior."""
+    run, target, truth = _converged_run(problem)
     estimate = bridge_log_evidence(target, *run.kept(), seed=1)
     assert estimate.error < 0.05, estimate
     assert abs(estimate.log_z - truth) < 4 * estimate.error, (estimate, truth)
     assert estimate.method == "bridge (fit draws)"
     assert estimate.details["likelihood_evaluations"] == 2 * 8000
     assert estimate.posterior_draws.shape[0] == 2
+
+
+@pytest.mark.parametrize("problem", ["linear-gaussian", "bent-ridge"])
+def test_stepping_stone_from_a_fits_draws_agrees_with_the_exact_log_z(problem):
+    """The demo's cross-check ladder (5 rungs, 4 ladders) from a reference fitted to each
+    ensemble's draws: within 4 of its own error bars of the closed-form log Z."""
+    run, target, truth = _converged_run(problem)
+
+    class Fit:
+        converged, posterior = True, target
+
+    Fit.run = run
+    ladder = LadderSettings(n_temps=5, exponent=1.0, burn=50, steps=250, replicates=4)
+    estimate = referenced_from_fit(Fit(), ladder, seed=3)
+    assert 0 < estimate.error < 0.1, estimate
+    assert abs(estimate.log_z - truth) < 4 * estimate.error, (estimate, truth)
+    assert estimate.method == "referenced stepping-stone", estimate.method
+    assert estimate.details["reference_regions"] == [2]  # one component per ensemble
 
 
 def test_a_fit_that_did_not_converge_and_misshapen_chains_are_refused():

@@ -73,11 +73,19 @@ def narrative(results, figures, plan):
     for s in results["sensors"].values():
         check = s["bayes_factor"].get("crosscheck")
         if check:
+            bridge = check.get("bridge")
+            also = (
+                f"; bridge sampling from the same draws: {bridge['log_bf_burgers_over_zener']:.2f}"
+                f" ± {bridge['err']:.2g}"
+                if bridge
+                else ""
+            )
+            unconverged = "" if check["converged"] else " (a fit did not converge)"
             lines += [
                 "",
-                f"Cross-check on {check['specimen']}: Laplace ln B = {check['laplace']:.1f}; "
-                f"from converged emcee fits of both models, {check['method']}: ln B = "
-                f"{check['log_bf_burgers_over_zener']:.1f} ± {check['err']:.1f}.",
+                f"Cross-check on {check['specimen']}: Laplace ln B = {check['laplace']:.2f}; "
+                f"{check['method']}{unconverged}: ln B = "
+                f"{check['log_bf_burgers_over_zener']:.2f} ± {check['err']:.2g}{also}.",
             ]
     lines += [
         "",
@@ -146,7 +154,7 @@ def _method_paragraph(plan):
             f"mode; split R-hat across ensembles < {FIT_SETTINGS.rhat_target:g}, kept chain ≥ "
             f"{FIT_SETTINGS.tau_factor:.0f} τ, bulk ESS ≥ {FIT_SETTINGS.ess_target:.0f}; table "
             f"below), and so are the population posteriors. The {evidences}, cross-checked "
-            "below against bridge sampling from converged fits; `diagnose` screens its "
+            "below against stepping-stone from converged fits; `diagnose` screens its "
             "candidates with Laplace fits and short runs at their modes, and the gaps in the "
             "table below are recomputed from the converged posteriors."
         )

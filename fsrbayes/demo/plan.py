@@ -2,6 +2,7 @@
 
 from dataclasses import dataclass, field
 
+from ..inference.evidence.ladder import LadderSettings
 from ..inference.samplers import SamplerSettings
 
 __all__ = ["DemoPlan", "FULL", "QUICK", "PAPER_HYPOTHESES", "FIGURE12", "subset"]
@@ -49,8 +50,11 @@ class DemoPlan:
     diagnose_effects : tuple, optional
         Catalogue effects tried (default: every one).
     crosscheck_sensor : str, optional
-        The sensor whose first specimen's Laplace Bayes factor is checked against bridge sampling
-        from converged emcee fits (None: no check).
+        The sensor whose first specimen's Laplace Bayes factor is checked against stepping-stone
+        (and bridge sampling) from converged emcee fits of both models (None: no check).
+    crosscheck_ladder : LadderSettings
+        The cross-check's stepping-stone ladders, from a reference fitted to each fit's draws to
+        the posterior.
     """
 
     name: str
@@ -70,6 +74,11 @@ class DemoPlan:
     diagnose_specimens: int = 1
     diagnose_effects: tuple = None
     crosscheck_sensor: str = None
+    crosscheck_ladder: LadderSettings = field(
+        default_factory=lambda: LadderSettings(
+            n_temps=5, exponent=1.0, burn=50, steps=250, replicates=4
+        )
+    )
 
 
 FULL = DemoPlan(
@@ -77,7 +86,7 @@ FULL = DemoPlan(
 )
 """Four specimens per sensor at all eleven voltages (264 creep tests); diagnose on one specimen per
 sensor with the paper's hypotheses (:data:`PAPER_HYPOTHESES`); the Laplace Bayes factor of the
-first FSR 402 specimen checked by bridge sampling."""
+first FSR 402 specimen checked by stepping-stone from converged fits."""
 
 QUICK = DemoPlan(
     "quick",

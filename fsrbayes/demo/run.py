@@ -242,8 +242,8 @@ def _report_result(say):
         kind, value = result
         if kind == "crosscheck":
             say(
-                f"  {value['specimen']}: ln B Burgers/Zener by bridge sampling "
-                f"{value['log_bf_burgers_over_zener']:+.1f} ± {value['err']:.1f}"
+                f"  {value['specimen']}: ln B Burgers/Zener by stepping-stone "
+                f"{value['log_bf_burgers_over_zener']:+.2f} ± {value['err']:.2g}"
             )
         elif kind == "diagnose":
             sensor, d = value
@@ -289,7 +289,7 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
     first = [("diagnose", (data, sensor, plan, seed)) for sensor in data.sensors]
     if plan.crosscheck_sensor in data.sensors:
         chosen = data.select(sensor=plan.crosscheck_sensor).specimens[0]
-        first.append(("crosscheck", (data.select(specimen=chosen), chosen, seed)))
+        first.append(("crosscheck", (data.select(specimen=chosen), chosen, plan, [seed, 10_000])))
     first += [
         ("fit", (data.select(specimen=s), s, {"base": BASE, "zener": "zener"}, plan, [seed, k]))
         for k, s in enumerate(specimens)

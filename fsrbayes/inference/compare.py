@@ -21,6 +21,7 @@ from .evidence.referenced import (
     MODE_SEARCH,
     PILOT_SETTINGS,
     REFERENCED_LADDER,
+    referenced_from_fit,
     referenced_log_evidence,
 )
 from .evidence.savage_dickey import savage_dickey_posterior
@@ -241,10 +242,7 @@ def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
         )
     if result.converged:
         return bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
-    chain, _ = result.run.kept()
-    estimate = referenced_log_evidence(
-        result.posterior, ladder, seed=seed, draws=[e.reshape(-1, chain.shape[-1]) for e in chain]
-    ).estimate()
+    estimate = referenced_from_fit(result, ladder, seed=seed)
     note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
     return replace(
         estimate,

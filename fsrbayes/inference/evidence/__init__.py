@@ -21,6 +21,7 @@ from .referenced import (
     PILOT_SETTINGS,
     REFERENCED_LADDER,
     ModeSearch,
+    referenced_from_fit,
     referenced_log_evidence,
 )
 from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
@@ -42,6 +43,7 @@ __all__ = [
     "TemperedSettings",
     "laplace_fit",
     "log_evidence",
+    "referenced_from_fit",
     "referenced_log_evidence",
     "savage_dickey",
     "savage_dickey_posterior",

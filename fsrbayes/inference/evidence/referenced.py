@@ -70,6 +70,7 @@ __all__ = [
     "pilot_reference",
     "minor_pilot",
     "referenced_log_evidence",
+    "referenced_from_fit",
 ]
 
 
@@ -373,3 +374,21 @@ def referenced_log_evidence(
         groups=labels if n_groups > 1 else None,
     )
     return merged
+
+
+def referenced_from_fit(result, settings=REFERENCED_LADDER, seed=0):
+    """Stepping-stone log Z from a :class:`~fsrbayes.inference.fit.FitResult`'s kept draws.
+
+    The reference is a mixture with one component per ensemble of the fit (each ensemble's kept
+    draws), so no mode search or pilot run is needed: only the ladder from g to the posterior
+    (``settings``) runs. A converged fit's ensembles describe the posterior, and a few rungs then
+    suffice; an unconverged fit's draws still give an exact identity, only a noisier one (the
+    error bar shows it).
+
+    Returns
+    -------
+    EvidenceEstimate
+    """
+    chain, _ = result.run.kept()
+    draws = [ensemble.reshape(-1, chain.shape[-1]) for ensemble in chain]
+    return referenced_log_evidence(result.posterior, settings, seed=seed, draws=draws).estimate()
