@@ -32,6 +32,7 @@ from .compiled_kernels import (
     INVALID,
     JIT,
     JUMP,
+    LOG_CURRENT_SCALE,
     OHMIC,
     OPACITY_LIMIT,
     PEAK_TABLE,
@@ -50,6 +51,13 @@ from .compiled_kernels import (
 from .constants import KAPPA
 
 __all__ = ["solve_compiled"]
+
+LOG_KAPPA, LOG_THREE_QUARTERS, LOG_PEAK_FACTOR = (
+    math.log(KAPPA),
+    math.log(0.75),
+    math.log(2.0 / 2.96),
+)
+"""log κ; log of eq. 9's 3/4; log of the 2/2.96 in eq. 11's b = (2/2.96)·κ s sqrt(Va)."""
 
 
 @numba.njit(**JIT)
@@ -141,12 +149,13 @@ def _solve_row_point(
 
 
 @numba.njit(**JIT)
-def _peak_voltage(ks, sqrt_va, va, peak_log_b, peak_log_u):
+def _peak_voltage(log_opacity, va, peak_log_b, peak_log_u):
     """Return where eq. 11 stops increasing, but not below Va (``tunneling.paper_peak_voltage``).
 
-    np.interp on the table, its bin found from the log-uniform grid instead of by bisection.
+    From log(κ s sqrt(Va)); np.interp on the table, its bin found from the log-uniform grid
+    instead of by bisection.
     """
-    log_b = math.log((2.0 / 2.96) * ks * sqrt_va)
+    log_b = LOG_PEAK_FACTOR + log_opacity
     last = peak_log_b.size - 1
     position = (log_b - peak_log_b[0]) / (peak_log_b[last] - peak_log_b[0]) * last
     if not position > 0:
@@ -165,11 +174,32 @@ def _peak_voltage(ks, sqrt_va, va, peak_log_b, peak_log_u):
 
 
 @numba.njit(**JIT)
+def _log_current_at_va(branch, log_pre, c, va, log_va, r_minus_va, r_plus_va):
+    """Return log I of a paper-law branch at V_bulk = Va, without the slope.
+
+    The operations of ``tunneling.evaluate_intermediate`` (eq. 10, with its r∓ = sqrt(Va ∓ Va/2)
+    given as row constants) or ``tunneling.evaluate_high_voltage`` (eq. 11, q = sqrt(3)) at
+    V = Va, in the same order, so the values are the same to the bit.
+    """
+    if branch == HIGH:
+        q = math.sqrt(1.0 + 2.0 * va / va)
+        diff = math.exp(-c / va) - q * q * math.exp(-c * q / va)
+        return log_pre + 2.0 * log_va + math.log(diff)
+    em1 = math.expm1(-c * va / (r_plus_va + r_minus_va))
+    bracket = -(va - 0.5 * va) * em1 - va * (1.0 + em1)
+    return log_pre - c * r_minus_va + math.log(bracket)
+
+
+@numba.njit(**JIT)
 def _paper_branch_h(branch, x, v, log_rs, c0, c1, c2):
     """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch (``solver._branch_h``)."""
-    return (
-        log_rs + evaluate_branch(branch, x, log_or_nan(x), c0, c1, c2, 0.0)[0] - log_or_nan(v - x)
-    )
+    return _paper_branch_h_logs(branch, x, log_or_nan(x), log_or_nan(v - x), log_rs, c0, c1, c2)
+
+
+@numba.njit(**JIT)
+def _paper_branch_h_logs(branch, x, log_x, log_v_minus_x, log_rs, c0, c1, c2):
+    """:func:`_paper_branch_h` with log x and log(V − x) given (at x = Va: row constants)."""
+    return log_rs + evaluate_branch(branch, x, log_x, c0, c1, c2, 0.0)[0] - log_v_minus_x
 
 
 @numba.njit(**JIT)
@@ -181,8 +211,13 @@ def _solve_paper_point(
     va,
     sqrt_va,
     log_va,
+    log_v_minus_va,
+    r_minus_va,
+    r_plus_va,
     log_a,
     vth,
+    log_vth,
+    log_v_minus_vth,
     s,
     warm_ell,
     warm_regime,
@@ -200,8 +235,10 @@ def _solve_paper_point(
     """
     ks = KAPPA * s
     opacity = ks * sqrt_va
-    log_pre10 = log_prefactor_10(log_a, s)
-    log_g9 = log_ohmic_conductance(opacity, log_pre10)
+    log_s = math.log(s)  # log(s) once: eq. 10's prefactor, eq. 9's log conductance, eq. 11's peak
+    log_opacity = LOG_KAPPA + log_s + 0.5 * log_va
+    log_pre10 = LOG_CURRENT_SCALE + log_a - 2.0 * log_s
+    log_g9 = LOG_THREE_QUARTERS + log_opacity + log_pre10 - opacity
     log_pre_high = log_pre10 + math.log(0.55) - log_va
     c_high = (2.0 / 2.96) * ks * va * sqrt_va
     if rs == 0:
@@ -216,7 +253,7 @@ def _solve_paper_point(
                 math.nan,
                 0,
             )
-        if v > _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1]):
+        if v > _peak_voltage(log_opacity, va, peak_table[0], peak_table[1]):
             return math.nan, math.nan, INVALID, math.nan, 0
         return math.exp(high(v, log_v, log_pre_high, c_high, va)[0]), v, HIGH, math.nan, 0
     conductance = math.exp(log_g9)
@@ -225,16 +262,28 @@ def _solve_paper_point(
         return x_ohmic * conductance, x_ohmic, OHMIC, math.nan, 0
     h10_va = math.inf
     if v > va:
-        h10_va = _paper_branch_h(INTERMEDIATE, va, v, log_rs, log_pre10, ks, va)
+        h10_va = (
+            log_rs
+            + _log_current_at_va(INTERMEDIATE, log_pre10, ks, va, log_va, r_minus_va, r_plus_va)
+            - log_v_minus_va
+        )
     peak = math.nan
     if h10_va >= 0:
         branch, lower, upper, c0, c1 = INTERMEDIATE, vth, min(v, va), log_pre10, ks
     elif h10_va < 0:
-        peak = _peak_voltage(ks, sqrt_va, va, peak_table[0], peak_table[1])
+        peak = _peak_voltage(log_opacity, va, peak_table[0], peak_table[1])
         branch, lower, upper, c0, c1 = HIGH, va, min(v, peak), log_pre_high, c_high
     else:
         return math.nan, math.nan, INVALID, math.nan, 0
-    if _paper_branch_h(branch, lower, v, log_rs, c0, c1, va) >= 0:
+    if branch == HIGH:
+        h_lower = (
+            log_rs
+            + _log_current_at_va(HIGH, c0, c1, va, log_va, r_minus_va, r_plus_va)
+            - log_v_minus_va
+        )
+    else:
+        h_lower = _paper_branch_h_logs(branch, lower, log_vth, log_v_minus_vth, log_rs, c0, c1, va)
+    if h_lower >= 0:
         # The circuit line passes the law's jump: the current is set by the series resistance.
         return (v - lower) / rs, lower, JUMP, math.nan, 0
     if branch == HIGH and v > peak and _paper_branch_h(HIGH, peak, v, log_rs, c0, c1, va) < 0:
@@ -286,6 +335,7 @@ def _solve_all(
     iterations = 0
     n = voltage.size
     v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = vth = math.nan
+    log_vth = log_v_minus_vth = r_minus_va = r_plus_va = math.nan
     row_ok = False
     warm_ell, warm_regime = math.nan, -1
     for i in range(n):
@@ -311,6 +361,8 @@ def _solve_all(
             if paper:
                 vth = vth_in[i]
                 row_ok = row_ok and math.isfinite(vth) and vth > 0 and vth < va
+                log_vth, log_v_minus_vth = log_or_nan(vth), log_or_nan(v - vth)
+                r_minus_va, r_plus_va = math.sqrt(va - 0.5 * va), math.sqrt(va + 0.5 * va)
             if row_ok:
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
                 log_v, log_rs = log_or_nan(v), log_or_nan(rs)
@@ -334,8 +386,13 @@ def _solve_all(
                 va,
                 sqrt_va,
                 log_va,
+                log_v_minus_va,
+                r_minus_va,
+                r_plus_va,
                 log_a,
                 vth,
+                log_vth,
+                log_v_minus_vth,
                 s,
                 warm_ell,
                 warm_regime,
