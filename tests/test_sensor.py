@@ -23,6 +23,15 @@ def test_public_api_is_the_design_contract(a201):
     assert fsrbayes.load_sensor("a201").params["A0"] == 3.87e-18
 
 
+def test_a_sensor_stands_for_its_parameters_and_anything_else_is_refused_in_one_line(a201):
+    sensor = fsrbayes.load_sensor("a201")
+    assert fsrbayes.drift(sensor, 1.0, 1e5, 3600.0) == fsrbayes.drift(
+        dict(sensor.params), 1.0, 1e5, 3600.0
+    )
+    with pytest.raises(TypeError, match=r"params must be a mapping .* got list$"):
+        fsrbayes.current([1.0, 2.0], 1.0, 1e5, 0.0)
+
+
 def test_smooth_current_increases_in_voltage_and_stress(sensor_params):
     voltages = np.geomspace(1e-3, 10.0, 600)
     stresses = np.geomspace(1e4, 2.5e5, 40)[:, None]

@@ -12,6 +12,7 @@ Paredes-Madrid et al. 2017, eqs. (1), (4)–(11), (17)–(24) and Figure 17.
 """
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
@@ -56,6 +57,18 @@ class DomainError(ValueError):
 
 class DomainWarning(UserWarning):
     """Warned when invalid points are returned as NaN (``on_invalid="nan"``)."""
+
+
+def _parameters(params):
+    """Return the parameter mapping of ``params``: a mapping, or a sensor with ``.params``."""
+    if isinstance(params, Mapping):
+        return params
+    if isinstance(getattr(params, "params", None), Mapping):
+        return params.params
+    raise TypeError(
+        "params must be a mapping of parameter names to values (or a sensor, e.g. "
+        f"fsrbayes.load_sensor('a201')), got {type(params).__name__}"
+    )
 
 
 def _check_choice(name, value, choices):
@@ -245,6 +258,7 @@ def solve_current(
     ----------
     Paper eqs. (15), (17)–(21).
     """
+    params = _parameters(params)
     family = model_family(rheology)
     effects = _check_effect_params(params, effects)
     if load_steps is None:
@@ -304,8 +318,9 @@ def current(
 
     Parameters
     ----------
-    params : mapping
-        Canonical parameters (see the module docstring); arrays broadcast.
+    params : mapping or Sensor
+        Canonical parameters (see the module docstring); arrays broadcast. A sensor
+        (:func:`fsrbayes.load_sensor`) stands for its default parameters.
     voltage : array_like
         Sourcing voltage V_FSR in V (held constant by the amplifier of Figure 9c).
     stress : array_like
@@ -414,6 +429,7 @@ def current_history(
     Paper eq. (15) (superposition) with eqs. (5), (6), (19)–(21) at the momentary σ(t).
     """
     family = model_family(rheology)
+    params = _parameters(params)
     effects = _check_effect_params(params, effects)
     time = np.asarray(time, dtype=float)
     stress = history.at(time)
