@@ -18,6 +18,7 @@ from .narrative import narrative
 from .plan import FIGURE12, FULL, subset
 from .study import (
     RECOMMENDED_V,
+    ROLE_KEYS,
     degradation_share,
     figure7_curves,
     figure12_tests,
@@ -270,9 +271,8 @@ def _effect_guess(diagnosis):
     local optimum between each pair of test voltages.
     """
     guess = {}
-    candidates = diagnosis.as_dict()["candidates"]
     for step, effect in enumerate(diagnosis.effects, start=1):
-        for c in candidates:
+        for c in diagnosis.candidates:
             if c["step"] == step and c["effect"] == effect:
                 guess.update({name: p["median"] for name, p in c["parameters"].items()})
     return guess
@@ -321,7 +321,7 @@ def _diagnose_and_fit(data, plan, processes, seed, say):
         say("fits with the named effects: " + "; ".join(f"{k}: {v}" for k, v in extended.items()))
     for _, value in map_jobs(run_job, second, processes=processes, on_result=_report_result(say)):
         fit = fits[value["specimen"]]
-        for key in ("posterior", "draws", "result", "convergence", "gap", "laplace", "log_z"):
+        for key in ROLE_KEYS:
             fit[key].update(value[key])
         fit["seconds"] += value["seconds"]
     return diagnoses, [fits[s] for s in specimens], checks

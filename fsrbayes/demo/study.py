@@ -36,6 +36,7 @@ from ..physics.sensor import drift as model_drift
 __all__ = [
     "DEGRADED_LOSS",
     "RECOMMENDED_V",
+    "ROLE_KEYS",
     "crosscheck",
     "degradation_share",
     "observed_drifts",
@@ -102,6 +103,10 @@ def diagnose_sensor(job):
     return sensor, diagnosis
 
 
+ROLE_KEYS = ("posterior", "draws", "result", "convergence", "gap", "laplace", "log_z")
+""":func:`fit_specimen`'s per-role entries (each a dict role → value)."""
+
+
 def fit_specimen(job):
     """Laplace fits (evidence) and posterior draws of one specimen under each of ``models``.
 
@@ -128,9 +133,8 @@ def fit_specimen(job):
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(packed.sensor)
     started = time.perf_counter()
-    out = {"specimen": specimen, "sensor": packed.sensor, "log_z": {}}
-    keys = ("posterior", "draws", "result", "convergence", "gap", "laplace")
-    out.update({key: {} for key in keys})
+    out = {"specimen": specimen, "sensor": packed.sensor}
+    out.update({key: {} for key in ROLE_KEYS})
     with single_threaded_blas():
         for role, model in models.items():
             posterior = LogPosterior.for_sensor(packed, sensor, model=model)

@@ -195,6 +195,14 @@ def _sampler_and_settings(sampler, settings):
     return sampler, settings
 
 
+def _coordinates(coordinates):
+    """Return the coordinates a fit samples in (default :data:`FIT_COORDINATES`), checked."""
+    coordinates = FIT_COORDINATES if coordinates is None else coordinates
+    if coordinates not in COORDINATES:
+        raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+    return coordinates
+
+
 def _seed(rng):
     """Return an int seed from an int, a Generator or None (same seed, same chains)."""
     if isinstance(rng, (int, np.integer)):
@@ -280,9 +288,7 @@ def fit(
     -------
     FitResult
     """
-    coordinates = FIT_COORDINATES if coordinates is None else coordinates
-    if coordinates not in COORDINATES:
-        raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+    coordinates = _coordinates(coordinates)
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
@@ -355,9 +361,7 @@ def sample_posterior(
     FitResult
     """
     settings = FIT_SETTINGS if settings is None else settings
-    coordinates = FIT_COORDINATES if coordinates is None else coordinates
-    if coordinates not in COORDINATES:
-        raise ValueError(f"coordinates must be one of {COORDINATES}, got {coordinates!r}")
+    coordinates = _coordinates(coordinates)
     seed = _seed(rng)
     if resume and checkpoint is not None:  # a mismatched checkpoint is refused before any search
         check_checkpoint(checkpoint, _fingerprint(posterior, coordinates), settings.n_ensembles)
