@@ -22,7 +22,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.optimize import find_map
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.pinned import REFERENCE_SAMPLES, PinnedCoordinates
+from fsrbayes.inference.pinned import PinnedCoordinates
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from fsrbayes.inference.samplers.coordinates import SampledLogProb
@@ -104,7 +104,7 @@ def pinned(rig_posterior):
 
 def test_pinned_coordinates_solve_for_what_the_rig_pins(pinned, rig_posterior):
     posterior, _ = rig_posterior
-    assert 2 <= len(pinned.solved) <= REFERENCE_SAMPLES * posterior.data.n_tests
+    assert 2 <= len(pinned.solved) <= 2 * posterior.data.n_tests
     assert "sigma_rel" not in pinned.solved
     assert len(pinned.names) == posterior.ndim and pinned.names[0].startswith("log_I[")
     described = pinned.describe()
@@ -203,18 +203,14 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
         raise ValueError("the data pin no parameter's log-current at the anchor point")
 
     # a start the pinned coordinates cannot hold — walkers whose root search back from the
-    # log-currents fails, as where the model is far from the data — solves fewer parameters,
-    # and falls back on the parameters where even one is too many
+    # log-currents fails, as where the model is far from the data — falls back too
     rng = np.random.default_rng(3)
     near = result.map_u + 0.01 * rng.standard_normal((2, 20, result.posterior.ndim))
     far = result.map_u + 5.0 * rng.standard_normal((2, 20, result.posterior.ndim))
     undefined = np.full_like(near, np.nan)
     posterior, anchor = result.posterior, result.map_u
-    every = PinnedCoordinates(posterior, anchor).solved
-    assert fit_module._pinned(posterior, anchor, "auto", near).solved == every
-    fewer = fit_module._pinned(posterior, anchor, "auto", far)
-    assert fewer is None or fewer.solved == every[: len(fewer.solved)] != every
-    assert fit_module._pinned(posterior, anchor, "auto", undefined) is None
+    assert isinstance(fit_module._pinned(posterior, anchor, "auto", near), PinnedCoordinates)
+    assert fit_module._pinned(posterior, anchor, "auto", far) is None
     with pytest.raises(ValueError, match="no start position maps to the pinned coordinates"):
         fit_module._pinned(posterior, anchor, "pinned", undefined)
 
@@ -222,13 +218,3 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     assert fit_module._pinned(posterior, anchor, "auto", near) is None
     with pytest.raises(ValueError, match="pin no parameter"):
         fit_module._pinned(posterior, anchor, "pinned", near)
-
-
-def test_a_rigs_creep_law_is_pinned_too(pinned, rig_posterior):
-    """A divider rig pins the drift's course as well as the current at load: a creep-law
-    parameter is solved for (its pivot sits ~1e-5 of the current's, above the round-off floor)."""
-    posterior, anchor = rig_posterior
-    assert {"k2", "b2", "inv_b1"} & set(pinned.solved)
-    assert pinned.describe()["reference_time_s"] == [t for _, t in pinned.references]
-    # at most as many as asked, the first in pivot order
-    assert PinnedCoordinates(posterior, anchor, max_solved=2).solved == pinned.solved[:2]

@@ -408,13 +408,10 @@ def sample_posterior(
 def _pinned(posterior, anchor, coordinates, start):
     """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none).
 
-    At least ndim + 1 of each ensemble's ``start`` positions (E, W, ndim) must map to the pinned
-    coordinates and back: the others would start on copies of those, and stretch moves never
-    leave the affine hull of the start. Where fewer do (the root search from the optimum fails
-    far out along weakly pinned directions, more often the more parameters it solves), fewer
-    parameters are solved, one at a time in reverse pivot order; ``"auto"`` falls back on the
-    prior-scaled parameters where even one is too many (a model far from the data: a sharp,
-    strongly curved posterior).
+    ``"auto"`` also falls back where fewer than ndim + 1 of an ensemble's ``start`` positions
+    (E, W, ndim) map to the pinned coordinates and back (a model far from the data: a sharp,
+    strongly curved posterior where the root search from the optimum fails). The others would
+    start on copies of those, and stretch moves never leave the affine hull of the start.
     """
     if coordinates == "prior":
         return None
@@ -425,9 +422,6 @@ def _pinned(posterior, anchor, coordinates, start):
             raise
         return None
     held = min(round_trips(walkers, pinned)[1].sum() for walkers in start)
-    while held <= posterior.ndim and len(pinned.solved) > 1:
-        pinned = PinnedCoordinates(posterior, anchor, max_solved=len(pinned.solved) - 1)
-        held = min(round_trips(walkers, pinned)[1].sum() for walkers in start)
     if coordinates == "auto" and held <= posterior.ndim:
         return None
     if held == 0:

@@ -9,8 +9,8 @@ In the prior-scaled coordinates u the posterior is then a thin, curved sheet —
 a quadratic map straightens only in part.
 
 What. :class:`PinnedCoordinates` replaces K of the sampled parameters u_P by the K quantities the
-data pin hardest, y_k = log I(test c_k, t_k; u) at one of a test's reference samples (the
-current at load, and along its drift), and keeps the other parameters u_F:
+data pin hardest, y_k = log I(test c_k, t_k; u) at the first or the last sample of a test (the
+current at load and its drift), and keeps the other parameters u_F:
 
     w = (y_1 … y_K, u_F),      log p_w(w) = log p_u(u(w)) − log|det ∂y/∂u_P|,
 
@@ -18,15 +18,12 @@ so the priors and the posterior are unchanged; only the coordinates the walkers 
 new. In w the pinned directions are the y's themselves — narrow, nearly Gaussian and nearly
 independent of u_F — and what remains is the data's weak information on the other parameters.
 
-Which. Every test offers :data:`REFERENCE_SAMPLES` reference samples, evenly spaced over its real
-samples (the first and the last among them): on a log-spaced time grid they span the drift's
-decades, so the creep law's parameters (the drift's amplitude at several times) can be pinned as
-well as the current at load. At the maximum a posteriori point (the *anchor*) the Jacobian
-∂y/∂u over every reference sample and all non-noise parameters is factorised by QR with column
-pivoting; parameters are taken in pivot order while their pivot stays above
-:data:`RANK_TOLERANCE` of the largest (at most one per reference point), and the reference points
-by a second pivoted QR on those columns. It works for any sensor file, readout and load history:
-y is the model current the likelihood itself compares.
+Which. At the maximum a posteriori point (the *anchor*) the Jacobian ∂y/∂u over both samples of
+every test and all non-noise parameters is factorised by QR with column pivoting; parameters
+are taken in pivot order while their pivot stays above :data:`RANK_TOLERANCE` of the largest (at
+most one per reference point), and the reference points by a second pivoted QR on those
+columns. It works for any sensor file, readout and load history: y is the model current the
+likelihood itself compares.
 
 The inverse u(w) is a K-dimensional root search, by Broyden's method from the linearisation at
 the anchor (the anchor's inverse Jacobian updated by every step, steps capped at :data:`MAX_STEP`
@@ -41,18 +38,11 @@ import scipy.linalg
 
 from .posterior import LogPosterior, noise_parameters
 
-__all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "REFERENCE_SAMPLES", "MAX_STEP"]
+__all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "MAX_STEP"]
 
-REFERENCE_SAMPLES = 5
-"""Reference samples per test (fewer where a test has fewer real samples)."""
-RANK_TOLERANCE = 5e-6
-"""A parameter is solved for only while its pivot (the pivoted QR's diagonal: how much y moves
-per prior width, beyond what the parameters before it explain) stays above this share of the
-largest. Below it the root search and the log-determinant's finite differences would lose the
-parameter to round-off (a pivot of 5e-6 × 10 moves y by ~1.5e-10 over a finite-difference step,
-~1e4 times the model's round-off). A divider rig's creep parameters sit between 1e-5 and 1e-4
-of the current at load: solved, they make its posterior near-Gaussian (BENCHMARKS.md, "Rig
-posteriors")."""
+RANK_TOLERANCE = 1e-4
+"""A parameter is solved for only while the data pin it within this share of the best-pinned one
+(the singular values of the pivoted QR): the root search loses the rest to round-off."""
 MAX_STEP = 2.0
 """Largest root-search step of a solved parameter, in prior widths (u units)."""
 FD_STEP = 3e-6
@@ -67,18 +57,11 @@ still unsolved after this many has none nearby and stops costing model evaluatio
 
 
 def _reference_times(data):
-    """Each test's :data:`REFERENCE_SAMPLES` reference sample times, shape (C, REFERENCE_SAMPLES).
-
-    Evenly spaced over the test's real samples, the first and the last included; a test with
-    fewer real samples repeats some (a repeated reference adds nothing to the pivoted QR).
-    """
-    times = np.empty((data.n_tests, REFERENCE_SAMPLES))
-    for test, mask in enumerate(data.mask):
-        real = np.flatnonzero(mask)
-        times[test] = data.time_s[
-            test, real[np.linspace(0, real.size - 1, times.shape[1]).round().astype(int)]
-        ]
-    return times
+    """Each test's first and last real sample times, shape (C, 2)."""
+    rows = np.arange(data.n_tests)
+    first = np.argmax(data.mask, axis=1)
+    last = data.mask.shape[1] - 1 - np.argmax(data.mask[:, ::-1], axis=1)
+    return np.stack([data.time_s[rows, first], data.time_s[rows, last]], axis=1)
 
 
 class PinnedCoordinates:
@@ -91,21 +74,19 @@ class PinnedCoordinates:
     anchor : ndarray, shape (ndim,)
         A point in u where the data's pins are chosen and the root search is linearised (the
         maximum a posteriori point).
-    max_solved : int, optional
-        Solve at most this many parameters (the first in pivot order); default: all whose pivot
-        passes :data:`RANK_TOLERANCE`.
 
     Attributes
     ----------
     solved : tuple of str
         The parameters replaced by log-currents, in pivot order.
-    references : tuple of (int, float)
-        Where each log-current is taken: the test (row of the data) and the time (s).
+    references : tuple of (int, str)
+        Where each log-current is taken: the test (row of the data) and its ``"first"`` or
+        ``"last"`` sample.
     names : tuple of str
         Names of the sampled coordinates w.
     """
 
-    def __init__(self, posterior, anchor, max_solved=None):
+    def __init__(self, posterior, anchor):
         self.posterior = posterior
         self.anchor = np.asarray(anchor, dtype=float).copy()
         self._times = _reference_times(posterior.data)
@@ -121,20 +102,16 @@ class PinnedCoordinates:
         k = int(np.count_nonzero(pinned >= RANK_TOLERANCE * pinned.max())) if pinned.size else 0
         if k == 0:
             raise ValueError("the data pin no parameter's log-current at the anchor point")
-        k = k if max_solved is None else max(1, min(k, int(max_solved)))
         self._solved = candidates[cols[:k]]
         _, _, rows = scipy.linalg.qr(jac[:, cols[:k]].T, pivoting=True, mode="economic")
         self._rows = np.sort(rows[:k])
         self._free = np.array([i for i in range(posterior.ndim) if i not in set(self._solved)])
         self.solved = tuple(posterior.names[i] for i in self._solved)
-        per_test = self._times.shape[1]
-        self.references = tuple(
-            (int(r) // per_test, float(self._times.flat[r])) for r in self._rows
-        )
-        self.names = tuple(f"log_I[{c},{t:.4g}s]" for c, t in self.references) + tuple(
+        self.references = tuple((int(r) // 2, ("first", "last")[r % 2]) for r in self._rows)
+        self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
             posterior.names[i] for i in self._free
         )
-        data = posterior.data.take(self._rows // per_test, self._times.flat[self._rows])
+        data = posterior.data.take(self._rows // 2, self._times.flat[self._rows])
         self._at_references = LogPosterior(
             data,
             posterior.prior,
