@@ -113,6 +113,10 @@ BAD = {
         r"data.csv line 6, column sensor: unknown sensor 'a301': expected one of \['a201', "
         r"'fsr402'\]",
     ),
+    "sensor name no path can hold": (  # longer than a file name may be: no OSError
+        replace_row(4, "s1," + "x" * 5000 + ",2.0,100000,10,5.01e-5"),
+        r"data.csv line 6, column sensor: unknown sensor 'x+…: expected one of",
+    ),
     "non-numeric": (
         replace_row(1, "s1,a201,1.0,100000,10,1.01e-6A"),
         r"data.csv line 3, column current_A: expected a number, got '1.01e-6A'",

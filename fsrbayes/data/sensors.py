@@ -219,9 +219,9 @@ def load_sensor(name):
         For an unknown name (listing the known ones) or an invalid file.
     """
     path = Path(name)
-    if path.suffix == ".toml" or path.is_file():
-        if not path.is_file():
-            raise ValueError(f"sensor file {path} does not exist")
+    if path.suffix == ".toml" or _is_file(path):
+        if not _is_file(path):
+            raise ValueError(f"sensor file {_shown(path)} does not exist")
         return _parse(path, _read(path))
     wanted = _normalise(str(name))
     known = []
@@ -233,5 +233,24 @@ def load_sensor(name):
         }:
             return sensor
     raise ValueError(
-        f"unknown sensor {name!r}: expected one of {sorted(known)} (or an alias, or a .toml path)"
+        f"unknown sensor {_shown(name)}: expected one of {sorted(known)} (or an alias, or a .toml "
+        "path)"
     )
+
+
+def _is_file(path):
+    """Whether ``path`` is a file.
+
+    False for what cannot be a path at all: a name longer than the file system allows, or with a
+    NUL byte (a mangled CSV cell).
+    """
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def _shown(name, limit=60):
+    """``repr(str(name))``, cut to ``limit`` characters so that an error stays one short line."""
+    text = repr(str(name))
+    return text if len(text) <= limit else text[: limit - 1] + "…"
