@@ -46,7 +46,8 @@ def test_the_default_pinned_coordinates_hold_every_draw_of_the_posterior(null_fi
     """Pinned coordinates must not cut the posterior: every draw of a converged fit in the
     prior-scaled parameters (no root search involved) maps to them and back. A proposal without
     an inverse is rejected, so a region the inverse cannot reach is never sampled — a truncated
-    posterior that converges fast (a tried rank tolerance of 5e-6 lost 5 % of these draws)."""
+    posterior that converges fast (what solving weakly pinned parameters does: BENCHMARKS.md,
+    "Rig posteriors")."""
     from fsrbayes.inference.pinned import PinnedCoordinates
     from fsrbayes.inference.samplers.coordinates import round_trips
 

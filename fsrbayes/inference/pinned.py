@@ -42,7 +42,11 @@ __all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "MAX_STEP"]
 
 RANK_TOLERANCE = 1e-4
 """A parameter is solved for only while the data pin it within this share of the best-pinned one
-(the singular values of the pivoted QR): the root search loses the rest to round-off."""
+(the singular values of the pivoted QR). Below it the root search loses a parameter to round-off,
+and, more to the point, parameters the data pin only weakly get solved for: over the posterior's
+spread the map u → w then stops being one-to-one (no root, or a root elsewhere), proposals there
+are rejected and the sampled posterior is cut short (BENCHMARKS.md, "Rig posteriors";
+``tests/test_fit_checks.py`` checks that a converged fit's draws all map back)."""
 MAX_STEP = 2.0
 """Largest root-search step of a solved parameter, in prior widths (u units)."""
 FD_STEP = 3e-6
