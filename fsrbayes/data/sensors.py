@@ -219,8 +219,9 @@ def load_sensor(name):
         For an unknown name (listing the known ones) or an invalid file.
     """
     path = Path(name)
-    if path.suffix == ".toml" or _is_file(path):
-        if not _is_file(path):
+    is_file = _is_file(path)
+    if path.suffix == ".toml" or is_file:
+        if not is_file:
             raise ValueError(f"sensor file {_shown(path)} does not exist")
         return _parse(path, _read(path))
     wanted = _normalise(str(name))
