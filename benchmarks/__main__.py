@@ -40,7 +40,9 @@ BENCHMARKS = {
     "csv": lambda: csv_read.report(csv_read.run()),
     "rig-read": lambda: rig_read.report(rig_read.run()),
     "predict": lambda: predict.report(predict.run()),
-    "likelihood": lambda: likelihood.report(likelihood.run()),
+    "likelihood": lambda: "\n".join(
+        [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
+    ),
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
     "rig-fit": lambda: rig_fit.report(rig_fit.run()),
     "evidence": lambda: evidence.report(evidence.run()),

@@ -46,3 +46,51 @@ def report(r):
         f"{r['per_s']:,.0f} evaluations/s vectorised over {r['walkers']} walkers, "
         f"{r['single_per_s']:,.0f}/s one at a time"
     )
+
+
+def run_rig(n_walkers=52, repeats=20, ramps=(0.3, 0.2, 0.45, 0.25)):
+    """Time the divider rig's log-posterior with its loadings as steps and with fitted ramps.
+
+    The default bench rig (FSR 402 divider, 10-bit ADC, four weights × 10 min at 100 Hz,
+    log-spaced bins), its weights settling over ``ramps`` and the log silent about it: the same
+    walkers evaluated by the posterior that reads each loading as a step and by the one that
+    samples a ramp per test (16 load steps in the creep instead of one), alternately.
+    """
+    import tempfile
+    from pathlib import Path
+
+    from fsrbayes.data import read_csv
+    from fsrbayes.data.rigsim import simulate_rig, write_rig
+
+    text, truth = simulate_rig(1, seed=3, ramp_s=ramps, ramp_column=False)
+    with tempfile.TemporaryDirectory() as folder:
+        data = SpecimenData.select(read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0]))
+    params = next(iter(truth["specimens"].values()))["params"] | {"sigma_rel": 0.002}
+    params |= {f"ramp_s[{k}]": r for k, r in enumerate(ramps)}
+    rng = np.random.default_rng(0)
+    timings = {}
+    for ramp in ("given", "fitted"):
+        posterior = LogPosterior.for_sensor(data, fsrbayes.load_sensor("fsr402"), ramp=ramp)
+        u0 = posterior.prior.to_unconstrained(np.array([params[n] for n in posterior.names]))
+        timings[ramp] = (posterior, u0 + 1e-4 * rng.standard_normal((n_walkers, posterior.ndim)))
+    best = {ramp: float("inf") for ramp in timings}
+    for _ in range(repeats):
+        for ramp, (posterior, u) in timings.items():
+            start = time.perf_counter()
+            posterior(u)
+            best[ramp] = min(best[ramp], time.perf_counter() - start)
+    return {
+        "walkers": n_walkers,
+        "points": data.n_obs,
+        "tests": data.n_tests,
+        "per_s": {ramp: n_walkers / seconds for ramp, seconds in best.items()},
+    }
+
+
+def report_rig(r):
+    step, ramp = r["per_s"]["given"], r["per_s"]["fitted"]
+    return (
+        f"log-posterior of the divider rig ({r['tests']} tests, {r['points']} bins, "
+        f"{r['walkers']} walkers): loadings as steps {step:,.0f}/s, a fitted ramp per test "
+        f"{ramp:,.0f}/s ({step / ramp:.2f}x the cost)"
+    )

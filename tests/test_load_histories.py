@@ -9,6 +9,7 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.population import Population
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import predict, write_point_fit
 from fsrbayes.physics.loading import StressHistory
@@ -257,7 +258,7 @@ def test_a_fitted_ramp_is_the_given_ramp_at_its_value_and_the_data_find_it(tmp_p
     sensor = load_sensor("fsr402")
     known = LogPosterior.for_sensor(SpecimenData.select(given), sensor)
     fitted = LogPosterior.for_sensor(SpecimenData.select(hidden), sensor, ramp="fitted")
-    assert fitted.names == (*known.names, "ramp_s")
+    assert fitted.names == (*known.names, "ramp_s[0]")
 
     def at(posterior, ramps):
         return np.array([[params.get(n, r) for n in posterior.names] for r in ramps])
@@ -273,6 +274,35 @@ def test_a_fitted_ramp_is_the_given_ramp_at_its_value_and_the_data_find_it(tmp_p
     # and read as a step (no ramp) the same data fit far worse
     step = LogPosterior.for_sensor(SpecimenData.select(hidden), sensor)
     assert step.log_likelihood_pointwise(at(step, [0]))[0].sum() < log_like.max() - 1000
+
+
+def test_every_test_has_its_own_fitted_ramp_and_its_readings_find_it(tmp_path):
+    # two weights placed by hand, one settling over 0.3 s and the other over 0.6 s: a ramp per
+    # test, each pinned by its own test's readings and by nothing else
+    data, truth = _hidden_ramp(tmp_path, (0.3, 0.6), weights_g=(200.0, 150.0))
+    assert truth["ramp_s"] == [0.3, 0.6] and [t.ramp_s for t in data.tests] == [0.0, 0.0]
+    params = {**truth["specimens"][data.specimens[0]]["params"], "sigma_rel": 0.002}
+    posterior = LogPosterior.for_sensor(
+        SpecimenData.select(data), load_sensor("fsr402"), ramp="fitted"
+    )
+    assert posterior.names[-2:] == ("ramp_s[0]", "ramp_s[1]")
+    assert posterior.prior.dists[-1] == posterior.prior.dists[-2]  # the sensor's ramp_s prior
+    # the experimenter's hand, not the sensor: no population over ramps in a hierarchical fit
+    assert not any(n.startswith("ramp_s") for n in Population(posterior.prior).names)
+    ramps = np.linspace(0.2, 0.7, 26)
+    for k, (truth_k, other) in enumerate(((0.3, 0.6), (0.6, 0.3))):
+        x = np.array([[params.get(n, np.nan) for n in posterior.names] for _ in ramps])
+        x[:, posterior.names.index(f"ramp_s[{k}]")] = ramps
+        x[:, posterior.names.index(f"ramp_s[{1 - k}]")] = other
+        points = posterior.log_likelihood_pointwise(x)  # (W, N): the samples test by test
+        test_of = np.repeat(np.arange(2), posterior.data.mask.sum(axis=1))
+        log_like = np.stack([points[:, test_of == c].sum(axis=1) for c in (0, 1)], axis=1)
+        assert ramps[np.argmax(log_like[:, k])] == pytest.approx(truth_k, abs=0.021)
+        assert np.ptp(log_like[:, 1 - k]) == 0.0  # the other test does not see this ramp
+    # drifts count from each test's own ramp's end
+    x = np.array([[params.get(n, r) for n in posterior.names] for r in (0.3, 0.6)])
+    x[:, -2:] = [[0.3, 0.6], [0.3, 0.6]]
+    assert np.array_equal(posterior.loading_end(x), [0.3, 0.6])
 
 
 def test_the_fit_checks_point_a_hidden_ramp_at_the_loading_and_not_a_given_one(tmp_path):
@@ -349,17 +379,19 @@ def test_the_cli_simulates_a_hidden_ramp_and_refuses_to_fit_a_given_one(tmp_path
 @pytest.mark.slow
 def test_a_fit_with_a_fitted_ramp_recovers_a_hidden_ramp_and_the_sensor(tmp_path):
     # the default bench rig (10-bit ADC, four weights) for 120 s each, every weight settling
-    # over 0.3 s and the log silent about it: with the ramp sampled the fit converges and every
-    # physical parameter's 90 % interval holds the truth (~7 min on 2 cores)
+    # in its own time (0.2–0.45 s) and the log silent about it: with a ramp sampled per test
+    # the fit converges, every physical parameter's 90 % interval holds the truth and every
+    # ramp is found
     from dataclasses import replace
 
     import fsrbayes
     from fsrbayes.inference import FIT_SETTINGS
     from fsrbayes.physics.parameters import physical_parameters
 
+    ramps = (0.3, 0.2, 0.45, 0.25)
     data, truth = _hidden_ramp(
         tmp_path,
-        0.3,
+        ramps,
         reading="adc_counts",
         weights_g=(133.0, 170.0, 210.0, 255.0),
         duration_s=120.0,
@@ -377,4 +409,6 @@ def test_a_fit_with_a_fitted_ramp_recovers_a_hidden_ramp_and_the_sensor(tmp_path
         if n in physical_parameters() and not low[i] <= params[n] <= high[i]
     ]
     assert not outside
-    assert median[names.index("ramp_s")] == pytest.approx(0.3, rel=0.01)
+    for k, ramp in enumerate(ramps):
+        assert low[names.index(f"ramp_s[{k}]")] <= ramp <= high[names.index(f"ramp_s[{k}]")]
+        assert median[names.index(f"ramp_s[{k}]")] == pytest.approx(ramp, rel=0.01)

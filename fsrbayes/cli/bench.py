@@ -128,10 +128,10 @@ def add_bench_commands(sub):
     )
     rig.add_argument(
         "--ramp",
-        type=float,
-        default=0.0,
-        help="seconds the first weight takes to settle, rising linearly (default 0: a step); "
-        "written in a ramp_s column unless --hide-ramp",
+        default="0",
+        help="seconds each test's first weight takes to settle, rising linearly: one number, "
+        "or one per test, comma-separated (default 0: a step); written in a ramp_s column "
+        "unless --hide-ramp",
     )
     rig.add_argument(
         "--hide-ramp",

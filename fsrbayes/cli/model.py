@@ -254,6 +254,11 @@ def cmd_simulate(args):
     return 0
 
 
+def _one_or_many(values):
+    """Return a single number as itself (every test), several as a list (one per test)."""
+    return values[0] if len(values) == 1 else list(values)
+
+
 def cmd_simulate_rig(args):
     """Simulate a divider rig's log (dead weights from rest or a staircase), with known truth."""
     from ..data.rigsim import simulate_rig, write_rig
@@ -273,7 +278,7 @@ def cmd_simulate_rig(args):
             effects=args.effect or (),
             protocol=args.protocol,
             rest_s=args.rest,
-            ramp_s=args.ramp,
+            ramp_s=_one_or_many(floats(args.ramp, "ramp")),
             ramp_column=not args.hide_ramp,
             sensor=args.sensor,
             weights_g=tuple(floats(args.weights_g, "weights-g")),

@@ -65,9 +65,11 @@ def simulate_rig(
     (load–unload–reload; the open divider reads a few counts meanwhile). With
     ``weight_from_start`` the load column holds the first weight from the logger's first row, as
     when the experimenter writes the weight beside the log: only the reading shows the landing.
-    ``ramp_s`` > 0 lets the first weight settle linearly over that many seconds (a hand-placed
-    weight; simulated as 400 equal steps) and writes a ``ramp_s`` column — unless ``ramp_column``
-    is False: the ramp is then in the readings only, as in a log whose ramps nobody measured.
+    ``ramp_s`` > 0 lets each test's first weight settle linearly over that many seconds (a
+    hand-placed weight; simulated as 400 equal steps) — one number for every test, or one per
+    test (each placement settles in its own time) — and writes a ``ramp_s`` column, unless
+    ``ramp_column`` is False: the ramps are then in the readings only, as in a log whose ramps
+    nobody measured.
 
     Parameters
     ----------
@@ -95,8 +97,6 @@ def simulate_rig(
         raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
     if protocol not in ("from-rest", "staircase"):
         raise ValueError(f"protocol must be 'from-rest' or 'staircase', got {protocol!r}")
-    if ramp_s < 0:
-        raise ValueError(f"ramp_s must be >= 0 s, got {ramp_s!r}")
     if rest_s < 0 or (rest_s and protocol != "staircase"):
         raise ValueError(f"rest_s must be >= 0 and is for a staircase, got {rest_s!r}")
     scale = {"s": 1.0, "min": 60.0, "ms": 1e-3}
@@ -123,6 +123,12 @@ def simulate_rig(
     else:
         logger_t = np.arange(0.0, setup["pre_s"] + held, step)
         tests = [(f"w{j + 1}", [g], np.zeros(1)) for j, g in enumerate(weights)]
+    ramps = np.atleast_1d(np.asarray(ramp_s, dtype=float))
+    if ramps.ndim != 1 or ramps.size not in (1, len(tests)) or not np.all(ramps >= 0):
+        raise ValueError(
+            f"ramp_s must be >= 0 s, one number or one per test ({len(tests)}), got {ramp_s!r}"
+        )
+    ramps = np.broadcast_to(ramps, (len(tests),))
     onset = setup["pre_s"] + step * rng.uniform(0.1, 0.9)  # between two samples
     top = 2 ** setup["adc_bits"] - 1
     lsb = setup["adc_vref_V"] / 2 ** setup["adc_bits"]
@@ -132,7 +138,7 @@ def simulate_rig(
     force_scale = 1.0 if force_unit == "g" else STANDARD_GRAVITY / 1000.0
     header = ["specimen", "sensor", "test", time_col, f"force_{force_unit}", "supply_V", "rm_ohm"]
     header += ["adc_bits", "adc_vref_V"] if reading == "adc_counts" else []
-    written_ramp = ramp_s > 0 and ramp_column
+    written_ramp = bool(np.any(ramps > 0)) and ramp_column
     header += ["ramp_s"] if written_ramp else []
     header += [reading]
     lines = [",".join(header)]
@@ -144,7 +150,7 @@ def simulate_rig(
         "protocol": protocol,
         "rest_s": float(rest_s),
         "weight_from_start": bool(weight_from_start),
-        "ramp_s": float(ramp_s),
+        "ramp_s": float(ramps[0]) if np.ndim(ramp_s) == 0 else ramps.tolist(),
         "effects": effect_params,
         "specimens": {},
         "seed": seed,
@@ -156,7 +162,7 @@ def simulate_rig(
             **{p: v for values in effect_params.values() for p, v in values.items()},
         }
         truth["specimens"][name] = {"params": params}
-        for label, grams, starts in tests:
+        for (label, grams, starts), ramp in zip(tests, ramps, strict=True):
             since = logger_t - onset
             # the weight on the rig at each logger time (rows at a step's time see the new one)
             index = np.searchsorted(starts, since, side="right") - 1
@@ -170,18 +176,18 @@ def simulate_rig(
                 if rest_s and k < len(grams) - 1:
                     step_at.append(starts[k] + held)
                     step_g.append(-g)
-            if ramp_s > 0:  # the first weight settles over ramp_s
+            if ramp > 0:  # the first weight settles over the test's ramp
                 fine = 400
-                step_at = list(ramp_s * np.arange(fine) / fine) + step_at[1:]
+                step_at = list(ramp * np.arange(fine) / fine) + step_at[1:]
                 step_g = [step_g[0] / fine] * fine + step_g[1:]
             area = sensor.area_m2
             load = np.array(step_g) * STANDARD_GRAVITY / 1000.0 / area
             t_on = np.maximum(since[on], 0.0)[None]
             steps = (np.array(step_at)[None], load[None])
             momentary = load_of_steps(*steps, t_on)
-            if ramp_s > 0:  # the load itself rises linearly; the creep follows the 400 steps
-                rising = t_on < ramp_s
-                momentary[rising] = load[:fine].sum() * np.maximum(t_on[rising] / ramp_s, 1e-3)
+            if ramp > 0:  # the load itself rises linearly; the creep follows the 400 steps
+                rising = t_on < ramp
+                momentary[rising] = load[:fine].sum() * np.maximum(t_on[rising] / ramp, 1e-3)
             current = solve_current(
                 params,
                 supply,
@@ -201,7 +207,7 @@ def simulate_rig(
             prefix = f"{name},{sensor.name},{label}"
             extra = (
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
-            ) + (f",{ramp_s!r}" if written_ramp else "")
+            ) + (f",{float(ramp)!r}" if written_ramp else "")
             lines += [
                 f"{prefix},{tt / scale[time_unit]:.9g},{f:g},{supply!r},{rm!r}{extra},{r}"
                 for tt, f, r in zip(logger_t, force, column, strict=True)

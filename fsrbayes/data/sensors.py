@@ -85,7 +85,8 @@ class Sensor:
             ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or
             ``"kalantari"`` (eq. 14).
         noise : tuple of str
-            Likelihood parameters to append (``sigma_rel``; ``nu`` for Student-t).
+            Likelihood parameters to append (``sigma_rel``; ``nu`` for Student-t); an indexed
+            name (``ramp_s[2]``: one test's loading ramp) takes the prior of its base name.
 
         Returns
         -------
@@ -93,7 +94,9 @@ class Sensor:
             In a stable order: tunneling/contact, rheology, effects, noise.
         """
         names = model_parameters(model) + tuple(noise)
-        return tuple(n for n in names if n in self.priors and not self.priors[n].is_fixed)
+        return tuple(
+            n for n in names if _base(n) in self.priors and not self.priors[_base(n)].is_fixed
+        )
 
     def prior_for(self, model="burgers", noise=("sigma_rel",)):
         """Return the joint prior over what ``model`` samples (:meth:`free_parameters`).
@@ -104,7 +107,8 @@ class Sensor:
             Can ``sample``, evaluate ``log_prob`` and map to and from the sampler's
             unconstrained space.
         """
-        return JointPrior.from_priors(self.priors, self.free_parameters(model, noise))
+        names = self.free_parameters(model, noise)
+        return JointPrior.from_priors({n: self.priors[_base(n)] for n in names}, names)
 
     @property
     def prior(self):
@@ -120,6 +124,11 @@ class Sensor:
             f"Sensor({self.name!r}, {self.description!r}, area={self.area_m2:g} m², "
             f"source={str(self.source)!r})"
         )
+
+
+def _base(name):
+    """Return the parameter whose prior an indexed name takes: ``ramp_s[2]`` → ``ramp_s``."""
+    return name.split("[", 1)[0]
 
 
 def _read(path):

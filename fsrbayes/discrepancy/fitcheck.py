@@ -144,7 +144,8 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
                 + (
                     "a weight placed by hand rises over a fraction of a second; fit its length "
                     "(fsrbayes fit --ramp fitted, or a ramp_s column)"
-                    if "ramp_s" not in posterior.names and posterior.data.ramp_s is None
+                    if not any(n.startswith("ramp_s[") for n in posterior.names)
+                    and posterior.data.ramp_s is None
                     else "the loading's ramp is not the bench's, or a process faster than the "
                     "model's creep"
                 ),

@@ -279,9 +279,10 @@ def fit(
         way. Ensemble sampler only.
     ramp : {"given", "fitted"}
         How each test's first loading reaches its weight: a step at the onset or the ramp of
-        the data's ``ramp_s`` column (``"given"``), or a linear ramp whose length ``ramp_s`` —
-        one per specimen, shared by its tests — is sampled with its prior (``"fitted"``; for
-        hand-placed weights whose settling nobody measured; refused when the data give
+        the data's ``ramp_s`` column (``"given"``), or a linear ramp per test whose length
+        ``ramp_s[k]`` (k: the test's row, in the specimen's test order) is sampled with the
+        sensor's ``ramp_s`` prior (``"fitted"``; for hand-placed weights whose settling nobody
+        measured — each placement settles in its own time; refused when the data give
         ``ramp_s``).
 
     Returns

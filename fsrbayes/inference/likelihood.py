@@ -96,6 +96,9 @@ class SpecimenData:
         ``stress_Pa`` at t = 0.
     ramp_s : ndarray, shape (C,), optional
         Each test's loading ramp in s (its first :data:`RAMP_STEPS` steps stand for it).
+    ramp_index : ndarray of int, shape (C,), optional
+        Which sampled loading ramp (``ramp_s[k]`` of a fit with ``ramp="fitted"``) each row's
+        first loading follows: its test's. None: row k follows ``ramp_s[k]``.
     """
 
     specimen: str
@@ -113,6 +116,7 @@ class SpecimenData:
     step_time: np.ndarray = None
     step_size: np.ndarray = None
     ramp_s: np.ndarray = None
+    ramp_index: np.ndarray = None
 
     @classmethod
     def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
@@ -237,10 +241,10 @@ class SpecimenData:
     def ramped(self, ramp_s, time_s):
         """Load steps and momentary load with every test's first loading spread over ``ramp_s``.
 
-        A sampled loading ramp (one length per parameter set, broadcasting as (W, 1, 1)): each
-        test's first load step becomes :data:`RAMP_STEPS` equal steps at ramp_s·k/n for the
-        creep, and the contact and area laws see the load rise linearly — as a ramp given in the
-        data (:meth:`load_at`).
+        Sampled loading ramps, shape (W, C) — each parameter set's ramp of every test — or (W,)
+        for one ramp shared by the tests: each test's first load step becomes
+        :data:`RAMP_STEPS` equal steps at ramp_s·k/n for the creep, and the contact and area
+        laws see the load rise linearly — as a ramp given in the data (:meth:`load_at`).
 
         Returns
         -------
@@ -248,7 +252,8 @@ class SpecimenData:
             For :func:`~fsrbayes.physics.sensor.solve_current`'s ``load_steps``.
         load : ndarray, shape (W, C, T)
         """
-        ramp = np.asarray(ramp_s, dtype=float).reshape(-1, 1)
+        ramp = np.atleast_1d(np.asarray(ramp_s, dtype=float))
+        ramp = ramp.reshape(ramp.shape[0], -1)
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
         )
@@ -284,7 +289,12 @@ class SpecimenData:
             step_time=rows(self.step_time),
             step_size=rows(self.step_size),
             ramp_s=rows(self.ramp_s),
+            ramp_index=self.ramp_rows()[tests],
         )
+
+    def ramp_rows(self):
+        """Which sampled loading ramp each row follows, shape (C,) (:attr:`ramp_index`)."""
+        return np.arange(self.n_tests) if self.ramp_index is None else self.ramp_index
 
     def series(self):
         """Series resistance of each test's circuit, shape (C,) (zeros at constant voltage)."""
@@ -317,6 +327,7 @@ class SpecimenData:
             self.step_time,
             self.step_size,
             self.ramp_s,
+            self.ramp_index,
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())

@@ -14,12 +14,29 @@ from ..physics.models import model_family, model_parameters, parse_model
 from ..physics.sensor import solve_current
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 
-__all__ = ["LogPosterior", "PriorScaledTarget", "RAMPS", "noise_parameters", "nuisance_parameters"]
+__all__ = [
+    "LogPosterior",
+    "PriorScaledTarget",
+    "RAMPS",
+    "noise_parameters",
+    "nuisance_parameters",
+    "ramp_names",
+]
 
 RAMPS = ("given", "fitted")
 """How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
-of the data's ``ramp_s`` column; ``"fitted"`` — a linear ramp whose length ``ramp_s`` (one per
-specimen, shared by its tests) is sampled with its prior."""
+of the data's ``ramp_s`` column; ``"fitted"`` — a linear ramp per test, whose length
+``ramp_s[k]`` (k: the test's row in the specimen's data) is sampled with the sensor's ``ramp_s``
+prior: every hand-placed weight settles in its own time."""
+
+
+def ramp_names(n_tests):
+    """Names of the sampled loading ramps of ``n_tests`` tests: ``ramp_s[0]`` … in test order."""
+    return tuple(f"ramp_s[{k}]" for k in range(n_tests))
+
+
+def _is_ramp(name):
+    return name.startswith("ramp_s[")
 
 
 def noise_parameters(likelihood):
@@ -30,11 +47,14 @@ def noise_parameters(likelihood):
     return ("sigma_rel", *extra)
 
 
-def nuisance_parameters(likelihood, ramp="given"):
-    """Return the likelihood's parameters (:func:`noise_parameters`), then ``ramp_s`` if fitted."""
+def nuisance_parameters(likelihood, ramp="given", n_tests=1):
+    """Return the likelihood's parameters (:func:`noise_parameters`), then the ramps if fitted.
+
+    With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`).
+    """
     if ramp not in RAMPS:
         raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
-    return noise_parameters(likelihood) + (("ramp_s",) if ramp == "fitted" else ())
+    return noise_parameters(likelihood) + (ramp_names(n_tests) if ramp == "fitted" else ())
 
 
 class PriorScaledTarget:
@@ -138,23 +158,30 @@ class LogPosterior(PriorScaledTarget):
         overlap = sorted(set(prior.names) & set(self.fixed))
         if overlap:
             raise ValueError(f"parameter(s) {overlap} are both sampled and fixed")
-        if "ramp_s" in self.fixed:
+        if "ramp_s" in self.fixed or any(_is_ramp(k) for k in self.fixed):
             raise ValueError(
                 "ramp_s cannot be a fixed parameter: give a known loading ramp in the data's "
                 "ramp_s column, or sample it (ramp='fitted')"
             )
+        self._ramps = [i for i, n in enumerate(prior.names) if _is_ramp(n)]
         self._ramp_limit = None
-        if "ramp_s" in prior.names:
+        if self._ramps:
             if data.ramp_s is not None and np.any(data.ramp_s > 0):
                 raise ValueError(
                     "the data give the loading ramp (ramp_s column); a fitted ramp (--ramp "
                     "fitted, ramp='fitted') is for data that do not: use the column, or drop it"
                 )
-            # the ramp ends before any test's load changes again
-            later = np.zeros(0)
+            names = tuple(prior.names[i] for i in self._ramps)
+            if names != ramp_names(len(names)) or data.ramp_rows().max() >= len(names):
+                raise ValueError(
+                    f"the sampled ramps {list(names)} are not one per test of the data's "
+                    f"{data.n_tests} (ramp_s[0] … in test order)"
+                )
+            # each test's ramp ends before its load changes again
+            self._ramp_limit = np.full(data.n_tests, np.inf)
             if data.step_time is not None:
-                later = data.step_time[:, 1:][data.step_size[:, 1:] != 0]
-            self._ramp_limit = float(np.min(later, initial=np.inf))
+                later = np.where(data.step_size[:, 1:] != 0, data.step_time[:, 1:], np.inf)
+                self._ramp_limit = later.min(axis=1, initial=np.inf)
 
     @classmethod
     def for_sensor(
@@ -173,7 +200,7 @@ class LogPosterior(PriorScaledTarget):
         Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at
         defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`).
         """
-        prior = sensor.prior_for(model, nuisance_parameters(likelihood, ramp))
+        prior = sensor.prior_for(model, nuisance_parameters(likelihood, ramp, data.n_tests))
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
         return cls(
             data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
@@ -217,8 +244,9 @@ class LogPosterior(PriorScaledTarget):
         params.update(self.fixed)  # scalars broadcast against every walker
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
         steps = self.data.load_steps()
-        if self._ramp_limit is not None:  # a sampled ramp
-            steps, load = self.data.ramped(params["ramp_s"], time)
+        if self._ramps:  # sampled ramps: each row's test's
+            ramps = x[:, self._ramps][:, self.data.ramp_rows()]
+            steps, load = self.data.ramped(ramps, time)
         else:
             load = self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time)
         solution = solve_current(
@@ -235,20 +263,21 @@ class LogPosterior(PriorScaledTarget):
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)
         valid = solution.valid & (solution.current > 0)
-        if self._ramp_limit is not None:  # a ramp ends before the load changes again
-            valid &= params["ramp_s"] < self._ramp_limit
+        if self._ramps:  # a ramp ends before its test's load changes again
+            valid &= (ramps < self._ramp_limit)[..., None]
         return np.where(valid, log_current, -np.inf)
 
     def loading_end(self, x=None):
         """Return when each test's first loading is complete, shape (C,): its ramp's end, or 0.
 
-        A ramp given in the data ends at its ``ramp_s``; a sampled one at the longest ``ramp_s``
-        among the parameter sets ``x`` (W, ndim), so that every draw has its weight on.
+        A ramp given in the data ends at its ``ramp_s``; a sampled one at the test's longest
+        ``ramp_s[k]`` among the parameter sets ``x`` (W, ndim), so that every draw has its weight
+        on.
         """
         end = np.zeros(self.data.n_tests) if self.data.ramp_s is None else self.data.ramp_s
-        if self._ramp_limit is not None and x is not None:
-            ramps = np.atleast_2d(np.asarray(x, dtype=float))[:, self.names.index("ramp_s")]
-            end = np.full(self.data.n_tests, float(np.max(ramps)))
+        if self._ramps and x is not None:
+            ramps = np.atleast_2d(np.asarray(x, dtype=float))[:, self._ramps]
+            end = ramps[:, self.data.ramp_rows()].max(axis=0)
         return np.asarray(end, dtype=float)
 
     def drift_percent(self, x, time_s=DRIFT_TIME_S):

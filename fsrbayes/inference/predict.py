@@ -37,7 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .posterior import LogPosterior, nuisance_parameters
+from .posterior import LogPosterior, nuisance_parameters, ramp_names
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -96,16 +96,25 @@ def reading_name(test):
     return "current_A" if test.readout is None else test.readout.reading
 
 
-def _posterior_of(folder, packed):
-    """Return the fit's LogPosterior rebuilt on ``packed`` and its stored draws, shape (S, ndim)."""
+def _posterior_of(folder, packed, rng):
+    """Return the fit's LogPosterior rebuilt on ``packed`` and its stored draws, shape (S, ndim).
+
+    A fit with fitted loading ramps (one per test it saw) lends each protocol test, draw by
+    draw, the ramp of one of its tests picked at random (``rng``): a new placement of a weight
+    settles as the placements seen did (a fit with one ``ramp_s`` for all its tests lends that
+    one). A protocol with a ``ramp_s`` column uses its own.
+    """
     import xarray as xr
 
     tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
     attrs = tree.attrs
     sensor = load_sensor(attrs["sensor"])
     likelihood = attrs["likelihood"]
-    ramp = "fitted" if "ramp_s" in tree.posterior else "given"
-    prior = sensor.prior_for(attrs["fsrbayes_model"], nuisance_parameters(likelihood, ramp))
+    fitted = [n for n in tree.posterior.data_vars if str(n).split("[", 1)[0] == "ramp_s"]
+    given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
+    ramp = "fitted" if fitted and not given else "given"
+    noise = nuisance_parameters(likelihood, ramp, packed.n_tests)
+    prior = sensor.prior_for(attrs["fsrbayes_model"], noise)
     posterior = LogPosterior(
         packed,
         prior,
@@ -114,7 +123,13 @@ def _posterior_of(folder, packed):
         tunneling=attrs["tunneling"],
         likelihood=likelihood,
     )
-    draws = np.stack([tree.posterior[n].values.ravel() for n in posterior.names], axis=-1)
+    ramps = set(ramp_names(packed.n_tests)) if ramp == "fitted" else set()
+    columns = [n for n in posterior.names if n not in ramps]
+    draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
+    if ramps:
+        seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
+        picks = rng.integers(len(fitted), size=(len(seen), packed.n_tests))
+        draws = np.concatenate([draws, np.take_along_axis(seen, picks, axis=1)], axis=1)
     return posterior, draws, attrs
 
 
@@ -207,7 +222,7 @@ def _predict_tests(folder, tests, n_draws, rng):
         scatter=None,
         quant_var=None,
     )
-    posterior, draws, attrs = _posterior_of(folder, packed)
+    posterior, draws, attrs = _posterior_of(folder, packed, rng)
     if attrs["sensor"] != tests[0].sensor:
         raise ValueError(
             f"specimen {tests[0].specimen!r} was fitted as a {attrs['sensor']} sensor, the "
@@ -388,7 +403,8 @@ def write_point_fit(
     model, likelihood : str
     n_draws : int
     ramp : {"given", "fitted"}
-        ``"fitted"``: ``params`` holds a loading ramp ``ramp_s``, as a fit with a fitted ramp.
+        ``"fitted"``: ``params`` holds a loading ramp ``ramp_s``, as a fit with fitted ramps
+        whose every test settled over it (the protocol's tests then do too).
 
     Returns
     -------
@@ -404,6 +420,9 @@ def write_point_fit(
     names = LogPosterior.for_sensor(
         dummy, load_sensor(sensor), model=model, likelihood=likelihood, ramp=ramp
     ).names
+    params = dict(params)
+    if ramp == "fitted" and "ramp_s" in params:
+        params["ramp_s[0]"] = params.pop("ramp_s")
     missing = [n for n in names if n not in params]
     if missing:
         raise ValueError(f"write_point_fit: params lack {missing} of model {model!r}")

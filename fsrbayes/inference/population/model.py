@@ -37,8 +37,8 @@ from ..posterior import PriorScaledTarget
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
 NOISE_PARAMETERS = ("sigma_rel", "nu", "ramp_s")
-"""Per-specimen nuisance parameters: not pooled across specimens (a fitted loading ramp is the
-experimenter's hand, not the sensor)."""
+"""Per-specimen nuisance parameters: not pooled across specimens (a fitted loading ramp —
+``ramp_s[k]``, one per test — is the experimenter's hand, not the sensor)."""
 
 _QUANTILES = (np.arange(4000) + 0.5) / 4000
 
@@ -82,7 +82,7 @@ class Population:
 
     def __init__(self, prior, names=None):
         names = (
-            tuple(n for n in prior.names if n not in NOISE_PARAMETERS)
+            tuple(n for n in prior.names if n.split("[", 1)[0] not in NOISE_PARAMETERS)
             if names is None
             else tuple(names)
         )
