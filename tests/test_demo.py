@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 
 def test_quick_demo_writes_the_report_and_results(tmp_path):
@@ -124,9 +125,11 @@ def test_figure12_tests_pick_the_nearest_stress_then_each_nearest_voltage_once()
     assert figure12_tests(data, (0.2, 7.0), 50e3) == [0, 2]
 
 
+@pytest.mark.slow
 def test_the_full_plans_specimen_posteriors_are_converged_emcee_runs_from_the_laplace_mode():
     """The full plan's per-specimen fits run emcee to convergence and report it (one FSR 402
-    specimen's 33 tests, the base model only)."""
+    specimen's 33 tests, the base model only; ~45 s — the slow story tests check every specimen
+    of the full demo, this one alone is the quick look when the demo's fits change)."""
     from dataclasses import replace
 
     from fsrbayes.data.embedded import default_data

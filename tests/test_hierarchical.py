@@ -357,7 +357,7 @@ def _small_bench(n_specimens=3):
 
 
 SHORT_FIT = SamplerSettings(
-    n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1
+    n_ensembles=2, chunk=50, max_steps=100, min_steps=100, transport_rounds=1
 )
 
 
