@@ -27,6 +27,7 @@ fails and records them as ``checks`` in ``summary.json``.
 
 import numpy as np
 
+from ..inference.posterior import is_ramp
 from .checks import predictive_checks
 from .gaps import failed_checks
 
@@ -144,7 +145,7 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
                 + (
                     "a weight placed by hand rises over a fraction of a second; fit its length "
                     "(fsrbayes fit --ramp fitted, or a ramp_s column)"
-                    if not any(n.startswith("ramp_s[") for n in posterior.names)
+                    if not any(is_ramp(n) for n in posterior.names)
                     and posterior.data.ramp_s is None
                     else "the loading's ramp is not the bench's, or a process faster than the "
                     "model's creep"

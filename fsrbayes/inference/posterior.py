@@ -21,6 +21,7 @@ __all__ = [
     "noise_parameters",
     "nuisance_parameters",
     "ramp_names",
+    "is_ramp",
 ]
 
 RAMPS = ("given", "fitted")
@@ -35,8 +36,9 @@ def ramp_names(n_tests):
     return tuple(f"ramp_s[{k}]" for k in range(n_tests))
 
 
-def _is_ramp(name):
-    return name.startswith("ramp_s[")
+def is_ramp(name):
+    """Return whether a parameter is a sampled loading ramp: ``ramp_s[k]``, or ``ramp_s``."""
+    return name.split("[", 1)[0] == "ramp_s"
 
 
 def noise_parameters(likelihood):
@@ -158,12 +160,12 @@ class LogPosterior(PriorScaledTarget):
         overlap = sorted(set(prior.names) & set(self.fixed))
         if overlap:
             raise ValueError(f"parameter(s) {overlap} are both sampled and fixed")
-        if "ramp_s" in self.fixed or any(_is_ramp(k) for k in self.fixed):
+        if any(is_ramp(k) for k in self.fixed):
             raise ValueError(
                 "ramp_s cannot be a fixed parameter: give a known loading ramp in the data's "
                 "ramp_s column, or sample it (ramp='fitted')"
             )
-        self._ramps = [i for i, n in enumerate(prior.names) if _is_ramp(n)]
+        self._ramps = [i for i, n in enumerate(prior.names) if is_ramp(n)]
         self._ramp_limit = None
         if self._ramps:
             if data.ramp_s is not None and np.any(data.ramp_s > 0):

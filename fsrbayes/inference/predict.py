@@ -37,7 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .posterior import LogPosterior, nuisance_parameters, ramp_names
+from .posterior import LogPosterior, is_ramp, nuisance_parameters
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -110,7 +110,7 @@ def _posterior_of(folder, packed, rng):
     attrs = tree.attrs
     sensor = load_sensor(attrs["sensor"])
     likelihood = attrs["likelihood"]
-    fitted = [n for n in tree.posterior.data_vars if str(n).split("[", 1)[0] == "ramp_s"]
+    fitted = [n for n in tree.posterior.data_vars if is_ramp(str(n))]
     given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
     ramp = "fitted" if fitted and not given else "given"
     noise = nuisance_parameters(likelihood, ramp, packed.n_tests)
@@ -123,10 +123,9 @@ def _posterior_of(folder, packed, rng):
         tunneling=attrs["tunneling"],
         likelihood=likelihood,
     )
-    ramps = set(ramp_names(packed.n_tests)) if ramp == "fitted" else set()
-    columns = [n for n in posterior.names if n not in ramps]
+    columns = [n for n in posterior.names if not is_ramp(n)]  # the ramps come last
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
-    if ramps:
+    if ramp == "fitted":
         seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
         picks = rng.integers(len(fitted), size=(len(seen), packed.n_tests))
         draws = np.concatenate([draws, np.take_along_axis(seen, picks, axis=1)], axis=1)
