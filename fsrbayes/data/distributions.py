@@ -24,7 +24,9 @@ from scipy import special, stats
 
 from ..utils import HALF_LOG_2PI
 
-__all__ = ["Distribution", "VOCABULARY", "make_distribution"]
+LOG_2 = math.log(2.0)
+
+__all__ = ["Distribution", "VOCABULARY", "density_constants", "log_density", "make_distribution"]
 
 
 VOCABULARY = {
@@ -97,46 +99,10 @@ class Distribution:
     def logpdf(self, x):
         """Log-density at ``x`` (−inf outside the support); closed forms, vectorised."""
         x = np.asarray(x, dtype=float)
-        a = self.args
         if self.kind == "fixed":
-            return np.where(x == a["value"], 0.0, -np.inf)
+            return np.where(x == self.args["value"], 0.0, -np.inf)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            if self.kind == "normal":
-                z = (x - a["mu"]) / a["sigma"]
-                return -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI
-            if self.kind == "lognormal":
-                log_x = np.log(x)
-                z = (log_x - math.log(a["median"])) / a["sigma"]
-                value = -0.5 * z * z - log_x - math.log(a["sigma"]) - HALF_LOG_2PI
-                return np.where(x > 0, value, -np.inf)
-            if self.kind == "halfnormal":
-                z = x / a["scale"]
-                return np.where(
-                    x >= 0,
-                    math.log(2.0) - 0.5 * z * z - math.log(a["scale"]) - HALF_LOG_2PI,
-                    -np.inf,
-                )
-            if self.kind == "gamma":
-                k, r = a["shape"], a["rate"]
-                value = k * math.log(r) + (k - 1.0) * np.log(x) - r * x - special.gammaln(k)
-                return np.where(x > 0, value, -np.inf)
-            inside = (x >= a["lower"]) & (x <= a["upper"])
-            if self.kind == "uniform":
-                return np.where(inside, -math.log(a["upper"] - a["lower"]), -np.inf)
-            if self.kind == "loguniform":
-                return np.where(
-                    inside,
-                    -np.log(x) - math.log(math.log(a["upper"]) - math.log(a["lower"])),
-                    -np.inf,
-                )
-            # truncnormal
-            z = (x - a["mu"]) / a["sigma"]
-            mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr(
-                (a["lower"] - a["mu"]) / a["sigma"]
-            )
-            return np.where(
-                inside, -0.5 * z * z - math.log(a["sigma"]) - HALF_LOG_2PI - math.log(mass), -np.inf
-            )
+            return log_density(self.kind, x, density_constants(self))
 
     def sample(self, rng, size=None):
         """Draw from the distribution with the given ``numpy.random.Generator``."""
@@ -185,6 +151,64 @@ class Distribution:
     def __repr__(self):
         inner = ", ".join(f"{k}={v:g}" for k, v in self.args.items())
         return f"{self.kind}({inner})"
+
+
+def density_constants(dist):
+    """Return the numbers :func:`log_density` needs for ``dist`` (not ``fixed``), by name."""
+    a = dict(dist.args)
+    if dist.kind in ("normal", "truncnormal"):
+        a["log_sigma"] = math.log(a["sigma"])
+    if dist.kind == "truncnormal":
+        mass = special.ndtr((a["upper"] - a["mu"]) / a["sigma"]) - special.ndtr(
+            (a["lower"] - a["mu"]) / a["sigma"]
+        )
+        a["log_mass"] = math.log(mass)
+    if dist.kind == "lognormal":
+        a["log_median"], a["log_sigma"] = math.log(a["median"]), math.log(a["sigma"])
+    if dist.kind == "halfnormal":
+        a["log_scale"] = math.log(a["scale"])
+    if dist.kind == "gamma":
+        a["k_log_rate"] = a["shape"] * math.log(a["rate"])
+        a["k_minus_1"] = a["shape"] - 1.0
+        a["log_gamma_k"] = special.gammaln(a["shape"])
+    if dist.kind == "uniform":
+        a["log_width"] = math.log(a["upper"] - a["lower"])
+    if dist.kind == "loguniform":
+        a["log_log_width"] = math.log(math.log(a["upper"]) - math.log(a["lower"]))
+    return a
+
+
+def log_density(kind, x, c):
+    """Log-density of distribution ``kind`` at ``x``; −inf outside the support.
+
+    ``c`` holds :func:`density_constants` — of one distribution, or stacked into arrays over the
+    last axis of ``x`` (one column per parameter of that kind: a joint prior evaluates each kind
+    in one call). Closed forms; the caller sets NumPy's error state.
+    """
+    if kind == "normal":
+        z = (x - c["mu"]) / c["sigma"]
+        return -0.5 * z * z - c["log_sigma"] - HALF_LOG_2PI
+    if kind == "lognormal":
+        log_x = np.log(x)
+        z = (log_x - c["log_median"]) / c["sigma"]
+        value = -0.5 * z * z - log_x - c["log_sigma"] - HALF_LOG_2PI
+        return np.where(x > 0, value, -np.inf)
+    if kind == "halfnormal":
+        z = x / c["scale"]
+        return np.where(x >= 0, LOG_2 - 0.5 * z * z - c["log_scale"] - HALF_LOG_2PI, -np.inf)
+    if kind == "gamma":
+        value = c["k_log_rate"] + c["k_minus_1"] * np.log(x) - c["rate"] * x - c["log_gamma_k"]
+        return np.where(x > 0, value, -np.inf)
+    inside = (x >= c["lower"]) & (x <= c["upper"])
+    if kind == "uniform":
+        return np.where(inside, -c["log_width"], -np.inf)
+    if kind == "loguniform":
+        return np.where(inside, -np.log(x) - c["log_log_width"], -np.inf)
+    if kind == "truncnormal":
+        z = (x - c["mu"]) / c["sigma"]
+        value = -0.5 * z * z - c["log_sigma"] - HALF_LOG_2PI - c["log_mass"]
+        return np.where(inside, value, -np.inf)
+    raise ValueError(f"distribution {kind!r} has no density")
 
 
 def make_distribution(spec, where="prior"):

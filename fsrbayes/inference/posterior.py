@@ -226,12 +226,18 @@ class LogPosterior(PriorScaledTarget):
             ]
         )
 
-    def parameters(self, x):
-        """All physical parameters for x (W, ndim): sampled ones from x, the rest fixed."""
+    def parameters(self, x, names=None):
+        """Physical parameters for x (W, ndim), each (W,): sampled ones from x, the rest fixed.
+
+        All of them, or only those ``names`` (the likelihood asks for its noise parameters only).
+        """
         x = np.atleast_2d(np.asarray(x, dtype=float))
-        params = {name: x[:, i] for i, name in enumerate(self.names)}
-        params.update({k: np.full(x.shape[0], v) for k, v in self.fixed.items()})
-        return params
+        sampled = {name: i for i, name in enumerate(self.names)}
+        wanted = (*self.names, *self.fixed) if names is None else names
+        return {
+            name: x[:, sampled[name]] if name in sampled else np.full(len(x), self.fixed[name])
+            for name in wanted
+        }
 
     def log_model_current(self, x, time_s=None):
         """Return log I of the model, shape (W, C, T).
@@ -296,7 +302,7 @@ class LogPosterior(PriorScaledTarget):
 
     def log_likelihood_pointwise(self, x):
         """Log-likelihood per observed sample, shape (W, N)."""
-        params = self.parameters(x)
+        params = self.parameters(x, noise_parameters(self.likelihood))
         return log_likelihood_pointwise(
             self.log_model_current(x),
             self.data,
