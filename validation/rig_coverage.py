@@ -6,8 +6,10 @@ weights × 10 minutes at 100 Hz) with its own seed, fits its four from-rest test
 defaults (a divider's fit samples the coordinates the data pin), and records for every physical
 parameter whether its central 90 % interval holds the truth, with the fit's convergence.
 
-Run ``python -m validation.rig_coverage N [FIRST_SEED]``; prints one line per rig, the share per
-parameter and the pooled share (:func:`coverage_summary`).
+Run ``python -m validation.rig_coverage N [FIRST_SEED] [--max-steps STEPS] [--json OUT]``; prints
+one line per rig, the share per parameter and the pooled share (:func:`coverage_summary`); with
+``--json`` every finished rig's row is also written to OUT (rewritten atomically after each rig,
+so a long study can be followed and an interrupted one keeps its rigs).
 
 How it is judged. A calibrated 90 % interval holds the truth in a rig with probability 0.9, so over
 n rigs a parameter's count inside is Binomial(n, 0.9): with 10 rigs 10/10 happens for 35 % of
@@ -17,8 +19,9 @@ not independent, so the pooled share is a check, not a test with a nominal rate)
 parameter whose count is below the binomial's 1 % quantile — too few inside to be a 90 % interval.
 """
 
+import argparse
 import json
-import sys
+import os
 import tempfile
 import time
 import warnings
@@ -104,7 +107,7 @@ def coverage_summary(rows):
 def format_coverage(rows):
     lines = [
         f"seed {r['seed']}: {'converged' if r['converged'] else 'NOT converged'}, "
-        f"tau {r['tau_max']:.0f}, {r['seconds']:.0f} s, inside "
+        f"{r['steps']} steps, tau {r['tau_max']:.0f}, {r['seconds']:.0f} s, inside "
         f"{sum(r['inside'].values())}/{len(r['inside'])}"
         for r in rows
     ]
@@ -118,12 +121,24 @@ def format_coverage(rows):
     return "\n".join(lines)
 
 
+def _write_rows(rows, path):
+    tmp = Path(f"{path}.tmp")
+    tmp.write_text(json.dumps([{k: v for k, v in r.items() if k != "report"} for r in rows]))
+    os.replace(tmp, path)
+
+
 if __name__ == "__main__":
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 10
-    first = int(sys.argv[2]) if len(sys.argv) > 2 else 100
+    parser = argparse.ArgumentParser(prog="python -m validation.rig_coverage")
+    parser.add_argument("n", type=int, nargs="?", default=10, help="rigs (default 10)")
+    parser.add_argument("first", type=int, nargs="?", default=100, help="first seed (100)")
+    parser.add_argument("--max-steps", type=int, default=FIT_SETTINGS.max_steps)
+    parser.add_argument("--json", type=Path, help="write every finished rig's row here")
+    args = parser.parse_args()
+    settings = replace(FIT_SETTINGS, processes=2, max_steps=args.max_steps)
     rows = []
-    for seed in range(first, first + n):
-        rows.append(rig_replication(seed))
+    for seed in range(args.first, args.first + args.n):
+        rows.append(rig_replication(seed, settings=settings))
         print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
+        if args.json:
+            _write_rows(rows, args.json)
     print(format_coverage(rows))
-    print(json.dumps([{k: v for k, v in r.items() if k != "report"} for r in rows]))
