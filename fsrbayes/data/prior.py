@@ -54,7 +54,8 @@ class _Transforms:
     lower: np.ndarray
     width: np.ndarray
     log_bounded: np.ndarray
-    log_jac_terms: tuple
+    log_jac_constants: np.ndarray
+    log_jac_columns: dict
 
 
 def _transforms(prior):
@@ -81,6 +82,13 @@ def _transforms(prior):
     def column(name, k, dtype=float):
         return np.array([row[k] for row in groups[name]], dtype=dtype)
 
+    varying = {}  # column name → (positions among the terms, indices into the column)
+    for position, (name, value) in enumerate(terms):
+        if name != "const":
+            varying.setdefault(name, ([], []))
+            varying[name][0].append(position)
+            varying[name][1].append(value)
+
     return _Transforms(
         affine=column("affine", 0, int),
         mu=column("affine", 1),
@@ -92,7 +100,8 @@ def _transforms(prior):
         lower=column("bounded", 1),
         width=column("bounded", 2),
         log_bounded=column("bounded", 3, bool),
-        log_jac_terms=tuple(terms),
+        log_jac_constants=np.array([value if name == "const" else 0.0 for name, value in terms]),
+        log_jac_columns={k: (np.array(p), np.array(i)) for k, (p, i) in varying.items()},
     )
 
 
@@ -174,9 +183,27 @@ class JointPrior:
         """x(u) and log|dx/du| summed over parameters; u (…, ndim).
 
         Vectorised by transform (affine, log-affine, logistic, log-logistic); log|dx/du| adds the
-        parameters' terms one by one in the order of the module docstring's formulas, so the sum
-        does not depend on how the parameters are grouped.
+        parameters' terms one by one in the order of the module docstring's formulas (a
+        sequential ``np.add.accumulate``), so the sum does not depend on how the parameters are
+        grouped.
         """
+        x, columns = self._constrained(u)
+        t = self._transforms
+        terms = np.empty(x.shape[:-1] + t.log_jac_constants.shape)
+        terms[...] = t.log_jac_constants
+        for name, (positions, index) in t.log_jac_columns.items():
+            terms[..., positions] = columns[name][..., index]
+        if not terms.shape[-1]:
+            return x, np.zeros(x.shape[:-1])
+        with np.errstate(all="ignore"):
+            return x, np.add.accumulate(terms, axis=-1)[..., -1]
+
+    def to_constrained(self, u):
+        """x(u) alone, for callers that do not need :meth:`from_unconstrained`'s log|dx/du|."""
+        return self._constrained(u)[0]
+
+    def _constrained(self, u):
+        """x(u) and the transforms' intermediate columns the log-Jacobian is made of."""
         u = np.asarray(u, dtype=float)
         t = self._transforms
         x = np.empty_like(u)
@@ -194,12 +221,7 @@ class JointPrior:
                 inner = t.lower + t.width * np.exp(columns["p"])
                 x[..., t.bounded] = np.where(t.log_bounded, np.exp(inner), inner)
                 columns["inner"] = inner
-            log_jac = np.zeros(u.shape[:-1])
-            for term in t.log_jac_terms:  # parameter by parameter, as the formulas add up
-                log_jac = log_jac + (
-                    term[1] if term[0] == "const" else columns[term[0]][..., term[1]]
-                )
-        return x, log_jac
+        return x, columns
 
     def to_unconstrained(self, x):
         """u(x), the inverse of :meth:`from_unconstrained`; x must lie inside the support."""

@@ -138,7 +138,7 @@ class PinnedCoordinates:
 
         ``rows``: other reference points (indices into every test's first and last sample).
         """
-        x, _ = self.posterior.prior.from_unconstrained(np.atleast_2d(u))
+        x = self.posterior.prior.to_constrained(np.atleast_2d(u))
         with np.errstate(all="ignore"):
             if rows is None:  # the model at the K reference points only
                 return self._finite(self._at_references.log_model_current(x)[..., 0])
