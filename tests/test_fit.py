@@ -183,6 +183,14 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     chain = np.load(checkpoint)["chain"]
     assert chain.shape[1] == 400
     assert chain[:, : saved.shape[1]].tobytes() == saved.tobytes()
+    # 400 steps do not converge: the fit says how to go on from its chains, and that works
+    hint = [line for line in result.stderr.splitlines() if "--resume --max-steps" in line]
+    assert hint and hint[0].endswith("--resume --max-steps 800"), result.stderr
+    more = cli("fit", *[("800" if a == "400" else str(a)) for a in args[4:]], "--resume")
+    assert more.returncode == 0, more.stderr
+    longer = np.load(checkpoint)["chain"]
+    assert 400 < longer.shape[1] <= 800
+    assert longer[:, :400].tobytes() == chain.tobytes()
     assert (out / "posterior.nc").exists() and (out / "summary.json").exists()
     assert all(
         (out / f).exists()

@@ -101,6 +101,12 @@ def cmd_fit(args):
             _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
+        if not result.converged and checkpoint is not None:
+            print(
+                f"fsrbayes fit: {specimen}: its chains are kept in {checkpoint}; to go on from "
+                f"them, run the same command with --resume --max-steps {2 * args.max_steps}",
+                file=sys.stderr,
+            )
     if len(specimens) > 1:
         write_json_atomic(
             out / "summary.json",
