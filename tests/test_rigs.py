@@ -324,3 +324,20 @@ def test_semicolon_files_with_decimal_commas_read_the_same(tmp_path):
     for a, b in zip(same.tests, other.tests, strict=True):
         np.testing.assert_allclose(a.current_A, b.current_A, rtol=1e-12)
         np.testing.assert_allclose(a.time_s, b.time_s, rtol=1e-12)
+
+
+def test_the_rig_coverage_study_pools_its_intervals_and_flags_too_few():
+    from validation.rig_coverage import coverage_summary
+
+    # ten rigs: "a" inside every time, "b" in 9 of 10, "c" in only 5 of 10 — fewer than the
+    # Binomial(10, 0.9)'s 1 % quantile (6), which a 90 % interval misses that often by chance
+    # less than once in a hundred studies
+    rows = [
+        {"converged": i != 3, "inside": {"a": True, "b": i != 0, "c": i % 2 == 0}}
+        for i in range(10)
+    ]
+    summary = coverage_summary(rows)
+    assert summary["n_rigs"] == 10 and summary["converged"] == 9
+    assert summary["inside"] == {"a": 10, "b": 9, "c": 5}
+    assert summary["pooled"] == pytest.approx(24 / 30)
+    assert summary["lowest_count"] == 6 and summary["too_few"] == ["c"]

@@ -1,6 +1,7 @@
 """The sampling machinery against targets with known answers."""
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -135,6 +136,64 @@ def test_checkpoint_resume_is_exact_and_mismatches_are_refused(tmp_path):
             fingerprint="data|zener|smooth|gaussian|q|f",
             resume=True,
         )
+
+
+def test_long_chains_are_checked_every_few_percent_of_their_length():
+    settings = SamplerSettings(chunk=500, max_steps=100000)
+    points = [n for n in range(500, 100001, 500) if settings.is_check_point(n)]
+    assert points[:20] == list(range(500, 10001, 500))  # every chunk up to chunk / 5 %
+    gaps = np.diff(points)
+    assert np.all(gaps >= np.maximum(500, 0.05 * np.array(points[:-1]) - 500))
+    assert np.all(gaps <= np.maximum(500, 0.05 * np.array(points[:-1])))
+    assert len(points) < 80 and points[-1] == 100000  # of 200 chunks; the budget is a check
+    every = SamplerSettings(chunk=500, max_steps=100000, check_growth=0.0)
+    assert all(every.is_check_point(n) for n in range(500, 100001, 500))
+    with pytest.raises(ValueError, match="check_growth must be in"):
+        SamplerSettings(check_growth=1.0)
+
+
+class _Interrupted(Gaussian):
+    """The Gaussian, until its ``calls``-th vectorised call raises KeyboardInterrupt (as the CLI's
+    SIGTERM handler does)."""
+
+    def __init__(self, calls):
+        super().__init__()
+        self.calls = calls
+
+    def __call__(self, u):
+        self.calls -= 1
+        if self.calls < 0:
+            raise KeyboardInterrupt
+        return super().__call__(u)
+
+
+def test_the_check_schedule_and_an_interrupt_leave_the_chains_as_they_were(tmp_path):
+    """Checking rarely changes where a run may stop, never its chain; an interrupted run keeps
+    what it sampled in its checkpoint, and resuming it gives the uninterrupted chain."""
+    start = MU + np.random.default_rng(3).normal(size=(2, 16, 3)) * 3 * SD
+    rare = SamplerSettings(n_ensembles=2, chunk=20, max_steps=2000, min_steps=20, check_growth=0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        run = run_ensembles(Gaussian(), start, seed=4, settings=rare)
+        n = run.chain.shape[1]
+        assert rare.is_check_point(n) and run.report.converged
+        fixed = SamplerSettings(n_ensembles=2, chunk=20, max_steps=n, min_steps=n, check_growth=0)
+        same = run_ensembles(Gaussian(), start, seed=4, settings=fixed)
+        assert np.array_equal(same.chain, run.chain)
+        # checkpoints at 20, 40, 60 and 100 steps; emcee calls the target twice per step (once
+        # per half-ensemble), once more to start: the 330th call falls in the fifth chunk, after
+        # 80 steps — kept by the interrupt, not by a check
+        path = tmp_path / "checkpoint.npz"
+        sparse = replace(fixed, check_growth=0.9)
+        assert [k for k in range(20, 101, 20) if sparse.is_check_point(k)] == [20, 40, 60, 100]
+        with pytest.raises(KeyboardInterrupt):
+            run_ensembles(_Interrupted(330), start, seed=4, settings=sparse, checkpoint=path)
+        kept = np.load(path)["chain"]
+        assert kept.shape[1] == 80 < n
+        resumed = run_ensembles(
+            Gaussian(), start, seed=4, settings=fixed, checkpoint=path, resume=True
+        )
+    assert np.array_equal(resumed.chain, run.chain)
 
 
 @pytest.mark.parametrize("model", ["burgers"])

@@ -22,8 +22,10 @@ autocorrelation times this buys are in BENCHMARKS.md). The stored chains are alw
 own coordinates. With k = 0 the first half of the chain is the warm-up, at every check. Sampling
 goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
 :class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded random
-state, so the same seed gives the same chains, and a checkpoint (written atomically after every
-chunk) resumes a run exactly where it stopped.
+state, so the same seed gives the same chains, and a checkpoint (written atomically at every
+convergence check, and when the run is interrupted) resumes a run exactly where it stopped.
+Checks come after every chunk, and once the chain is long after every ``check_growth`` share of
+it: a check's cost grows with the chain.
 """
 
 import warnings
@@ -76,7 +78,8 @@ class SamplerSettings:
     n_walkers : int or None
         Walkers per ensemble; default max(32, 4·ndim), even.
     chunk : int
-        Steps between convergence checks (and checkpoints).
+        Steps between convergence checks (and checkpoints) while the chain is short; see
+        ``check_growth``.
     max_steps : int
         Step budget per ensemble.
     min_steps : int
@@ -112,6 +115,13 @@ class SamplerSettings:
         (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
         coordinates, which the chain then under-samples while reporting convergence; the affine
         map does not (the closed-form bent ridge, VALIDATION.md).
+    check_growth : float
+        Once the chain is long, convergence is checked and the checkpoint written only after it
+        has grown by this share since the last check (in whole chunks; every chunk up to
+        ``chunk / check_growth`` steps): both cost time in proportion to the chain's length,
+        and checked every chunk a long run spends more time on them than on sampling
+        (BENCHMARKS.md). A fit may then stop up to this share later than the first step at which
+        it met the criteria. 0 checks every chunk.
     """
 
     n_ensembles: int = 4
@@ -128,8 +138,11 @@ class SamplerSettings:
     independence_fraction: float = 0.3
     quadratic_map: bool | None = None
     extra_transport_rounds: int = 0
+    check_growth: float = 0.05
 
     def __post_init__(self):
+        if not 0.0 <= self.check_growth < 1.0:
+            raise ValueError(f"check_growth must be in [0, 1), got {self.check_growth}")
         if self.transport_rounds is not None and self.transport_rounds < 0:
             raise ValueError(f"transport_rounds must be >= 0, got {self.transport_rounds}")
         if self.extra_transport_rounds < 0:
@@ -170,6 +183,20 @@ class SamplerSettings:
     def walkers_for(self, ndim):
         """Walkers per ensemble for a target of ``ndim`` dimensions."""
         return walkers_for(self.n_walkers, ndim)
+
+    def is_check_point(self, n_steps):
+        """Whether convergence is checked, and the checkpoint written, after ``n_steps``.
+
+        After every chunk, and once the chain is long after every ``check_growth`` share of it;
+        the points depend on ``n_steps`` alone, so a resumed run checks where the uninterrupted
+        one would. The step budget is always one.
+        """
+        if n_steps >= self.max_steps:
+            return True
+        point = 0
+        while point < n_steps:
+            point += self.chunk * max(1, int(self.check_growth * point) // self.chunk)
+        return point == n_steps
 
 
 @dataclass
@@ -270,6 +297,39 @@ def _progress_bar(settings, done):
     )
 
 
+class _Stored:
+    """The chains and log-densities sampled so far, grown in place.
+
+    Appending a chunk copies only the chunk: the buffers grow geometrically (up to the step
+    budget), where concatenating copied the whole chain after every chunk.
+    """
+
+    def __init__(self, chains, log_probs, max_steps):
+        self.n_steps = chains.shape[1]
+        self._max_steps = max_steps
+        self._chains, self._log_probs = chains, log_probs
+
+    def append(self, chains, log_probs):
+        needed = self.n_steps + chains.shape[1]
+        if needed > self._chains.shape[1]:
+            size = max(needed, min(2 * self._chains.shape[1], self._max_steps))
+            self._chains = self._grown(self._chains, size)
+            self._log_probs = self._grown(self._log_probs, size)
+        self._chains[:, self.n_steps : needed] = chains
+        self._log_probs[:, self.n_steps : needed] = log_probs
+        self.n_steps = needed
+
+    def _grown(self, buffer, size):
+        grown = np.empty((buffer.shape[0], size, *buffer.shape[2:]))
+        grown[:, : self.n_steps] = buffer[:, : self.n_steps]
+        return grown
+
+    def arrays(self, copy=False):
+        """(chains, log_probs) so far: views, or trimmed copies."""
+        chains, log_probs = self._chains[:, : self.n_steps], self._log_probs[:, : self.n_steps]
+        return (chains.copy(), log_probs.copy()) if copy else (chains, log_probs)
+
+
 def run_ensembles(
     log_prob,
     start,
@@ -297,7 +357,8 @@ def run_ensembles(
     names : sequence of str
         Parameter names for reports.
     checkpoint : path-like, optional
-        Saved after every chunk; with ``resume=True`` a run continues from it.
+        Saved at every convergence check (:meth:`SamplerSettings.is_check_point`) and when the
+        run is interrupted; with ``resume=True`` a run continues from it.
     fingerprint : str
         Identity of the fit (data, model, priors, order); a checkpoint with another one is refused.
     progress : bool
@@ -329,18 +390,34 @@ def run_ensembles(
             chains, log_probs, accepted, states = load_checkpoint(checkpoint, fingerprint, n_ens)
         except FileNotFoundError:
             pass
+    stored = _Stored(chains, log_probs, settings.max_steps)
+    saved = stored.n_steps
+
+    def save():
+        nonlocal saved
+        if checkpoint is not None and stored.n_steps != saved:
+            save_checkpoint(checkpoint, fingerprint, *stored.arrays(), accepted, states, settings)
+            saved = stored.n_steps
+
     pool = None
     if settings.processes > 1:
         pool = fork_pool(min(settings.processes, n_ens))
     report = None
     warmup = None
-    bar = _progress_bar(settings, chains.shape[1]) if progress else None
+    maps, maps_end = None, None
+    bar = _progress_bar(settings, stored.n_steps) if progress else None
     try:
         while True:
+            chains, log_probs = stored.arrays()
+            n_steps = chains.shape[1]
             warmup = warmup_rounds(chains, settings, warmup, coordinates)
-            warmup_steps = settings.warmup_steps(chains.shape[1], warmup[0])
-            if chains.shape[1] >= settings.min_steps and chains.shape[1] > warmup_steps:
-                at_budget = chains.shape[1] >= settings.max_steps
+            warmup_steps = settings.warmup_steps(n_steps, warmup[0])
+            if (
+                n_steps >= settings.min_steps
+                and n_steps > warmup_steps
+                and settings.is_check_point(n_steps)
+            ):
+                at_budget = n_steps >= settings.max_steps
                 report = convergence_report(
                     chains, settings, names, final=at_budget, warmup=warmup_steps
                 )
@@ -350,13 +427,17 @@ def run_ensembles(
                     )
                 if report.converged or at_budget:
                     break
-            steps = min(settings.chunk, settings.max_steps - chains.shape[1])
-            maps = transport_maps(chains, settings, warmup[0], coordinates=coordinates)
+            steps = min(settings.chunk, settings.max_steps - n_steps)
+            # the maps depend on the first `end` steps only: refitted while warm-up goes on
+            end = min(n_steps // settings.chunk, warmup[0]) * settings.chunk
+            if end != maps_end:
+                maps = transport_maps(chains, settings, warmup[0], coordinates=coordinates)
+                maps_end = end
             jobs = [
                 (
                     log_prob,
-                    chains[e, -1] if chains.shape[1] else start[e],
-                    log_probs[e, -1] if log_probs.shape[1] else None,
+                    chains[e, -1] if n_steps else start[e],
+                    log_probs[e, -1] if n_steps else None,
                     states[e],
                     steps,
                     settings.de_fraction,
@@ -382,16 +463,19 @@ def run_ensembles(
                         for job, kw in zip(jobs, extra, strict=False)
                     ]
                 ]
-            chains = np.concatenate([chains, np.array([r[0] for r in results])], axis=1)
-            log_probs = np.concatenate([log_probs, np.array([r[1] for r in results])], axis=1)
-            accepted += np.array([r[2] for r in results])
-            states = [r[3] for r in results]
-            if checkpoint is not None:
-                save_checkpoint(
-                    checkpoint, fingerprint, chains, log_probs, accepted, states, settings
-                )
+            # the chain, the acceptance counts and the random states move on together: an
+            # interrupt saves one consistent state (append counts a chunk in its last statement)
+            moved = accepted + np.array([r[2] for r in results])
+            new_states = [r[3] for r in results]
+            stored.append(np.array([r[0] for r in results]), np.array([r[1] for r in results]))
+            accepted, states = moved, new_states
+            if settings.is_check_point(stored.n_steps):
+                save()
             if bar is not None:
                 bar.update(steps)
+    except KeyboardInterrupt:  # SIGTERM too (the CLI's handler): keep what was sampled
+        save()
+        raise
     finally:
         if bar is not None:
             bar.close()
@@ -399,4 +483,5 @@ def run_ensembles(
             pool.shutdown(cancel_futures=True)
     if not report.converged:
         warnings.warn(ConvergenceWarning(report), stacklevel=2)
+    chains, log_probs = stored.arrays(copy=True)
     return EnsembleRun(chains, log_probs, accepted / chains.shape[1], report)
