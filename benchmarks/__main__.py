@@ -1,6 +1,6 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty] [hierarchical]
-[population-sizes] [diagnose] [demo]``.
+[predict] [likelihood] [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty]
+[hierarchical] [population-sizes] [diagnose] [demo]``.
 
 Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
 install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds, in both
@@ -27,6 +27,7 @@ from benchmarks import (  # noqa: E402
     fit,
     hierarchical,
     likelihood,
+    long_run,
     population_sizes,
     predict,
     rig_fit,
@@ -42,6 +43,9 @@ BENCHMARKS = {
     "predict": lambda: predict.report(predict.run()),
     "likelihood": lambda: "\n".join(
         [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
+    ),
+    "long-run": lambda: "\n".join(
+        [long_run.report(long_run.run()), long_run.report(long_run.run(check_growth=0.0))]
     ),
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
     "rig-fit": lambda: rig_fit.report(rig_fit.run()),

@@ -260,7 +260,8 @@ def fit(
     settings : SamplerSettings or TemperedSettings, optional
         Of the chosen sampler (default: :data:`FIT_SETTINGS`, or the tempered sampler's defaults).
     checkpoint : path-like, optional
-        Checkpoint file (written after every chunk); with ``resume=True`` the fit continues it.
+        Checkpoint file (written at every convergence check and on an interrupt); with
+        ``resume=True`` the fit continues it.
         Ensemble sampler only.
     progress : bool
         Show a progress bar (ensemble sampler).

@@ -1,4 +1,4 @@
-"""Checkpoints of ensemble runs: written atomically after every chunk, refused for another fit.
+"""Checkpoints of ensemble runs: written atomically at convergence checks, refused for another fit.
 
 A checkpoint holds the chains, log-probabilities, acceptance and every ensemble's random state,
 with the fingerprint of the target (data, model, priors, parameter order, fixed values) and the
