@@ -141,7 +141,7 @@ def test_checkpoint_resume_is_exact_and_mismatches_are_refused(tmp_path):
 def test_long_chains_are_checked_every_few_percent_of_their_length():
     settings = SamplerSettings(chunk=500, max_steps=100000)
     points = [n for n in range(500, 100001, 500) if settings.is_check_point(n)]
-    assert points[:20] == list(range(500, 10001, 500))  # every chunk up to chunk / 5 %
+    assert points[:40] == list(range(500, 20001, 500))  # every chunk up to 2 · chunk / 5 %
     gaps = np.diff(points)
     assert np.all(gaps >= np.maximum(500, 0.05 * np.array(points[:-1]) - 500))
     assert np.all(gaps <= np.maximum(500, 0.05 * np.array(points[:-1])))
