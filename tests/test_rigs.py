@@ -341,3 +341,26 @@ def test_the_rig_coverage_study_pools_its_intervals_and_flags_too_few():
     assert summary["inside"] == {"a": 10, "b": 9, "c": 5}
     assert summary["pooled"] == pytest.approx(24 / 30)
     assert summary["lowest_count"] == 6 and summary["too_few"] == ["c"]
+
+
+@pytest.mark.slow
+def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
+    """Ten bench rigs as they would log (FSR 402 specimens drawn from the population, 4.9 V
+    divider with 3.3 kΩ, 10-bit ADC, four dead weights × 10 min at 100 Hz), each fitted with the
+    defaults and a 100,000-step budget (rig fits converge in 23,000 steps and more: hours on 2
+    cores, VALIDATION.md). Every fit converges; the twelve physical parameters' 90 % intervals
+    hold the truth in 80–98 % of the 120 cases, and no parameter's count falls below the
+    Binomial(10, 0.9)'s 1 % quantile. (One parameter's share over ten rigs cannot be held to
+    80–98 %: a calibrated interval holds the truth in all ten for 35 % of parameters.)"""
+    from dataclasses import replace
+
+    from fsrbayes.inference import FIT_SETTINGS
+    from validation.rig_coverage import coverage_summary, format_coverage, rig_replication
+
+    settings = replace(FIT_SETTINGS, processes=2, max_steps=100000)
+    rows = [rig_replication(seed, settings=settings) for seed in range(100, 110)]
+    print(format_coverage(rows))
+    summary = coverage_summary(rows)
+    assert summary["converged"] == 10
+    assert 0.8 <= summary["pooled"] <= 0.98
+    assert not summary["too_few"], summary["inside"]

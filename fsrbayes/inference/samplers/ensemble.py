@@ -118,11 +118,10 @@ class SamplerSettings:
     check_growth : float
         Once the chain is long, convergence is checked and the checkpoint written only after it
         has grown by this share since the last check, rounded down to whole chunks (so every
-        chunk up to ``2 · chunk / check_growth`` steps): both cost time in proportion to the
-        chain's length,
-        and checked every chunk a long run spends more time on them than on sampling
-        (BENCHMARKS.md). A fit may then stop up to this share later than the first step at which
-        it met the criteria. 0 checks every chunk.
+        chunk up to ``2 · chunk / check_growth`` steps). Both cost time in proportion to the
+        chain's length; checked every chunk, a long run spent more time on them than on
+        sampling (BENCHMARKS.md). A fit may then stop up to this share later than the first
+        step at which it met the criteria. 0 checks every chunk.
     """
 
     n_ensembles: int = 4
