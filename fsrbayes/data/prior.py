@@ -170,13 +170,13 @@ class JointPrior:
         added parameter by parameter, in order (the sum does not depend on the grouping).
         """
         x = np.asarray(x, dtype=float)
+        if not self.ndim:
+            return np.zeros(x.shape[:-1])
         terms = np.empty(x.shape)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             for kind, columns, constants in self._densities:
                 terms[..., columns] = log_density(kind, x[..., columns], constants)
-            total = terms[..., 0]
-            for i in range(1, self.ndim):
-                total = total + terms[..., i]
+            total = np.add.accumulate(terms, axis=-1)[..., -1]  # sequential, in parameter order
         return np.where(np.isnan(total), -np.inf, total)
 
     def from_unconstrained(self, u):
