@@ -123,7 +123,7 @@ def format_coverage(rows):
 
 def _write_rows(rows, path):
     tmp = Path(f"{path}.tmp")
-    tmp.write_text(json.dumps([{k: v for k, v in r.items() if k != "report"} for r in rows]))
+    tmp.write_text(json.dumps(rows))
     os.replace(tmp, path)
 
 
