@@ -354,7 +354,8 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
 
     Does not pass yet: rig 103 is not converged at 100,000 steps (τ 4,416); of rigs 100–105 the
     other five converged in 5,500–100,000 steps, 2–24 minutes each on 2 cores, and rig 104's
-    intervals miss 6 of 12 (VALIDATION.md §10)."""
+    intervals miss 6 of 12: its noise is under half an ADC count, and the likelihood's
+    quantisation model reads the rounding bias as signal (VALIDATION.md §10)."""
     from dataclasses import replace
 
     from fsrbayes.inference import FIT_SETTINGS
