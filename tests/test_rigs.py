@@ -352,8 +352,8 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     below the Binomial(10, 0.9)'s 1 % quantile. (One parameter's share over ten rigs cannot be
     held to 80–98 %: a calibrated interval holds the truth in all ten for 35 % of parameters.)
 
-    Does not pass yet: rig 103 is not converged at 100,000 steps (τ 4,416); of rigs 100–106 the
-    other six converged in 5,500–100,000 steps, 2–24 minutes each on 2 cores, and rig 104's
+    Does not pass yet: rig 103 is not converged at 100,000 steps (τ 4,416). The other nine
+    converged in 5,500–100,000 steps, 1.5–24 minutes each on 2 cores (pooled 0.933), and rig 104's
     intervals miss 6 of 12: its noise is under half an ADC count, and the likelihood's
     quantisation model reads the rounding bias as signal (VALIDATION.md §10)."""
     from dataclasses import replace
