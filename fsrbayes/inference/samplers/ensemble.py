@@ -119,7 +119,7 @@ class SamplerSettings:
         Once the chain is long, convergence is checked and the checkpoint written only after it
         has grown by this share since the last check, rounded down to whole chunks (so every
         chunk up to ``2 · chunk / check_growth`` steps). Both cost time in proportion to the
-        chain's length; checked every chunk, a long run spent more time on them than on
+        chain's length: checked every chunk, a long run would spend more time on them than on
         sampling (BENCHMARKS.md). A fit may then stop up to this share later than the first
         step at which it met the criteria. 0 checks every chunk.
     """
@@ -301,7 +301,7 @@ class _Stored:
     """The chains and log-densities sampled so far, grown in place.
 
     Appending a chunk copies only the chunk: the buffers grow geometrically (up to the step
-    budget), where concatenating copied the whole chain after every chunk.
+    budget), so appending costs O(1) per step rather than a copy of the whole chain.
     """
 
     def __init__(self, chains, log_probs, max_steps):
