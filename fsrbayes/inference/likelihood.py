@@ -15,10 +15,14 @@ Rig data (:mod:`fsrbayes.data.readouts`) add two things, both with the Gaussian 
 log is reduced to log-spaced bins in time (:func:`bin_log_time`): a bin of n samples with mean
 ȳ and within-bin scatter S = Σ(y_i − ȳ)² contributes −(n/2)·log(2π v) − (S + n·(ȳ − log
 I(θ))²)/(2v) − n·ȳ, exactly the samples' own likelihood when the model is linear across the bin.
-A quantised reading (ADC counts, step q in amperes) adds its rounding error as noise: v = σ² +
-δ², δ² = (q/I)²/12, the variance of a rounding error spread evenly over one step — so a
-10-bit logger's stair-steps are read as noise of known size, not as signal, and the binned
-statistics stay sufficient. ``sigma_rel`` is
+A whole-count reading (ADC counts, one count q in amperes) is the continuous reading rounded: a
+count k is read when the latent current, log-normal about I(θ), falls between (k − ½)q and
+(k + ½)q, with probability P(k) = Φ(b) − Φ(a), a, b = (log((k ∓ ½)q) − log I(θ))/sigma_rel (the
+converter's top count reaches +∞); it enters as the density P(k)/q. This holds at any noise
+level: when the noise is under a count the readings sit on one or two counts whose proportions
+carry the information, and the rounding's bias is part of the model rather than read as creep. A
+bin of a high-rate log keeps how often each count was read (:class:`CountHistograms`) and
+contributes Σ n_k·log(P(k)/q) at the bin's mean time. ``sigma_rel`` is
 the relative noise of the current; ``nu`` the Student-t degrees of freedom (robust to outlying
 samples); ``noise_tau`` the correlation time of correlated noise (a drifting amplifier, the
 rig's temperature, a logger's filter) — the AR(1) law in continuous time, so that unevenly
@@ -40,6 +44,7 @@ from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
     RAMP_STEPS,
+    CountHistograms,
     bin_log_time,
     load_step_arrays,
     pack_rig,
@@ -54,8 +59,10 @@ __all__ = [
     "SpecimenData",
     "ar1_innovations",
     "bin_log_time",
+    "count_log_likelihood",
     "load_step_arrays",
     "log_likelihood_pointwise",
+    "log_normal_interval",
     "ou_coefficients",
 ]
 
@@ -89,7 +96,8 @@ class SpecimenData:
         Σ (y_i − ȳ)² of the log-currents within each bin. None: 0.
     quant_var : ndarray, shape (C, T), optional
         Variance a reading's quantisation adds to the log-current, (q/I)²/12 for a step q
-        (an ADC's least significant bit). None: 0.
+        (an ADC's least significant bit): the spread of a rounded reading, for predictive checks
+        (:meth:`noise_scale`); the likelihood uses :attr:`counts`. None: 0.
     step_time, step_size : ndarray, shape (C, K), optional
         Time (s) and signed size (Pa) of each test's load steps when the load changes within a
         test (padding: size 0); ``stress_Pa`` is then the first load. None: one step of
@@ -99,6 +107,9 @@ class SpecimenData:
     ramp_index : ndarray of int, shape (C,), optional
         Which sampled loading ramp (``ramp_s[k]`` of a fit with ``ramp="fitted"``) each row's
         first loading follows: its test's. None: row k follows ``ramp_s[k]``.
+    counts : CountHistograms, optional
+        The whole-count readings of quantised tests, per observed point (their likelihood is
+        the count's probability). None: every reading is continuous.
     """
 
     specimen: str
@@ -117,6 +128,7 @@ class SpecimenData:
     step_size: np.ndarray = None
     ramp_s: np.ndarray = None
     ramp_index: np.ndarray = None
+    counts: CountHistograms = None
 
     @classmethod
     def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
@@ -210,6 +222,7 @@ class SpecimenData:
             and self.weight is None
             and self.scatter is None
             and self.quant_var is None
+            and self.counts is None
             and self.step_time is None
         )
 
@@ -331,6 +344,8 @@ class SpecimenData:
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())
+        for array in () if self.counts is None else self.counts.arrays():
+            digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(repr(self.test_keys).encode())
         return digest.hexdigest()
 
@@ -360,6 +375,61 @@ def ar1_innovations(resid_full, time_s, tau):
     log_scale = np.zeros_like(resid_full)
     log_scale[..., 1:] = np.log(scale)
     return z, log_scale
+
+
+def log_normal_interval(lower, upper):
+    """Return log(Φ(upper) − Φ(lower)) for lower < upper, accurate far in either tail.
+
+    An interval on the upper side is mirrored to the lower one, where ``log_ndtr`` keeps its
+    precision; the difference of the two is taken in logs.
+    """
+    mirror = lower > 0
+    low = np.where(mirror, -upper, lower)
+    high = np.where(mirror, -lower, upper)
+    log_high = special.log_ndtr(high)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = special.log_ndtr(low) - log_high  # ≤ 0
+        tail = np.where(ratio > -np.log(2.0), np.log(-np.expm1(ratio)), np.log1p(-np.exp(ratio)))
+    return log_high + tail
+
+
+def count_log_likelihood(log_model, sigma, counts, first):
+    """Log-likelihood of the whole-count readings at each point that holds them.
+
+    A count's probability Φ(b) − Φ(a) is formed from the smaller tail ndtr(−|z|) at each
+    rounding edge, which keeps it precise on either side of the model; where it underflows (a
+    parameter set far from the data) :func:`log_normal_interval` takes over.
+
+    Parameters
+    ----------
+    log_model : ndarray, shape (W, N)
+        log of the model current at every observed point.
+    sigma : ndarray, shape (W, 1)
+        Relative noise of the latent (unrounded) reading.
+    counts : CountHistograms
+    first : ndarray of int, shape (P,)
+        The first entry of each point (``counts.points``).
+
+    Returns
+    -------
+    ndarray, shape (W, P)
+        Σ n_k·(log P(k) − log q) over the counts read at each point.
+    """
+    z = (counts.log_edge - log_model[:, counts.edge_point]) / sigma
+    tail = special.ndtr(-np.abs(z))
+    z_low, z_high = z[:, counts.lower], z[:, counts.upper]
+    tail_low, tail_high = tail[:, counts.lower], tail[:, counts.upper]
+    probability = np.where(
+        z_low > 0,
+        tail_low - tail_high,
+        np.where(z_high <= 0, tail_high - tail_low, 1.0 - tail_high - tail_low),
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_p = np.log(probability)
+    far = ~(probability > 1e-250)
+    if far.any():
+        log_p[far] = log_normal_interval(z_low[far], z_high[far])
+    return np.add.reduceat(counts.multiplicity * (log_p - counts.log_step), first, axis=1)
 
 
 def log_likelihood_pointwise(
@@ -399,12 +469,16 @@ def log_likelihood_pointwise(
         n = 1.0 if data.weight is None else data.weight[data.mask]
         scatter = 0.0 if data.scatter is None else data.scatter[data.mask]
         variance = sigma**2 + (0.0 if data.quant_var is None else data.quant_var[data.mask])
-        resid = y[None, :] - log_model[:, data.mask]
+        at_points = log_model[:, data.mask]
+        resid = y[None, :] - at_points
         value = (
             -0.5 * n * np.log(2.0 * np.pi * variance)
             - (scatter + n * resid**2) / (2.0 * variance)
             - n * y
         )
+        if data.counts is not None:
+            points, first = data.counts.points
+            value[:, points] = count_log_likelihood(at_points, sigma, data.counts, first)
         return np.where(np.isfinite(value), value, -np.inf)
     if likelihood == "ar1":
         tau = np.asarray(noise_tau, dtype=float)

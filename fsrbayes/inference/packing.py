@@ -2,22 +2,29 @@
 
 A high-rate log is reduced to log-spaced bins in time since each load step (:func:`bin_log_time`),
 whose sufficient statistics keep the likelihood exact where the model is straight across a bin;
+whole-count readings keep, per bin, how often each count was read (:class:`CountHistograms`);
 a test's load history (staircases, rests, a loading ramp) becomes arrays of load steps for the
 superposition in the forward model (:func:`load_step_arrays`); :func:`pack_rig` builds the
 padded arrays of :class:`~fsrbayes.inference.likelihood.SpecimenData` from them.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
 __all__ = [
     "BINS_PER_DECADE",
+    "CountHistograms",
     "MAX_RAW_SAMPLES",
     "RAMP_FLOOR",
     "RAMP_STEPS",
     "ramp_load",
     "ramp_steps",
     "bin_log_time",
+    "bin_statistics",
+    "count_histograms",
     "load_step_arrays",
+    "log_time_bins",
     "pack_rig",
 ]
 
@@ -27,54 +34,56 @@ BINS_PER_DECADE = 20
 """Bins per decade of time since the load landed (12 % wide: the model is linear across one)."""
 
 
+def log_time_bins(time_s, bins_per_decade=BINS_PER_DECADE):
+    """Return the bin of every sample of one test: log-spaced in time, numbered from 0.
+
+    A sample at t ≤ 0 (the load's landing) keeps a bin of its own; the later ones fall into
+    bins whose edges are spaced ``bins_per_decade`` per decade from the first positive time.
+    Times increase, so the numbers do too and every bin is a run of consecutive samples.
+    """
+    time_s = np.asarray(time_s, dtype=float)
+    positive = time_s > 0
+    labels = np.arange(time_s.size)
+    if not positive.any():
+        return labels
+    first = time_s[positive][0]
+    later = np.floor(bins_per_decade * np.log10(time_s[positive] / first) + 1e-9).astype(int)
+    labels[positive] = (~positive).sum() + np.unique(later, return_inverse=True)[1]
+    return labels
+
+
 def bin_log_time(time_s, log_current, bins_per_decade=BINS_PER_DECADE):
     """Reduce one test's samples to log-spaced bins in time: sufficient statistics of each.
 
-    The first sample at t = 0 (the load's landing) keeps a bin of its own; the later ones fall
-    into bins whose edges are spaced ``bins_per_decade`` per decade from the first positive
-    time. For white noise of sd σ in the log-current and a model that is linear in t across a
-    bin, the samples' likelihood is exactly that of the bin's mean ȳ at the mean time t̄ with sd
-    σ/√n, times a factor in σ carried by the within-bin scatter S = Σ(y − ȳ)²
-    (:func:`log_likelihood_pointwise`): the posterior is unchanged by the binning.
+    The bins are :func:`log_time_bins`. For white noise of sd σ in the log-current and a model
+    that is linear in t across a bin, the samples' likelihood is that of the bin's mean ȳ at
+    the mean time t̄ with sd σ/√n, times a factor in σ carried by the within-bin scatter S =
+    Σ(y − ȳ)² (:func:`~fsrbayes.inference.likelihood.log_likelihood_pointwise`).
 
     Returns
     -------
     time, mean, count, scatter : ndarray
         Per non-empty bin.
     """
-    time_s = np.asarray(time_s, dtype=float)
-    log_current = np.asarray(log_current, dtype=float)
-    positive = time_s > 0
-    if not positive.any():
-        return time_s, log_current, np.ones(time_s.size), np.zeros(time_s.size)
-    first = time_s[positive][0]
-    index = np.full(time_s.size, -1)
-    index[positive] = np.floor(bins_per_decade * np.log10(time_s[positive] / first) + 1e-9).astype(
-        int
+    return bin_statistics(
+        np.asarray(time_s, dtype=float),
+        np.asarray(log_current, dtype=float),
+        log_time_bins(time_s, bins_per_decade),
     )
-    out = [
-        (
-            time_s[~positive],
-            log_current[~positive],
-            np.ones((~positive).sum()),
-            np.zeros((~positive).sum()),
-        )
-    ]
-    labels, start = np.unique(index[positive], return_index=True)
-    counts = np.diff(np.append(start, positive.sum()))
-    t, y = time_s[positive], log_current[positive]
-    sums = np.add.reduceat(y, start)
-    means = sums / counts
-    centred = y - np.repeat(means, counts)
-    out.append(
-        (
-            np.add.reduceat(t, start) / counts,
-            means,
-            counts.astype(float),
-            np.add.reduceat(centred**2, start),
-        )
+
+
+def bin_statistics(time_s, log_current, labels):
+    """Return (mean time, mean, count, scatter) of each run of equal ``labels``."""
+    start = np.flatnonzero(np.diff(labels, prepend=-1))
+    counts = np.diff(np.append(start, labels.size))
+    means = np.add.reduceat(log_current, start) / counts
+    centred = log_current - np.repeat(means, counts)
+    return (
+        np.add.reduceat(time_s, start) / counts,
+        means,
+        counts.astype(float),
+        np.add.reduceat(centred**2, start),
     )
-    return tuple(np.concatenate(parts) for parts in zip(*out, strict=True))
 
 
 RAMP_STEPS = 16
@@ -137,30 +146,138 @@ def load_step_arrays(tests):
     return step_time, step_size
 
 
-def _bin_segments(test, y, bins_per_decade):
-    """Log-spaced bins of each constant-load segment of a test, in time since its load step."""
+def _bin_labels(test, bins_per_decade):
+    """Bins of a test: log-spaced within each constant-load segment, in time since its step.
+
+    Returns (labels, since) — every sample's bin (:func:`log_time_bins`, numbered through the
+    test) and the time its segment started.
+    """
     if test.load_steps is None:
-        return bin_log_time(test.time_s, y, bins_per_decade)
+        return log_time_bins(test.time_s, bins_per_decade), np.zeros(test.time_s.size)
     edges = np.append(test.load_steps[0], np.inf)
-    parts = []
+    labels, since = np.zeros(test.time_s.size, dtype=int), np.zeros(test.time_s.size)
+    first = 0
     for start, end in zip(edges[:-1], edges[1:], strict=True):
         inside = (test.time_s >= start) & (test.time_s < end)
         if inside.any():
-            time, *rest = bin_log_time(test.time_s[inside] - start, y[inside], bins_per_decade)
-            parts.append((time + start, *rest))
-    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
+            labels[inside] = first + log_time_bins(test.time_s[inside] - start, bins_per_decade)
+            since[inside] = start
+            first = labels[inside][-1] + 1
+    return labels, since
+
+
+@dataclass(frozen=True)
+class CountHistograms:
+    """Whole-count readings (an ADC's) of a specimen's tests: how often each count was read.
+
+    One entry per (observed point, count) — a point being a bin of a high-rate log or a single
+    sample — so that the likelihood can give each count its exact probability
+    (:func:`~fsrbayes.inference.likelihood.count_log_likelihood`); neighbouring counts of a
+    point share their rounding edge. Entries are sorted by point.
+
+    Attributes
+    ----------
+    edge_point : ndarray of int, shape (G,)
+        The observed point (mask order of the packed data) of each rounding edge.
+    log_edge : ndarray, shape (G,)
+        log of the current in A at the edge, (k ± ½)·q; the converter's top count reaches +inf
+        (a saturated reading).
+    lower, upper : ndarray of int, shape (E,)
+        Each entry's count's edges (indices into ``log_edge``).
+    point : ndarray of int, shape (E,)
+        The observed point of each entry.
+    multiplicity : ndarray, shape (E,)
+        How many samples of the point read that count.
+    log_step : ndarray, shape (E,)
+        log q, one count in A: a count's probability over q is a density in A, on the scale of
+        a continuous reading's.
+    """
+
+    edge_point: np.ndarray
+    log_edge: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    point: np.ndarray
+    multiplicity: np.ndarray
+    log_step: np.ndarray
+
+    @property
+    def points(self):
+        """The observed points that hold counts, in order, and their first entries: (P,), (P,)."""
+        first = np.flatnonzero(np.diff(self.point, prepend=-1))
+        return self.point[first], first
+
+    def arrays(self):
+        """Return the arrays (for a fingerprint)."""
+        return tuple(getattr(self, name) for name in self.__dataclass_fields__)
+
+    @classmethod
+    def concatenate(cls, parts):
+        """Join the histograms of several tests (:func:`count_histograms`), in order."""
+        shift = np.cumsum([0] + [part.log_edge.size for part in parts[:-1]])
+
+        def joined(name, shifted=False):
+            arrays = [getattr(part, name) for part in parts]
+            if shifted:
+                arrays = [array + k for array, k in zip(arrays, shift, strict=True)]
+            return np.concatenate(arrays)
+
+        return cls(
+            joined("edge_point"),
+            joined("log_edge"),
+            joined("lower", shifted=True),
+            joined("upper", shifted=True),
+            joined("point"),
+            joined("multiplicity"),
+            joined("log_step"),
+        )
+
+
+def count_histograms(test, labels, first_point):
+    """Return the :class:`CountHistograms` of one quantised test.
+
+    ``labels`` is every sample's point within the test; ``first_point`` the index of the
+    test's first point among the specimen's observed points.
+    """
+    q = test.quantum_A
+    count = np.rint(test.current_A / q).astype(np.int64)
+    top = np.inf if test.readout is None else 2**test.readout.adc_bits - 1
+    # a count k is the odd key 2k + 1 within its point; its edges k ∓ ½ the even keys either side
+    span = 2 * int(count.max()) + 3
+    key = labels.astype(np.int64) * span + 2 * count + 1
+    key, multiplicity = np.unique(key, return_counts=True)
+    point = key // span
+    edge_key, index = np.unique(np.concatenate([key - 1, key + 1]), return_inverse=True)
+    edge_point, twice = np.divmod(edge_key, span)  # twice the edge, in counts, plus 1
+    with np.errstate(divide="ignore"):
+        log_edge = np.where(twice > 2 * top + 1, np.inf, np.log(np.maximum(twice - 1, 0) * (q / 2)))
+    return CountHistograms(
+        edge_point + first_point,
+        log_edge,
+        index[: key.size],
+        index[key.size :],
+        point + first_point,
+        multiplicity.astype(float),
+        np.full(key.size, np.log(q)),
+    )
 
 
 def pack_rig(cls, tests, max_samples, bins_per_decade):
     """Pack tests with circuits, quantised readings, load steps or many samples (``from_tests``)."""
-    columns = []
+    columns, histograms, n_points = [], [], 0
     for t in tests:
         y = np.log(t.current_A)
         if t.time_s.size > max_samples:
-            time, mean, count, scatter = _bin_segments(t, y, bins_per_decade)
+            labels, since = _bin_labels(t, bins_per_decade)
+            time, mean, count, scatter = bin_statistics(t.time_s - since, y, labels)
+            time = time + since[np.flatnonzero(np.diff(labels, prepend=-1))]
         else:
+            labels = np.arange(y.size)
             time, mean, count, scatter = t.time_s, y, np.ones(y.size), np.zeros(y.size)
         quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(mean.size)
+        if t.quantum_A > 0:
+            histograms.append(count_histograms(t, labels, n_points))
+        n_points += mean.size
         columns.append((time, mean, count, scatter, np.broadcast_to(quant, mean.shape)))
     width = max(c[0].size for c in columns)
     arrays = [np.empty((len(tests), width)) for _ in range(5)]
@@ -189,4 +306,5 @@ def pack_rig(cls, tests, max_samples, bins_per_decade):
         quant,
         *(steps or (None, None)),
         np.array([t.ramp_s for t in tests]) if any(t.ramp_s > 0 for t in tests) else None,
+        counts=CountHistograms.concatenate(histograms) if histograms else None,
     )

@@ -220,6 +220,7 @@ def _predict_tests(folder, tests, n_draws, rng):
         weight=None,
         scatter=None,
         quant_var=None,
+        counts=None,
     )
     posterior, draws, attrs = _posterior_of(folder, packed, rng)
     if attrs["sensor"] != tests[0].sensor:
