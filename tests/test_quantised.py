@@ -11,11 +11,8 @@ from fsrbayes.data.creep import CreepTest
 from fsrbayes.data.readouts import Readout
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.likelihood import (
-    SpecimenData,
-    log_likelihood_pointwise,
-    log_normal_interval,
-)
+from fsrbayes.inference.counts import log_normal_interval
+from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
 from fsrbayes.inference.optimize import polish
 from fsrbayes.inference.posterior import LogPosterior
 

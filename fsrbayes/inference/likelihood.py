@@ -14,15 +14,10 @@ and the density is that of the measured current, p(I_obs) = p(y)/I_obs.
 Rig data (:mod:`fsrbayes.data.readouts`) add two things, both with the Gaussian law. A high-rate
 log is reduced to log-spaced bins in time (:func:`bin_log_time`): a bin of n samples with mean
 ȳ and within-bin scatter S = Σ(y_i − ȳ)² contributes −(n/2)·log(2π v) − (S + n·(ȳ − log
-I(θ))²)/(2v) − n·ȳ, exactly the samples' own likelihood when the model is linear across the bin.
-A whole-count reading (ADC counts, one count q in amperes) is the continuous reading rounded: a
-count k is read when the latent current, log-normal about I(θ), falls between (k − ½)q and
-(k + ½)q, with probability P(k) = Φ(b) − Φ(a), a, b = (log((k ∓ ½)q) − log I(θ))/sigma_rel (the
-converter's top count reaches +∞); it enters as the density P(k)/q. This holds at any noise
-level: when the noise is under a count the readings sit on one or two counts whose proportions
-carry the information, and the rounding's bias is part of the model rather than read as creep. A
-bin of a high-rate log keeps how often each count was read (:class:`CountHistograms`) and
-contributes Σ n_k·log(P(k)/q) at the bin's mean time. ``sigma_rel`` is
+I(θ))²)/(2v) − n·ȳ with v = sigma_rel², exactly the samples' own likelihood when the model is
+linear across the bin.
+A whole-count reading (ADC counts) enters with the exact probability of the count it read — the
+unrounded reading rounded to one count (:mod:`.counts`), at any noise level. ``sigma_rel`` is
 the relative noise of the current; ``nu`` the Student-t degrees of freedom (robust to outlying
 samples); ``noise_tau`` the correlation time of correlated noise (a drifting amplifier, the
 rig's temperature, a logger's filter) — the AR(1) law in continuous time, so that unevenly
@@ -40,11 +35,11 @@ from scipy import special
 from ..data.creep import CreepData
 from ..physics.sensor import load_of_steps
 from ..utils import HALF_LOG_2PI
+from .counts import CountHistograms, count_log_likelihood
 from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
     RAMP_STEPS,
-    CountHistograms,
     bin_log_time,
     load_step_arrays,
     pack_rig,
@@ -59,10 +54,8 @@ __all__ = [
     "SpecimenData",
     "ar1_innovations",
     "bin_log_time",
-    "count_log_likelihood",
     "load_step_arrays",
     "log_likelihood_pointwise",
-    "log_normal_interval",
     "ou_coefficients",
 ]
 
@@ -375,61 +368,6 @@ def ar1_innovations(resid_full, time_s, tau):
     log_scale = np.zeros_like(resid_full)
     log_scale[..., 1:] = np.log(scale)
     return z, log_scale
-
-
-def log_normal_interval(lower, upper):
-    """Return log(Φ(upper) − Φ(lower)) for lower < upper, accurate far in either tail.
-
-    An interval on the upper side is mirrored to the lower one, where ``log_ndtr`` keeps its
-    precision; the difference of the two is taken in logs.
-    """
-    mirror = lower > 0
-    low = np.where(mirror, -upper, lower)
-    high = np.where(mirror, -lower, upper)
-    log_high = special.log_ndtr(high)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = special.log_ndtr(low) - log_high  # ≤ 0
-        tail = np.where(ratio > -np.log(2.0), np.log(-np.expm1(ratio)), np.log1p(-np.exp(ratio)))
-    return log_high + tail
-
-
-def count_log_likelihood(log_model, sigma, counts, first):
-    """Log-likelihood of the whole-count readings at each point that holds them.
-
-    A count's probability Φ(b) − Φ(a) is formed from the smaller tail ndtr(−|z|) at each
-    rounding edge, which keeps it precise on either side of the model; where it underflows (a
-    parameter set far from the data) :func:`log_normal_interval` takes over.
-
-    Parameters
-    ----------
-    log_model : ndarray, shape (W, N)
-        log of the model current at every observed point.
-    sigma : ndarray, shape (W, 1)
-        Relative noise of the latent (unrounded) reading.
-    counts : CountHistograms
-    first : ndarray of int, shape (P,)
-        The first entry of each point (``counts.points``).
-
-    Returns
-    -------
-    ndarray, shape (W, P)
-        Σ n_k·(log P(k) − log q) over the counts read at each point.
-    """
-    z = (counts.log_edge - log_model[:, counts.edge_point]) / sigma
-    tail = special.ndtr(-np.abs(z))
-    z_low, z_high = z[:, counts.lower], z[:, counts.upper]
-    tail_low, tail_high = tail[:, counts.lower], tail[:, counts.upper]
-    probability = np.where(
-        z_low > 0,
-        tail_low - tail_high,
-        np.where(z_high <= 0, tail_high - tail_low, 1.0 - tail_high - tail_low),
-    )
-    with np.errstate(divide="ignore", invalid="ignore"):
-        log_p = np.log(probability)
-    far = ~(probability > 1e-250)
-    if far.any():
-        log_p[far] = log_normal_interval(z_low[far], z_high[far])
-    return np.add.reduceat(counts.multiplicity * (log_p - counts.log_step), first, axis=1)
 
 
 def log_likelihood_pointwise(

@@ -8,13 +8,12 @@ superposition in the forward model (:func:`load_step_arrays`); :func:`pack_rig` 
 padded arrays of :class:`~fsrbayes.inference.likelihood.SpecimenData` from them.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from .counts import CountHistograms, count_histograms
 
 __all__ = [
     "BINS_PER_DECADE",
-    "CountHistograms",
     "MAX_RAW_SAMPLES",
     "RAMP_FLOOR",
     "RAMP_STEPS",
@@ -22,7 +21,6 @@ __all__ = [
     "ramp_steps",
     "bin_log_time",
     "bin_statistics",
-    "count_histograms",
     "load_step_arrays",
     "log_time_bins",
     "pack_rig",
@@ -164,102 +162,6 @@ def _bin_labels(test, bins_per_decade):
             since[inside] = start
             first = labels[inside][-1] + 1
     return labels, since
-
-
-@dataclass(frozen=True)
-class CountHistograms:
-    """Whole-count readings (an ADC's) of a specimen's tests: how often each count was read.
-
-    One entry per (observed point, count) — a point being a bin of a high-rate log or a single
-    sample — so that the likelihood can give each count its exact probability
-    (:func:`~fsrbayes.inference.likelihood.count_log_likelihood`); neighbouring counts of a
-    point share their rounding edge. Entries are sorted by point.
-
-    Attributes
-    ----------
-    edge_point : ndarray of int, shape (G,)
-        The observed point (mask order of the packed data) of each rounding edge.
-    log_edge : ndarray, shape (G,)
-        log of the current in A at the edge, (k ± ½)·q; the converter's top count reaches +inf
-        (a saturated reading).
-    lower, upper : ndarray of int, shape (E,)
-        Each entry's count's edges (indices into ``log_edge``).
-    point : ndarray of int, shape (E,)
-        The observed point of each entry.
-    multiplicity : ndarray, shape (E,)
-        How many samples of the point read that count.
-    log_step : ndarray, shape (E,)
-        log q, one count in A: a count's probability over q is a density in A, on the scale of
-        a continuous reading's.
-    """
-
-    edge_point: np.ndarray
-    log_edge: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    point: np.ndarray
-    multiplicity: np.ndarray
-    log_step: np.ndarray
-
-    @property
-    def points(self):
-        """The observed points that hold counts, in order, and their first entries: (P,), (P,)."""
-        first = np.flatnonzero(np.diff(self.point, prepend=-1))
-        return self.point[first], first
-
-    def arrays(self):
-        """Return the arrays (for a fingerprint)."""
-        return tuple(getattr(self, name) for name in self.__dataclass_fields__)
-
-    @classmethod
-    def concatenate(cls, parts):
-        """Join the histograms of several tests (:func:`count_histograms`), in order."""
-        shift = np.cumsum([0] + [part.log_edge.size for part in parts[:-1]])
-
-        def joined(name, shifted=False):
-            arrays = [getattr(part, name) for part in parts]
-            if shifted:
-                arrays = [array + k for array, k in zip(arrays, shift, strict=True)]
-            return np.concatenate(arrays)
-
-        return cls(
-            joined("edge_point"),
-            joined("log_edge"),
-            joined("lower", shifted=True),
-            joined("upper", shifted=True),
-            joined("point"),
-            joined("multiplicity"),
-            joined("log_step"),
-        )
-
-
-def count_histograms(test, labels, first_point):
-    """Return the :class:`CountHistograms` of one quantised test.
-
-    ``labels`` is every sample's point within the test; ``first_point`` the index of the
-    test's first point among the specimen's observed points.
-    """
-    q = test.quantum_A
-    count = np.rint(test.current_A / q).astype(np.int64)
-    top = np.inf if test.readout is None else 2**test.readout.adc_bits - 1
-    # a count k is the odd key 2k + 1 within its point; its edges k ∓ ½ the even keys either side
-    span = 2 * int(count.max()) + 3
-    key = labels.astype(np.int64) * span + 2 * count + 1
-    key, multiplicity = np.unique(key, return_counts=True)
-    point = key // span
-    edge_key, index = np.unique(np.concatenate([key - 1, key + 1]), return_inverse=True)
-    edge_point, twice = np.divmod(edge_key, span)  # twice the edge, in counts, plus 1
-    with np.errstate(divide="ignore"):
-        log_edge = np.where(twice > 2 * top + 1, np.inf, np.log(np.maximum(twice - 1, 0) * (q / 2)))
-    return CountHistograms(
-        edge_point + first_point,
-        log_edge,
-        index[: key.size],
-        index[key.size :],
-        point + first_point,
-        multiplicity.astype(float),
-        np.full(key.size, np.log(q)),
-    )
 
 
 def pack_rig(cls, tests, max_samples, bins_per_decade):

@@ -1,0 +1,174 @@
+"""Whole-count readings (an ADC's): the exact probability of each count, kept per bin.
+
+A count k is read when the unrounded reading — log-normal about the model current I(θ), relative
+noise ``sigma_rel`` — falls between (k − ½)q and (k + ½)q, q one count in amperes:
+
+    P(k) = Φ(b) − Φ(a),   a, b = (log((k ∓ ½)q) − log I(θ)) / sigma_rel,
+
+the converter's top count reaching b = +∞ (a saturated reading). It enters the likelihood as
+the density P(k)/q, on the scale of a continuous reading's density, so that the two agree when
+the noise spans many counts. Under half a count of noise the readings sit on one or two counts:
+their proportions say where the level lies, and the rounding's bias (the mean of rounded
+readings is up to a tenth of a count off the true level) is part of the model rather than read
+as creep. A log's samples are kept as histograms per observed point (a bin of a high-rate log, or
+one sample): :class:`CountHistograms`, built by :func:`count_histograms`, evaluated by
+:func:`count_log_likelihood`.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import special
+
+__all__ = ["CountHistograms", "count_histograms", "count_log_likelihood", "log_normal_interval"]
+
+
+@dataclass(frozen=True)
+class CountHistograms:
+    """Whole-count readings (an ADC's) of a specimen's tests: how often each count was read.
+
+    One entry per (observed point, count) — a point being a bin of a high-rate log or a single
+    sample — so that the likelihood can give each count its exact probability
+    (:func:`~fsrbayes.inference.likelihood.count_log_likelihood`); neighbouring counts of a
+    point share their rounding edge. Entries are sorted by point.
+
+    Attributes
+    ----------
+    edge_point : ndarray of int, shape (G,)
+        The observed point (mask order of the packed data) of each rounding edge.
+    log_edge : ndarray, shape (G,)
+        log of the current in A at the edge, (k ± ½)·q; the converter's top count reaches +inf
+        (a saturated reading).
+    lower, upper : ndarray of int, shape (E,)
+        Each entry's count's edges (indices into ``log_edge``).
+    point : ndarray of int, shape (E,)
+        The observed point of each entry.
+    multiplicity : ndarray, shape (E,)
+        How many samples of the point read that count.
+    log_step : ndarray, shape (E,)
+        log q, one count in A: a count's probability over q is a density in A, on the scale of
+        a continuous reading's.
+    """
+
+    edge_point: np.ndarray
+    log_edge: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    point: np.ndarray
+    multiplicity: np.ndarray
+    log_step: np.ndarray
+
+    @property
+    def points(self):
+        """The observed points that hold counts, in order, and their first entries: (P,), (P,)."""
+        first = np.flatnonzero(np.diff(self.point, prepend=-1))
+        return self.point[first], first
+
+    def arrays(self):
+        """Return the arrays (for a fingerprint)."""
+        return tuple(getattr(self, name) for name in self.__dataclass_fields__)
+
+    @classmethod
+    def concatenate(cls, parts):
+        """Join the histograms of several tests (:func:`count_histograms`), in order."""
+        shift = np.cumsum([0] + [part.log_edge.size for part in parts[:-1]])
+
+        def joined(name, shifted=False):
+            arrays = [getattr(part, name) for part in parts]
+            if shifted:
+                arrays = [array + k for array, k in zip(arrays, shift, strict=True)]
+            return np.concatenate(arrays)
+
+        return cls(
+            joined("edge_point"),
+            joined("log_edge"),
+            joined("lower", shifted=True),
+            joined("upper", shifted=True),
+            joined("point"),
+            joined("multiplicity"),
+            joined("log_step"),
+        )
+
+
+def count_histograms(test, labels, first_point):
+    """Return the :class:`CountHistograms` of one quantised test.
+
+    ``labels`` is every sample's point within the test; ``first_point`` the index of the
+    test's first point among the specimen's observed points.
+    """
+    q = test.quantum_A
+    count = np.rint(test.current_A / q).astype(np.int64)
+    top = np.inf if test.readout is None else 2**test.readout.adc_bits - 1
+    # a count k is the odd key 2k + 1 within its point; its edges k ∓ ½ the even keys either side
+    span = 2 * int(count.max()) + 3
+    key = labels.astype(np.int64) * span + 2 * count + 1
+    key, multiplicity = np.unique(key, return_counts=True)
+    point = key // span
+    edge_key, index = np.unique(np.concatenate([key - 1, key + 1]), return_inverse=True)
+    edge_point, twice = np.divmod(edge_key, span)  # twice the edge, in counts, plus 1
+    with np.errstate(divide="ignore"):
+        log_edge = np.where(twice > 2 * top + 1, np.inf, np.log(np.maximum(twice - 1, 0) * (q / 2)))
+    return CountHistograms(
+        edge_point + first_point,
+        log_edge,
+        index[: key.size],
+        index[key.size :],
+        point + first_point,
+        multiplicity.astype(float),
+        np.full(key.size, np.log(q)),
+    )
+
+
+def log_normal_interval(lower, upper):
+    """Return log(Φ(upper) − Φ(lower)) for lower < upper, accurate far in either tail.
+
+    An interval on the upper side is mirrored to the lower one, where ``log_ndtr`` keeps its
+    precision; the difference of the two is taken in logs.
+    """
+    mirror = lower > 0
+    low = np.where(mirror, -upper, lower)
+    high = np.where(mirror, -lower, upper)
+    log_high = special.log_ndtr(high)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = special.log_ndtr(low) - log_high  # ≤ 0
+        tail = np.where(ratio > -np.log(2.0), np.log(-np.expm1(ratio)), np.log1p(-np.exp(ratio)))
+    return log_high + tail
+
+
+def count_log_likelihood(log_model, sigma, counts, first):
+    """Log-likelihood of the whole-count readings at each point that holds them.
+
+    A count's probability Φ(b) − Φ(a) is formed from the smaller tail ndtr(−|z|) at each
+    rounding edge, which keeps it precise on either side of the model; where it underflows (a
+    parameter set far from the data) :func:`log_normal_interval` takes over.
+
+    Parameters
+    ----------
+    log_model : ndarray, shape (W, N)
+        log of the model current at every observed point.
+    sigma : ndarray, shape (W, 1)
+        Relative noise of the latent (unrounded) reading.
+    counts : CountHistograms
+    first : ndarray of int, shape (P,)
+        The first entry of each point (``counts.points``).
+
+    Returns
+    -------
+    ndarray, shape (W, P)
+        Σ n_k·(log P(k) − log q) over the counts read at each point.
+    """
+    z = (counts.log_edge - log_model[:, counts.edge_point]) / sigma
+    tail = special.ndtr(-np.abs(z))
+    z_low, z_high = z[:, counts.lower], z[:, counts.upper]
+    tail_low, tail_high = tail[:, counts.lower], tail[:, counts.upper]
+    probability = np.where(
+        z_low > 0,
+        tail_low - tail_high,
+        np.where(z_high <= 0, tail_high - tail_low, 1.0 - tail_high - tail_low),
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_p = np.log(probability)
+    far = ~(probability > 1e-250)
+    if far.any():
+        log_p[far] = log_normal_interval(z_low[far], z_high[far])
+    return np.add.reduceat(counts.multiplicity * (log_p - counts.log_step), first, axis=1)
