@@ -115,9 +115,10 @@ def test_bins_are_sufficient_statistics():
     assert np.log10(late[1:] / late[:-1]).max() < 0.06 and late.size == pytest.approx(58, abs=2)
 
 
-def test_quantised_readings_add_their_step_to_the_noise():
-    """With the noise far below one ADC step, the quantisation variance keeps the likelihood
-    finite and sets its scale (sigma_rel cannot collapse to 0)."""
+def test_counts_read_far_below_one_step_keep_a_finite_likelihood():
+    """With the noise far below one ADC step, each count's probability stays finite and, with
+    the model on the counts read, no longer depends on sigma_rel: the readings pin the level to
+    within the step, and a smaller sigma_rel gains nothing."""
     text, truth = simulate_rig(1, seed=5, **{**SHORT, "noise_rel": 1e-5})
     folder = __import__("tempfile").mkdtemp()
     path = write_rig(text, truth, f"{folder}/q.csv")[0]
