@@ -5,7 +5,8 @@ its string dispatch replaced by registries; a refactoring that changes any numbe
 The fits sample the prior-scaled parameters (``coordinates="prior"``), as every fit did then.
 The fits' pins depend on the MAP search's optimiser, so a SciPy release can move them in the
 fifth digit; they are then re-recorded from a commit that passed here before (CHANGELOG), never
-from the code under test.
+from the code under test — unless a commit changes the MAP search on purpose, which then
+re-records them itself and says so in the CHANGELOG.
 """
 
 import warnings
