@@ -7,6 +7,7 @@ import subprocess
 import sys
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -239,6 +240,28 @@ def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_pat
     )
     with pytest.raises(CheckpointMismatch, match="was written for"):
         fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
+
+
+def test_a_resumed_fit_keeps_its_map_search_and_gives_the_uninterrupted_chain(
+    small, result, tmp_path, monkeypatch
+):
+    """A fit stopped at 100 steps and resumed to 200 equals the 200-step fit bit for bit, and the
+    resume does not search for the MAP again: the checkpoint kept its optima and random state."""
+    from fsrbayes.inference import fit as fit_module
+
+    path = tmp_path / "checkpoint.npz"
+    with pytest.warns(ConvergenceWarning):
+        first = fsrbayes.fit(
+            small.data, rng=7, settings=replace(FAST, max_steps=100), checkpoint=path
+        )
+    assert first.run.chain.shape[1] == 100
+    monkeypatch.setattr(
+        fit_module, "find_map", lambda *a, **k: pytest.fail("the resumed fit searched again")
+    )
+    with pytest.warns(ConvergenceWarning):
+        resumed = fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
+    np.testing.assert_array_equal(resumed.map_u, result.map_u)
+    assert resumed.run.chain.tobytes() == result.run.chain.tobytes()
 
 
 def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, monkeypatch):

@@ -20,6 +20,7 @@ tail toward 0 that holds no maximum (:func:`nested_starts`); a profile optimum w
 near 0 takes the last ensemble's start when its Laplace mass is within 10 nats of the best.
 """
 
+import json
 import warnings
 from dataclasses import dataclass, replace
 
@@ -36,6 +37,7 @@ from .samplers import (
     SamplerSettings,
     check_checkpoint,
     even_index,
+    load_kept,
     round_trips,
     run_ensembles,
 )
@@ -261,7 +263,7 @@ def fit(
         Of the chosen sampler (default: :data:`FIT_SETTINGS`, or the tempered sampler's defaults).
     checkpoint : path-like, optional
         Checkpoint file (written at every convergence check and on an interrupt); with
-        ``resume=True`` the fit continues it.
+        ``resume=True`` the fit continues it, from the MAP search it kept (no new search).
         Ensemble sampler only.
     progress : bool
         Show a progress bar (ensemble sampler).
@@ -368,6 +370,12 @@ def sample_posterior(
     if resume and checkpoint is not None:  # a mismatched checkpoint is refused before any search
         check_checkpoint(checkpoint, _fingerprint(posterior, coordinates), settings.n_ensembles)
     generator = np.random.default_rng(seed)
+    if optima is None and resume and checkpoint is not None:
+        # a resumed fit reuses the search its checkpoint kept, and the random state after it
+        kept = load_kept(checkpoint, _fingerprint(posterior, coordinates))
+        if "optima" in kept:
+            optima = kept["optima"]
+            generator.bit_generator.state = json.loads(str(kept["generator"]))
     if optima is None:
         optima = find_map(
             posterior,
@@ -377,6 +385,7 @@ def sample_posterior(
             processes=settings.processes,
         )
     optima = np.atleast_2d(np.asarray(optima, dtype=float))
+    keep = {"optima": optima, "generator": json.dumps(generator.bit_generator.state)}
     n_walk = settings.walkers_for(posterior.ndim)
     # Ensembles start in the separate regions in turn (module docstring); the mixture
     # independence proposal carries walkers between regions.
@@ -403,6 +412,7 @@ def sample_posterior(
         resume=resume,
         progress=progress,
         coordinates=pinned,
+        keep=keep,
     )
     return FitResult(posterior, run, optima[0], seed, posterior(optima), coordinates=pinned)
 

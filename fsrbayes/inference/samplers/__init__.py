@@ -8,7 +8,7 @@ proposals, :mod:`.warmup` fits and tests them round by round, and :mod:`.coordin
 target in coordinates of the caller's choosing.
 """
 
-from .checkpoint import CheckpointMismatch, check_checkpoint
+from .checkpoint import CheckpointMismatch, check_checkpoint, load_kept
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import round_trips
 from .ensemble import (
@@ -33,6 +33,7 @@ __all__ = [
     "SamplerSettings",
     "TriangularMap",
     "check_checkpoint",
+    "load_kept",
     "convergence_report",
     "ensemble_moves",
     "even_index",

@@ -342,6 +342,7 @@ def run_ensembles(
     resume=False,
     progress=False,
     coordinates=None,
+    keep=None,
 ):
     """Sample with ``settings.n_ensembles`` emcee ensembles until convergence or the budget.
 
@@ -367,6 +368,8 @@ def run_ensembles(
     coordinates : object, optional
         Sample in other coordinates w(u) (:mod:`.coordinates`); the transport maps are fitted
         there, the chains stored in u.
+    keep : dict of array_like, optional
+        The caller's arrays, stored in every checkpoint (:func:`.checkpoint.load_kept`).
 
     Returns
     -------
@@ -396,7 +399,9 @@ def run_ensembles(
     def save():
         nonlocal saved
         if checkpoint is not None and stored.n_steps != saved:
-            save_checkpoint(checkpoint, fingerprint, *stored.arrays(), accepted, states, settings)
+            save_checkpoint(
+                checkpoint, fingerprint, *stored.arrays(), accepted, states, settings, keep
+            )
             saved = stored.n_steps
 
     pool = None
