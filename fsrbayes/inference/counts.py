@@ -29,7 +29,7 @@ class CountHistograms:
 
     One entry per (observed point, count) — a point being a bin of a high-rate log or a single
     sample — so that the likelihood can give each count its exact probability
-    (:func:`~fsrbayes.inference.likelihood.count_log_likelihood`); neighbouring counts of a
+    (:func:`count_log_likelihood`); neighbouring counts of a
     point share their rounding edge. Entries are sorted by point.
 
     Attributes

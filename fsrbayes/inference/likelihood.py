@@ -11,7 +11,7 @@ For each sample y = log I_obs, with the model current I(θ) at the same time,
 
 and the density is that of the measured current, p(I_obs) = p(y)/I_obs.
 
-Rig data (:mod:`fsrbayes.data.readouts`) add two things, both with the Gaussian law. A high-rate
+Rig data (:mod:`fsrbayes.data.readouts`) add two things, for the Gaussian law only. A high-rate
 log is reduced to log-spaced bins in time (:func:`bin_log_time`): a bin of n samples with mean
 ȳ and within-bin scatter S = Σ(y_i − ȳ)² contributes −(n/2)·log(2π v) − (S + n·(ȳ − log
 I(θ))²)/(2v) − n·ȳ with v = sigma_rel², exactly the samples' own likelihood when the model is
