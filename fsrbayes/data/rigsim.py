@@ -55,6 +55,7 @@ def simulate_rig(
     weight_from_start=False,
     ramp_s=0.0,
     ramp_column=True,
+    specimens=None,
     **rig,
 ):
     """Simulate divider logs of dead-weight creep tests; return (CSV text, truth dict).
@@ -83,6 +84,10 @@ def simulate_rig(
     effects : sequence
         Effects hidden in the data: ``NAME[=...]`` specs as for ``fsrbayes simulate --effect``,
         or ``(name, {parameter: value})`` pairs.
+    specimens : sequence of dict, optional
+        Each specimen's parameters (those given replace the sensor's defaults), in place of draws
+        from the sensor's population — e.g. draws from a fit's prior, for a coverage study whose
+        truths follow the prior; one per specimen.
     **rig
         Overrides of :data:`RIG_DEFAULTS`.
 
@@ -108,7 +113,15 @@ def simulate_rig(
     setup = {**RIG_DEFAULTS, **rig}
     rng = np.random.default_rng(seed)
     sensor = load_sensor(setup["sensor"])
-    specimens = draw_specimens(sensor, n_specimens, rng)
+    drawn = draw_specimens(sensor, n_specimens, rng)
+    if specimens is not None:
+        if len(specimens) != n_specimens:
+            raise ValueError(
+                f"specimens must hold one parameter set per specimen ({n_specimens}), got "
+                f"{len(specimens)}"
+            )
+        drawn = [{**sensor.params, **dict(given)} for given in specimens]
+    specimens = drawn
     effect_params = effect_parameters(sensor, effects)
     names = tuple(effect_params)
     supply, rm = setup["supply_V"], setup["rm_ohm"]
