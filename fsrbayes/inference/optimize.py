@@ -39,11 +39,12 @@ In prior-scaled coordinates L-BFGS-B crawls along the creep posterior's ridges a
 walks them, so a short first phase finds the same optima sooner (BENCHMARKS.md, "MAP search")."""
 
 
-MAP_FTOL = 1e-7
+MAP_FTOL = 1e-6
 """L-BFGS-B stops when an iteration gains less than this share of max(|objective|, 1), the
 objective counted from where the optimisation started (:class:`NegativeLogPosterior`): near an
-optimum ~1e-7 nats per iteration. SciPy's default (2.2e-9) runs on a ridge for several times as
-long to gain under a nat more (BENCHMARKS.md, "MAP search")."""
+optimum ~1e-6 nats per iteration. On rig logs 1e-7 gains another 0.5–3 nats at twice to three
+times the search's time, SciPy's default (2.2e-9) under a nat more again at up to ten times it
+(BENCHMARKS.md)."""
 
 
 class NegativeLogPosterior:
