@@ -124,9 +124,10 @@ def test_counts_under_half_a_step_recover_a_current_between_counts():
 
 def test_a_rig_read_under_half_a_count_puts_its_truth_at_the_optimum(tmp_path):
     """The bench rig of seed 104 reads 119–238 counts with noise of 0.24–0.48 counts. Read as
-    rounded counts, its true parameters are a local optimum to within a few nats (from them the
-    whitened optimiser gains < 20); an unbiased rounding error of variance 1/12 instead would
-    read the rounding's bias as creep and put a better point > 1,000 nats above the truth."""
+    rounded counts, its true parameters are a local optimum to within a few nats (from them a
+    round of the whitened optimiser gains < 20); an unbiased rounding error of variance 1/12
+    instead would read the rounding's bias as creep and put a better point > 1,000 nats above
+    the truth."""
     text, truth = simulate_rig(1, seed=104)
     data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
     packed = SpecimenData.from_tests(data.tests)
@@ -140,5 +141,5 @@ def test_a_rig_read_under_half_a_count_puts_its_truth_at_the_optimum(tmp_path):
         posterior = LogPosterior.for_sensor(candidate, load_sensor("fsr402"))
         u = posterior.prior.to_unconstrained(np.array([[params[n] for n in posterior.names]]))[0]
         value = posterior(u[None])[0]
-        gains.append(polish(posterior, u, value)[1] - value)
+        gains.append(polish(posterior, u, value, rounds=1)[1] - value)
     assert gains[0] < 20.0 and gains[1] > 1000.0
