@@ -113,15 +113,16 @@ def simulate_rig(
     setup = {**RIG_DEFAULTS, **rig}
     rng = np.random.default_rng(seed)
     sensor = load_sensor(setup["sensor"])
-    drawn = draw_specimens(sensor, n_specimens, rng)
-    if specimens is not None:
-        if len(specimens) != n_specimens:
-            raise ValueError(
-                f"specimens must hold one parameter set per specimen ({n_specimens}), got "
-                f"{len(specimens)}"
-            )
-        drawn = [{**sensor.params, **dict(given)} for given in specimens]
-    specimens = drawn
+    drawn = draw_specimens(sensor, n_specimens, rng)  # either way: the seed's noise follows
+    if specimens is None:
+        specimens = drawn
+    elif len(specimens) != n_specimens:
+        raise ValueError(
+            f"specimens must hold one parameter set per specimen ({n_specimens}), got "
+            f"{len(specimens)}"
+        )
+    else:
+        specimens = [{**sensor.params, **dict(given)} for given in specimens]
     effect_params = effect_parameters(sensor, effects)
     names = tuple(effect_params)
     supply, rm = setup["supply_V"], setup["rm_ohm"]
