@@ -6,7 +6,12 @@ weights × 10 minutes at 100 Hz) with its own seed, fits its four from-rest test
 defaults (a divider's fit samples the coordinates the data pin), and records for every physical
 parameter whether its central 90 % interval holds the truth, with the fit's convergence.
 
-Run ``python -m validation.rig_coverage N [FIRST_SEED] [--max-steps STEPS] [--json OUT]``; prints
+With ``--truth prior`` each rig's specimen and noise level are drawn from the fit's prior instead
+(:func:`simulate_truth`): only then is 90 % the rate a right fit's intervals must meet — truths
+from the population sit near the middle of the prior-wide posteriors and over-cover.
+
+Run ``python -m validation.rig_coverage N [FIRST_SEED] [--truth {population,prior}] [--max-steps
+STEPS] [--json OUT]``; prints
 one line per rig, the share per parameter and the pooled share (:func:`coverage_summary`); with
 ``--json`` every finished rig's row is also written to OUT (rewritten atomically after each rig,
 so a long study can be followed and an interrupted one keeps its rigs).
