@@ -90,6 +90,18 @@ class NegativeLogPosterior:
         return (0.0 if self.reference is None else self.reference) - fun
 
 
+def _lbfgs(objective, x0, maxiter):
+    """L-BFGS-B on ``objective`` from ``x0``; return (the optimum's x, its log-posterior)."""
+    result = optimize.minimize(
+        objective,
+        x0,
+        jac=True,
+        method="L-BFGS-B",
+        options={"maxiter": maxiter, "maxfun": 2 * maxiter, "ftol": MAP_FTOL},
+    )
+    return result.x, objective.log_posterior(result.fun)
+
+
 def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, processes=1):
     """Maximum-a-posteriori points in unconstrained space, optimised from the best prior draws.
 
@@ -154,15 +166,7 @@ def _optimise_start(posterior, u0, maxiter):
     small for its thread pool.
     """
     with single_threaded_blas():
-        objective = NegativeLogPosterior(posterior)
-        result = optimize.minimize(
-            objective,
-            u0,
-            jac=True,
-            method="L-BFGS-B",
-            options={"maxiter": maxiter, "maxfun": 2 * maxiter, "ftol": MAP_FTOL},
-        )
-        return polish(posterior, result.x, objective.log_posterior(result.fun))[::-1]
+        return polish(posterior, *_lbfgs(NegativeLogPosterior(posterior), u0, maxiter))[::-1]
 
 
 NESTED_DEPTH = -3.0
@@ -206,16 +210,9 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
             continue
         held = _Slice(posterior, index, depth)
         v0 = np.delete(u_best, index)
-        objective = NegativeLogPosterior(held)
-        result = optimize.minimize(
-            objective,
-            v0,
-            jac=True,
-            method="L-BFGS-B",
-            options={"maxiter": 2000, "maxfun": 4000, "ftol": MAP_FTOL},
-        )
-        if np.isfinite(result.fun):
-            v, _ = polish(held, result.x, objective.log_posterior(result.fun))
+        v, value = _lbfgs(NegativeLogPosterior(held), v0, 2000)
+        if np.isfinite(value):
+            v, _ = polish(held, v, value)
             starts.append(held.full(v))
     return np.array(starts).reshape(-1, posterior.ndim)
 
@@ -351,17 +348,10 @@ def polish(posterior, u, value, rounds=4, tol=1e-3):
     for _ in range(rounds):
         root = root_covariance(posterior, u)
         objective = NegativeLogPosterior(posterior, basis=root, origin=u)
-        result = optimize.minimize(
-            objective,
-            np.zeros(posterior.ndim),
-            jac=True,
-            method="L-BFGS-B",
-            options={"maxiter": 2000, "maxfun": 4000, "ftol": MAP_FTOL},
-        )
-        found = objective.log_posterior(result.fun)
+        step, found = _lbfgs(objective, np.zeros(posterior.ndim), 2000)
         if not np.isfinite(found) or found <= value + tol:
             if np.isfinite(found) and found > value:
-                u, value = u + root @ result.x, found
+                u, value = u + root @ step, found
             break
-        u, value = u + root @ result.x, found
+        u, value = u + root @ step, found
     return u, value

@@ -176,11 +176,12 @@ def pack_rig(cls, tests, max_samples, bins_per_decade):
         else:
             labels = np.arange(y.size)
             time, mean, count, scatter = t.time_s, y, np.ones(y.size), np.zeros(y.size)
-        quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0 if t.quantum_A > 0 else np.zeros(mean.size)
+        quant = np.zeros(mean.size)
         if t.quantum_A > 0:
+            quant = (t.quantum_A / np.exp(mean)) ** 2 / 12.0
             histograms.append(count_histograms(t, labels, n_points))
         n_points += mean.size
-        columns.append((time, mean, count, scatter, np.broadcast_to(quant, mean.shape)))
+        columns.append((time, mean, count, scatter, quant))
     width = max(c[0].size for c in columns)
     arrays = [np.empty((len(tests), width)) for _ in range(5)]
     mask = np.zeros((len(tests), width), dtype=bool)
