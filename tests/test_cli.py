@@ -2,20 +2,18 @@
 
 import argparse
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.commandline import fsrbayes_command
+
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
 
 
 def run(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=120
-    )
+    return fsrbayes_command(*args)
 
 
 def test_demo_prints_and_writes_the_figure7_table(tmp_path):

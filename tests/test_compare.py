@@ -1,8 +1,6 @@
 """fsrbayes.compare and 'fsrbayes compare': keys, Bayes factors, LOO, bad input (tiny settings)."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -13,6 +11,7 @@ from fsrbayes.inference.compare import strength
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import ModeSearch
 from fsrbayes.inference.samplers import SamplerSettings
+from tests.commandline import fsrbayes_command
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
 TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=40, min_steps=200, max_steps=200)
@@ -70,9 +69,7 @@ def test_strength_words():
 
 
 def cli(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=300
-    )
+    return fsrbayes_command(*args)
 
 
 def test_cli_compare_writes_the_contract_keys(small, tmp_path):

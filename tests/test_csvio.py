@@ -1,12 +1,10 @@
 """Reading creep-test CSV files: the format, its alternatives, and every bad-input case."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 from fsrbayes.data import CreepData, DataError, read_csv, write_csv
+from tests.commandline import fsrbayes_command
 
 HEADER = "specimen,sensor,voltage_V,stress_Pa,time_s,current_A"
 ROWS = [
@@ -221,12 +219,7 @@ def test_bad_input_raises_one_located_line(tmp_path, case):
 def test_cli_reports_bad_input_in_one_line_with_exit_2(tmp_path, case):
     text, message = BAD[case]
     path = write(tmp_path, text)
-    result = subprocess.run(
-        [sys.executable, "-m", "fsrbayes", "check", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = fsrbayes_command("check", path)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr

@@ -1,19 +1,16 @@
 """``fsrbayes diagnose``: JSON with the documented keys, a report folder, one-line errors."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from fsrbayes.data.synthetic import simulate, write_simulation
 from fsrbayes.discrepancy import diagnose_schema
+from tests.commandline import fsrbayes_command
 
 
-def run(*args, timeout=300):
-    return subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *args], capture_output=True, text=True, timeout=timeout
-    )
+def run(*args):
+    return fsrbayes_command(*args)
 
 
 @pytest.fixture(scope="module")

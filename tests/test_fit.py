@@ -21,6 +21,7 @@ from fsrbayes.inference.samplers import (
     ConvergenceWarning,
     SamplerSettings,
 )
+from tests.commandline import fsrbayes_command
 
 FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 
@@ -87,14 +88,8 @@ def test_several_specimens_need_a_choice():
         fsrbayes.fit(data, settings=FAST)
 
 
-def cli(*args, **kwargs):
-    return subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        **kwargs,
-    )
+def cli(*args):
+    return fsrbayes_command(*args)
 
 
 @pytest.fixture(scope="module")
@@ -140,7 +135,7 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
         "--chunk",
         "50",
         "--max-steps",
-        "400",
+        "200",
         "--seed",
         "3",
     ]
@@ -162,36 +157,22 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
         time.sleep(0.2)
     assert not _children_of(proc.pid)
     saved = np.load(checkpoint)["chain"].copy()
-    assert 0 < saved.shape[1] < 400
+    assert 0 < saved.shape[1] < 200
     if stop == signal.SIGTERM:
         return  # resuming is the same path after either signal: the SIGKILL case runs it to the end
-    result = cli(
-        "fit",
-        str(csv_file),
-        "--out",
-        str(out),
-        "--ensembles",
-        "2",
-        "--chunk",
-        "50",
-        "--max-steps",
-        "400",
-        "--seed",
-        "3",
-        "--resume",
-    )
+    result = cli(*args[3:], "--resume", "--no-plots")
     assert result.returncode == 0, result.stderr
     chain = np.load(checkpoint)["chain"]
-    assert chain.shape[1] == 400
+    assert chain.shape[1] == 200
     assert chain[:, : saved.shape[1]].tobytes() == saved.tobytes()
-    # 400 steps do not converge: the fit says how to go on from its chains, and that works
+    # 200 steps do not converge: the fit says how to go on from its chains, and that works
     hint = [line for line in result.stderr.splitlines() if "--resume --max-steps" in line]
-    assert hint and hint[0].endswith("--resume --max-steps 800"), result.stderr
-    more = cli("fit", *[("800" if a == "400" else str(a)) for a in args[4:]], "--resume")
+    assert hint and hint[0].endswith("--resume --max-steps 400"), result.stderr
+    more = cli(*[("400" if a == "200" else a) for a in args[3:]], "--resume")
     assert more.returncode == 0, more.stderr
     longer = np.load(checkpoint)["chain"]
-    assert 400 < longer.shape[1] <= 800
-    assert longer[:, :400].tobytes() == chain.tobytes()
+    assert 200 < longer.shape[1] <= 400
+    assert longer[:, :200].tobytes() == chain.tobytes()
     assert (out / "posterior.nc").exists() and (out / "summary.json").exists()
     assert all(
         (out / f).exists()

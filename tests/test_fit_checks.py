@@ -2,8 +2,6 @@
 that does not fit the data is never silent."""
 
 import json
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -15,6 +13,7 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.data import write_csv
 from fsrbayes.discrepancy import fit_checks
 from fsrbayes.inference import FIT_SETTINGS, save_fit
+from tests.commandline import fsrbayes_command
 
 
 @pytest.fixture(scope="module")
@@ -88,25 +87,19 @@ def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
     path = tmp_path / "cycle.csv"
     write_csv(_temperature_cycle(sim), path)
     out = tmp_path / "fit"
-    run = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "fsrbayes",
-            "fit",
-            str(path),
-            "--out",
-            str(out),
-            "--seed",
-            "1",
-            "--max-steps",
-            "1000",
-            "--coordinates",  # the checks, not the sampler: the quicker coordinates for a misfit
-            "prior",
-            "--no-plots",
-        ],
-        capture_output=True,
-        text=True,
+    # the checks, not the sampler: the quicker prior coordinates for a misfit
+    run = fsrbayes_command(
+        "fit",
+        path,
+        "--out",
+        out,
+        "--seed",
+        1,
+        "--max-steps",
+        1000,
+        "--coordinates",
+        "prior",
+        "--no-plots",
     )
     assert run.returncode == 0, run.stderr
     assert "does not fit these data" in run.stderr

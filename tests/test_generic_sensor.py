@@ -1,8 +1,5 @@
 """``fsrbayes sensor new``: a generic sensor file from an area and a typical resistance."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -13,6 +10,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.circuits import resistances
+from tests.commandline import fsrbayes_command
 
 
 @pytest.mark.parametrize("template", ["fsr402", "a201"])
@@ -56,13 +54,10 @@ def test_a_csv_names_the_sensor_file_relative_to_its_folder(tmp_path, monkeypatc
 
 
 def test_the_cli_writes_the_file_and_refuses_bad_input(tmp_path):
-    command = [sys.executable, "-m", "fsrbayes", "sensor", "new"]
+    command = ["sensor", "new"]
     out = tmp_path / "a301.toml"
-    made = subprocess.run(
-        [*command, "a301", "--area-mm2", "71", "--typical-ohm", "2e4", "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
+    made = fsrbayes_command(
+        *command, "a301", "--area-mm2", "71", "--typical-ohm", "2e4", "--out", out
     )
     assert made.returncode == 0, made.stderr
     assert load_sensor(out).name == "a301"
@@ -76,8 +71,6 @@ def test_the_cli_writes_the_file_and_refuses_bad_input(tmp_path):
         ),
     ]:
         bad = tmp_path / "bad.toml"
-        result = subprocess.run(
-            [*command, *args, "--out", str(bad)], capture_output=True, text=True, timeout=120
-        )
+        result = fsrbayes_command(*command, *args, "--out", bad)
         assert result.returncode == 2 and message in result.stderr, result.stderr
         assert len(result.stderr.strip().splitlines()) == 1 and not bad.exists()

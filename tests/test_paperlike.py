@@ -11,6 +11,7 @@ from fsrbayes.data import paperlike
 from fsrbayes.data.embedded import default_data, default_truth
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.utils import first_sign_change
+from tests.commandline import fsrbayes_command
 
 
 @pytest.fixture(scope="module")
@@ -131,23 +132,14 @@ def test_first_sign_change_interpolates_and_reports_none():
 
 def test_cli_simulate_paper_like_writes_data_and_truth(tmp_path):
     import json
-    import subprocess
-    import sys
 
     out = tmp_path / "pl.csv"
-    args = [sys.executable, "-m", "fsrbayes", "simulate", "--preset", "paper-like"]
-    run = subprocess.run(
-        [*args, "--sensor", "a201", "--specimens", "1", "--seed", "3", "-o", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    args = ["simulate", "--preset", "paper-like"]
+    run = fsrbayes_command(*args, "--sensor", "a201", "--specimens", "1", "--seed", "3", "-o", out)
     assert run.returncode == 0, run.stderr
     assert "path-loss" in run.stdout
     truth = json.loads((tmp_path / "pl.truth.json").read_text())
     assert truth["bench"] == "paper-like" and list(truth["specimens"]) == ["a201-01"]
-    refused = subprocess.run(
-        [*args, "--effect", "area-creep", "-o", str(out)], capture_output=True, text=True
-    )
+    refused = fsrbayes_command(*args, "--effect", "area-creep", "-o", out)
     assert refused.returncode == 2 and "drop --effect" in refused.stderr
     assert "Traceback" not in refused.stderr

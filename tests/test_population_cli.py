@@ -1,24 +1,17 @@
 """`fsrbayes fit --hierarchical` and `fsrbayes drift` end to end on a tiny virtual bench."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 import xarray as xr
 
 from fsrbayes.data import synthetic
 from fsrbayes.data.csvwrite import write_csv
+from tests.commandline import fsrbayes_command
 
 
-def fsrbayes(*args, timeout=600):
-    return subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-    )
+def fsrbayes(*args):
+    return fsrbayes_command(*args)
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,6 @@
 """Rig data: divider and resistance readouts, logger units, load onsets, binning, hostile input."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -14,6 +12,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData, bin_log_time, log_likelihood_pointwise
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.sensor import solve_current
+from tests.commandline import fsrbayes_command
 
 SHORT = {"duration_s": 60.0, "rate_hz": 20.0, "weights_g": (133.0, 255.0)}
 
@@ -210,12 +209,7 @@ def test_the_cli_refuses_hostile_rig_input_with_exit_2_and_writes_nothing(tmp_pa
     path = tmp_path / "rig.csv"
     path.write_text(HOSTILE[case][0])
     out = tmp_path / "fit-out"
-    result = subprocess.run(
-        [sys.executable, "-m", "fsrbayes", "fit", str(path), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    result = fsrbayes_command("fit", path, "--out", out)
     assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1
     assert "Traceback" not in result.stderr and not out.exists()
 
@@ -229,25 +223,12 @@ def test_the_truth_file_describes_the_rig(tmp_path):
 
 def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
     out = tmp_path / "rig.csv"
-    command = [sys.executable, "-m", "fsrbayes"]
-    made = subprocess.run(
-        [*command, "simulate-rig", "-o", str(out), "--duration", "30", "--rate-hz", "10"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    made = fsrbayes_command("simulate-rig", "-o", out, "--duration", "30", "--rate-hz", "10")
     assert made.returncode == 0, made.stderr
-    checked = subprocess.run(
-        [*command, "check", str(out)], capture_output=True, text=True, timeout=120
-    )
+    checked = fsrbayes_command("check", out)
     assert checked.returncode == 0, checked.stderr
     assert "4 creep tests" in checked.stdout and "a divider: 4.9 V supply" in checked.stdout
-    refused = subprocess.run(
-        [*command, "simulate-rig", "-o", str(tmp_path / "x.csv"), "--rm-ohm", "0"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    refused = fsrbayes_command("simulate-rig", "-o", tmp_path / "x.csv", "--rm-ohm", "0")
     assert refused.returncode == 2 and "--rm-ohm must be > 0" in refused.stderr
     assert not (tmp_path / "x.csv").exists()
 

@@ -1,14 +1,12 @@
 """The virtual test bench: round trips, exact truth, determinism, what each hidden effect does."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.data.csvio import read_csv
+from tests.commandline import fsrbayes_command
 
 
 def small(**kwargs):
@@ -167,9 +165,6 @@ def test_paper_protocol_preset():
 
 def test_cli_simulate_writes_data_and_truth(tmp_path):
     args = [
-        sys.executable,
-        "-m",
-        "fsrbayes",
         "simulate",
         "-o",
         str(tmp_path / "sim.csv"),
@@ -186,7 +181,7 @@ def test_cli_simulate_writes_data_and_truth(tmp_path):
         "--seed",
         "4",
     ]
-    result = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    result = fsrbayes_command(*args)
     assert result.returncode == 0, result.stderr
     assert "hidden effects: contact-creep" in result.stdout
     truth = syn.load_truth(tmp_path / "sim.truth.json")
@@ -208,12 +203,7 @@ def test_cli_simulate_writes_data_and_truth(tmp_path):
     ],
 )
 def test_cli_simulate_bad_options(tmp_path, args, message):
-    result = subprocess.run(
-        [sys.executable, "-m", "fsrbayes", "simulate", "-o", str(tmp_path / "x.csv"), *args],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = fsrbayes_command("simulate", "-o", tmp_path / "x.csv", *args)
     assert (
         result.returncode == 2
         and message in result.stderr
