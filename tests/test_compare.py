@@ -97,7 +97,7 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
         "3",
         "--no-loo",
         "--pilot-steps",
-        "200",
+        "100",
     )
     assert result.returncode == 0, result.stderr
     saved = json.loads(out.read_text())
