@@ -19,7 +19,7 @@ from fsrbayes.inference.calibration import (
     sbc_ranks,
 )
 
-TINY = replace(SBC_SETTINGS, chunk=100, min_steps=200, max_steps=200, transport_rounds=1)
+TINY = replace(SBC_SETTINGS, chunk=50, min_steps=100, max_steps=100, transport_rounds=1)
 
 
 def _normal_mean_sbc(n_reps, n_draws, *, sd_factor=1.0, shift=0.0, seed=0, n_obs=5):
@@ -117,7 +117,7 @@ def test_cli_calibrate_writes_json_and_figure_and_refuses_bad_bins(tmp_path, cap
             "--reps",
             "2",
             "--steps",
-            "200",
+            "100",
             "--draws",
             "19",
             "--bins",

@@ -14,7 +14,7 @@ from fsrbayes.inference.samplers import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
-TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=40, min_steps=200, max_steps=200)
+TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=50, min_steps=100, max_steps=100)
 FEW_STARTS = ModeSearch(n_starts=3)
 
 
