@@ -89,9 +89,9 @@ def correlated():
 
 @pytest.mark.filterwarnings("ignore::fsrbayes.inference.ConvergenceWarning")
 def test_correlated_noise_trips_the_white_noise_fit_and_not_the_ar1_fit(correlated):
-    # the checks read the posterior predictive, not the chains' convergence: 1,000 steps in the
+    # the checks read the posterior predictive, not the chains' convergence: 500 steps in the
     # prior-scaled parameters (several times cheaper per step than pinned coordinates) suffice
-    settings = replace(FIT_SETTINGS, processes=2, max_steps=1000)
+    settings = replace(FIT_SETTINGS, processes=2, max_steps=500)
     white = fsrbayes.fit(correlated, rng=1, settings=settings, coordinates="prior")
     checks = fit_checks(white, 0)
     assert not checks["passed"] and checks["residual_lag1_autocorrelation"] > 0.2, checks
