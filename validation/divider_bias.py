@@ -45,8 +45,11 @@ def constant_voltage_tests(data):
     return out
 
 
-def run(seed=0, n_draws=400):
-    """Fit the rig both ways; return the sensor's drift at constant V_FSR from each, and truth."""
+def run(seed=0, n_draws=400, n_starts=8):
+    """Fit the rig both ways; return the sensor's drift at constant V_FSR from each, and truth.
+
+    Each fit is a Laplace approximation at the best of ``n_starts`` MAP searches.
+    """
     text, truth = simulate_rig(1, seed=seed)
     with tempfile.TemporaryDirectory() as folder:
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
@@ -61,7 +64,7 @@ def run(seed=0, n_draws=400):
     ):
         started = time.perf_counter()
         posterior = LogPosterior.for_sensor(SpecimenData.from_tests(tests), sensor)
-        fitted = laplace_fit(posterior, rng, n_starts=8)
+        fitted = laplace_fit(posterior, rng, n_starts=n_starts)
         draws = fitted.draws(rng, n_draws)
         physical = posterior.parameters(draws)
         entry = {"seconds": time.perf_counter() - started}
