@@ -39,7 +39,8 @@ import scipy.stats
 from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import RIG_DEFAULTS, simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.fit import FIT_SETTINGS, fit
+from fsrbayes.inference import SpecimenData
+from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
 
 __all__ = ["rig_replication", "simulate_truth", "coverage_summary", "format_coverage"]
@@ -54,9 +55,11 @@ def simulate_truth(seed, truth="population"):
     ``truth="population"``: the specimen is drawn from the sensor's population (around its
     defaults) with the bench's noise. ``"prior"``: its parameters and noise level are drawn
     from the fit's prior, redrawn (up to 1000 times) while the log would be refused — an ADC
-    reading outside 1 … 2^bits − 1, or no valid current. Selecting on the data alone leaves the
-    posterior of an accepted rig unchanged, so its 90 % intervals hold the truth in 90 % of
-    rigs exactly when the fit is right.
+    reading outside 1 … 2^bits − 1, or no valid current — or while its readings stay below
+    :data:`~fsrbayes.inference.fit.ADC_MIN_COUNTS` counts (a fixed resistor no researcher would
+    keep for that sensor; the fit warns of it). Selecting on the data alone leaves the posterior
+    of an accepted rig unchanged, so its 90 % intervals hold the truth in 90 % of rigs exactly
+    when the fit is right.
     """
     if truth not in ("population", "prior"):
         raise ValueError(f"truth must be 'population' or 'prior', got {truth!r}")
@@ -75,9 +78,12 @@ def simulate_truth(seed, truth="population"):
                 if truth == "population":
                     raise
                 continue
+        counts = SpecimenData.select(data).counts
+        if truth == "prior" and counts is not None and counts.highest_count < ADC_MIN_COUNTS:
+            continue
         params = next(iter(simulated["specimens"].values()))["params"]
         return data, params | {"sigma_rel": simulated["rig"]["noise_rel"]}
-    raise RuntimeError(f"1000 prior draws in a row gave a log the reader refuses (seed {seed})")
+    raise RuntimeError(f"1000 prior draws in a row gave a log the study refuses (seed {seed})")
 
 
 def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, truth="population"):

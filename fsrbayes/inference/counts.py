@@ -64,6 +64,14 @@ class CountHistograms:
         first = np.flatnonzero(np.diff(self.point, prepend=-1))
         return self.point[first], first
 
+    @property
+    def highest_count(self):
+        """The highest count read at any point (an int).
+
+        How much of the converter's range the readings use.
+        """
+        return int(np.rint(np.max(np.exp(self.log_edge[self.lower] - self.log_step)) + 0.5))
+
     def arrays(self):
         """Return the arrays (for a fingerprint)."""
         return tuple(getattr(self, name) for name in self.__dataclass_fields__)

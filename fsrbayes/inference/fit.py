@@ -48,6 +48,7 @@ __all__ = [
     "sample_posterior",
     "design_warnings",
     "DesignWarning",
+    "ADC_MIN_COUNTS",
     "MAP_STARTS",
     "MAP_ITERATIONS",
     "SAMPLERS",
@@ -80,6 +81,11 @@ class DesignWarning(UserWarning):
 
 AREA_COEFFICIENTS = ("A0", "A1", "A2")
 
+ADC_MIN_COUNTS = 100
+"""Below this highest count, one count is over 1 % of every reading: the rounding, not the
+noise, sets what the readings say, and the posterior mixes slowly (VALIDATION.md, "Coverage on
+divider rigs"). :func:`design_warnings` says so."""
+
 
 def _distinct_levels(values, rtol=0.01):
     """Count the distinct levels in ``values``; levels within ``rtol`` of each other count once."""
@@ -96,20 +102,32 @@ def design_warnings(posterior):
     ridge that the ensembles explore slowly (autocorrelation times in VALIDATION.md), and drift
     predictions at other stresses rest on the prior.
 
+    ADC readings that stay below :data:`ADC_MIN_COUNTS` counts resolve the drift coarsely (a
+    count is over 1 % of a reading): the divider's fixed resistor does not match the sensor.
+
     Returns
     -------
     list of str
     """
+    notes = []
     sampled = [name for name in AREA_COEFFICIENTS if name in posterior.names]
     levels = _distinct_levels(posterior.data.stress_Pa)
     if len(sampled) > levels:
-        return [
+        notes.append(
             f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law "
             f"A(σ) (eq. 6) samples {len(sampled)} coefficients ({', '.join(sampled)}): the data "
             "fix A only at the tested stresses, the rest is prior along a curved ridge that mixes "
             f"slowly; test at >= {len(sampled)} stresses or fix {sampled[-1]} in the sensor file"
-        ]
-    return []
+        )
+    counts = getattr(posterior.data, "counts", None)
+    if counts is not None and counts.highest_count < ADC_MIN_COUNTS:
+        notes.append(
+            f"the ADC readings reach {counts.highest_count} counts at most: one count is over 1 % "
+            "of every reading, so the rounding rather than the noise decides what they say and "
+            "the posterior mixes slowly; a fixed resistor that brings the loaded readings higher "
+            "in the converter's range resolves the drift better"
+        )
+    return notes
 
 
 @dataclass
