@@ -154,6 +154,12 @@ def test_round_trip_and_the_jacobian_of_the_inverse(pinned, rig_posterior):
     ok = np.isfinite(wide_det)
     assert ok.any() and np.isnan(roots[~ok]).any(axis=1).all()
     assert np.abs(pinned.to_sampled(roots[ok]) - wide[ok]).max() < 1e-8
+    # a proposal holding inf or NaN has no preimage, quietly (a RuntimeWarning fails the suite)
+    bad = w[:3].copy()
+    bad[0, :2], bad[1, -1] = (np.inf, -np.inf), np.nan
+    lost, lost_det = pinned.from_sampled(bad)
+    assert np.isnan(lost[:2]).any(axis=1).all() and np.isneginf(lost_det[:2]).all()
+    assert np.array_equal(lost[2], back[2]) and lost_det[2] == log_det[2]
     # log|det du/dw| = −log|det ∂y/∂u_P| against central differences of the forward map
     solved = [posterior.names.index(n) for n in pinned.solved]
     h = 1e-5

@@ -182,14 +182,13 @@ class PinnedCoordinates:
         u = np.full(w.shape, np.nan)
         u[:, self._free] = free
         log_det = np.full(len(w), -np.inf)
-        linear = (
+        rows = np.flatnonzero(np.isfinite(w).all(axis=1))  # a proposal may hold inf or NaN
+        trial = u[rows].copy()
+        trial[:, self._solved] = (
             self.anchor[self._solved]
-            + (target - self._y0 - (free - self.anchor[self._free]) @ self._jac_free.T)
+            + (target[rows] - self._y0 - (free[rows] - self.anchor[self._free]) @ self._jac_free.T)
             @ self._inv_solved.T
         )
-        rows = np.flatnonzero(np.isfinite(w).all(axis=1))
-        trial = u[rows].copy()
-        trial[:, self._solved] = linear[rows]
         found, solution, det = self._root(trial, target[rows])
         u[rows[found]] = solution[found]
         log_det[rows[found]] = det[found]
