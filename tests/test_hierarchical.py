@@ -348,7 +348,7 @@ def test_two_stage_warns_when_a_specimen_keeps_few_draws():
     assert result.effective_draws[0] < 20 < result.effective_draws[1:].min()
 
 
-def _small_bench(n_specimens=3):
+def _small_bench(n_specimens=2):
     from fsrbayes.data import synthetic
 
     return synthetic.simulate(
@@ -377,7 +377,7 @@ def serial_fits():
 def test_parallel_specimen_fits_equal_serial_ones(serial_fits):
     serial = serial_fits
     parallel = _fits(processes=2)
-    assert list(serial) == list(parallel) == ["a201-01", "a201-02", "a201-03"]
+    assert list(serial) == list(parallel) == ["a201-01", "a201-02"]
     for key in serial:
         assert np.array_equal(serial[key].run.chain, parallel[key].run.chain)
     assert not np.array_equal(serial["a201-01"].run.chain, serial["a201-02"].run.chain)
