@@ -362,13 +362,16 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     """Ten bench rigs as they would log (4.9 V divider with 3.3 kΩ, 10-bit ADC, four dead weights
     × 10 min at 100 Hz), each specimen and noise level drawn from the fit's prior (rigs whose log
     the reader refuses, or whose readings stay under ADC_MIN_COUNTS, redrawn), each fitted with
-    the defaults and a 100,000-step budget. Every
-    fit converges; the twelve physical parameters' 90 % intervals hold the truth in 80–98 % of
-    the 120 cases, and no parameter's count falls below the Binomial(10, 0.9)'s 1 % quantile.
-    (One parameter's share over ten rigs cannot be held to 80–98 %: a calibrated interval holds
-    the truth in all ten for 35 % of parameters.) Truths drawn from the sensor's population
-    instead sit in the middle of prior-wide posteriors and over-cover by design (VALIDATION.md
-    §11: 119 of 120)."""
+    the defaults and a 100,000-step budget. Every fit converges; the twelve physical parameters'
+    90 % intervals hold the truth in 80–98 % of the 120 cases, and no parameter's count falls
+    below the Binomial(10, 0.9)'s 1 % quantile. (One parameter's share over ten rigs cannot be
+    held to 80–98 %: a calibrated interval holds the truth in all ten for 35 % of parameters.)
+    Truths drawn from the sensor's population instead sit in the middle of prior-wide posteriors
+    and over-cover by design (VALIDATION.md §11: 119 of 120).
+
+    Fails today on convergence alone (VALIDATION.md §12, ~2.5 h): rigs 205 and 208 do not
+    converge in 100,000 steps (τ ~9,700 and ~9,800 on the tunneling/area block); the coverage
+    criteria hold on the ten rigs."""
     from dataclasses import replace
 
     from fsrbayes.inference import FIT_SETTINGS

@@ -83,8 +83,8 @@ AREA_COEFFICIENTS = ("A0", "A1", "A2")
 
 ADC_MIN_COUNTS = 100
 """Below this highest count, one count is over 1 % of every reading: the rounding, not the
-noise, sets what the readings say, and the posterior mixes slowly (VALIDATION.md, "Coverage on
-divider rigs"). :func:`design_warnings` says so."""
+noise, sets what the readings say, and the posterior mixes slowly (VALIDATION.md §12).
+:func:`design_warnings` says so."""
 
 
 def _distinct_levels(values, rtol=0.01):
