@@ -1,9 +1,9 @@
 """Run the ``fsrbayes`` command inside the test process, as a user's shell would see it.
 
-A subprocess pays ~1.5 s of interpreter start and imports per call; the suite runs the command
-line well over a hundred times, so most tests call :func:`fsrbayes_command` instead. It runs
-``fsrbayes.cli.main`` with the streams captured, a ``SystemExit`` (argparse's usage errors) taken
-as the exit code, and warnings filtered as in a fresh interpreter and printed to the captured
+A subprocess pays the interpreter's start and the package's imports on every call, and the suite
+runs the command line over a hundred times, so most tests call :func:`fsrbayes_command` instead.
+It runs ``fsrbayes.cli.main`` with the streams captured, a ``SystemExit`` (argparse's usage errors)
+taken as the exit code, and warnings filtered as in a fresh interpreter and printed to the captured
 stderr — so a warning that would leak to a user's terminal shows up there. Tests of what only a
 real process shows (signals, the ``python -m fsrbayes`` entry point, the README's commands) keep
 ``subprocess``.

@@ -78,9 +78,10 @@ def simulate_truth(seed, truth="population"):
                 if truth == "population":
                     raise
                 continue
-        counts = SpecimenData.select(data).counts
-        if truth == "prior" and counts is not None and counts.highest_count < ADC_MIN_COUNTS:
-            continue
+        if truth == "prior":
+            counts = SpecimenData.select(data).counts
+            if counts is not None and counts.highest_count < ADC_MIN_COUNTS:
+                continue
         params = next(iter(simulated["specimens"].values()))["params"]
         return data, params | {"sigma_rel": simulated["rig"]["noise_rel"]}
     raise RuntimeError(f"1000 prior draws in a row gave a log the study refuses (seed {seed})")
