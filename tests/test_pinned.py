@@ -20,12 +20,12 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
-from fsrbayes.inference.optimize import find_map
+from fsrbayes.inference.optimize import find_map, polish
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.pinned import PinnedCoordinates
+from fsrbayes.inference.pinned import PinnedCoordinates, polish_along_pins
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.samplers.coordinates import SampledLogProb
+from fsrbayes.inference.samplers.coordinates import SampledLogProb, round_trips
 from tests.test_transport import BEND, WIDTH, Banana
 
 banana = Banana()
@@ -86,15 +86,35 @@ def test_sampled_log_prob_rejects_points_without_a_preimage():
 
 
 @pytest.fixture(scope="module")
-def rig_posterior(tmp_path_factory):
+def rig_search(tmp_path_factory):
+    """A short rig's posterior and a plain two-start search's optima (no polish along pins)."""
     text, truth = simulate_rig(
         1, seed=3, duration_s=60.0, rate_hz=20.0, weights_g=(133.0, 170.0, 255.0)
     )
     data = read_csv(write_rig(text, truth, tmp_path_factory.mktemp("rig") / "rig.csv")[0])
     packed = SpecimenData.select(data, None)
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor))
-    best = find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=100)[0]
-    return posterior, best
+    return posterior, find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=100)
+
+
+@pytest.fixture(scope="module")
+def rig_posterior(rig_search):
+    posterior, optima = rig_search
+    return posterior, optima[0]
+
+
+def test_polishing_along_the_pins_walks_the_sheet_to_its_best(rig_search):
+    posterior, optima = rig_search
+    values = posterior(optima)
+    assert values[0] - values[1] > 1.0  # the second start stopped short on the sheet
+    refined = [polish_along_pins(posterior, *start) for start in zip(optima, values, strict=True)]
+    for (u, value), before in zip(refined, values, strict=True):
+        assert value >= before
+        assert value == pytest.approx(posterior(u[None])[0], abs=1e-9)
+    # both starts end at one optimum, above the plain search's best; a polish in u gains nothing
+    assert refined[1][1] == pytest.approx(refined[0][1], abs=0.05)
+    assert refined[0][1] > values[0] + 0.05
+    assert polish(posterior, *refined[1])[1] - refined[1][1] < 1e-2
 
 
 @pytest.fixture(scope="module")
@@ -208,15 +228,22 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     def no_pins(*args):
         raise ValueError("the data pin no parameter's log-current at the anchor point")
 
-    # a start the pinned coordinates cannot hold — walkers whose root search back from the
-    # log-currents fails, as where the model is far from the data — falls back too
+    # a start far from the anchor — walkers whose root search back from the log-currents fails
+    # with every pinned parameter solved for — gets fewer solved parameters, each ensemble's
+    # start then mapping back; a start no solved set holds falls back
     rng = np.random.default_rng(3)
     near = result.map_u + 0.01 * rng.standard_normal((2, 20, result.posterior.ndim))
     far = result.map_u + 5.0 * rng.standard_normal((2, 20, result.posterior.ndim))
     undefined = np.full_like(near, np.nan)
     posterior, anchor = result.posterior, result.map_u
-    assert isinstance(fit_module._pinned(posterior, anchor, "auto", near), PinnedCoordinates)
-    assert fit_module._pinned(posterior, anchor, "auto", far) is None
+    pins = fit_module._pinned(posterior, anchor, "auto", near)
+    assert pins.solved == PinnedCoordinates(posterior, anchor).solved
+    fewer = fit_module._pinned(posterior, anchor, "auto", far)
+    assert 0 < len(fewer.solved) < len(pins.solved)
+    assert fewer.solved == pins.solved[: len(fewer.solved)]
+    assert min(round_trips(w, fewer)[1].sum() for w in far) > posterior.ndim
+    assert min(round_trips(w, pins)[1].sum() for w in far) <= posterior.ndim
+    assert fit_module._pinned(posterior, anchor, "auto", undefined) is None
     with pytest.raises(ValueError, match="no start position maps to the pinned coordinates"):
         fit_module._pinned(posterior, anchor, "pinned", undefined)
 

@@ -30,7 +30,7 @@ from ..data.sensors import load_sensor
 from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
-from .pinned import PinnedCoordinates
+from .pinned import PinnedCoordinates, polish_along_pins
 from .posterior import LogPosterior
 from .samplers import (
     EnsembleRun,
@@ -401,6 +401,7 @@ def sample_posterior(
             n_starts=max(MAP_STARTS, settings.n_ensembles),
             maxiter=MAP_ITERATIONS,
             processes=settings.processes,
+            refine=None if coordinates == "prior" else polish_along_pins,
         )
     optima = np.atleast_2d(np.asarray(optima, dtype=float))
     keep = {"optima": optima, "generator": json.dumps(generator.bit_generator.state)}
@@ -438,28 +439,39 @@ def sample_posterior(
 def _pinned(posterior, anchor, coordinates, start):
     """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none).
 
-    ``"auto"`` also falls back where fewer than ndim + 1 of an ensemble's ``start`` positions
-    (E, W, ndim) map to the pinned coordinates and back (a model far from the data: a sharp,
-    strongly curved posterior where the root search from the optimum fails). The others would
-    start on copies of those, and stretch moves never leave the affine hull of the start.
+    The map must hold every ensemble's ``start`` (E, W, ndim): more than ndim of its positions
+    mapping to the pinned coordinates and back, or the others would start on copies of those
+    (stretch moves never leave the affine hull of the start). The ensembles start in every
+    region the search found, a nested model's tail included, and a root search linearised at the
+    anchor may not reach a second region with every pinned parameter solved for — on a rig whose
+    drift two creep laws explain, one region with a short Kelvin time, the other with a long one
+    and no Maxwell flow. So the solved set shrinks, last pivot first, until it holds every
+    ensemble's start. ``"auto"`` falls back where none does (a model far from the data: a
+    sharp, strongly curved posterior where the root search from the optimum fails);
+    ``"pinned"`` then keeps the full set where any start position maps back.
     """
     if coordinates == "prior":
         return None
     try:
-        pinned = PinnedCoordinates(posterior, anchor)
+        full = PinnedCoordinates(posterior, anchor)
     except ValueError:
         if coordinates == "pinned":
             raise
         return None
-    held = min(round_trips(walkers, pinned)[1].sum() for walkers in start)
-    if coordinates == "auto" and held <= posterior.ndim:
+    pinned = full
+    for solved in range(len(full.solved), 0, -1):
+        if solved < len(full.solved):
+            pinned = PinnedCoordinates(posterior, anchor, max_solved=solved)
+        if min(round_trips(walkers, pinned)[1].sum() for walkers in start) > posterior.ndim:
+            return pinned
+    if coordinates == "auto":
         return None
-    if held == 0:
+    if not min(round_trips(walkers, full)[1].sum() for walkers in start):
         raise ValueError(
             "coordinates='pinned': no start position maps to the pinned coordinates and back "
             "(the model is far from the data here); fit with coordinates='auto' or 'prior'"
         )
-    return pinned
+    return full
 
 
 def _fingerprint(posterior, coordinates):

@@ -102,7 +102,9 @@ def _lbfgs(objective, x0, maxiter):
     return result.x, objective.log_posterior(result.fun)
 
 
-def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, processes=1):
+def find_map(
+    posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, processes=1, refine=None
+):
     """Maximum-a-posteriori points in unconstrained space, optimised from the best prior draws.
 
     Each start runs L-BFGS-B in the prior-scaled coordinates for at most ``maxiter`` iterations,
@@ -123,6 +125,9 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, proc
     processes : int
         Worker processes optimising starts side by side (forked; BLAS on one thread in each).
         The optimisation has no randomness, so the optima are the same either way.
+    refine : callable, optional
+        ``refine(posterior, u, value) -> (u, value)``, run on each start after the polish (in its
+        worker): e.g. :func:`~fsrbayes.inference.pinned.polish_along_pins`.
 
     Returns
     -------
@@ -139,34 +144,36 @@ def find_map(posterior, rng, n_starts=4, n_candidates=256, *, maxiter=2000, proc
         raise RuntimeError(
             "no prior draw gives a finite posterior: check the data against the model's domain"
         )
-    optima = _optimise_starts(posterior, starts, maxiter, processes)
+    optima = _optimise_starts(posterior, starts, maxiter, processes, refine)
     optima.sort(key=lambda item: -item[0])
     optima = [u for _, u in optima]
     return np.array([optima[i % len(optima)] for i in range(n_starts)])
 
 
-def _optimise_starts(posterior, starts, maxiter, processes):
+def _optimise_starts(posterior, starts, maxiter, processes, refine=None):
     """Optimise every start, in forked workers.
 
     :func:`_optimise_start` for every start, in ``processes`` forked workers; a list of (value, u).
     """
     workers = min(processes, len(starts))
     if workers <= 1:
-        return [_optimise_start(posterior, u, maxiter) for u in starts]
+        return [_optimise_start(posterior, u, maxiter, refine) for u in starts]
+    n = len(starts)
     with fork_pool(workers) as pool:
-        return list(
-            pool.map(_optimise_start, [posterior] * len(starts), starts, [maxiter] * len(starts))
-        )
+        return list(pool.map(_optimise_start, [posterior] * n, starts, [maxiter] * n, [refine] * n))
 
 
-def _optimise_start(posterior, u0, maxiter):
-    """One start of :func:`find_map`: L-BFGS-B, then the whitened polish; returns (value, u).
+def _optimise_start(posterior, u0, maxiter, refine=None):
+    """One start of :func:`find_map`: L-BFGS-B, the whitened polish, ``refine``; (value, u).
 
     BLAS runs on one thread: the finite-difference gradient's 25 × 12 products are far too
     small for its thread pool.
     """
     with single_threaded_blas():
-        return polish(posterior, *_lbfgs(NegativeLogPosterior(posterior), u0, maxiter))[::-1]
+        u, value = polish(posterior, *_lbfgs(NegativeLogPosterior(posterior), u0, maxiter))
+        if refine is not None:
+            u, value = refine(posterior, u, value)
+        return value, u
 
 
 NESTED_DEPTH = -3.0
@@ -239,7 +246,8 @@ def root_covariance(posterior, u_map, step=1e-3):
         ]
     )
     f = posterior(corners).reshape(4, -1)
-    upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
+    with np.errstate(invalid="ignore"):  # −inf − −inf: a corner outside the support, zeroed below
+        upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
     hessian = np.zeros((n, n))
     hessian[i, j] = upper
     hessian[j, i] = upper

@@ -36,9 +36,10 @@ needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 import numpy as np
 import scipy.linalg
 
+from .optimize import polish
 from .posterior import LogPosterior, noise_parameters
 
-__all__ = ["PinnedCoordinates", "RANK_TOLERANCE", "MAX_STEP"]
+__all__ = ["PinnedCoordinates", "polish_along_pins", "RANK_TOLERANCE", "MAX_STEP"]
 
 RANK_TOLERANCE = 1e-4
 """A parameter is solved for only while the data pin it within this share of the best-pinned one
@@ -55,6 +56,9 @@ density's log-determinant (error ~1e-5 nats on posterior draws, from the step's 
 the solver's ~1e-12 round-off), central ones at the anchor."""
 TOLERANCE = 1e-9
 """The root search stops when every |y − y_target| is below this (log-current units)."""
+ALONG_PINS_ROUNDS = 6
+"""Most rounds of :func:`polish_along_pins` (each: new pins at the point, a whitened polish along
+them, one in u)."""
 MAX_ITER = 16
 """Iterations per root search: Broyden's method converges superlinearly near a root, so a row
 still unsolved after this many has none nearby and stops costing model evaluations."""
@@ -78,6 +82,11 @@ class PinnedCoordinates:
     anchor : ndarray, shape (ndim,)
         A point in u where the data's pins are chosen and the root search is linearised (the
         maximum a posteriori point).
+    max_solved : int, optional
+        Solve for at most this many parameters (the first in pivot order). Fewer solved
+        parameters make a map that holds further from the anchor: where the posterior has mass
+        in a second region (another creep law's explanation of the drift, a nested model's tail)
+        the root search from the anchor may not reach it with every pinned parameter solved for.
 
     Attributes
     ----------
@@ -90,7 +99,7 @@ class PinnedCoordinates:
         Names of the sampled coordinates w.
     """
 
-    def __init__(self, posterior, anchor):
+    def __init__(self, posterior, anchor, max_solved=None):
         self.posterior = posterior
         self.anchor = np.asarray(anchor, dtype=float).copy()
         self._times = _reference_times(posterior.data)
@@ -104,6 +113,8 @@ class PinnedCoordinates:
         _, r_cols, cols = scipy.linalg.qr(jac, pivoting=True, mode="economic")
         pinned = np.abs(np.diag(r_cols))
         k = int(np.count_nonzero(pinned >= RANK_TOLERANCE * pinned.max())) if pinned.size else 0
+        if max_solved is not None:
+            k = min(k, int(max_solved))
         if k == 0:
             raise ValueError("the data pin no parameter's log-current at the anchor point")
         self._solved = candidates[cols[:k]]
@@ -257,3 +268,65 @@ class PinnedCoordinates:
             "reference_tests": [c for c, _ in self.references],
             "reference_time_s": [float(self._times.flat[r]) for r in self._rows],
         }
+
+
+class _AlongPins:
+    """log p(u(w)): the log-posterior of u as a function of the pinned coordinates w.
+
+    No Jacobian term — its optimum is the maximum a posteriori point in u. −inf where the root
+    search finds no u.
+    """
+
+    def __init__(self, pins):
+        self.pins, self.posterior, self.ndim = pins, pins.posterior, pins.ndim
+
+    def __call__(self, w):
+        u, log_det = self.pins.from_sampled(w)
+        values = np.full(len(u), -np.inf)
+        found = np.isfinite(log_det)
+        values[found] = self.posterior(u[found])
+        return values
+
+
+def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
+    """Re-optimise a maximum a posteriori point along the sheet the data pin.
+
+    A creep posterior in u is a thin, curved sheet: the data fix a few log-currents, and the
+    parameters move widely along the sheet. The whitened
+    :func:`~fsrbayes.inference.optimize.polish` straightens it only near the point, so a search
+    can stop at a local optimum well below the sheet's best, with a creep parameter several
+    prior widths out (on rigs with prior-drawn truths, VALIDATION.md). In pinned coordinates w
+    the sheet's pinned directions are the log-currents themselves, so a whitened polish of
+    log p(u(w)) walks along the sheet however it curves. Each round takes new pins at the
+    current point, polishes along them, maps back and polishes once in u; rounds stop when one
+    gains less than ``tol`` nats, and a point where the data pin nothing is returned as it is.
+
+    Parameters
+    ----------
+    posterior : LogPosterior
+    u : ndarray, shape (ndim,)
+        A (local) maximum a posteriori point in u.
+    value : float
+        log p(u).
+
+    Returns
+    -------
+    (ndarray, float)
+        The refined point and its log-posterior (never below ``value``).
+    """
+    for _ in range(rounds):
+        try:
+            pins = PinnedCoordinates(posterior, u)
+        except ValueError:
+            break
+        along = _AlongPins(pins)
+        w = pins.to_sampled(u[None])
+        w_best, found = polish(along, w[0], along(w)[0])
+        if not np.isfinite(found) or found <= value + tol:
+            break
+        u_new = pins.from_sampled(w_best[None])[0][0]
+        u_new, found = polish(posterior, u_new, posterior(u_new[None])[0])
+        if not np.isfinite(found) or found <= value + tol:
+            break
+        u, value = u_new, found
+    return u, value
