@@ -114,6 +114,7 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
         "seed": seed,
         "truth": truth,
         "coordinates": "prior" if result.coordinates is None else "pinned",
+        "solved": [] if result.coordinates is None else list(result.coordinates.solved),
         "converged": bool(result.converged),
         "seconds": seconds,
         "steps": result.run.report.n_steps,
