@@ -228,26 +228,29 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     def no_pins(*args):
         raise ValueError("the data pin no parameter's log-current at the anchor point")
 
-    # a start far from the anchor — walkers whose root search back from the log-currents fails
-    # with every pinned parameter solved for — gets fewer solved parameters, each ensemble's
-    # start then mapping back; a start no solved set holds falls back
-    rng = np.random.default_rng(3)
-    near = result.map_u + 0.01 * rng.standard_normal((2, 20, result.posterior.ndim))
-    far = result.map_u + 5.0 * rng.standard_normal((2, 20, result.posterior.ndim))
-    undefined = np.full_like(near, np.nan)
+    # walkers start in the pinned coordinates, each ensemble around its centre, all on the sheet
     posterior, anchor = result.posterior, result.map_u
-    pins = fit_module._pinned(posterior, anchor, "auto", near)
+    rng = np.random.default_rng(3)
+    u_start = anchor + 0.01 * rng.standard_normal((2, 20, posterior.ndim))
+    pins, start = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, anchor], rng)
     assert pins.solved == PinnedCoordinates(posterior, anchor).solved
-    fewer = fit_module._pinned(posterior, anchor, "auto", far)
+    assert start.shape == u_start.shape and not np.allclose(start, u_start)
+    assert all(round_trips(walkers, pins)[1].all() for walkers in start)
+    # a second centre far from the anchor, where the root search with every pinned parameter
+    # solved for fails, gets fewer solved parameters (the first in pivot order) ...
+    far = anchor + 0.5 * rng.standard_normal(posterior.ndim)
+    fewer, start = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, far], rng)
     assert 0 < len(fewer.solved) < len(pins.solved)
     assert fewer.solved == pins.solved[: len(fewer.solved)]
-    assert min(round_trips(w, fewer)[1].sum() for w in far) > posterior.ndim
-    assert min(round_trips(w, pins)[1].sum() for w in far) <= posterior.ndim
-    assert fit_module._pinned(posterior, anchor, "auto", undefined) is None
-    with pytest.raises(ValueError, match="no start position maps to the pinned coordinates"):
-        fit_module._pinned(posterior, anchor, "pinned", undefined)
+    assert min(round_trips(walkers, fewer)[1].sum() for walkers in start) > posterior.ndim
+    # ... and a centre no solved set maps falls back on the start drawn in u
+    nowhere = np.full(posterior.ndim, np.nan)
+    none, kept = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
+    assert none is None and kept is u_start
+    with pytest.raises(ValueError, match="no set of pinned parameters maps"):
+        fit_module._pinned(posterior, anchor, "pinned", u_start, [anchor, nowhere], rng)
 
     monkeypatch.setattr(fit_module, "PinnedCoordinates", no_pins)
-    assert fit_module._pinned(posterior, anchor, "auto", near) is None
+    assert fit_module._pinned(posterior, anchor, "auto", u_start, [anchor], rng)[0] is None
     with pytest.raises(ValueError, match="pin no parameter"):
-        fit_module._pinned(posterior, anchor, "pinned", near)
+        fit_module._pinned(posterior, anchor, "pinned", u_start, [anchor], rng)

@@ -30,7 +30,7 @@ from ..data.sensors import load_sensor
 from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
-from .pinned import PinnedCoordinates, polish_along_pins
+from .pinned import PinnedCoordinates, pinned_start, polish_along_pins
 from .posterior import LogPosterior
 from .samplers import (
     EnsembleRun,
@@ -38,7 +38,6 @@ from .samplers import (
     check_checkpoint,
     even_index,
     load_kept,
-    round_trips,
     run_ensembles,
 )
 
@@ -417,7 +416,8 @@ def sample_posterior(
             for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
         ]
     )
-    pinned = _pinned(posterior, optima[0], coordinates, start)
+    centres = np.array([regions[e % len(regions)][0] for e in range(settings.n_ensembles)])
+    pinned, start = _pinned(posterior, optima[0], coordinates, start, centres, generator)
     if pinned is not None and posterior.data.plain and settings.transport_rounds is None:
         settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)
     run = run_ensembles(
@@ -436,42 +436,40 @@ def sample_posterior(
     return FitResult(posterior, run, optima[0], seed, posterior(optima), coordinates=pinned)
 
 
-def _pinned(posterior, anchor, coordinates, start):
-    """Return the pinned coordinates at ``anchor``, or None (``"prior"``; ``"auto"`` if none).
+def _pinned(posterior, anchor, coordinates, start, centres, rng):
+    """Return the pinned coordinates at ``anchor`` and the walkers' start in u.
 
-    The map must hold every ensemble's ``start`` (E, W, ndim): more than ndim of its positions
-    mapping to the pinned coordinates and back, or the others would start on copies of those
-    (stretch moves never leave the affine hull of the start). The ensembles start in every
-    region the search found, a nested model's tail included, and a root search linearised at the
-    anchor may not reach a second region with every pinned parameter solved for — on a rig whose
-    drift two creep laws explain, one region with a short Kelvin time, the other with a long one
-    and no Maxwell flow. So the solved set shrinks, last pivot first, until it holds every
-    ensemble's start. ``"auto"`` falls back where none does (a model far from the data: a
-    sharp, strongly curved posterior where the root search from the optimum fails);
-    ``"pinned"`` then keeps the full set where any start position maps back.
+    The walkers then start in the pinned coordinates, around each ensemble's centre
+    (:func:`~fsrbayes.inference.pinned.pinned_start`), and more than ndim of every ensemble's
+    walkers must map back, or the others would start on copies of those (stretch moves never
+    leave the affine hull of the start). The ensembles start in every region the search found,
+    a nested model's tail included, and a root search linearised at the anchor may not reach a
+    second region with every pinned parameter solved for; the solved set then shrinks, last
+    pivot first, until it holds every ensemble's start. Where none does (a model far from the
+    data: a sharp, strongly curved posterior where the root search from the optimum fails),
+    ``"auto"`` returns None and the ``start`` drawn in u, and ``"pinned"`` raises; ``"prior"``
+    returns them at once.
     """
     if coordinates == "prior":
-        return None
+        return None, start
     try:
         full = PinnedCoordinates(posterior, anchor)
     except ValueError:
         if coordinates == "pinned":
             raise
-        return None
-    pinned = full
+        return None, start
     for solved in range(len(full.solved), 0, -1):
-        if solved < len(full.solved):
-            pinned = PinnedCoordinates(posterior, anchor, max_solved=solved)
-        if min(round_trips(walkers, pinned)[1].sum() for walkers in start) > posterior.ndim:
-            return pinned
+        pins = full if solved == len(full.solved) else PinnedCoordinates(posterior, anchor, solved)
+        pinned, held = pinned_start(pins, centres, rng, start.shape[1])
+        if held > posterior.ndim:
+            return pins, pinned
     if coordinates == "auto":
-        return None
-    if not min(round_trips(walkers, full)[1].sum() for walkers in start):
-        raise ValueError(
-            "coordinates='pinned': no start position maps to the pinned coordinates and back "
-            "(the model is far from the data here); fit with coordinates='auto' or 'prior'"
-        )
-    return full
+        return None, start
+    raise ValueError(
+        "coordinates='pinned': no set of pinned parameters maps more than ndim of every "
+        "ensemble's start back (the model is far from the data here); fit with "
+        "coordinates='auto' or 'prior'"
+    )
 
 
 def _fingerprint(posterior, coordinates):

@@ -36,10 +36,11 @@ needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 import numpy as np
 import scipy.linalg
 
-from .optimize import polish
+from .optimize import ensemble_start, polish
 from .posterior import LogPosterior, noise_parameters
+from .samplers.coordinates import SampledLogProb
 
-__all__ = ["PinnedCoordinates", "polish_along_pins", "RANK_TOLERANCE", "MAX_STEP"]
+__all__ = ["PinnedCoordinates", "pinned_start", "polish_along_pins", "RANK_TOLERANCE", "MAX_STEP"]
 
 RANK_TOLERANCE = 1e-4
 """A parameter is solved for only while the data pin it within this share of the best-pinned one
@@ -330,3 +331,53 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
             break
         u, value = u_new, found
     return u, value
+
+
+def pinned_start(pins, centres, rng, n_walkers):
+    """Walker starts drawn in the pinned coordinates, around each ensemble's centre.
+
+    Each ensemble's start is :func:`~fsrbayes.inference.optimize.ensemble_start` in w — around
+    w(centre), overdispersed by the Laplace covariance of log p_w there — mapped back to u. Drawn
+    in u instead, a start spreads off the posterior's sheet in its wide directions, where the
+    root search back from the log-currents fails for most walkers; drawn in w, every walker lies
+    on the sheet.
+
+    Parameters
+    ----------
+    pins : PinnedCoordinates
+    centres : ndarray, shape (E, ndim)
+        Each ensemble's centre in u (an optimum, a nested model's start).
+    rng : numpy.random.Generator
+    n_walkers : int
+
+    Returns
+    -------
+    start : ndarray, shape (E, n_walkers, ndim)
+        Positions in u; NaN where the root search found none (the sampler starts those walkers
+        on copies of the others).
+    held : int
+        The fewest walkers of any ensemble that map back (0 where a centre has no image in w).
+    """
+    density = _SampledDensity(pins)
+    start = np.full((len(centres), n_walkers, pins.ndim), np.nan)
+    held = []
+    for ensemble, centre in enumerate(centres):
+        w_centre = pins.to_sampled(np.asarray(centre, dtype=float)[None])
+        if not np.isfinite(density(w_centre)[0]):
+            return start, 0
+        w = ensemble_start(density, w_centre[0], rng, (n_walkers,))
+        u, log_det = pins.from_sampled(w)
+        found = np.isfinite(log_det)
+        start[ensemble, found] = u[found]
+        held.append(int(found.sum()))
+    return start, min(held)
+
+
+class _SampledDensity:
+    """log p_w(w), the density the sampler sees in the pinned coordinates, (W, ndim) → (W,)."""
+
+    def __init__(self, pins):
+        self.sampled, self.ndim = SampledLogProb(pins.posterior, pins), pins.ndim
+
+    def __call__(self, w):
+        return self.sampled(w)[:, 0]
