@@ -31,6 +31,9 @@ prior widths, at most :data:`MAX_ITER` iterations), with the model evaluated at 
 points only; the log-determinant comes from forward differences at the root.
 Where no root is found the density is −inf — the proposal is rejected. The inverse is never
 needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
+
+The same coordinates serve a fit before it samples: its MAP search walks along the sheet in them
+(:func:`polish_along_pins`), and its walkers start in them (:func:`pinned_start`).
 """
 
 import numpy as np
