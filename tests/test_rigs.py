@@ -367,11 +367,8 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     below the Binomial(10, 0.9)'s 1 % quantile. (One parameter's share over ten rigs cannot be
     held to 80–98 %: a calibrated interval holds the truth in all ten for 35 % of parameters.)
     Truths drawn from the sensor's population instead sit in the middle of prior-wide posteriors
-    and over-cover by design (VALIDATION.md §11: 119 of 120).
-
-    Fails today on convergence alone (VALIDATION.md §12, ~2.5 h): rigs 205 and 208 do not
-    converge in 100,000 steps (τ ~9,700 and ~9,800 on the tunneling/area block); the coverage
-    criteria hold on the ten rigs."""
+    and over-cover by design (VALIDATION.md §11: 119 of 120). The run and its numbers:
+    VALIDATION.md §13."""
     from dataclasses import replace
 
     from fsrbayes.inference import FIT_SETTINGS
