@@ -410,13 +410,11 @@ def sample_posterior(
     regions = start_regions(
         posterior, optima, nested_starts(posterior, optima[0]), settings.n_ensembles
     )
+    picks = [regions[e % len(regions)] for e in range(settings.n_ensembles)]
     start = np.concatenate(
-        [
-            ensemble_start(posterior, u, generator, (1, n_walk), root_cov=root)
-            for u, root, _ in (regions[e % len(regions)] for e in range(settings.n_ensembles))
-        ]
+        [ensemble_start(posterior, u, generator, (1, n_walk), root_cov=c) for u, c, _ in picks]
     )
-    centres = np.array([regions[e % len(regions)][0] for e in range(settings.n_ensembles)])
+    centres = np.array([u for u, _, _ in picks])
     pinned, start = _pinned(posterior, optima[0], coordinates, start, centres, generator)
     if pinned is not None and posterior.data.plain and settings.transport_rounds is None:
         settings = replace(settings, transport_rounds=PINNED_TRANSPORT_ROUNDS)

@@ -32,8 +32,8 @@ points only; the log-determinant comes from forward differences at the root.
 Where no root is found the density is −inf — the proposal is rejected. The inverse is never
 needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 
-The same coordinates serve a fit before it samples: its MAP search walks along the sheet in them
-(:func:`polish_along_pins`), and its walkers start in them (:func:`pinned_start`).
+A fit also runs its MAP search along the sheet in these coordinates (:func:`polish_along_pins`)
+and draws its walkers' start in them (:func:`pinned_start`).
 """
 
 import numpy as np
@@ -274,24 +274,6 @@ class PinnedCoordinates:
         }
 
 
-class _AlongPins:
-    """log p(u(w)): the log-posterior of u as a function of the pinned coordinates w.
-
-    No Jacobian term — its optimum is the maximum a posteriori point in u. −inf where the root
-    search finds no u.
-    """
-
-    def __init__(self, pins):
-        self.pins, self.posterior, self.ndim = pins, pins.posterior, pins.ndim
-
-    def __call__(self, w):
-        u, log_det = self.pins.from_sampled(w)
-        values = np.full(len(u), -np.inf)
-        found = np.isfinite(log_det)
-        values[found] = self.posterior(u[found])
-        return values
-
-
 def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
     """Re-optimise a maximum a posteriori point along the sheet the data pin.
 
@@ -323,7 +305,7 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
             pins = PinnedCoordinates(posterior, u)
         except ValueError:
             break
-        along = _AlongPins(pins)
+        along = _SampledColumn(pins, LOG_P_U)  # no Jacobian: its optimum is the MAP point in u
         w = pins.to_sampled(u[None])
         w_best, found = polish(along, w[0], along(w)[0])
         if not np.isfinite(found) or found <= value + tol:
@@ -361,7 +343,7 @@ def pinned_start(pins, centres, rng, n_walkers):
     held : int
         The fewest walkers of any ensemble that map back (0 where a centre has no image in w).
     """
-    density = _SampledDensity(pins)
+    density = _SampledColumn(pins, LOG_P_W)
     start = np.full((len(centres), n_walkers, pins.ndim), np.nan)
     held = []
     for ensemble, centre in enumerate(centres):
@@ -376,11 +358,20 @@ def pinned_start(pins, centres, rng, n_walkers):
     return start, min(held)
 
 
-class _SampledDensity:
-    """log p_w(w), the density the sampler sees in the pinned coordinates, (W, ndim) → (W,)."""
+LOG_P_W, LOG_P_U = 0, 1
+"""Columns of :class:`~fsrbayes.inference.samplers.coordinates.SampledLogProb`'s output."""
 
-    def __init__(self, pins):
-        self.sampled, self.ndim = SampledLogProb(pins.posterior, pins), pins.ndim
+
+class _SampledColumn:
+    """One column of ``SampledLogProb`` as a vectorised function of w, (W, ndim) → (W,).
+
+    log p_w (the density the sampler sees) or log p_u(u(w)); −inf where the root search finds
+    no u.
+    """
+
+    def __init__(self, pins, column):
+        self.sampled = SampledLogProb(pins.posterior, pins)
+        self.column, self.ndim = column, pins.ndim
 
     def __call__(self, w):
-        return self.sampled(w)[:, 0]
+        return self.sampled(w)[:, self.column]
