@@ -265,10 +265,10 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     jsonschema.validate(json.loads(json.dumps(payload)), diagnose_schema())
 
 
-def test_the_circuit_matters_a_constant_voltage_fit_halves_the_sensors_drift():
+def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drift():
     """The default rig fitted with its divider recovers the sensor's drift at constant V_FSR;
     converted by hand to constant voltages, the fit reads the divider's damping as a sensor that
-    creeps about half as much (Laplace approximations at the MAP; validation/divider_bias.py)."""
+    creeps less (Laplace approximations at the MAP; validation/divider_bias.py)."""
     from validation.divider_bias import PROBE_V, run
 
     rows = run(seed=0, n_draws=200, n_starts=4)
@@ -280,8 +280,9 @@ def test_the_circuit_matters_a_constant_voltage_fit_halves_the_sensors_drift():
         # interval's edge is no evidence of bias
         sd = (np.array(exact["q95"]) - np.array(exact["q05"])) / 3.29
         assert np.all(np.abs(truth - np.array(exact["q50"])) < 3 * sd)
-        assert np.all(np.array(approx["q50"]) < 0.7 * truth)
-        assert np.all(np.array(approx["q95"]) < truth)
+        # the hand conversion's medians all below the truth, by more the heavier the weight
+        ratio = np.array(approx["q50"]) / truth
+        assert np.all(ratio < 0.9) and np.all(np.diff(ratio) < 0), ratio
 
 
 def test_an_onset_column_sets_t0_and_is_checked(tmp_path):

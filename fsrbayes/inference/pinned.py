@@ -43,7 +43,14 @@ from .optimize import ensemble_start, polish
 from .posterior import LogPosterior, noise_parameters
 from .samplers.coordinates import SampledLogProb
 
-__all__ = ["PinnedCoordinates", "pinned_start", "polish_along_pins", "RANK_TOLERANCE", "MAX_STEP"]
+__all__ = [
+    "PinnedCoordinates",
+    "pinned_start",
+    "polish_along_pins",
+    "map_refinement",
+    "RANK_TOLERANCE",
+    "MAX_STEP",
+]
 
 RANK_TOLERANCE = 1e-4
 """A parameter is solved for only while the data pin it within this share of the best-pinned one
@@ -316,6 +323,16 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
             break
         u, value = u_new, found
     return u, value
+
+
+def map_refinement(posterior):
+    """Return the ``refine`` step of a MAP search of ``posterior`` (:func:`~.optimize.find_map`).
+
+    :func:`polish_along_pins` for a creep posterior (a
+    :class:`~fsrbayes.inference.posterior.LogPosterior`, whose data pin log-currents); None for
+    any other target (a closed-form test problem, a hyper-posterior), which has no sheet to walk.
+    """
+    return polish_along_pins if isinstance(posterior, LogPosterior) else None
 
 
 def pinned_start(pins, centres, rng, n_walkers):

@@ -25,6 +25,7 @@ import numpy as np
 
 from ...utils import HALF_LOG_2PI
 from ..optimize import MAP_ITERATIONS, find_map, polish, root_covariance
+from ..pinned import map_refinement
 from ..samplers import ensemble_moves
 from .estimate import EvidenceEstimate
 
@@ -166,8 +167,9 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None, guess=
     rng : int or numpy.random.Generator, optional
     n_starts : int
         Optimisations from the best prior draws (:func:`~fsrbayes.inference.optimize.find_map`,
-        a short L-BFGS-B phase of :data:`~fsrbayes.inference.optimize.MAP_ITERATIONS` and the
-        whitened polish, as in a fit).
+        a short L-BFGS-B phase of :data:`~fsrbayes.inference.optimize.MAP_ITERATIONS`, the
+        whitened polish and, on a creep posterior, the polish along the pins
+        (:func:`~fsrbayes.inference.pinned.polish_along_pins`), as in a fit).
     base : LaplaceFit, optional
         Fit of a model nested in this one (same data): the optimisation is also started at
         its optimum with the extra parameters at ``null`` and at prior draws (the best
@@ -186,7 +188,8 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None, guess=
     LaplaceFit
     """
     rng = np.random.default_rng(rng)
-    optima = find_map(posterior, rng, n_starts=n_starts, maxiter=MAP_ITERATIONS)
+    refine = map_refinement(posterior)
+    optima = find_map(posterior, rng, n_starts=n_starts, maxiter=MAP_ITERATIONS, refine=refine)
     u_best = optima[0]
     value = posterior(u_best)
     if base is not None:
@@ -201,6 +204,8 @@ def laplace_fit(posterior, rng=None, *, n_starts=2, base=None, null=None, guess=
             if not np.isfinite(values[index]):
                 continue
             u_nested, v_nested = polish(posterior, starts[index], values[index], rounds=6)
+            if refine is not None:
+                u_nested, v_nested = refine(posterior, u_nested, v_nested)
             if v_nested > value:
                 u_best, value = u_nested, v_nested
     return LaplaceFit(posterior, u_best, float(value), root_covariance(posterior, u_best))

@@ -49,6 +49,7 @@ from scipy.special import logsumexp
 
 from ..optimize import ensemble_start, find_map, separate_regions
 from ..parallel import fork_pool, single_threaded_blas
+from ..pinned import map_refinement
 from ..samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from .ladder import (
     LadderSettings,
@@ -94,7 +95,9 @@ def pilot_draws(
     """
     rng = np.random.default_rng(seed)
     optimum = (
-        find_map(posterior, rng, n_starts=2)[0] if start is None else np.asarray(start, dtype=float)
+        find_map(posterior, rng, n_starts=2, refine=map_refinement(posterior))[0]
+        if start is None
+        else np.asarray(start, dtype=float)
     )
     start = ensemble_start(
         posterior, optimum, rng, (settings.n_ensembles, settings.walkers_for(posterior.ndim))
@@ -148,7 +151,7 @@ def distinct_optima(posterior, rng, search=MODE_SEARCH):
     list of (ndarray (ndim,), float)
         Each optimum with its Laplace log mass log p(u*) + log|Σ|^½.
     """
-    optima = find_map(posterior, rng, n_starts=search.n_starts)
+    optima = find_map(posterior, rng, n_starts=search.n_starts, refine=map_refinement(posterior))
     return separate_regions(
         posterior,
         optima,
