@@ -1,5 +1,6 @@
 """Evidence from a fit's draws (bridge sampling, referenced stepping-stone) against closed forms."""
 
+import functools
 import warnings
 
 import numpy as np
@@ -52,6 +53,7 @@ def test_error_bars_from_exact_draws_cover_the_exact_log_z_at_their_nominal_rate
     assert np.mean(z <= 2.0) >= stats.binom(20, 0.9545).ppf(0.005) / 20, z
 
 
+@functools.cache  # both estimators read the same run (neither changes it)
 def _converged_run(problem):
     """Converged emcee ensembles on a closed-form problem, the target and its exact log Z."""
     rng = np.random.default_rng(7)
