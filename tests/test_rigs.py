@@ -268,8 +268,9 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
 def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drift():
     """The default rig fitted with its divider recovers the sensor's drift at constant V_FSR;
     converted by hand to constant voltages, the fit reads the divider's damping as a sensor that
-    creeps less (Laplace approximations at the MAP; validation/divider_bias.py)."""
-    from validation.divider_bias import PROBE_V, run
+    creeps less, and misplaces its contact law and Kelvin element (Laplace approximations at the
+    MAP; validation/divider_bias.py)."""
+    from validation.divider_bias import PROBE_V, format_parameters, run
 
     rows = run(seed=0, n_draws=200, n_starts=4)
     for v in PROBE_V:
@@ -283,6 +284,16 @@ def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drif
         # the hand conversion's medians all below the truth, by more the heavier the weight
         ratio = np.array(approx["q50"]) / truth
         assert np.all(ratio < 0.9) and np.all(np.diff(ratio) < 0), ratio
+    # and it moves the contact law and the Kelvin element off the truth
+    for name in ("alpha", "Rc0", "k2", "b2"):
+        truth = rows["truth_parameters"][name]
+        exact, approx = (
+            rows["divider"]["parameters"][name],
+            rows["constant voltage"]["parameters"][name],
+        )
+        assert exact["q05"] < truth < exact["q95"], (name, truth, exact)
+        assert not approx["q05"] < truth < approx["q95"], (name, truth, approx)
+    assert "| Rc0 | 2e+10 |" in format_parameters(rows)
 
 
 def test_an_onset_column_sets_t0_and_is_checked(tmp_path):

@@ -8,7 +8,7 @@ sensor's own conductance, and the constant-voltage fit reads the circuit's dampi
 that creeps less. This study simulates the default rig (FSR 402, 4.9 V,
 3.3 kΩ, 10-bit ADC, four dead weights for 10 minutes at 100 Hz), fits it both ways (Laplace
 approximation at the MAP, labelled as such) and compares what each says about the sensor: its
-drift at a constant V_FSR, the paper's protocol, against the truth.
+drift at a constant V_FSR, the paper's protocol, and its parameters, against the truth.
 
 Run ``python -m validation.divider_bias [seed]``.
 """
@@ -29,11 +29,12 @@ from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.sensor import drift
 
-__all__ = ["constant_voltage_tests", "run"]
+__all__ = ["constant_voltage_tests", "run", "format_rows", "format_parameters"]
 
 PROBE_V = (1.0, 2.0)
 """Constant V_FSR at which the fitted sensors' drifts are compared with the truth."""
 PROBE_TIME_S = 600.0
+QUANTILES = (0.05, 0.5, 0.95)
 
 
 def constant_voltage_tests(data):
@@ -48,7 +49,9 @@ def constant_voltage_tests(data):
 def run(seed=0, n_draws=400, n_starts=8):
     """Fit the rig both ways; return the sensor's drift at constant V_FSR from each, and truth.
 
-    Each fit is a Laplace approximation at the best of ``n_starts`` MAP searches.
+    Each fit is a Laplace approximation at the best of ``n_starts`` MAP searches. Each fit's
+    entry also holds its parameters' 5–50–95 % quantiles (``"parameters"``), and
+    ``"truth_parameters"`` the simulated specimen's (``sigma_rel``: the rig's noise level).
     """
     text, truth = simulate_rig(1, seed=seed)
     with tempfile.TemporaryDirectory() as folder:
@@ -57,6 +60,8 @@ def run(seed=0, n_draws=400, n_starts=8):
     sensor = load_sensor("fsr402")
     stresses = np.array([t.stress_Pa for t in data.tests])
     rows = {"truth": {v: drift(params, v, stresses, PROBE_TIME_S).tolist() for v in PROBE_V}}
+    rows["truth_parameters"] = {key: float(value) for key, value in params.items()}
+    rows["truth_parameters"]["sigma_rel"] = float(truth["rig"]["noise_rel"])
     rng = np.random.default_rng(seed)
     for name, tests in (
         ("divider", data.tests),
@@ -80,6 +85,10 @@ def run(seed=0, n_draws=400, n_starts=8):
                 "q50": np.median(values, axis=0).tolist(),
                 "q95": np.quantile(values, 0.95, axis=0).tolist(),
             }
+        entry["parameters"] = {}
+        for key in posterior.names:
+            low, mid, high = np.quantile(physical[key], QUANTILES)
+            entry["parameters"][key] = {"q05": float(low), "q50": float(mid), "q95": float(high)}
         rows[name] = entry
     rows["v_fsr_start"] = [t.voltage_V - t.current_A[0] * t.rm_ohm for t in data.tests]
     rows["observed_drift_pct"] = [t.observed_drift(PROBE_TIME_S - 2.0) for t in data.tests]
@@ -102,8 +111,26 @@ def format_rows(rows):
     return "\n".join(lines)
 
 
+def format_parameters(rows):
+    """A Markdown table: each parameter's truth and its 5–50–95 % quantiles from both fits."""
+    lines = [
+        "| parameter | truth | divider fit (5–50–95 %) | constant-voltage fit (5–50–95 %) |",
+        "|---|---|---|---|",
+    ]
+    for key, true in rows["truth_parameters"].items():
+        if key not in rows["divider"]["parameters"]:
+            continue
+        cells = []
+        for name in ("divider", "constant voltage"):
+            q = rows[name]["parameters"][key]
+            cells.append(f"{q['q05']:.3g} – {q['q50']:.3g} – {q['q95']:.3g}")
+        lines.append(f"| {key} | {true:.3g} | {cells[0]} | {cells[1]} |")
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
     result = run(int(sys.argv[1]) if len(sys.argv) > 1 else 0)
     print(format_rows(result))
+    print(format_parameters(result))
     print("V_FSR at the start:", [f"{v:.2f}" for v in result["v_fsr_start"]])
     print("observed drift of the rig's current (%):", result["observed_drift_pct"])
