@@ -1,9 +1,10 @@
 """Posterior predictive checks of a creep fit on statistics that carry physics.
 
 For posterior draws θ_s of one specimen, replicated data y_rep,s = log I(θ_s) + noise are drawn
-from the likelihood, and each statistic T is computed on the observed and on the replicated
-data. The statistics (Gelman, Meng & Stern 1996 call those that also depend on θ "realised
-discrepancies"):
+from the likelihood (whole-count readings rounded as the data were,
+:func:`~.replicates.replicate_rounded_readings`), and each statistic T is computed on the
+observed and on the replicated data. The statistics (Gelman, Meng & Stern 1996 call those that
+also depend on θ "realised discrepancies"):
 
 ``drift_3600`` (per test)
     drift(3600 s) in % (eq. 22), by the same interpolation as the observed one.
@@ -17,7 +18,7 @@ discrepancies"):
     the creep curve.
 ``loo_pit`` (per test)
     Kolmogorov–Smirnov test of the uniformity of the test's LOO-PIT values (calibrated: each
-    sample is predicted from a posterior without it, by PSIS).
+    sample is predicted from a posterior without it, by PSIS); not made on whole-count readings.
 ``stress_trend`` (per specimen)
     slope of the drift(3600 s) misfit over ln σ: drift that grows with stress differently than
     the model says (the paper's area-creep puzzle).
@@ -52,6 +53,7 @@ from scipy import special
 
 from ..inference.likelihood import ar1_innovations, ou_coefficients
 from ..physics.constants import DRIFT_TIME_S
+from .replicates import replicate_rounded_readings
 
 __all__ = [
     "TEST_STATISTICS",
@@ -165,6 +167,8 @@ def loo_pit(y, log_mu, sigma, mask, nu=None, *, standardised=None, log_scale=Non
     sigma : ndarray, shape (S,)
         Noise scale per draw; ``nu`` (S,) for Student-t noise.
     mask : ndarray of bool, shape (C, T)
+        The samples to transform; :func:`predictive_checks` leaves out whole-count readings
+        (an ADC's), whose PIT under a continuous predictive is not uniform.
     standardised, log_scale : ndarray, shape (S, C, T), optional
         For correlated (AR(1)) noise: each sample's standardised innovation given the one before,
         and the log of its conditional sd in units of sigma; they replace (y − log_mu)/sigma.
@@ -181,6 +185,8 @@ def loo_pit(y, log_mu, sigma, mask, nu=None, *, standardised=None, log_scale=Non
     from arviz_stats.base import array_stats
     from scipy import stats
 
+    if not mask.any():
+        return np.full(y.shape, np.nan), np.full(y.shape[0], np.nan), float("nan")
     z = (y[None] - log_mu) / sigma[:, None, None] if standardised is None else standardised
     if nu is None:
         log_pdf, cdf = -0.5 * z**2, special.ndtr(z)
@@ -356,6 +362,8 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if posterior.likelihood == "ar1":
         noise = _ornstein_uhlenbeck(noise, data.time_s, params["noise_tau"])
     y_rep = log_mu + sigma * noise
+    if data.quant_var is not None and posterior.likelihood == "gaussian":
+        replicate_rounded_readings(y_rep, log_mu, data, params["sigma_rel"], rng)
     y_obs = np.broadcast_to(data.log_current, log_mu.shape)
 
     j, w, at = _interpolation(data.time_s, data.mask, at_s)
@@ -401,11 +409,12 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if posterior.likelihood == "ar1":
         with np.errstate(invalid="ignore"):
             innovations, log_scale = ar1_innovations(r_obs, data.time_s, params["noise_tau"])
+    continuous = data.mask if data.quant_var is None else data.mask & ~(data.quant_var > 0)
     pit, p_values["loo_pit"], max_k = loo_pit(
         data.log_current,
         log_mu,
         params["sigma_rel"],
-        data.mask,
+        continuous,
         params["nu"] if posterior.likelihood == "student" else None,
         standardised=innovations if log_scale is not None else None,
         log_scale=log_scale,
