@@ -23,7 +23,7 @@ def replicate_rounded_readings(y_rep, log_mu, data, sigma_rel, rng):
     rounding biases that mean by up to half a count when the noise spans less than a count —
     by how much depends on where the level lies between two counts, and so on how it moves
     within the bin. Each replicate is therefore drawn as the data were: n readings evenly spaced
-    in time across the bin (the spacing from the neighbouring bins' times and sizes), each
+    in time across the bin (the spacing from the nearer neighbouring bin's time and size), each
     log-normal about the model current at its own time (linear within the bin, the slope
     limited by minmod so that a load step next to the bin does not bend it), rounded to whole
     counts of the point's step q = √(12·quant_var)·I, their logs averaged (a reading that rounds
@@ -40,13 +40,15 @@ def replicate_rounded_readings(y_rep, log_mu, data, sigma_rel, rng):
     last = data.mask.sum(axis=1)[rows] - 1
     before, after = np.maximum(cols - 1, 0), np.minimum(cols + 1, last)
     time = data.time_s
-    with np.errstate(divide="ignore", invalid="ignore"):
-        spacing = np.where(
-            after > cols,
-            2.0 * (time[rows, after] - time[rows, cols]) / (n + weight[rows, after]),
-            2.0 * (time[rows, cols] - time[rows, before]) / (n + weight[rows, before]),
-        )
-    spacing = np.where(np.isfinite(spacing), spacing, 0.0)
+    # contiguous bins of evenly spaced readings: Δt̄ = spacing·(n + n')/2 to either neighbour;
+    # the smaller estimate, so that a gap in the log (an unloaded period) does not widen a bin
+    forward = 2.0 * (time[rows, after] - time[rows, cols]) / (n + weight[rows, after])
+    backward = 2.0 * (time[rows, cols] - time[rows, before]) / (n + weight[rows, before])
+    spacing = np.where(
+        (after > cols) & (before < cols),
+        np.minimum(forward, backward),
+        np.where(after > cols, forward, backward),
+    )
     owner = np.repeat(np.arange(rows.size), n)  # each simulated reading's point
     starts = np.concatenate([[0], np.cumsum(n)[:-1]])
     offset = (np.arange(owner.size) - starts[owner] - (n[owner] - 1) / 2.0) * spacing[owner]
