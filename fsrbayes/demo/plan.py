@@ -40,7 +40,8 @@ class DemoPlan:
         convergence, started at the Laplace fit's mode; False: a short run at the mode
         (``draw_steps``), a labelled approximation.
     n_starts, draw_steps : int
-        MAP optimisations per Laplace fit, and steps of the short ensemble run at the mode.
+        MAP optimisations per round of each Laplace fit (rounds are added until two starts
+        agree on the best optimum), and steps of the short ensemble run at the mode.
     hyper : SamplerSettings
         The two-stage hyper-posterior run.
     n_hyper, n_per_hyper : int

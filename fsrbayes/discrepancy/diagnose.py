@@ -347,7 +347,8 @@ def diagnose(
     n_draws : int
         Draws of each Laplace posterior for the predictive checks.
     n_starts : int
-        MAP optimisations per fit.
+        MAP optimisations per round of each Laplace fit; rounds are added until two starts
+        reach the same best optimum (:func:`~fsrbayes.inference.evidence.laplace.laplace_fit`).
     seed : int
     processes, executor, scheduler
         Where the specimens run (:func:`fsrbayes.inference.parallel.map_jobs`).
