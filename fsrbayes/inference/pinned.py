@@ -239,7 +239,9 @@ class PinnedCoordinates:
             if not active.size or iteration == MAX_ITER:
                 break
             step[active] = np.einsum("nij,nj->ni", inverse[active], residual) * shrink[active, None]
-            step[active] *= np.minimum(1.0, MAX_STEP / np.abs(step[active]).max(axis=1))[:, None]
+            with np.errstate(divide="ignore"):  # a zero step (shrunk to nothing) stays zero
+                largest = np.abs(step[active]).max(axis=1)
+                step[active] *= np.minimum(1.0, MAX_STEP / largest)[:, None]
             trial = u[active].copy()
             trial[:, self._solved] += step[active]
             y_trial = self.log_current(trial)
