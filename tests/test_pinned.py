@@ -118,25 +118,22 @@ def test_polishing_along_the_pins_walks_the_sheet_to_its_best(rig_search):
     assert polish(posterior, *refined[1])[1] - refined[1][1] < 1e-2
 
 
-def _prior_drawn_rig(seed, folder):
+def _prior_drawn_rig(seed):
     """A 2-minute bench rig whose specimen and noise level are drawn from the fit's prior."""
-    prior = load_sensor("fsr402").prior
-    drawn = dict(zip(prior.names, prior.sample(np.random.default_rng(seed), 1)[0], strict=True))
-    noise = drawn.pop("sigma_rel")
-    text, truth = simulate_rig(1, seed=seed, noise_rel=noise, specimens=[drawn], duration_s=120.0)
-    packed = SpecimenData.select(read_csv(write_rig(text, truth, folder / "rig.csv")[0]), None)
+    from validation.rig_coverage import simulate_truth
+
+    data, truth = simulate_truth(seed, "prior", duration_s=120.0)
+    packed = SpecimenData.select(data, None)
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor))
-    truth_u = posterior.prior.to_unconstrained(
-        np.array([[(drawn | {"sigma_rel": noise})[name] for name in posterior.names]])
-    )
+    truth_u = posterior.prior.to_unconstrained(np.array([[truth[n] for n in posterior.names]]))
     return posterior, truth_u
 
 
-def test_a_laplace_fit_searches_along_the_pins(tmp_path):
+def test_a_laplace_fit_searches_along_the_pins():
     """The Laplace fits of ``diagnose`` and of the demo's Bayes factors search for their mode as a
     fit does: on a rig with a prior-drawn specimen the plain search stops on the sheet, 3.4 nats
     below the mode (a Laplace log-evidence short by as much)."""
-    posterior, _ = _prior_drawn_rig(201, tmp_path)
+    posterior, _ = _prior_drawn_rig(201)
     plain = find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=MAP_ITERATIONS)
     laplace = laplace_fit(posterior, 1, n_starts=2)
     assert laplace.log_post_map > posterior(plain).max() + 1.0
@@ -145,12 +142,12 @@ def test_a_laplace_fit_searches_along_the_pins(tmp_path):
     assert again[1] - laplace.log_post_map < 1e-2  # nothing left to gain along the sheet
 
 
-def test_a_laplace_fit_adds_starts_until_two_agree_on_the_best(tmp_path):
+def test_a_laplace_fit_adds_starts_until_two_agree_on_the_best():
     """A maximum a posteriori point is at least as probable as the truth. On this rig the better
     of two starts ends 207 nats below the truth's log-posterior — there, a base model misfits data
     with nothing missing and ``diagnose`` cannot call it adequate; more starts, until two reach
     the same best optimum, end above the truth."""
-    posterior, truth_u = _prior_drawn_rig(205, tmp_path)
+    posterior, truth_u = _prior_drawn_rig(205)
     laplace = laplace_fit(posterior, 205, n_starts=2)
     assert laplace.log_post_map >= posterior(truth_u)[0]
     once = laplace_fit(posterior, 205, n_starts=2, max_starts=2)  # the two starts alone

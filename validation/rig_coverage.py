@@ -49,8 +49,10 @@ NOMINAL = 0.9
 FLAG_QUANTILE = 0.01
 
 
-def simulate_truth(seed, truth="population"):
+def simulate_truth(seed, truth="population", **rig):
     """Simulate the bench rig of ``seed``; return (data, its specimen's true parameters).
+
+    ``rig``: overrides of :data:`~fsrbayes.data.rigsim.RIG_DEFAULTS` (e.g. ``duration_s``).
 
     ``truth="population"``: the specimen is drawn from the sensor's population (around its
     defaults) with the bench's noise. ``"prior"``: its parameters and noise level are drawn
@@ -70,7 +72,7 @@ def simulate_truth(seed, truth="population"):
         if truth == "prior":
             drawn = dict(zip(prior.names, prior.sample(rng, 1)[0], strict=True))
             options = {"noise_rel": drawn.pop("sigma_rel"), "specimens": [drawn]}
-        text, simulated = simulate_rig(1, seed=seed, **options)
+        text, simulated = simulate_rig(1, seed=seed, **options, **rig)
         with tempfile.TemporaryDirectory() as folder:
             try:
                 data = read_csv(write_rig(text, simulated, Path(folder) / "rig.csv")[0])
