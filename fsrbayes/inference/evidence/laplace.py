@@ -164,11 +164,11 @@ AGREEMENT_NATS = 1.0
 """Two starts agree on an optimum when their log-posteriors differ by less than this."""
 
 
-def _best_optimum_found_twice(posterior, optima):
+def _best_optimum_found_twice(optima, values):
     """Return whether two different starts reached the best optimum (within AGREEMENT_NATS)."""
-    distinct = np.unique(np.asarray(optima, dtype=float), axis=0)  # one start's repeats are equal
-    values = posterior(distinct)
-    return np.count_nonzero(values >= np.max(values) - AGREEMENT_NATS) >= 2
+    _, first = np.unique(optima, axis=0, return_index=True)  # one start's repeats are equal
+    distinct = values[first]
+    return np.count_nonzero(distinct >= np.max(distinct) - AGREEMENT_NATS) >= 2
 
 
 def laplace_fit(
@@ -211,7 +211,8 @@ def laplace_fit(
     rng = np.random.default_rng(rng)
     refine = map_refinement(posterior)
     optima = find_map(posterior, rng, n_starts=n_starts, maxiter=MAP_ITERATIONS, refine=refine)
-    while len(optima) < max_starts and not _best_optimum_found_twice(posterior, optima):
+    values = posterior(optima)
+    while len(optima) < max_starts and not _best_optimum_found_twice(optima, values):
         more = find_map(
             posterior,
             rng,
@@ -219,10 +220,9 @@ def laplace_fit(
             maxiter=MAP_ITERATIONS,
             refine=refine,
         )
-        optima = np.vstack([optima, more])
-    optima = optima[np.argsort(posterior(optima))[::-1]]
-    u_best = optima[0]
-    value = posterior(u_best)
+        optima, values = np.vstack([optima, more]), np.append(values, posterior(more))
+    best = int(np.argmax(values))
+    u_best, value = optima[best], values[best]
     if base is not None:
         starts = _nested_starts(posterior, base, dict(null or {}), rng)
         values = posterior(starts)
