@@ -29,6 +29,7 @@ def _replicates(levels, times, n):
         weight=np.asarray(n, dtype=float)[None],
         log_current=log_mu[0] + 0.01,  # the observed level only sets the step q
         quant_var=(STEP / np.exp(log_mu[0] + 0.01)) ** 2 / 12.0,
+        whole_counts=np.ones((1, len(levels)), dtype=bool),
     )
     shape = (DRAWS, 1, len(levels))
     y_rep = np.broadcast_to(log_mu, shape).copy()

@@ -362,8 +362,7 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if posterior.likelihood == "ar1":
         noise = _ornstein_uhlenbeck(noise, data.time_s, params["noise_tau"])
     y_rep = log_mu + sigma * noise
-    if data.quant_var is not None and posterior.likelihood == "gaussian":
-        replicate_rounded_readings(y_rep, log_mu, data, params["sigma_rel"], rng)
+    replicate_rounded_readings(y_rep, log_mu, data, params["sigma_rel"], rng)
     y_obs = np.broadcast_to(data.log_current, log_mu.shape)
 
     j, w, at = _interpolation(data.time_s, data.mask, at_s)
@@ -409,7 +408,7 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
     if posterior.likelihood == "ar1":
         with np.errstate(invalid="ignore"):
             innovations, log_scale = ar1_innovations(r_obs, data.time_s, params["noise_tau"])
-    continuous = data.mask if data.quant_var is None else data.mask & ~(data.quant_var > 0)
+    continuous = data.mask & ~data.whole_counts
     pit, p_values["loo_pit"], max_k = loo_pit(
         data.log_current,
         log_mu,

@@ -30,10 +30,9 @@ def replicate_rounded_readings(y_rep, log_mu, data, sigma_rel, rng):
     to 0 counts is read as 1: a loaded log holds no zero). ``y_rep`` (S, C, T) is changed in
     place.
     """
-    quantised = data.mask & (data.quant_var > 0)
-    if not quantised.any():
+    rows, cols = np.nonzero(data.whole_counts)
+    if not rows.size:
         return
-    rows, cols = np.nonzero(quantised)
     step = np.sqrt(12.0 * data.quant_var[rows, cols]) * np.exp(data.log_current[rows, cols])
     weight = np.ones(data.mask.shape) if data.weight is None else data.weight
     n = np.rint(weight[rows, cols]).astype(int)

@@ -208,6 +208,13 @@ class SpecimenData:
         return int(self.mask.sum())
 
     @property
+    def whole_counts(self):
+        """The observed points of whole-count readings (an ADC's), bool (C, T)."""
+        if self.quant_var is None:
+            return np.zeros(self.mask.shape, dtype=bool)
+        return self.mask & (self.quant_var > 0)
+
+    @property
     def plain(self):
         """Whether every point is one continuous reading at a constant sourcing voltage."""
         return (
