@@ -80,19 +80,18 @@ def run(seed=0, n_draws=400, n_starts=8):
                     for i in range(n_draws)
                 ]
             )
-            entry[v] = {
-                "q05": np.quantile(values, 0.05, axis=0).tolist(),
-                "q50": np.median(values, axis=0).tolist(),
-                "q95": np.quantile(values, 0.95, axis=0).tolist(),
-            }
-        entry["parameters"] = {}
-        for key in posterior.names:
-            low, mid, high = np.quantile(physical[key], QUANTILES)
-            entry["parameters"][key] = {"q05": float(low), "q50": float(mid), "q95": float(high)}
+            entry[v] = _quantiles(values)
+        entry["parameters"] = {key: _quantiles(physical[key]) for key in posterior.names}
         rows[name] = entry
     rows["v_fsr_start"] = [t.voltage_V - t.current_A[0] * t.rm_ohm for t in data.tests]
     rows["observed_drift_pct"] = [t.observed_drift(PROBE_TIME_S - 2.0) for t in data.tests]
     return rows
+
+
+def _quantiles(values):
+    """Return the 5–50–95 % quantiles over draws (axis 0), as JSON-ready numbers or lists."""
+    bands = np.quantile(values, QUANTILES, axis=0).tolist()
+    return dict(zip(("q05", "q50", "q95"), bands, strict=True))
 
 
 def format_rows(rows):
