@@ -53,6 +53,7 @@ from scipy import special
 
 from ..inference.likelihood import ar1_innovations, ou_coefficients
 from ..physics.constants import DRIFT_TIME_S
+from .ranks import rank_scores, replicate_rank_scores
 from .replicates import replicate_rounded_readings
 
 __all__ = [
@@ -278,6 +279,11 @@ class SpecimenChecks:
     innovation_observed: np.ndarray = None
     """Posterior-mean standardised innovations: the residuals whitened by the noise model (equal
     to ``residual_observed`` for white noise; AR(1) noise is whitened), shape (C, T)."""
+    quarter_scores: tuple = None
+    """For tests of whole-count readings (an ADC's counts), the normal scores by rank
+    (:mod:`.ranks`) of the observed quarter means (C, 4) and of each replicate's among the
+    replicates (S, C, 4), NaN for other tests; their p-values are taken from the same ranks. None
+    when no test is quantised."""
 
     @property
     def z(self):
@@ -296,6 +302,11 @@ class SpecimenChecks:
         with a known truth. Shape (C,); NaN for tests too short to cut.
         """
         observed, replicated = self.observed["quarter_means"][0], self.replicated["quarter_means"]
+        ranked = self._ranked
+        if ranked.any():  # quantised tests: their quarter means' normal scores by rank
+            observed, replicated = observed.copy(), replicated.copy()
+            observed[ranked] = self.quarter_scores[0][ranked]
+            replicated[:, ranked] = self.quarter_scores[1][:, ranked]
         out = np.full(observed.shape[0], np.nan)
         ok = np.all(np.isfinite(observed), axis=1)
         if ok.any():
@@ -308,9 +319,23 @@ class SpecimenChecks:
 
     @property
     def quarter_z(self):
-        """Standardised misfit of the mean log-current per quarter of each test, shape (C, 4)."""
+        """Standardised misfit of the mean log-current per quarter of each test, shape (C, 4).
+
+        (T_obs − mean)/sd over the replicates; for quantised tests the normal score of the
+        observed's rank among them (:func:`~.ranks.rank_scores`).
+        """
         observed, replicated = self.observed["quarter_means"][0], self.replicated["quarter_means"]
-        return (observed - replicated.mean(axis=0)) / replicated.std(axis=0, ddof=1)
+        z = (observed - replicated.mean(axis=0)) / replicated.std(axis=0, ddof=1)
+        ranked = self._ranked
+        z[ranked] = self.quarter_scores[0][ranked] if ranked.any() else z[ranked]
+        return z
+
+    @property
+    def _ranked(self):
+        """Tests whose quarter means are scored by rank, shape (C,)."""
+        if self.quarter_scores is None:
+            return np.zeros(len(self.test_keys), bool)
+        return np.all(np.isfinite(self.quarter_scores[0]), axis=1)
 
     def predicted_drift(self):
         """Posterior predictive q05, q50, q95 of drift(3600 s) per test, shape (3, C)."""
@@ -402,6 +427,23 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         observed[name] = _slope_over(d_obs - d_model, covariate)
         replicated[name] = _slope_over(d_rep - d_model, covariate)
     p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
+    quantised = np.any(data.mask & data.whole_counts, axis=1)
+    quarter_scores = None
+    if quantised.any():  # rare count changes: far from normal, so scored by rank
+        for name in TEST_STATISTICS:
+            score = rank_scores(observed[name][:, quantised], replicated[name][:, quantised], rng)
+            p_values[name][quantised] = 2.0 * special.ndtr(-np.abs(score))
+        ranked = quantised & ~undefined
+        quarter_scores = (
+            np.full(observed["quarter_means"].shape[1:], np.nan),
+            np.full(replicated["quarter_means"].shape, np.nan),
+        )
+        quarter_scores[0][ranked] = rank_scores(
+            observed["quarter_means"][:, ranked], replicated["quarter_means"][:, ranked], rng
+        )
+        quarter_scores[1][:, ranked] = replicate_rank_scores(
+            replicated["quarter_means"][:, ranked], rng
+        )
     innovations, log_scale = r_obs, None
     if not data.plain:  # each point's own sd, in units of sigma_rel
         log_scale = np.log(sigma / params["sigma_rel"][:, None, None])
@@ -441,4 +483,5 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         pit,
         max_k,
         innovation,
+        quarter_scores,
     )
