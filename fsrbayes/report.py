@@ -174,7 +174,8 @@ def diagnosis_narrative(result):
         f"{result['n_tests']} creep tests, misses the measured creep curves by **gap_before = "
         f"{result['gap_before']:.2f}** ({result['gap_metric']}); drift(3600 s) alone by "
         f"{result['drift_gap_before']:.2f}. Across voltages it {voltage}; across stresses it "
-        f"{stress}."
+        f"{stress}. An adequate model's gap stays below G0 = {result['band']:.2f}: the "
+        f"{result['band_method']}."
     )
     failed = result["findings_before"]["failed"]
     lines += [

@@ -110,6 +110,8 @@ def test_diagnose_rejects_bad_arguments():
         diagnose(sim.data, threshold=0)
     with pytest.raises(ValueError, match="peer model 'kalantari' takes none"):
         diagnose(sim.data, base="kalantari")
+    with pytest.raises(ValueError, match="null_sets must be 0 or >= 2"):
+        diagnose(sim.data, null_sets=1)
 
 
 # The verdict logic itself, on made-up numbers: each verdict and each way to lose it.

@@ -239,7 +239,7 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     stress-independent change of the sensor's area, and says that the other would do as well —
     one supply voltage and a narrow load range give the data no lever to tell them apart (their
     ln B differ by ~1.5 of ~2,378 nats, so which one leads is floating-point detail). Named,
-    the gain drift is the rig's."""
+    the gain drift is the rig's. The band is the rig's own, from 8 null sets (20 by default)."""
     from fsrbayes.discrepancy import diagnose
 
     text, truth = simulate_rig(
@@ -251,7 +251,7 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
         weights_g=(133.0, 255.0),
     )
     data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
-    result = diagnose(data, effects=("gain-drift", "area-growth"), processes=1)
+    result = diagnose(data, effects=("gain-drift", "area-growth"), null_sets=8, processes=1)
     assert result.verdict == "missing-effect" and len(result.effects) == 1
     (named,) = result.effects
     (other,) = {"gain-drift", "area-growth"} - {named}

@@ -8,6 +8,7 @@ import sys
 
 from .._version import __version__
 from ..data.sensors import available_sensors
+from ..discrepancy.nullband import NULL_SETS
 from ..inference.fit import COORDINATES, FIT_COORDINATES
 from ..inference.parallel import JobError
 from ..inference.posterior import RAMPS
@@ -237,6 +238,13 @@ def build_parser():
     )
     dia.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     dia.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
+    dia.add_argument(
+        "--null-sets",
+        type=int,
+        default=NULL_SETS,
+        help="null data sets per specimen simulated for the band of a rig log (default "
+        f"{NULL_SETS}; 0: the constant-voltage formula)",
+    )
     dia.add_argument("--processes", type=int, help="specimens side by side (default: one per core)")
     dia.add_argument("--seed", type=int, default=0)
     dia.add_argument("--sep", default=",", help="CSV field separator")

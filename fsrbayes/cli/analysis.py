@@ -104,6 +104,8 @@ def cmd_diagnose(args):
             writable(path)
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    if args.null_sets < 0 or args.null_sets == 1:
+        raise UsageError(f"--null-sets must be 0 or >= 2, got {args.null_sets}")
     result = diagnose(
         data,
         args.base,
@@ -113,6 +115,7 @@ def cmd_diagnose(args):
         likelihood=args.likelihood,
         threshold=args.threshold,
         seed=args.seed,
+        null_sets=args.null_sets,
         processes=args.processes,
     )
     print(f"gap before ({args.base}): {result.gap_before:.2f} (adequate below {result.band:.2f})")

@@ -43,6 +43,7 @@ from ..utils import json_ready
 from .checks import predictive_checks
 from .gaps import drift_gap, failed_checks, gap, gap_band
 from .locate import locate, misfit_by
+from .nullband import NULL_SETS, formula_band_applies, null_quarter_distances, simulated_band
 from .verdict import MAX_EFFECTS, verdict_of
 
 __all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
@@ -66,6 +67,9 @@ class SpecimenDiagnosis:
     base_checks: object
     candidates: dict = field(default_factory=dict)
     """effect → (LaplaceFit, SpecimenChecks)."""
+    null_distances: np.ndarray = None
+    """Quarter distances of null data sets simulated from the base fit, (n_sets, C), when the
+    band is found by simulation (:mod:`.nullband`); None otherwise."""
 
     def evidence(self, effect=None):
         """Return the evidence estimate of the base model (``effect=None``) or base + effect."""
@@ -96,6 +100,18 @@ def _diagnose_one(job):
                 predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
             )
         out = SpecimenDiagnosis(specimen, *start)
+        if options.get("null_sets"):
+            out.null_distances = null_quarter_distances(
+                data.select(specimen=specimen).tests,
+                out.base.posterior,
+                out.base,
+                lambda packed_null: LogPosterior.for_sensor(
+                    packed_null, sensor, model=options["base"], **kwargs
+                ),
+                rng,
+                n_sets=options["null_sets"],
+                n_draws=options["n_draws"],
+            )
         for effect in options["effects"]:
             post = LogPosterior.for_sensor(
                 packed, sensor, model=f"{options['base']}+{effect}", **kwargs
@@ -176,6 +192,9 @@ class Diagnosis:
     findings_after: dict
     where: dict
     seconds: float = float("nan")
+    band_method: str = None
+    """How ``band`` was found: the formula (:data:`BAND_METHOD`) or by simulation
+    (:data:`BAND_SIMULATED`)."""
 
     @property
     def effect(self):
@@ -237,7 +256,7 @@ class Diagnosis:
                 "gap_after": self.gap_after,
                 "band": self.band,
                 "gap_metric": GAP_METRIC,
-                "band_method": BAND_METHOD,
+                "band_method": self.band_method or BAND_METHOD,
                 "drift_gap_before": drift_gap(before),
                 "drift_gap_after": drift_gap(after),
                 "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
@@ -268,6 +287,11 @@ EVIDENCE_METHOD = (
 BAND_METHOD = (
     "95th percentile of the gap of the base model fitted to data it generated, by the numbers of "
     "creep tests and specimens (fsrbayes.discrepancy.gap_band)"
+)
+BAND_SIMULATED = (
+    "95th percentile of the gap of {n} null data sets per specimen, simulated as the data were "
+    "logged from the base model at its fitted optimum, refitted and checked "
+    "(fsrbayes.discrepancy.nullband)"
 )
 
 
@@ -322,6 +346,7 @@ def diagnose(
     n_draws=400,
     n_starts=2,
     seed=0,
+    null_sets=NULL_SETS,
     processes=None,
     executor=None,
     scheduler=None,
@@ -350,6 +375,10 @@ def diagnose(
         MAP optimisations per round of each Laplace fit; rounds are added until two starts
         reach the same best optimum (:func:`~fsrbayes.inference.evidence.laplace.laplace_fit`).
     seed : int
+    null_sets : int
+        Null data sets simulated per specimen for the band of data unlike the band formula's
+        (a rig log: a divider or ADC readout, binned high-rate readings, load histories, ramps;
+        :mod:`.nullband`). 0 takes the formula for any data.
     processes, executor, scheduler
         Where the specimens run (:func:`fsrbayes.inference.parallel.map_jobs`).
 
@@ -372,7 +401,12 @@ def diagnose(
     effects = tuple(e for e in effects if e not in had)
     if threshold <= 0:
         raise ValueError(f"threshold must be > 0 (a ln Bayes factor), got {threshold}")
+    if null_sets < 0 or null_sets == 1:
+        raise ValueError(f"null_sets must be 0 or >= 2 (a band needs a spread), got {null_sets}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
+    simulate_band = null_sets > 0 and not formula_band_applies(
+        [SpecimenData.select(data, s) for s in specimens]
+    )
     options = {
         "sensor": sensor,
         "tunneling": tunneling,
@@ -387,6 +421,7 @@ def diagnose(
             base=model,
             effects=candidates,
             start=start or {},
+            null_sets=int(null_sets) if simulate_band and step == 0 else 0,
             components={
                 name: model_components(name if name == model else f"{model}+{name}")
                 for name in (model, *candidates)
@@ -404,7 +439,12 @@ def diagnose(
     base_checks = [d.base_checks for d in rounds[0]]
     gap_before = gap(base_checks)
     findings = failed_checks(base_checks)
-    band = gap_band(int(sum(len(c.test_keys) for c in base_checks)), len(base_checks))
+    if simulate_band:
+        band = simulated_band([d.null_distances for d in rounds[0]])
+        band_method = BAND_SIMULATED.format(n=int(null_sets))
+    else:
+        band = gap_band(int(sum(len(c.test_keys) for c in base_checks)), len(base_checks))
+        band_method = BAND_METHOD
     candidates = _candidates(1, base, effects, rounds[0], gap_before)
     steps, model, remaining = [], base, list(effects)
     in_band = not findings["failed"] and gap_before <= band
@@ -444,6 +484,7 @@ def diagnose(
         None,
         locate(base_checks),
         0.0,
+        band_method,
     )
     diagnosis.findings_after = failed_checks(diagnosis.checks_after())
     diagnosis.seconds = time.perf_counter() - started

@@ -45,6 +45,7 @@ __all__ = [
     "fit_folders",
     "predict",
     "reading_name",
+    "relative_noise",
     "write_point_fit",
 ]
 
@@ -181,7 +182,7 @@ def _interpolate(test, model_t, log_i):
     return out
 
 
-def _noise(rng, likelihood, params, time_s, before=None):
+def relative_noise(rng, likelihood, params, time_s, before=None):
     """Relative noise of the log-current in units of σ, (S, T): the likelihood's noise model.
 
     For AR(1) noise ``before`` is (the last time, the last value) of the block before, so that
@@ -252,7 +253,7 @@ def _predict_tests(folder, tests, n_draws, rng):
         method = "inverted_cdf" if discrete else "weibull"  # whole counts stay whole
         for start in range(0, test.time_s.size, CHUNK):
             part = slice(start, start + CHUNK)
-            z = _noise(rng, posterior.likelihood, kept, test.time_s[part], before)
+            z = relative_noise(rng, posterior.likelihood, kept, test.time_s[part], before)
             before = (test.time_s[part][-1], z[:, -1])
             current = np.exp(log_i[valid, part] + kept["sigma_rel"][:, None] * z)
             replicates = reading_of(test.readout, current)
