@@ -10,7 +10,6 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.synthetic import simulate
 from fsrbayes.discrepancy import diagnose, gap_band
 from fsrbayes.discrepancy.nullband import formula_band_applies, redrawn_test, simulated_band
-from fsrbayes.inference.likelihood import SpecimenData
 
 
 def _rig(tmp_path, **options):
@@ -41,8 +40,8 @@ def test_the_band_is_simulated_only_for_data_unlike_the_formulas(tmp_path):
     specimens, G0 = √(mean + 1.645·sd) of their gap²."""
     plain = simulate("a201", n_specimens=1, voltages=(0.5, 2.0), samples=11, seed=1).data
     rig = _rig(tmp_path)
-    assert formula_band_applies([SpecimenData.select(plain)])
-    assert not formula_band_applies([SpecimenData.select(rig)])
+    assert formula_band_applies(plain.tests)
+    assert not formula_band_applies(rig.tests)
     first = np.array([[0.5, 0.7], [1.5, 1.3], [0.9, 1.1]])  # 3 sets × 2 tests
     second = np.array([[1.0], [1.6], [0.4]])  # 3 sets × 1 test
     squares = np.array([2.2 / 3, 4.4 / 3, 2.4 / 3])

@@ -327,7 +327,8 @@ class SpecimenChecks:
         observed, replicated = self.observed["quarter_means"][0], self.replicated["quarter_means"]
         z = (observed - replicated.mean(axis=0)) / replicated.std(axis=0, ddof=1)
         ranked = self._ranked
-        z[ranked] = self.quarter_scores[0][ranked] if ranked.any() else z[ranked]
+        if ranked.any():
+            z[ranked] = self.quarter_scores[0][ranked]
         return z
 
     @property
@@ -427,7 +428,7 @@ def predictive_checks(posterior, draws, rng, *, at_s=DRIFT_TIME_S):
         observed[name] = _slope_over(d_obs - d_model, covariate)
         replicated[name] = _slope_over(d_rep - d_model, covariate)
     p_values = {name: two_sided_p(observed[name], replicated[name]) for name in observed}
-    quantised = np.any(data.mask & data.whole_counts, axis=1)
+    quantised = np.any(data.whole_counts, axis=1)
     quarter_scores = None
     if quantised.any():  # rare count changes: far from normal, so scored by rank
         for name in TEST_STATISTICS:

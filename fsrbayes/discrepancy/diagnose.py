@@ -103,7 +103,6 @@ def _diagnose_one(job):
         if options.get("null_sets"):
             out.null_distances = null_quarter_distances(
                 data.select(specimen=specimen).tests,
-                out.base.posterior,
                 out.base,
                 lambda packed_null: LogPosterior.for_sensor(
                     packed_null, sensor, model=options["base"], **kwargs
@@ -256,7 +255,7 @@ class Diagnosis:
                 "gap_after": self.gap_after,
                 "band": self.band,
                 "gap_metric": GAP_METRIC,
-                "band_method": self.band_method or BAND_METHOD,
+                "band_method": self.band_method,
                 "drift_gap_before": drift_gap(before),
                 "drift_gap_after": drift_gap(after),
                 "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
@@ -405,7 +404,7 @@ def diagnose(
         raise ValueError(f"null_sets must be 0 or >= 2 (a band needs a spread), got {null_sets}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     simulate_band = null_sets > 0 and not formula_band_applies(
-        [SpecimenData.select(data, s) for s in specimens]
+        [t for t in data.tests if t.specimen in specimens]
     )
     options = {
         "sensor": sensor,

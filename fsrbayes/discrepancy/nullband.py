@@ -26,8 +26,8 @@ from scipy.stats import norm
 
 from ..data.readouts import current_of, reading_of
 from ..inference.evidence.laplace import local_laplace_fit
-from ..inference.likelihood import SpecimenData
-from ..inference.predict import relative_noise
+from ..inference.likelihood import SpecimenData, is_rig_design
+from ..inference.predict import evaluation_packing, relative_noise
 from .checks import predictive_checks
 
 __all__ = [
@@ -42,26 +42,25 @@ NULL_SETS = 20
 """Null data sets simulated per specimen for a band by simulation."""
 
 
-def formula_band_applies(packed):
-    """Whether the band's formula was measured on designs like these specimens' data.
+def formula_band_applies(tests):
+    """Whether the band's formula was measured on designs like these tests.
 
-    True when every specimen's data are plain (one continuous reading per sample at a constant
-    sourcing voltage, one load step): the constant-voltage designs of the formula's null sets.
+    True unless a test is packed as a rig's (:func:`~fsrbayes.inference.likelihood.is_rig_design`:
+    a circuit, quantised or binned readings, load steps, a ramp): plain tests of one continuous
+    reading per sample at a constant sourcing voltage are the formula's null designs.
     """
-    return all(p.plain for p in packed)
+    return not is_rig_design(tests)
 
 
-def null_quarter_distances(tests, posterior, fit, make_posterior, rng, *, n_sets, n_draws):
+def null_quarter_distances(tests, fit, make_posterior, rng, *, n_sets, n_draws):
     """Quarter distances of null data sets simulated from a fit and checked as the data were.
 
     Parameters
     ----------
     tests : sequence of fsrbayes.data.creep.CreepTest
         One specimen's tests, as read.
-    posterior : fsrbayes.inference.posterior.LogPosterior
-        The fitted model on those tests.
     fit : fsrbayes.inference.evidence.laplace.LaplaceFit
-        Its fit; the null data are drawn at its optimum.
+        The fitted model on those tests; the null data are drawn at its optimum.
     make_posterior : callable
         SpecimenData → LogPosterior of the same model, priors and likelihood.
     rng : numpy.random.Generator
@@ -74,8 +73,8 @@ def null_quarter_distances(tests, posterior, fit, make_posterior, rng, *, n_sets
         :attr:`~.checks.SpecimenChecks.quarter_distance` of every test of every null set.
     """
     tests = list(tests)
-    theta = np.array([fit.x_map[name] for name in posterior.names])[None]
-    raw = make_posterior(_raw_packing(tests))
+    theta = np.array([fit.x_map[name] for name in fit.posterior.names])[None]
+    raw = make_posterior(evaluation_packing(tests))
     log_model = raw.log_model_current(theta)[0]
     params = raw.parameters(theta)
     out = np.empty((n_sets, len(tests)))
@@ -109,20 +108,6 @@ def simulated_band(distances, quantile=0.95):
     squares = np.nanmean(np.concatenate(list(distances), axis=1), axis=1)
     spread = np.std(squares, ddof=1) if squares.size > 1 else 0.0
     return float(np.sqrt(max(np.mean(squares), 0.0) + norm.ppf(quantile) * spread))
-
-
-def _raw_packing(tests):
-    """Return the tests packed at every sample, unbinned, to evaluate the model there."""
-    packed = SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests))
-    return replace(
-        packed,
-        log_current=np.zeros_like(packed.time_s),
-        mask=np.ones_like(packed.time_s, dtype=bool),
-        weight=None,
-        scatter=None,
-        quant_var=None,
-        counts=None,
-    )
 
 
 def redrawn_test(test, log_model, params, likelihood, rng):

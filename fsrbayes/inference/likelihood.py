@@ -41,6 +41,7 @@ from .packing import (
     MAX_RAW_SAMPLES,
     RAMP_STEPS,
     bin_log_time,
+    is_rig_design,
     load_step_arrays,
     pack_rig,
     ramp_load,
@@ -54,6 +55,7 @@ __all__ = [
     "SpecimenData",
     "ar1_innovations",
     "bin_log_time",
+    "is_rig_design",
     "load_step_arrays",
     "log_likelihood_pointwise",
     "ou_coefficients",
@@ -137,15 +139,7 @@ class SpecimenData:
         specimens = {t.specimen for t in tests}
         if len(specimens) != 1:
             raise ValueError(f"SpecimenData holds one specimen, got {sorted(specimens)}")
-        rig = any(
-            t.rm_ohm > 0
-            or t.quantum_A > 0
-            or t.time_s.size > max_samples
-            or t.load_steps is not None
-            or t.ramp_s > 0
-            for t in tests
-        )
-        if rig:
+        if is_rig_design(tests, max_samples):
             return pack_rig(cls, tests, max_samples, bins_per_decade)
         width = max(t.time_s.size for t in tests)
         time = np.empty((len(tests), width))

@@ -21,6 +21,7 @@ __all__ = [
     "ramp_steps",
     "bin_log_time",
     "bin_statistics",
+    "is_rig_design",
     "load_step_arrays",
     "log_time_bins",
     "pack_rig",
@@ -162,6 +163,22 @@ def _bin_labels(test, bins_per_decade):
             since[inside] = start
             first = labels[inside][-1] + 1
     return labels, since
+
+
+def is_rig_design(tests, max_samples=MAX_RAW_SAMPLES):
+    """Whether tests are packed as a rig's (:func:`pack_rig`) rather than one reading per sample.
+
+    True when a test has a circuit (a divider's fixed resistor), quantised readings, more than
+    ``max_samples`` samples (binned in log-time), load steps or a loading ramp.
+    """
+    return any(
+        t.rm_ohm > 0
+        or t.quantum_A > 0
+        or t.time_s.size > max_samples
+        or t.load_steps is not None
+        or t.ramp_s > 0
+        for t in tests
+    )
 
 
 def pack_rig(cls, tests, max_samples, bins_per_decade):

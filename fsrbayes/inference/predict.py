@@ -42,6 +42,7 @@ from .posterior import LogPosterior, is_ramp, nuisance_parameters
 __all__ = [
     "PREDICT_QUANTILES",
     "READING_UNITS",
+    "evaluation_packing",
     "fit_folders",
     "predict",
     "reading_name",
@@ -207,22 +208,41 @@ def relative_noise(rng, likelihood, params, time_s, before=None):
     return out
 
 
-def _predict_tests(folder, tests, n_draws, rng):
-    """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
-    times = [_model_times(t) for t in tests]
-    width = max(t.size for t in times)
-    grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
-    # the tests packed as for a fit (circuit, load steps, ramps), evaluated on the model times
-    packed = replace(
-        SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests)),
-        time_s=grid,
-        log_current=np.zeros_like(grid),
-        mask=np.ones_like(grid, dtype=bool),
+def evaluation_packing(tests, time_s=None):
+    """Return the tests packed as for a fit (circuit, load steps, ramps), to evaluate the model.
+
+    Parameters
+    ----------
+    tests : sequence of fsrbayes.data.creep.CreepTest
+        One specimen's tests.
+    time_s : ndarray, shape (C, T), optional
+        Where to evaluate it (padded); default every sample, unbinned.
+
+    Returns
+    -------
+    SpecimenData
+        No readings: every point unmasked, no bins, counts or quantisation.
+    """
+    packed = SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests))
+    time_s = packed.time_s if time_s is None else time_s
+    return replace(
+        packed,
+        time_s=time_s,
+        log_current=np.zeros_like(time_s),
+        mask=np.ones_like(time_s, dtype=bool),
         weight=None,
         scatter=None,
         quant_var=None,
         counts=None,
     )
+
+
+def _predict_tests(folder, tests, n_draws, rng):
+    """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
+    times = [_model_times(t) for t in tests]
+    width = max(t.size for t in times)
+    grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
+    packed = evaluation_packing(tests, grid)
     posterior, draws, attrs = _posterior_of(folder, packed, rng)
     if attrs["sensor"] != tests[0].sensor:
         raise ValueError(
