@@ -49,6 +49,37 @@ def test_superposed_steps_match_the_stress_history_path():
     np.testing.assert_allclose(got, reference, rtol=1e-12)
 
 
+@pytest.mark.parametrize(
+    "effect, extra",
+    [
+        ((), {}),
+        (("second-kelvin",), {"kv2_comp": 2e-7, "kv2_tau": 5.0}),
+        (("power-law-creep",), {"plc_psi": 1e-9, "plc_n": 0.3}),
+        (("log-creep",), {"lc_comp": 1e-8, "lc_tau": 1.0}),
+    ],
+    ids=["burgers", "second-kelvin", "power-law-creep", "log-creep"],
+)
+def test_a_loading_ramp_in_the_steps_is_the_stress_history_s_ramp(effect, extra):
+    # a first weight settling linearly over 0.3 s, then a second step: the steps' exact ramp
+    # (ramp compliance of the law and of each strain effect) against the piecewise-linear
+    # StressHistory path, during the ramp and after it
+    params = dict(load_sensor("a201").params) | extra
+    t = np.concatenate([np.linspace(0.003, 0.3, 34), np.linspace(0.31, 2400.0, 300)])
+    history = StressHistory([0, 0.3, 600, 600], [0, 1e5, 1e5, 1.6e5])
+    reference = current_history(params, 1.0, history, t, effects=effect)
+    steps = (np.array([[0.0, 600.0]]), np.array([[1e5, 6e4]]))
+    got = solve_current(
+        params, 1.0, None, t[None], load_steps=steps, first_ramp=np.array([[0.3]]), effects=effect
+    ).current[0]
+    np.testing.assert_allclose(got, reference, rtol=1e-11)
+    # a ramp of 0 is the step
+    step = solve_current(params, 1.0, None, t[None], load_steps=steps, effects=effect).current
+    zero = solve_current(
+        params, 1.0, None, t[None], load_steps=steps, first_ramp=np.zeros((1, 1)), effects=effect
+    ).current
+    np.testing.assert_array_equal(zero, step)
+
+
 def test_a_staircase_is_one_test_with_its_steps(tmp_path):
     path, truth = _staircase(tmp_path)
     data = read_csv(path)
@@ -263,9 +294,12 @@ def test_a_fitted_ramp_is_the_given_ramp_at_its_value_and_the_data_find_it(tmp_p
     def at(posterior, ramps):
         return np.array([[params.get(n, r) for n in posterior.names] for r in ramps])
 
-    # the sampled ramp at the given value is the given ramp, to the last bit
+    # the sampled ramp at the given value is the given ramp, to the last bit (at the same times:
+    # a given ramp's samples are packed one by one, a hidden one's into log-spaced bins)
+    times = known.data.time_s
     assert np.array_equal(
-        fitted.log_model_current(at(fitted, [0.5])), known.log_model_current(at(known, [0.5]))
+        fitted.log_model_current(at(fitted, [0.5]), times),
+        known.log_model_current(at(known, [0.5]), times),
     )
     # the readings pin the ramp: the log-likelihood over ramp lengths peaks at the truth
     ramps = np.linspace(0.3, 0.7, 21)

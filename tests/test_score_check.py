@@ -29,6 +29,15 @@ def test_the_count_likelihood_is_the_bench_s_at_the_truth(truth):
     assert 0.85 < check.pooled_variance < 1.15, check.summary()
 
 
+def test_a_given_ramp_is_the_bench_s_ramp(truth):
+    # a weight settling over 0.3 s, its ramp and its landing instant written in the log: the
+    # first loading's creep exact (ramp compliance) and its samples kept out of log-spaced bins
+    bench = {"ramp_s": 0.3, "onset_column": True}
+    check = score_check(truth, truth["sigma_rel"], 12, **BENCH, **bench)
+    mean_p, variance_p = check.p_values()
+    assert mean_p > 1e-3 and variance_p > 1e-3, check.summary()
+
+
 @pytest.mark.parametrize(
     "hidden",
     [

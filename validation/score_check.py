@@ -25,8 +25,8 @@ draw's packing). :func:`score_check` reports their means (in standard errors) an
 ratios, the same for the noise level's score, and the pooled ratio Σ Var(g_p)/Σ F_p.
 
 Run: ``python -m validation.score_check`` (the default bench rig, the 10-bit ADC, 200 noise
-draws of a specimen from the population; about ten minutes on one core) — ``--help`` for other readouts,
-protocols and truths drawn from the prior.
+draws of a specimen from the population; about ten minutes on one core) — ``--help`` for
+other readouts, protocols and truths drawn from the prior.
 """
 
 import argparse
@@ -122,8 +122,22 @@ class ScoreCheck:
 
 
 def _bench_posterior(spec, sigma_rel, seed, model, bench):
-    """The bench's log of one noise draw, read back as a user's CSV, and its posterior."""
+    """The bench's log of one noise draw, read back as a user's CSV, and its posterior.
+
+    ``bench["onset_column"]``: the bench's true landing instant written in an ``onset_s``
+    column (otherwise the reader takes the first loaded sample).
+    """
+    bench = dict(bench)
+    onset_column = bench.pop("onset_column", False)
     text, truth = simulate_rig(1, seed=seed, noise_rel=sigma_rel, specimens=[spec], **bench)
+    if onset_column:
+        text = (
+            "\n".join(
+                f"{row},onset_s" if k == 0 else f"{row},{truth['onset_s']!r}"
+                for k, row in enumerate(text.strip().splitlines())
+            )
+            + "\n"
+        )
     with tempfile.TemporaryDirectory() as folder:
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
     packed = SpecimenData.select(data, data.specimens[0])
@@ -152,7 +166,8 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
         The model whose likelihood is checked; the bench must simulate it (no hidden effect).
     **bench
         Keyword arguments of :func:`~fsrbayes.data.rigsim.simulate_rig` (reading, protocol,
-        ramp_s, duration_s, …).
+        ramp_s, duration_s, …), and ``onset_column=True`` to write the bench's landing instant
+        in an ``onset_s`` column.
     """
     if n_draws < 3:
         raise ValueError(f"n_draws must be >= 3, got {n_draws}")
@@ -196,9 +211,8 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
     )
     project = right_t.T / singular
     z = np.array([(d[0].T @ d[1]) @ project for d in draws])
-    expected = np.mean(
-        [np.sum((np.sqrt(d[2])[:, None] * d[0] @ project) ** 2, axis=0) for d in draws], axis=0
-    )
+    # each draw's information along the directions (its points' −h, which a count may hold < 0)
+    expected = np.mean([d[2] @ (d[0] @ project) ** 2 for d in draws], axis=0)
     g_sigma = np.array([d[3] for d in draws])
     sigma_information = np.mean([d[4] for d in draws])
     return ScoreCheck(
@@ -228,6 +242,9 @@ def main(argv=None):
     parser.add_argument("--rest-s", type=float, default=0.0, help="staircase: unloaded seconds")
     parser.add_argument("--ramp-s", type=float, default=0.0, help="loading ramp (a ramp_s column)")
     parser.add_argument("--duration-s", type=float, default=600.0, help="per weight (600)")
+    parser.add_argument(
+        "--onset-column", action="store_true", help="write the true landing in an onset_s column"
+    )
     args = parser.parse_args(argv)
     bench = {
         "reading": args.reading,
@@ -236,7 +253,10 @@ def main(argv=None):
         "ramp_s": args.ramp_s,
         "duration_s": args.duration_s,
     }
-    _, params = simulate_truth(args.seed, args.truth, **bench)
+    if args.onset_column:
+        bench["onset_column"] = True
+    drawn = {k: v for k, v in bench.items() if k != "onset_column"}
+    _, params = simulate_truth(args.seed, args.truth, **drawn)
     check = score_check(params, params["sigma_rel"], args.draws, **bench)
     print(check.summary())
 

@@ -16,7 +16,8 @@ import json
 
 import numpy as np
 
-from ..physics.sensor import load_of_steps, solve_current
+from ..physics.sensor import solve_current
+from ..physics.superposition import load_of_steps, ramped_load
 from ..utils import atomic_path
 from .readouts import STANDARD_GRAVITY
 from .sensors import load_sensor
@@ -67,8 +68,8 @@ def simulate_rig(
     ``weight_from_start`` the load column holds the first weight from the logger's first row, as
     when the experimenter writes the weight beside the log: only the reading shows the landing.
     ``ramp_s`` > 0 lets each test's first weight settle linearly over that many seconds (a
-    hand-placed weight; simulated as 400 equal steps) — one number for every test, or one per
-    test (each placement settles in its own time) — and writes a ``ramp_s`` column, unless
+    hand-placed weight; its creep exact, by the ramp compliance) — one number for every test, or
+    one per test (each placement settles in its own time) — and writes a ``ramp_s`` column, unless
     ``ramp_column`` is False: the ramps are then in the readings only, as in a log whose ramps
     nobody measured.
 
@@ -190,18 +191,15 @@ def simulate_rig(
                 if rest_s and k < len(grams) - 1:
                     step_at.append(starts[k] + held)
                     step_g.append(-g)
-            if ramp > 0:  # the first weight settles over the test's ramp
-                fine = 400
-                step_at = list(ramp * np.arange(fine) / fine) + step_at[1:]
-                step_g = [step_g[0] / fine] * fine + step_g[1:]
             area = sensor.area_m2
             load = np.array(step_g) * STANDARD_GRAVITY / 1000.0 / area
             t_on = np.maximum(since[on], 0.0)[None]
             steps = (np.array(step_at)[None], load[None])
+            # the first weight settles linearly over the test's ramp (0: lands at once)
+            first_ramp = np.array([[ramp]]) if ramp > 0 else None
             momentary = load_of_steps(*steps, t_on)
-            if ramp > 0:  # the load itself rises linearly; the creep follows the 400 steps
-                rising = t_on < ramp
-                momentary[rising] = load[:fine].sum() * np.maximum(t_on[rising] / ramp, 1e-3)
+            if first_ramp is not None:
+                momentary = ramped_load(momentary, load[0], ramp, t_on)
             current = solve_current(
                 params,
                 supply,
@@ -210,6 +208,7 @@ def simulate_rig(
                 effects=names,
                 extra_series=rm,
                 load_steps=steps,
+                first_ramp=first_ramp,
             ).current[0]
             vout = np.empty(since.size)
             vout[on] = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(on.sum()))

@@ -33,19 +33,16 @@ import numpy as np
 from scipy import special
 
 from ..data.creep import CreepData
-from ..physics.sensor import load_of_steps
+from ..physics.superposition import load_of_steps, ramped_load
 from ..utils import HALF_LOG_2PI
 from .counts import CountHistograms, count_log_likelihood
 from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
-    RAMP_STEPS,
     bin_log_time,
     is_rig_design,
     load_step_arrays,
     pack_rig,
-    ramp_load,
-    ramp_steps,
 )
 
 __all__ = [
@@ -98,7 +95,7 @@ class SpecimenData:
         test (padding: size 0); ``stress_Pa`` is then the first load. None: one step of
         ``stress_Pa`` at t = 0.
     ramp_s : ndarray, shape (C,), optional
-        Each test's loading ramp in s (its first :data:`RAMP_STEPS` steps stand for it).
+        Each test's loading ramp in s: its first load step rises linearly over it (0: a step).
     ramp_index : ndarray of int, shape (C,), optional
         Which sampled loading ramp (``ramp_s[k]`` of a fit with ``ramp="fitted"``) each row's
         first loading follows: its test's. None: row k follows ``ramp_s[k]``.
@@ -227,11 +224,21 @@ class SpecimenData:
         """
         return None if self.step_time is None else (self.step_time, self.step_size)
 
+    def first_ramps(self):
+        """Return each test's given loading ramp in s, shape (C, 1); None when no test has one.
+
+        For :func:`~fsrbayes.physics.sensor.solve_current`'s ``first_ramp``: the first load step
+        of each test rises linearly over it (0: a step).
+        """
+        if self.ramp_s is None or not np.any(self.ramp_s > 0):
+            return None
+        return np.asarray(self.ramp_s, dtype=float)[:, None]
+
     def load_at(self, time_s):
         """Return the momentary load in Pa of every test at ``time_s`` (C, T).
 
         The steps' load, with a loading ramp rising linearly from the onset
-        (:func:`~.packing.ramp_load`).
+        (:func:`~fsrbayes.physics.superposition.ramped_load`).
         """
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
@@ -239,28 +246,30 @@ class SpecimenData:
         if self.step_time is None:
             return np.broadcast_to(self.stress_Pa[:, None], time_s.shape)
         load = load_of_steps(self.step_time, self.step_size, time_s)
-        if self.ramp_s is not None:
-            for i in np.flatnonzero(self.ramp_s > 0):
-                weight = self.step_size[i, :RAMP_STEPS].sum()
-                load[i] = ramp_load(load[i], weight, self.ramp_s[i], time_s[i])
+        ramps = self.first_ramps()
+        if ramps is not None:
+            load = ramped_load(load, self.step_size[:, :1], ramps, time_s)
         return load
 
     def ramped(self, ramp_s, time_s):
-        """Load steps and momentary load with every test's first loading spread over ``ramp_s``.
+        """Load steps, momentary load and first ramps with every test's loading over ``ramp_s``.
 
         Sampled loading ramps, shape (W, C) — each parameter set's ramp of every test — or (W,)
-        for one ramp shared by the tests: each test's first load step becomes
-        :data:`RAMP_STEPS` equal steps at ramp_s·k/n for the creep, and the contact and area
-        laws see the load rise linearly — as a ramp given in the data (:meth:`load_at`).
+        for one ramp shared by the tests: each test's first load step rises linearly over its
+        ramp, in the creep (exactly, by the ramp compliance) and in the load the contact and
+        area laws see — as a ramp given in the data (:meth:`load_at`, :meth:`first_ramps`).
 
         Returns
         -------
-        (step_time, step_size) : ndarray, shapes (W, C, K) and (C, K)
+        (step_time, step_size) : ndarray, shape (C, K) each
             For :func:`~fsrbayes.physics.sensor.solve_current`'s ``load_steps``.
         load : ndarray, shape (W, C, T)
+        first_ramp : ndarray, shape (W, C, 1)
+            For its ``first_ramp``.
         """
         ramp = np.atleast_1d(np.asarray(ramp_s, dtype=float))
         ramp = ramp.reshape(ramp.shape[0], -1)
+        ramp = np.broadcast_to(ramp, (ramp.shape[0], self.n_tests))[..., None]
         time_s = np.broadcast_to(
             np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
         )
@@ -268,8 +277,8 @@ class SpecimenData:
             np.zeros((self.n_tests, 1)),
             self.stress_Pa[:, None].astype(float),
         )
-        load = ramp_load(load_of_steps(at, size, time_s), size[:, :1], ramp[..., None], time_s)
-        return ramp_steps(at, size, ramp), load
+        load = ramped_load(load_of_steps(at, size, time_s), size[:, :1], ramp, time_s)
+        return (at, size), load, ramp
 
     def take(self, tests, time_s):
         """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).

@@ -223,9 +223,6 @@ def segment_drifts(posterior, draws):
         at, size = data.step_time[i], data.step_size[i]
         t, y = data.time_s[i][data.mask[i]], data.log_current[i][data.mask[i]]
         loads = np.cumsum(size)
-        if data.ramp_s is not None and data.ramp_s[i] > 0:  # a ramp's steps are one loading
-            inside = (at > 0) & (at < data.ramp_s[i])
-            at, loads, size = at[~inside], loads[~inside], np.diff(np.append(0.0, loads[~inside]))
         ends = np.append(at[1:], np.inf)
         found = []
         for k in np.flatnonzero((size != 0) & (loads > 0)):

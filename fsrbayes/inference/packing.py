@@ -15,10 +15,6 @@ from .counts import CountHistograms, count_histograms
 __all__ = [
     "BINS_PER_DECADE",
     "MAX_RAW_SAMPLES",
-    "RAMP_FLOOR",
-    "RAMP_STEPS",
-    "ramp_load",
-    "ramp_steps",
     "bin_log_time",
     "bin_statistics",
     "is_rig_design",
@@ -85,55 +81,17 @@ def bin_statistics(time_s, log_current, labels):
     )
 
 
-RAMP_STEPS = 16
-"""Steps that stand for a loading ramp in the creep: each 1/16 of the load, at the start of its
-1/16."""
-
-RAMP_FLOOR = 1e-3
-"""The momentary load of a ramp is held at this share of the weight at least: at the very onset
-the linear rise is 0, where the contact law Rc ∝ σ^−α (eq. 5) diverges."""
-
-
-def ramp_steps(at, size, ramp_s):
-    """Return load steps (time, size) with the first loading spread over a ramp of ``ramp_s``.
-
-    A linear ramp is :data:`RAMP_STEPS` equal steps at ramp_s·k/n (k = 0 … n − 1): its strain
-    to first order in ramp_s/n, with a nonzero load from t = 0 on. ``at`` and ``size`` are
-    (..., K) with the first loading first; ``ramp_s`` broadcasts against their leading axes (a
-    ramp per parameter set: (W, 1) against (C, K) gives step times (W, C, n + K − 1)).
-    """
-    rising = np.asarray(ramp_s, dtype=float)[..., None] * (np.arange(RAMP_STEPS) / RAMP_STEPS)
-    later = at[..., 1:]
-    lead = np.broadcast_shapes(rising.shape[:-1], later.shape[:-1])
-    parts = [np.broadcast_to(a, lead + a.shape[-1:]) for a in (rising, later)]
-    times = np.concatenate(parts, axis=-1)
-    parts = np.repeat(size[..., :1] / RAMP_STEPS, RAMP_STEPS, axis=-1)
-    return times, np.concatenate([parts, size[..., 1:]], axis=-1)
-
-
-def ramp_load(load, weight, ramp_s, time_s):
-    """Return the momentary ``load`` with the first loading rising linearly over ``ramp_s``.
-
-    Before ``ramp_s`` the load is ``weight``·t/ramp_s, held at :data:`RAMP_FLOOR` of it at least;
-    all arguments broadcast.
-    """
-    share = np.clip(time_s / ramp_s, RAMP_FLOOR, 1.0)
-    return np.where(time_s < ramp_s, weight * share, load)
-
-
 def _history(test):
-    """Return a test's load steps, its first loading spread over its ramp (``ramp_s``)."""
-    at, size = test.load_steps or (np.zeros(1), np.array([test.stress_Pa]))
-    if test.ramp_s <= 0:
-        return at, size
-    return ramp_steps(at, size, test.ramp_s)
+    """Return a test's load steps: its own, or the single step (0, ``stress_Pa``)."""
+    return test.load_steps or (np.zeros(1), np.array([test.stress_Pa]))
 
 
 def load_step_arrays(tests):
     """Return (step_time, step_size), each (C, K), of tests whose load changes; None if none does.
 
-    A test holding one load is the single step (0, ``stress_Pa``); a loading ramp (``ramp_s``)
-    becomes :data:`RAMP_STEPS` steps; padding steps have size 0.
+    A test holding one load is the single step (0, ``stress_Pa``) — also one whose first loading
+    rises over a ramp (``ramp_s``: the step's ramp, exact in the forward model); padding steps
+    have size 0.
     """
     if all(t.load_steps is None and t.ramp_s <= 0 for t in tests):
         return None
@@ -148,20 +106,31 @@ def load_step_arrays(tests):
 def _bin_labels(test, bins_per_decade):
     """Bins of a test: log-spaced within each constant-load segment, in time since its step.
 
+    A loading ramp's samples (``ramp_s``: the first ``ramp_s`` seconds) keep a bin each: the
+    load rises under them and the current with it, far from straight across a log-spaced bin,
+    and the ramp's end would fall inside one. The first segment's bins start after the ramp.
+
     Returns (labels, since) — every sample's bin (:func:`log_time_bins`, numbered through the
     test) and the time its segment started.
     """
-    if test.load_steps is None:
+    if test.load_steps is None and test.ramp_s <= 0:
         return log_time_bins(test.time_s, bins_per_decade), np.zeros(test.time_s.size)
-    edges = np.append(test.load_steps[0], np.inf)
+    starts = np.zeros(1) if test.load_steps is None else test.load_steps[0]
+    edges = np.append(starts, np.inf)
     labels, since = np.zeros(test.time_s.size, dtype=int), np.zeros(test.time_s.size)
     first = 0
-    for start, end in zip(edges[:-1], edges[1:], strict=True):
-        inside = (test.time_s >= start) & (test.time_s < end)
-        if inside.any():
-            labels[inside] = first + log_time_bins(test.time_s[inside] - start, bins_per_decade)
-            since[inside] = start
-            first = labels[inside][-1] + 1
+    for k, (start, end) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
+        inside = np.flatnonzero((test.time_s >= start) & (test.time_s < end))
+        if not inside.size:
+            continue
+        t = test.time_s[inside] - start
+        rising = t < test.ramp_s if k == 0 else np.zeros(t.size, dtype=bool)
+        segment = np.arange(t.size)
+        if not rising.all():
+            segment[~rising] = rising.sum() + log_time_bins(t[~rising], bins_per_decade)
+        labels[inside] = first + segment
+        since[inside] = start
+        first = labels[inside][-1] + 1
     return labels, since
 
 

@@ -251,10 +251,10 @@ class LogPosterior(PriorScaledTarget):
         params = {name: x[:, i, None, None] for i, name in enumerate(self.names)}
         params.update(self.fixed)  # scalars broadcast against every walker
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
-        steps = self.data.load_steps()
+        steps, first_ramp = self.data.load_steps(), self.data.first_ramps()
         if self._ramps:  # sampled ramps: each row's test's
             ramps = x[:, self._ramps][:, self.data.ramp_rows()]
-            steps, load = self.data.ramped(ramps, time)
+            steps, load, first_ramp = self.data.ramped(ramps, time)
         else:
             load = self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time)
         solution = solve_current(
@@ -267,6 +267,7 @@ class LogPosterior(PriorScaledTarget):
             effects=self.effect_objects,
             extra_series=0.0 if self.data.extra_series is None else self.data.series()[:, None],
             load_steps=steps,
+            first_ramp=first_ramp,
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)

@@ -16,6 +16,7 @@ from . import (
     peers,
     rheology,
     solver,
+    superposition,
     tunneling,
 )
 from .circuits import (
@@ -51,6 +52,7 @@ __all__ = [
     "peers",
     "rheology",
     "solver",
+    "superposition",
     "tunneling",
     "contact_resistance",
     "effective_area",

@@ -103,6 +103,10 @@ class Effect:
         """Return the creep strain added under a stress history (None: none)."""
         return None
 
+    def extra_ramp_strain(self, params, rate, time):
+        """Creep strain added by a stress rising at ``rate`` (Pa/s) from t = 0 (None: none)."""
+        return None
+
     def adjust_state(self, params, area, series, creep_strain, time):
         """Tunneling area and series resistance at the creep strain Δε = ε − σ/k1 and time t."""
         return area, series
@@ -134,8 +138,16 @@ class PowerLawCreep(Effect):
         return params["plc_psi"] * np.asarray(stress, dtype=float) * t ** params["plc_n"]
 
     def extra_strain_history(self, params, history, time):
-        power_law = {"k1": np.inf, "psi": params["plc_psi"], "n": params["plc_n"]}
-        return NUTTING.strain_history(history, time, power_law)
+        return NUTTING.strain_history(history, time, self._power_law(params))
+
+    def extra_ramp_strain(self, params, rate, time):
+        return np.asarray(rate, dtype=float) * NUTTING.ramp_compliance(
+            time, self._power_law(params)
+        )
+
+    @staticmethod
+    def _power_law(params):
+        return {"k1": np.inf, "psi": params["plc_psi"], "n": params["plc_n"]}
 
 
 class VoltageDegradation(Effect):
@@ -245,6 +257,9 @@ class ExtraCreep(Effect):
 
     def extra_strain_history(self, params, history, time):
         return self.law.strain_history(history, time, params)
+
+    def extra_ramp_strain(self, params, rate, time):
+        return np.asarray(rate, dtype=float) * self.law.ramp_compliance(time, params)
 
 
 class SecondKelvin(ExtraCreep):

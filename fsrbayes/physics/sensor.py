@@ -21,6 +21,7 @@ from .contact import contact_resistance, effective_area, gap
 from .effects import resolve_effects
 from .models import PeerModel, model_family
 from .solver import solve_bulk
+from .superposition import load_of_steps, ramped_load, strain_of_steps
 from .tunneling import TUNNELING_LAWS
 
 __all__ = [
@@ -28,8 +29,6 @@ __all__ = [
     "DomainWarning",
     "sensor_state",
     "solve_current",
-    "strain_of_steps",
-    "load_of_steps",
     "current",
     "drift",
     "current_history",
@@ -189,45 +188,6 @@ def _strain_step(params, stress, time, family, effects=()):
     return strain
 
 
-def strain_of_steps(params, step_time, step_size, time, family, effects=()):
-    """Strain under a load that changes in steps, by Boltzmann superposition (eq. 15).
-
-    ε(t) = Σ_k Δσ_k·J(t − τ_k), plus each effect's extra creep strain for the same steps (every
-    catalogue strain effect is linear in the stress). J is 0 before its step.
-
-    Parameters
-    ----------
-    params : mapping
-        Parameters, broadcasting with ``time`` (e.g. (W, 1, 1) against (C, T)).
-    step_time, step_size : ndarray, shape (C, K)
-        Time (s) and size (Pa, signed) of each test's load steps; padding steps have size 0.
-        Either may carry leading axes that broadcast with the parameters' (a sampled loading
-        ramp: step times (W, C, K)).
-    time : ndarray, shape (C, T)
-
-    Returns
-    -------
-    ndarray
-    """
-    law = _creep_law(family)
-    strain = 0.0
-    for k in range(step_time.shape[-1]):
-        since = time - step_time[..., k : k + 1]
-        size = step_size[..., k : k + 1]
-        strain = strain + law.creep_strain(size, since, params)
-        for effect in effects:
-            extra = effect.extra_strain(params, size, since)
-            if extra is not None:
-                strain = strain + extra
-    return strain
-
-
-def load_of_steps(step_time, step_size, time):
-    """Return the momentary stress Σ_k Δσ_k·[t ≥ τ_k] of step loads, shaped like ``time``."""
-    on = time[..., None] >= step_time[..., None, :]
-    return np.sum(step_size[..., None, :] * on, axis=-1)
-
-
 def solve_current(
     params,
     voltage,
@@ -239,6 +199,7 @@ def solve_current(
     effects=(),
     extra_series=0.0,
     load_steps=None,
+    first_ramp=None,
 ):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
@@ -247,8 +208,10 @@ def solve_current(
     series with the sensor (a divider's fixed resistor; ``voltage`` is then the supply).
     ``load_steps`` = (step_time, step_size), each (C, K), replaces the single step by a load
     that changes in steps (a staircase, an unloading): the strain follows by superposition
-    (:func:`strain_of_steps`) and the contact and area laws see the momentary load ``stress``
-    (C, T), by default the steps' own (:func:`load_of_steps`); ``time`` must then be (C, T).
+    (:mod:`~.superposition`) and the contact and area laws see the momentary load ``stress``
+    (C, T), by default the steps' own; ``time`` must then be (C, T). ``first_ramp`` (s,
+    broadcasting with ``step_time[..., :1]``) lets each test's first step rise linearly over
+    that time, exactly, in the strain and in the default momentary load.
 
     Returns
     -------
@@ -268,9 +231,14 @@ def solve_current(
         time = np.broadcast_to(
             np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1])
         )
-        strain = strain_of_steps(params, step_time, step_size, time, family, effects)
+        strain = strain_of_steps(
+            params, step_time, step_size, time, _creep_law(family), effects, first_ramp=first_ramp
+        )
         if stress is None:
             stress = load_of_steps(step_time, step_size, time)
+            if first_ramp is not None:
+                weight = step_size[..., :1]
+                stress = ramped_load(stress, weight, first_ramp, time - step_time[..., :1])
     return _solve_model(
         params, voltage, stress, strain, family, tunneling, effects, time, extra_series
     )

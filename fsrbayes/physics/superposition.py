@@ -1,0 +1,104 @@
+"""Boltzmann superposition of load steps and a first loading ramp, vectorised over walkers.
+
+A rig's load changes within a test in steps (a staircase, an unloading, a reloading) and its
+first weight may settle over a fraction of a second: the creep strain is the superposition of
+the creep law's step responses J(t − τ_k), with the first loading's exactly integrated over its
+linear rise (the ramp compliance Ĵ = ∫J), and the contact and area laws see the momentary load.
+
+References
+----------
+Paper eq. (15) (the linear constitutive law whose solution superposition is).
+"""
+
+import numpy as np
+
+__all__ = ["RAMP_FLOOR", "load_of_steps", "ramped_load", "strain_of_steps"]
+
+RAMP_FLOOR = 1e-3
+"""The momentary load of a ramp is held at this share of the weight at least: at the very onset
+the linear rise is 0, where the contact law Rc ∝ σ^−α (eq. 5) diverges."""
+
+
+def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_ramp=None):
+    """Strain under a load that changes in steps, by Boltzmann superposition (eq. 15).
+
+    ε(t) = Σ_k Δσ_k·J(t − τ_k), plus each effect's extra creep strain for the same steps (every
+    catalogue strain effect is linear in the stress). J is 0 before its step. With
+    ``first_ramp`` = r > 0 the first step rises linearly over r seconds instead — a hand-placed
+    weight settling — and contributes exactly (Δσ_0/r)·[Ĵ(t − τ_0) − Ĵ(t − τ_0 − r)], Ĵ = ∫J
+    the law's ramp compliance.
+
+    Parameters
+    ----------
+    params : mapping
+        Parameters, broadcasting with ``time`` (e.g. (W, 1, 1) against (C, T)).
+    step_time, step_size : ndarray, shape (C, K)
+        Time (s) and size (Pa, signed) of each test's load steps; padding steps have size 0.
+        Either may carry leading axes that broadcast with the parameters'.
+    time : ndarray, shape (C, T)
+    law : CreepLaw
+        The creep law (:mod:`~fsrbayes.physics.rheology`).
+    effects : sequence of Effect
+        Catalogue effects whose extra creep strain adds (:mod:`~fsrbayes.physics.effects`).
+    first_ramp : ndarray, optional
+        Duration in s over which each test's first step rises, shape broadcasting with
+        ``step_time[..., :1]`` (e.g. (C, 1), or (W, C, 1) for sampled ramps); 0: a step.
+
+    Returns
+    -------
+    ndarray
+    """
+    strain = 0.0
+    for k in range(step_time.shape[-1]):
+        since = time - step_time[..., k : k + 1]
+        size = step_size[..., k : k + 1]
+        if k == 0 and first_ramp is not None:
+            strain = strain + _ramp_strain(law, effects, params, size, since, first_ramp)
+        else:
+            strain = strain + _step_strain(law, effects, params, size, since)
+    return strain
+
+
+def _step_strain(law, effects, params, size, since):
+    """Strain of a load step ``size`` at since = 0, the effects' extra creep included."""
+    strain = law.creep_strain(size, since, params)
+    for effect in effects:
+        extra = effect.extra_strain(params, size, since)
+        if extra is not None:
+            strain = strain + extra
+    return strain
+
+
+def _ramp_strain(law, effects, params, size, since, ramp_s):
+    """Strain of a load ``size`` rising linearly over ``ramp_s`` from since = 0; a step where 0."""
+    ramp_s = np.asarray(ramp_s, dtype=float)
+    rising = ramp_s > 0
+    width = np.where(rising, ramp_s, 1.0)
+    rate = size / width
+    strain = rate * (
+        law.ramp_compliance(since, params) - law.ramp_compliance(since - width, params)
+    )
+    for effect in effects:
+        extra = effect.extra_ramp_strain(params, rate, since)
+        if extra is not None:
+            strain = strain + extra - effect.extra_ramp_strain(params, rate, since - width)
+    if rising.all():
+        return strain
+    return np.where(rising, strain, _step_strain(law, effects, params, size, since))
+
+
+def load_of_steps(step_time, step_size, time):
+    """Return the momentary stress Σ_k Δσ_k·[t ≥ τ_k] of step loads, shaped like ``time``."""
+    on = time[..., None] >= step_time[..., None, :]
+    return np.sum(step_size[..., None, :] * on, axis=-1)
+
+
+def ramped_load(load, weight, ramp_s, time_s):
+    """Return the momentary ``load`` with a first loading ``weight`` rising over ``ramp_s``.
+
+    Before ``ramp_s`` (s since the onset) the load is ``weight``·t/ramp_s, held at
+    :data:`RAMP_FLOOR` of it at least; all arguments broadcast.
+    """
+    ramp_s = np.asarray(ramp_s, dtype=float)
+    share = np.clip(time_s / np.where(ramp_s > 0, ramp_s, 1.0), RAMP_FLOOR, 1.0)
+    return np.where(time_s < ramp_s, weight * share, load)
