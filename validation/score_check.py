@@ -234,6 +234,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m validation.score_check")
     parser.add_argument("--draws", type=int, default=200, help="noise draws (200)")
     parser.add_argument("--seed", type=int, default=0, help="the truth's seed (0)")
+    parser.add_argument("--first-noise-seed", type=int, default=10_000, help="(10000)")
     parser.add_argument("--truth", choices=("population", "prior"), default="population")
     parser.add_argument(
         "--reading", default="adc_counts", help="adc_counts, vout_V, resistance_ohm or …_kohm"
@@ -257,7 +258,9 @@ def main(argv=None):
         bench["onset_column"] = True
     drawn = {k: v for k, v in bench.items() if k != "onset_column"}
     _, params = simulate_truth(args.seed, args.truth, **drawn)
-    check = score_check(params, params["sigma_rel"], args.draws, **bench)
+    check = score_check(
+        params, params["sigma_rel"], args.draws, first_seed=args.first_noise_seed, **bench
+    )
     print(check.summary())
 
 
