@@ -222,6 +222,12 @@ class CreepData:
                     f"    loading ramps of {', '.join(f'{r:g}' for r in ramps)} s (ramp_s) in "
                     f"{sum(t.ramp_s > 0 for t in sub)} test(s)"
                 )
+                unknown = sum(t.ramp_s > 0 and t.onset_source != "onset_s" for t in sub)
+                if unknown:
+                    lines.append(
+                        f"    in {unknown} of them the landing is the first loaded row, known only "
+                        "to one sample, which a ramp makes matter: give it in onset_s"
+                    )
             for t in sub:
                 if t.load_steps is not None:
                     loads = np.cumsum(t.load_steps[1])
