@@ -459,3 +459,29 @@ def test_a_ramp_whose_landing_is_not_given_is_pointed_out(tmp_path):
     given, _ = _hidden_ramp(tmp_path, 0.3, column=True, name="given.csv")
     assert given.tests[0].onset_source == "onset_s"
     assert "first loaded row" not in given.summary()
+
+
+def test_an_effect_without_a_ramp_response_is_refused_under_a_ramp():
+    # an extension that adds creep strain after a step but says nothing of a ramp would drop
+    # its strain from a ramped first loading: refused by name instead
+    from fsrbayes.physics.effects import Effect
+
+    class StepOnly(Effect):
+        def extra_strain(self, params, stress, time):
+            return 1e-9 * np.asarray(stress) * np.maximum(time, 0.0)
+
+    effect = StepOnly("step-only", (), {}, "toy")
+    params = dict(load_sensor("a201").params)
+    steps = (np.zeros((1, 1)), np.full((1, 1), 1e5))
+    t = np.linspace(0.01, 10.0, 5)[None]
+    assert solve_current(params, 1.0, None, t, load_steps=steps, effects=[effect]).valid.all()
+    with pytest.raises(ValueError, match="'step-only' .* no extra_ramp_strain"):
+        solve_current(
+            params,
+            1.0,
+            None,
+            t,
+            load_steps=steps,
+            first_ramp=np.full((1, 1), 0.3),
+            effects=[effect],
+        )

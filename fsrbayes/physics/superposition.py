@@ -80,8 +80,14 @@ def _ramp_strain(law, effects, params, size, since, ramp_s):
     )
     for effect in effects:
         extra = effect.extra_ramp_strain(params, rate, since)
-        if extra is not None:
-            strain = strain + extra - effect.extra_ramp_strain(params, rate, since - width)
+        if extra is None:
+            if effect.extra_strain(params, size, since) is not None:
+                raise ValueError(
+                    f"effect {effect.name!r} adds creep strain after a step (extra_strain) but "
+                    "defines no extra_ramp_strain, which a loading ramp needs"
+                )
+            continue
+        strain = strain + extra - effect.extra_ramp_strain(params, rate, since - width)
     if rising.all():
         return strain
     return np.where(rising, strain, _step_strain(law, effects, params, size, since))
