@@ -17,7 +17,6 @@ import json
 import numpy as np
 
 from ..physics.sensor import solve_current
-from ..physics.superposition import load_of_steps, ramped_load
 from ..utils import atomic_path
 from .readouts import STANDARD_GRAVITY
 from .sensors import load_sensor
@@ -195,20 +194,17 @@ def simulate_rig(
             load = np.array(step_g) * STANDARD_GRAVITY / 1000.0 / area
             t_on = np.maximum(since[on], 0.0)[None]
             steps = (np.array(step_at)[None], load[None])
-            # the first weight settles linearly over the test's ramp (0: lands at once)
-            first_ramp = np.array([[ramp]]) if ramp > 0 else None
-            momentary = load_of_steps(*steps, t_on)
-            if first_ramp is not None:
-                momentary = ramped_load(momentary, load[0], ramp, t_on)
+            # the first weight settles linearly over the test's ramp (0: lands at once); the
+            # contact and area laws see the steps' momentary load, rising with the ramp
             current = solve_current(
                 params,
                 supply,
-                momentary,
+                None,
                 t_on,
                 effects=names,
                 extra_series=rm,
                 load_steps=steps,
-                first_ramp=first_ramp,
+                first_ramp=np.array([[ramp]]) if ramp > 0 else None,
             ).current[0]
             vout = np.empty(since.size)
             vout[on] = current * rm * np.exp(setup["noise_rel"] * rng.standard_normal(on.sum()))

@@ -251,34 +251,29 @@ class SpecimenData:
             load = ramped_load(load, self.step_size[:, :1], ramps, time_s)
         return load
 
-    def ramped(self, ramp_s, time_s):
-        """Load steps, momentary load and first ramps with every test's loading over ``ramp_s``.
+    def ramped(self, ramp_s):
+        """Load steps and first ramps with every test's first loading rising over ``ramp_s``.
 
         Sampled loading ramps, shape (W, C) — each parameter set's ramp of every test — or (W,)
         for one ramp shared by the tests: each test's first load step rises linearly over its
-        ramp, in the creep (exactly, by the ramp compliance) and in the load the contact and
-        area laws see — as a ramp given in the data (:meth:`load_at`, :meth:`first_ramps`).
+        ramp, in the creep (exactly, by the ramp compliance) and in the momentary load the
+        contact and area laws see — as a ramp given in the data (:meth:`first_ramps`).
 
         Returns
         -------
         (step_time, step_size) : ndarray, shape (C, K) each
             For :func:`~fsrbayes.physics.sensor.solve_current`'s ``load_steps``.
-        load : ndarray, shape (W, C, T)
         first_ramp : ndarray, shape (W, C, 1)
             For its ``first_ramp``.
         """
         ramp = np.atleast_1d(np.asarray(ramp_s, dtype=float))
         ramp = ramp.reshape(ramp.shape[0], -1)
         ramp = np.broadcast_to(ramp, (ramp.shape[0], self.n_tests))[..., None]
-        time_s = np.broadcast_to(
-            np.asarray(time_s, dtype=float), (self.n_tests, np.shape(time_s)[-1])
-        )
-        at, size = self.load_steps() or (
+        steps = self.load_steps() or (
             np.zeros((self.n_tests, 1)),
             self.stress_Pa[:, None].astype(float),
         )
-        load = ramped_load(load_of_steps(at, size, time_s), size[:, :1], ramp, time_s)
-        return (at, size), load, ramp
+        return steps, ramp
 
     def take(self, tests, time_s):
         """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).

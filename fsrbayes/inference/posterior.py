@@ -254,13 +254,12 @@ class LogPosterior(PriorScaledTarget):
         steps, first_ramp = self.data.load_steps(), self.data.first_ramps()
         if self._ramps:  # sampled ramps: each row's test's
             ramps = x[:, self._ramps][:, self.data.ramp_rows()]
-            steps, load, first_ramp = self.data.ramped(ramps, time)
-        else:
-            load = self.data.stress_Pa[:, None] if steps is None else self.data.load_at(time)
+            steps, first_ramp = self.data.ramped(ramps)
         solution = solve_current(
             params,
             self.data.voltage_V[:, None],
-            load,
+            # a load that changes: the steps' momentary load (solve_current's, with the ramps)
+            self.data.stress_Pa[:, None] if steps is None else None,
             time,
             rheology=self.family,
             tunneling=self.tunneling,

@@ -21,7 +21,7 @@ from .contact import contact_resistance, effective_area, gap
 from .effects import resolve_effects
 from .models import PeerModel, model_family
 from .solver import solve_bulk
-from .superposition import load_of_steps, ramped_load, strain_of_steps
+from .superposition import load_of_steps, ramped_load, step_strain, strain_of_steps
 from .tunneling import TUNNELING_LAWS
 
 __all__ = [
@@ -180,12 +180,7 @@ def _strain_step(params, stress, time, family, effects=()):
     stress = np.asarray(stress, dtype=float)
     if np.any(stress <= 0) and not np.any(np.asarray(params.get("sigma0", 0.0)) > 0):
         raise ValueError(f"stress must be > 0 Pa, got min {stress.min():g} Pa")
-    strain = _creep_law(family).creep_strain(stress, time, params)
-    for effect in effects:
-        extra = effect.extra_strain(params, stress, time)
-        if extra is not None:
-            strain = strain + extra
-    return strain
+    return step_strain(_creep_law(family), effects, params, stress, time)
 
 
 def solve_current(

@@ -12,7 +12,7 @@ Paper eq. (15) (the linear constitutive law whose solution superposition is).
 
 import numpy as np
 
-__all__ = ["RAMP_FLOOR", "load_of_steps", "ramped_load", "strain_of_steps"]
+__all__ = ["RAMP_FLOOR", "load_of_steps", "ramped_load", "step_strain", "strain_of_steps"]
 
 RAMP_FLOOR = 1e-3
 """The momentary load of a ramp is held at this share of the weight at least: at the very onset
@@ -55,12 +55,16 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
         if k == 0 and first_ramp is not None:
             strain = strain + _ramp_strain(law, effects, params, size, since, first_ramp)
         else:
-            strain = strain + _step_strain(law, effects, params, size, since)
+            strain = strain + step_strain(law, effects, params, size, since)
     return strain
 
 
-def _step_strain(law, effects, params, size, since):
-    """Strain of a load step ``size`` at since = 0, the effects' extra creep included."""
+def step_strain(law, effects, params, size, since):
+    """Strain of a load step ``size`` at since = 0, the effects' extra creep included.
+
+    ``law`` is a :class:`~fsrbayes.physics.rheology.CreepLaw`, ``effects`` catalogue effects
+    (their ``extra_strain``); everything broadcasts.
+    """
     strain = law.creep_strain(size, since, params)
     for effect in effects:
         extra = effect.extra_strain(params, size, since)
@@ -90,7 +94,7 @@ def _ramp_strain(law, effects, params, size, since, ramp_s):
         strain = strain + extra - effect.extra_ramp_strain(params, rate, since - width)
     if rising.all():
         return strain
-    return np.where(rising, strain, _step_strain(law, effects, params, size, since))
+    return np.where(rising, strain, step_strain(law, effects, params, size, since))
 
 
 def load_of_steps(step_time, step_size, time):
