@@ -186,11 +186,13 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
 
     e = STEP_LOG
     draws = []  # per draw: (jacobian, g, −h, score of log σ, its −second derivative)
+    alike = []  # whether each draw was packed into the first draw's points
     for k in range(n_draws):
         posterior = (
             first if k == 0 else _bench_posterior(spec, sigma_rel, first_seed + k, model, bench)
         )
         same = k > 0 and np.array_equal(posterior.data.mask, first.data.mask)
+        alike.append(k == 0 or same)
         by_model = _pointwise(posterior, x, [e, -e, 0.0], np.zeros(3))
         by_sigma = _pointwise(posterior, x, np.zeros(2), [e, -e]).sum(axis=1)
         draws.append(
@@ -202,7 +204,7 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
                 -(by_sigma[0] + by_sigma[1] - 2 * by_model[2].sum()) / e**2,
             )
         )
-    like_first = [d for d in draws if d[1].size == draws[0][1].size and d[0] is draws[0][0]]
+    like_first = [d for d, packed_alike in zip(draws, alike, strict=True) if packed_alike]
     g_first = np.array([d[1] for d in like_first])
     information = np.mean([d[2] for d in like_first], axis=0)
     # the directions the first draw's data inform; every draw's score projected on them
