@@ -1,9 +1,10 @@
 """Is a rig's likelihood the bench's? The score at the true parameters, over many noise draws.
 
 The likelihood of a rig log is built from packed data — log-spaced bins of a 100 Hz log, each
-bin's count histogram or sufficient statistics, the landing taken at the first loaded sample —
-while the virtual test bench writes every sample from the forward model, rounds it as the ADC
-would and prints it as a logger does. Whether the two agree is checked here without any fit.
+bin's count histogram or sufficient statistics, the landing at the first loaded sample (under a
+ramp, sampled in the interval before it: the bench's own is used here) — while the virtual test
+bench writes every sample from the forward model, rounds it as the ADC would and prints it as a
+logger does. Whether the two agree is checked here without any fit.
 For a fixed specimen and many noise draws of the same rig, let m_p be the log model current at
 observed point p (a bin, or one sample) and g_p = ∂ log L_p/∂m_p at the truth. If the
 likelihood is the data's distribution, then at every point
@@ -41,7 +42,7 @@ from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
-from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.posterior import LogPosterior, is_landing, landing_names
 
 from .rig_coverage import simulate_truth
 
@@ -141,7 +142,16 @@ def _bench_posterior(spec, sigma_rel, seed, model, bench):
     with tempfile.TemporaryDirectory() as folder:
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
     packed = SpecimenData.select(data, data.specimens[0])
-    return LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model)
+    posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model)
+    # where the bench's onset lies in each test's interval before its first loaded row
+    landings = {
+        name: (test.onset_s - truth["onset_s"]) / test.onset_window_s
+        if test.onset_window_s > 0
+        else 0.5  # an onset known: the landing moves nothing
+        for name, test in zip(landing_names(len(data.tests)), data.tests, strict=True)
+        if name in posterior.names
+    }
+    return posterior, landings
 
 
 def _pointwise(posterior, x, log_shift, log_sigma_shift):
@@ -172,10 +182,11 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
     if n_draws < 3:
         raise ValueError(f"n_draws must be >= 3, got {n_draws}")
     spec = {k: v for k, v in params.items() if k != "sigma_rel"}
-    first = _bench_posterior(spec, sigma_rel, first_seed, model, bench)
-    names = tuple(n for n in first.names if n != "sigma_rel")
+    first, landings = _bench_posterior(spec, sigma_rel, first_seed, model, bench)
+    # the landings (a ramp's onset known to a sample) are the bench's own, draw by draw
+    names = tuple(n for n in first.names if n != "sigma_rel" and not is_landing(n))
     truth = {**spec, "sigma_rel": sigma_rel}
-    x = np.array([[truth[n] for n in first.names]])
+    x = np.array([[{**truth, **landings}[n] for n in first.names]])
     u = first.prior.to_unconstrained(x)[0]
     steps = np.eye(u.size)[[first.names.index(n) for n in names]] * STEP_U
     shifted = first.prior.from_unconstrained(np.vstack([u + steps, u - steps]))[0]
@@ -188,9 +199,14 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
     draws = []  # per draw: (jacobian, g, −h, score of log σ, its −second derivative)
     alike = []  # whether each draw was packed into the first draw's points
     for k in range(n_draws):
-        posterior = (
-            first if k == 0 else _bench_posterior(spec, sigma_rel, first_seed + k, model, bench)
-        )
+        if k:
+            posterior, landings = _bench_posterior(spec, sigma_rel, first_seed + k, model, bench)
+            x = np.array([[{**truth, **landings}[n] for n in first.names]])
+            shifted[:, [first.names.index(n) for n in landings]] = x[0, :][
+                [first.names.index(n) for n in landings]
+            ]
+        else:
+            posterior = first
         same = k > 0 and np.array_equal(posterior.data.mask, first.data.mask)
         alike.append(k == 0 or same)
         by_model = _pointwise(posterior, x, [e, -e, 0.0], np.zeros(3))

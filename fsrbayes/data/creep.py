@@ -95,6 +95,10 @@ class CreepTest:
     column, or the reading's jump (``reading``) when the load is written on every row."""
     ramp_s: float = field(default=0.0, compare=False, repr=False)
     """Seconds the first loading takes, rising linearly from the onset (0: a step)."""
+    onset_window_s: float = field(default=0.0, compare=False, repr=False)
+    """How long before the first loaded sample the load may have begun: the interval from the
+    last unloaded sample when the onset is the first loaded row (``load`` or ``reading``); 0
+    when the ``onset_s`` column gives it or no sample precedes it."""
 
     @property
     def key(self):
@@ -222,11 +226,12 @@ class CreepData:
                     f"    loading ramps of {', '.join(f'{r:g}' for r in ramps)} s (ramp_s) in "
                     f"{sum(t.ramp_s > 0 for t in sub)} test(s)"
                 )
-                unknown = sum(t.ramp_s > 0 and t.onset_source != "onset_s" for t in sub)
+                unknown = sum(t.ramp_s > 0 and t.onset_window_s > 0 for t in sub)
                 if unknown:
                     lines.append(
-                        f"    in {unknown} of them the landing is the first loaded row, known only "
-                        "to one sample, which a ramp makes matter: give it in onset_s"
+                        f"    in {unknown} of them the onset is known to one sample interval (the "
+                        "first loaded row): the fit samples where in it the load began "
+                        "(landing[k]); an onset_s column pins it"
                     )
             for t in sub:
                 if t.load_steps is not None:

@@ -232,6 +232,7 @@ def rig_tests(
                 )
         else:
             t_on = float(t[first])
+        window = float(t[first] - t[first - 1]) if onset is None and first > 0 else 0.0
         keep = idx[first:][loaded[first:]]  # unloaded rows after the onset carry no reading
         steps = None
         if changes.size:
@@ -254,9 +255,10 @@ def rig_tests(
                     "ramp_s",
                 )
 
-        if required:  # a weight still settling: its first rows may read an open circuit
-            before = keep if not changes.size else keep[keep < idx[changes[0]]]
-            keep = keep[_settling(raw, before, renamed_reading, readout, decimal_comma) :]
+        # a weight still settling: its first rows may read an open circuit (in a protocol too;
+        # its empty readings are not one)
+        before = keep if not changes.size else keep[keep < idx[changes[0]]]
+        keep = keep[_settling(raw, before, renamed_reading, readout, decimal_comma) :]
         if keep.size < 3:
             raise DataError(
                 f"{what} has {keep.size} loaded sample(s); a creep test needs at least 3",
@@ -284,6 +286,7 @@ def rig_tests(
                 steps,
                 onset_from,
                 ramp_s,
+                window,
             )
         )
     return tuple(tests)

@@ -21,10 +21,15 @@ __all__ = ["RIG_PRIORS", "Sensor", "load_sensor", "available_sensors", "models_d
 
 REQUIRED_SENSOR_KEYS = ("name", "description", "area_m2")
 
-RIG_PRIORS = {"ramp_s": {"dist": "lognormal", "median": 0.2, "sigma": 1.5}}
+RIG_PRIORS = {
+    "ramp_s": {"dist": "lognormal", "median": 0.2, "sigma": 1.5},
+    "landing": {"dist": "uniform", "lower": 0.0, "upper": 1.0},
+}
 """Priors of the rig's nuisance parameters, for sensor files that give none: the loading ramp of
 a hand-placed dead weight (median 0.2 s, 90 % between 0.017 and 2.4 s), sampled only when a fit
-asks for it (``fit(..., ramp="fitted")``)."""
+asks for it (``fit(..., ramp="fitted")``); where in the sample interval before the first loaded
+row the load began (uniform: the logger's clock knows nothing of the weight), sampled when a
+ramp makes it matter."""
 
 
 def models_directory():

@@ -97,8 +97,14 @@ class SpecimenData:
     ramp_s : ndarray, shape (C,), optional
         Each test's loading ramp in s: its first load step rises linearly over it (0: a step).
     ramp_index : ndarray of int, shape (C,), optional
-        Which sampled loading ramp (``ramp_s[k]`` of a fit with ``ramp="fitted"``) each row's
-        first loading follows: its test's. None: row k follows ``ramp_s[k]``.
+        Which sampled loading ramp (``ramp_s[k]`` of a fit with ``ramp="fitted"``) and landing
+        (``landing[k]``) each row's first loading follows: its test's. None: row k follows
+        ``ramp_s[k]`` and ``landing[k]``.
+    onset_window : ndarray, shape (C,), optional
+        How long before t = 0 (the first loaded sample) each test's load may have begun: the
+        interval from the last unloaded sample when the onset was not given (0: known). A
+        loading ramp makes that lag matter; the posterior then samples where in the interval
+        the load began (``landing[k]``). None: every onset known.
     counts : CountHistograms, optional
         The whole-count readings of quantised tests, per observed point (their likelihood is
         the count's probability). None: every reading is continuous.
@@ -121,6 +127,7 @@ class SpecimenData:
     ramp_s: np.ndarray = None
     ramp_index: np.ndarray = None
     counts: CountHistograms = None
+    onset_window: np.ndarray = None
 
     @classmethod
     def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
@@ -275,6 +282,19 @@ class SpecimenData:
         )
         return steps, ramp
 
+    def landed(self, steps, lag_s):
+        """Load steps whose first begins ``lag_s`` (W, C) before t = 0 (a sampled landing).
+
+        ``steps`` = (step_time, step_size), each (C, K) or step_time (W, C, K); returns
+        step_time of shape (W, C, K) with its first column −``lag_s`` — the later steps stay at
+        the rows where the load column changes.
+        """
+        step_time, step_size = steps
+        lag = np.asarray(lag_s, dtype=float)
+        moved = np.array(np.broadcast_to(step_time, lag.shape + step_time.shape[-1:]))
+        moved[..., 0] = -lag
+        return moved, step_size
+
     def take(self, tests, time_s):
         """Return the tests ``tests`` (repeats allowed) at the times ``time_s``, (len(tests), T).
 
@@ -301,6 +321,7 @@ class SpecimenData:
             step_size=rows(self.step_size),
             ramp_s=rows(self.ramp_s),
             ramp_index=self.ramp_rows()[tests],
+            onset_window=rows(self.onset_window),
         )
 
     def ramp_rows(self):
@@ -339,6 +360,7 @@ class SpecimenData:
             self.step_size,
             self.ramp_s,
             self.ramp_index,
+            self.onset_window,
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())

@@ -196,4 +196,7 @@ def pack_rig(cls, tests, max_samples, bins_per_decade):
         *(steps or (None, None)),
         np.array([t.ramp_s for t in tests]) if any(t.ramp_s > 0 for t in tests) else None,
         counts=CountHistograms.concatenate(histograms) if histograms else None,
+        onset_window=np.array([t.onset_window_s for t in tests])
+        if any(t.onset_window_s > 0 for t in tests)
+        else None,
     )

@@ -22,6 +22,9 @@ __all__ = [
     "nuisance_parameters",
     "ramp_names",
     "is_ramp",
+    "landing_names",
+    "is_landing",
+    "samples_landing",
 ]
 
 RAMPS = ("given", "fitted")
@@ -41,6 +44,32 @@ def is_ramp(name):
     return name.split("[", 1)[0] == "ramp_s"
 
 
+def landing_names(n_tests):
+    """Names of the sampled landings of ``n_tests`` tests: ``landing[0]`` … in test order.
+
+    ``landing[k]`` ∈ (0, 1) is where in the sample interval before test k's first loaded sample
+    its load began: the onset lies ``landing[k]`` of the interval (``onset_window``) before t = 0.
+    """
+    return tuple(f"landing[{k}]" for k in range(n_tests))
+
+
+def is_landing(name):
+    """Return whether a parameter is a sampled landing (:func:`landing_names`)."""
+    return name.split("[", 1)[0] == "landing"
+
+
+def samples_landing(data, ramp="given"):
+    """Whether a fit of ``data`` samples each test's landing (:func:`landing_names`).
+
+    When a test's first loading rises over a ramp (given, or ``ramp="fitted"``) and its onset is
+    known only to the sample interval before its first loaded row: under a ramp of a few tenths
+    of a second a lag of up to one sample shifts the load of the first samples by a few percent,
+    which a 100 Hz log resolves; on a step it only delays the creep by a few milliseconds.
+    """
+    unknown = data.onset_window is not None and bool(np.any(data.onset_window > 0))
+    return unknown and (ramp == "fitted" or data.first_ramps() is not None)
+
+
 def noise_parameters(likelihood):
     """Likelihood parameters: sigma_rel, plus nu for Student-t or noise_tau for AR(1)."""
     if likelihood not in LIKELIHOODS:
@@ -49,14 +78,19 @@ def noise_parameters(likelihood):
     return ("sigma_rel", *extra)
 
 
-def nuisance_parameters(likelihood, ramp="given", n_tests=1):
-    """Return the likelihood's parameters (:func:`noise_parameters`), then the ramps if fitted.
+def nuisance_parameters(likelihood, ramp="given", n_tests=1, landing=False):
+    """Return the likelihood's parameters (:func:`noise_parameters`), then the loadings' ones.
 
-    With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`).
+    With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`), with
+    ``landing`` one landing per test (:func:`landing_names`, :func:`samples_landing`).
     """
     if ramp not in RAMPS:
         raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
-    return noise_parameters(likelihood) + (ramp_names(n_tests) if ramp == "fitted" else ())
+    return (
+        noise_parameters(likelihood)
+        + (ramp_names(n_tests) if ramp == "fitted" else ())
+        + (landing_names(n_tests) if landing else ())
+    )
 
 
 class PriorScaledTarget:
@@ -165,6 +199,24 @@ class LogPosterior(PriorScaledTarget):
                 "ramp_s cannot be a fixed parameter: give a known loading ramp in the data's "
                 "ramp_s column, or sample it (ramp='fitted')"
             )
+        if any(is_landing(k) for k in self.fixed):
+            raise ValueError(
+                "landing cannot be a fixed parameter: give a known onset in the data's onset_s "
+                "column"
+            )
+        self._landings = [i for i, n in enumerate(prior.names) if is_landing(n)]
+        if self._landings:
+            names = tuple(prior.names[i] for i in self._landings)
+            if data.onset_window is None:
+                raise ValueError(
+                    "the data give every test's onset (onset_s column, or no sample before the "
+                    f"load): nothing to sample for {list(names)}"
+                )
+            if names != landing_names(len(names)) or data.ramp_rows().max() >= len(names):
+                raise ValueError(
+                    f"the sampled landings {list(names)} are not one per test of the data's "
+                    f"{data.n_tests} (landing[0] … in test order)"
+                )
         self._ramps = [i for i, n in enumerate(prior.names) if is_ramp(n)]
         self._ramp_limit = None
         if self._ramps:
@@ -200,9 +252,14 @@ class LogPosterior(PriorScaledTarget):
         """Build the posterior of a specimen from a sensor file's priors.
 
         Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at
-        defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`).
+        defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`), and each
+        test's landing where a ramp makes an onset known to one sample matter
+        (:func:`samples_landing`).
         """
-        prior = sensor.prior_for(model, nuisance_parameters(likelihood, ramp, data.n_tests))
+        nuisance = nuisance_parameters(
+            likelihood, ramp, data.n_tests, landing=samples_landing(data, ramp)
+        )
+        prior = sensor.prior_for(model, nuisance)
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
         return cls(
             data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
@@ -255,6 +312,8 @@ class LogPosterior(PriorScaledTarget):
         if self._ramps:  # sampled ramps: each row's test's
             ramps = x[:, self._ramps][:, self.data.ramp_rows()]
             steps, first_ramp = self.data.ramped(ramps)
+        if self._landings:  # the first loading began its landing's share of a sample before 0
+            steps = self.data.landed(steps, self._lag(x))
         solution = solve_current(
             params,
             self.data.voltage_V[:, None],
@@ -275,18 +334,28 @@ class LogPosterior(PriorScaledTarget):
             valid &= (ramps < self._ramp_limit)[..., None]
         return np.where(valid, log_current, -np.inf)
 
+    def _lag(self, x):
+        """How long before t = 0 each test's load began, shape (W, C) (its sampled landing)."""
+        share = np.atleast_2d(np.asarray(x, dtype=float))[:, self._landings]
+        return share[:, self.data.ramp_rows()] * self.data.onset_window
+
     def loading_end(self, x=None):
         """Return when each test's first loading is complete, shape (C,): its ramp's end, or 0.
 
         A ramp given in the data ends at its ``ramp_s``; a sampled one at the test's longest
         ``ramp_s[k]`` among the parameter sets ``x`` (W, ndim), so that every draw has its weight
-        on.
+        on — less its sampled landing's lag (never before t = 0, the first loaded sample).
         """
         end = np.zeros(self.data.n_tests) if self.data.ramp_s is None else self.data.ramp_s
-        if self._ramps and x is not None:
-            ramps = np.atleast_2d(np.asarray(x, dtype=float))[:, self._ramps]
-            end = ramps[:, self.data.ramp_rows()].max(axis=0)
-        return np.asarray(end, dtype=float)
+        if x is None or not (self._ramps or self._landings):
+            return np.asarray(end, dtype=float)
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if self._ramps:
+            end = x[:, self._ramps][:, self.data.ramp_rows()]
+        if self._landings:
+            end = end - self._lag(x)
+        end = np.broadcast_to(end, (len(x), self.data.n_tests)).max(axis=0)
+        return np.maximum(end, 0.0)
 
     def drift_percent(self, x, time_s=DRIFT_TIME_S):
         """Return the model drift(t) of every test at ``time_s`` (eq. 22).

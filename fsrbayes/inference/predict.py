@@ -37,7 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .posterior import LogPosterior, is_ramp, nuisance_parameters
+from .posterior import LogPosterior, is_landing, is_ramp, nuisance_parameters, samples_landing
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -104,7 +104,9 @@ def _posterior_of(folder, packed, rng):
     A fit with fitted loading ramps (one per test it saw) lends each protocol test, draw by
     draw, the ramp of one of its tests picked at random (``rng``): a new placement of a weight
     settles as the placements seen did (a fit with one ``ramp_s`` for all its tests lends that
-    one). A protocol with a ``ramp_s`` column uses its own.
+    one). A protocol with a ``ramp_s`` column uses its own. A protocol test whose onset is known
+    only to a sample interval under a ramp draws where in it the load began from its uniform
+    prior (:func:`~.posterior.samples_landing`): the fit's landings are its own tests'.
     """
     import xarray as xr
 
@@ -115,7 +117,8 @@ def _posterior_of(folder, packed, rng):
     fitted = [n for n in tree.posterior.data_vars if is_ramp(str(n))]
     given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
     ramp = "fitted" if fitted and not given else "given"
-    noise = nuisance_parameters(likelihood, ramp, packed.n_tests)
+    landing = samples_landing(packed, ramp)
+    noise = nuisance_parameters(likelihood, ramp, packed.n_tests, landing=landing)
     prior = sensor.prior_for(attrs["fsrbayes_model"], noise)
     posterior = LogPosterior(
         packed,
@@ -125,12 +128,15 @@ def _posterior_of(folder, packed, rng):
         tunneling=attrs["tunneling"],
         likelihood=likelihood,
     )
-    columns = [n for n in posterior.names if not is_ramp(n)]  # the ramps come last
+    # the ramps, then the landings, come last
+    columns = [n for n in posterior.names if not (is_ramp(n) or is_landing(n))]
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
     if ramp == "fitted":
         seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
         picks = rng.integers(len(fitted), size=(len(seen), packed.n_tests))
         draws = np.concatenate([draws, np.take_along_axis(seen, picks, axis=1)], axis=1)
+    if landing:
+        draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
     return posterior, draws, attrs
 
 

@@ -36,9 +36,10 @@ from ..posterior import PriorScaledTarget
 
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
-NOISE_PARAMETERS = ("sigma_rel", "nu", "ramp_s")
+NOISE_PARAMETERS = ("sigma_rel", "nu", "ramp_s", "landing")
 """Per-specimen nuisance parameters: not pooled across specimens (a fitted loading ramp —
-``ramp_s[k]``, one per test — is the experimenter's hand, not the sensor)."""
+``ramp_s[k]``, one per test — is the experimenter's hand, not the sensor; a landing
+``landing[k]``, the logger's clock)."""
 
 _QUANTILES = (np.arange(4000) + 0.5) / 4000
 
