@@ -310,6 +310,26 @@ def test_a_fitted_ramp_is_the_given_ramp_at_its_value_and_the_data_find_it(tmp_p
     assert step.log_likelihood_pointwise(at(step, [0]))[0].sum() < log_like.max() - 1000
 
 
+def test_a_sampled_ramp_s_rise_is_kept_out_of_the_bins(tmp_path):
+    # packing for ramp="fitted" keeps the rise the readings show one sample per point; a step's
+    # creep shows none, and nothing changes for it
+    from fsrbayes.inference.packing import rise_end
+
+    hidden, _ = _hidden_ramp(tmp_path, 0.3, duration_s=60.0)
+    step, _ = _hidden_ramp(tmp_path, 0.0, name="step.csv", duration_s=60.0)
+    assert 0.3 < rise_end(hidden.tests[0]) < 0.6
+    assert rise_end(step.tests[0]) == 0.0
+    binned = SpecimenData.select(hidden)
+    kept = SpecimenData.select(hidden, ramp="fitted")
+    early = binned.time_s[binned.mask] < rise_end(hidden.tests[0])
+    assert np.all(kept.weight[kept.time_s < rise_end(hidden.tests[0])] == 1.0)
+    assert binned.weight[binned.mask][early].max() > 1.0  # the rise was binned before
+    assert (
+        SpecimenData.select(step, ramp="fitted").fingerprint()
+        == SpecimenData.select(step).fingerprint()
+    )
+
+
 def test_every_test_has_its_own_fitted_ramp_and_its_readings_find_it(tmp_path):
     # two weights placed by hand, one settling over 0.3 s and the other over 0.6 s: a ramp per
     # test, each pinned by its own test's readings and by nothing else

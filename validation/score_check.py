@@ -42,7 +42,13 @@ from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
-from fsrbayes.inference.posterior import LogPosterior, is_landing, landing_names
+from fsrbayes.inference.posterior import (
+    LogPosterior,
+    is_landing,
+    is_ramp,
+    landing_names,
+    ramp_names,
+)
 
 from .rig_coverage import simulate_truth
 
@@ -122,7 +128,7 @@ class ScoreCheck:
         return "\n".join(rows)
 
 
-def _bench_posterior(spec, sigma_rel, seed, model, bench):
+def _bench_posterior(spec, sigma_rel, seed, model, bench, ramp="given"):
     """The bench's log of one noise draw, read back as a user's CSV, and its posterior.
 
     ``bench["onset_column"]``: the bench's true landing instant written in an ``onset_s``
@@ -141,17 +147,24 @@ def _bench_posterior(spec, sigma_rel, seed, model, bench):
         )
     with tempfile.TemporaryDirectory() as folder:
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
-    packed = SpecimenData.select(data, data.specimens[0])
-    posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model)
-    # where the bench's onset lies in each test's interval before its first loaded row
-    landings = {
+    packed = SpecimenData.select(data, data.specimens[0], ramp=ramp)
+    posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model, ramp=ramp)
+    # where the bench's onset lies in each test's interval before its first loaded row, and its
+    # ramps where the fit samples them
+    nuisance = {
         name: (test.onset_s - truth["onset_s"]) / test.onset_window_s
         if test.onset_window_s > 0
         else 0.5  # an onset known: the landing moves nothing
         for name, test in zip(landing_names(len(data.tests)), data.tests, strict=True)
         if name in posterior.names
     }
-    return posterior, landings
+    ramps = np.broadcast_to(truth["ramp_s"], (len(data.tests),))
+    nuisance.update(
+        {name: float(r) for name, r in zip(ramp_names(len(data.tests)), ramps, strict=True)}
+        if ramp == "fitted"
+        else {}
+    )
+    return posterior, nuisance
 
 
 def _pointwise(posterior, x, log_shift, log_sigma_shift):
@@ -161,7 +174,9 @@ def _pointwise(posterior, x, log_shift, log_sigma_shift):
     return log_likelihood_pointwise(log_model, posterior.data, sigma)
 
 
-def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="burgers", **bench):
+def score_check(
+    params, sigma_rel, n_draws=200, *, first_seed=10_000, model="burgers", ramp="given", **bench
+):
     """Return the :class:`ScoreCheck` of the bench rig ``bench`` with a fixed specimen.
 
     Parameters
@@ -174,6 +189,9 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
         Noise draws (bench seeds ``first_seed`` …); each is written as a CSV and read back.
     model : str
         The model whose likelihood is checked; the bench must simulate it (no hidden effect).
+    ramp : {"given", "fitted"}
+        The fit's ramp option; ``"fitted"`` (with ``ramp_column=False``) checks the likelihood
+        of sampled ramps at the bench's ramps.
     **bench
         Keyword arguments of :func:`~fsrbayes.data.rigsim.simulate_rig` (reading, protocol,
         ramp_s, duration_s, …), and ``onset_column=True`` to write the bench's landing instant
@@ -182,11 +200,12 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
     if n_draws < 3:
         raise ValueError(f"n_draws must be >= 3, got {n_draws}")
     spec = {k: v for k, v in params.items() if k != "sigma_rel"}
-    first, landings = _bench_posterior(spec, sigma_rel, first_seed, model, bench)
-    # the landings (a ramp's onset known to a sample) are the bench's own, draw by draw
-    names = tuple(n for n in first.names if n != "sigma_rel" and not is_landing(n))
+    first, nuisance = _bench_posterior(spec, sigma_rel, first_seed, model, bench, ramp)
+    # the landings (a ramp's onset known to a sample) and sampled ramps are the bench's own, draw
+    # by draw
+    names = tuple(n for n in first.names if n != "sigma_rel" and not (is_landing(n) or is_ramp(n)))
     truth = {**spec, "sigma_rel": sigma_rel}
-    x = np.array([[{**truth, **landings}[n] for n in first.names]])
+    x = np.array([[{**truth, **nuisance}[n] for n in first.names]])
     u = first.prior.to_unconstrained(x)[0]
     steps = np.eye(u.size)[[first.names.index(n) for n in names]] * STEP_U
     shifted = first.prior.from_unconstrained(np.vstack([u + steps, u - steps]))[0]
@@ -200,11 +219,12 @@ def score_check(params, sigma_rel, n_draws=200, *, first_seed=10_000, model="bur
     alike = []  # whether each draw was packed into the first draw's points
     for k in range(n_draws):
         if k:
-            posterior, landings = _bench_posterior(spec, sigma_rel, first_seed + k, model, bench)
-            x = np.array([[{**truth, **landings}[n] for n in first.names]])
-            shifted[:, [first.names.index(n) for n in landings]] = x[0, :][
-                [first.names.index(n) for n in landings]
-            ]
+            posterior, nuisance = _bench_posterior(
+                spec, sigma_rel, first_seed + k, model, bench, ramp
+            )
+            x = np.array([[{**truth, **nuisance}[n] for n in first.names]])
+            moved = [first.names.index(n) for n in nuisance]
+            shifted[:, moved] = x[0, moved]
         else:
             posterior = first
         same = k > 0 and np.array_equal(posterior.data.mask, first.data.mask)
@@ -264,6 +284,11 @@ def main(argv=None):
     parser.add_argument(
         "--onset-column", action="store_true", help="write the true landing in an onset_s column"
     )
+    parser.add_argument(
+        "--fitted-ramp",
+        action="store_true",
+        help="leave the ramp out of the file and check the likelihood of ramp='fitted' at it",
+    )
     args = parser.parse_args(argv)
     bench = {
         "reading": args.reading,
@@ -274,10 +299,17 @@ def main(argv=None):
     }
     if args.onset_column:
         bench["onset_column"] = True
-    drawn = {k: v for k, v in bench.items() if k != "onset_column"}
+    if args.fitted_ramp:
+        bench["ramp_column"] = False
+    drawn = {k: v for k, v in bench.items() if k not in ("onset_column", "ramp_column")}
     _, params = simulate_truth(args.seed, args.truth, **drawn)
     check = score_check(
-        params, params["sigma_rel"], args.draws, first_seed=args.first_noise_seed, **bench
+        params,
+        params["sigma_rel"],
+        args.draws,
+        first_seed=args.first_noise_seed,
+        ramp="fitted" if args.fitted_ramp else "given",
+        **bench,
     )
     print(check.summary())
 

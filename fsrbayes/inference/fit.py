@@ -310,7 +310,7 @@ def fit(
     FitResult
     """
     coordinates = _coordinates(coordinates)
-    packed = SpecimenData.select(data, specimen)
+    packed = SpecimenData.select(data, specimen, ramp=ramp)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     posterior = LogPosterior.for_sensor(
         packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood, ramp=ramp

@@ -130,12 +130,21 @@ class SpecimenData:
     onset_window: np.ndarray = None
 
     @classmethod
-    def from_tests(cls, tests, *, max_samples=MAX_RAW_SAMPLES, bins_per_decade=BINS_PER_DECADE):
+    def from_tests(
+        cls,
+        tests,
+        *,
+        max_samples=MAX_RAW_SAMPLES,
+        bins_per_decade=BINS_PER_DECADE,
+        ramp="given",
+    ):
         """Pack a sequence of :class:`fsrbayes.data.creep.CreepTest` of one specimen.
 
         Tests longer than ``max_samples`` are reduced to log-spaced bins
         (:func:`bin_log_time`, ``bins_per_decade``); rig circuits (a divider's series
-        resistance) and quantised readings are carried into the likelihood.
+        resistance) and quantised readings are carried into the likelihood. ``ramp="fitted"``
+        (ramps whose length a fit samples) keeps each first loading's visible rise out of the
+        bins (:func:`~.packing.rise_end`), as a given ramp's samples are.
         """
         tests = list(tests)
         if not tests:
@@ -144,7 +153,7 @@ class SpecimenData:
         if len(specimens) != 1:
             raise ValueError(f"SpecimenData holds one specimen, got {sorted(specimens)}")
         if is_rig_design(tests, max_samples):
-            return pack_rig(cls, tests, max_samples, bins_per_decade)
+            return pack_rig(cls, tests, max_samples, bins_per_decade, rise=ramp == "fitted")
         width = max(t.time_s.size for t in tests)
         time = np.empty((len(tests), width))
         logc = np.empty((len(tests), width))
@@ -166,7 +175,7 @@ class SpecimenData:
         )
 
     @classmethod
-    def select(cls, data, specimen=None):
+    def select(cls, data, specimen=None, ramp="given"):
         """One specimen's tests of ``data`` packed; ``data`` may already be a SpecimenData.
 
         Parameters
@@ -174,6 +183,8 @@ class SpecimenData:
         data : CreepData or SpecimenData
         specimen : str, optional
             Needed when the data hold several specimens.
+        ramp : {"given", "fitted"}
+            The fit's ramp option (:meth:`from_tests`).
 
         Returns
         -------
@@ -193,7 +204,7 @@ class SpecimenData:
                     f"(e.g. {data.specimens[0]!r})"
                 )
             specimen = data.specimens[0]
-        return cls.from_tests(data.select(specimen=specimen).tests)
+        return cls.from_tests(data.select(specimen=specimen).tests, ramp=ramp)
 
     @property
     def n_tests(self):

@@ -21,12 +21,20 @@ __all__ = [
     "load_step_arrays",
     "log_time_bins",
     "pack_rig",
+    "rise_end",
 ]
 
 MAX_RAW_SAMPLES = 400
 """Tests with more samples than this are reduced to log-spaced bins for inference."""
 BINS_PER_DECADE = 20
 """Bins per decade of time since the load landed (12 % wide: the model is linear across one)."""
+RISE_SLOPE = 0.5
+"""A loading still rising: its log-current climbs faster than this per decade of time between
+log-spaced bins (a weight's ramp: ~4, I ∝ σ^α; a step's creep: a few hundredths)."""
+RISE_MARGIN = 1.5
+"""The samples kept one by one reach this many times past the last rising bin."""
+RISE_CAP_S = 10.0
+"""Seconds of a test's first loading searched for its rise."""
 
 
 def log_time_bins(time_s, bins_per_decade=BINS_PER_DECADE):
@@ -103,17 +111,45 @@ def load_step_arrays(tests):
     return step_time, step_size
 
 
-def _bin_labels(test, bins_per_decade):
+def rise_end(test, bins_per_decade=BINS_PER_DECADE):
+    """Return until when a test's first loading visibly rises, in s since t = 0 (0: it does not).
+
+    A ramp nobody recorded (its length sampled: ``ramp="fitted"``) shows in the readings: the
+    log-current climbs several units per decade while the load rises and a few hundredths once
+    it is on. Over the first :data:`RISE_CAP_S` seconds of the first segment, the readings'
+    log-spaced bin means (:func:`bin_log_time`) are compared bin to bin; the rise ends
+    :data:`RISE_MARGIN` times past the last bin from which they climb faster than
+    :data:`RISE_SLOPE` per decade. Only the packing uses it — the samples before it are kept one
+    by one — so a rise found where there is none costs time, not accuracy.
+    """
+    end = RISE_CAP_S if test.load_steps is None else min(RISE_CAP_S, test.load_steps[0][1])
+    inside = (test.time_s > 0) & (test.time_s < end)
+    if inside.sum() < 3:
+        return 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        time, mean, _, _ = bin_log_time(
+            test.time_s[inside], np.log(test.current_A[inside]), bins_per_decade
+        )
+        slope = np.diff(mean) / np.diff(np.log10(time))
+    rising = np.flatnonzero(slope > RISE_SLOPE)
+    if not rising.size:
+        return 0.0
+    return float(min(RISE_MARGIN * time[rising[-1] + 1], end))
+
+
+def _bin_labels(test, bins_per_decade, head_s=0.0):
     """Bins of a test: log-spaced within each constant-load segment, in time since its step.
 
-    A loading ramp's samples (``ramp_s``: the first ``ramp_s`` seconds) keep a bin each: the
-    load rises under them and the current with it, far from straight across a log-spaced bin,
-    and the ramp's end would fall inside one. The first segment's bins start after the ramp.
+    A loading ramp's samples (``ramp_s``: the first ``ramp_s`` seconds; or the first ``head_s``,
+    a rise whose ramp is sampled) keep a bin each: the load rises under them and the current
+    with it, far from straight across a log-spaced bin, and the ramp's end would fall inside
+    one. The first segment's bins start after them.
 
     Returns (labels, since) — every sample's bin (:func:`log_time_bins`, numbered through the
     test) and the time its segment started.
     """
-    if test.load_steps is None and test.ramp_s <= 0:
+    head_s = max(test.ramp_s, head_s)
+    if test.load_steps is None and head_s <= 0:
         return log_time_bins(test.time_s, bins_per_decade), np.zeros(test.time_s.size)
     starts = np.zeros(1) if test.load_steps is None else test.load_steps[0]
     edges = np.append(starts, np.inf)
@@ -124,7 +160,7 @@ def _bin_labels(test, bins_per_decade):
         if not inside.size:
             continue
         t = test.time_s[inside] - start
-        rising = t < test.ramp_s if k == 0 else np.zeros(t.size, dtype=bool)
+        rising = t < head_s if k == 0 else np.zeros(t.size, dtype=bool)
         segment = np.arange(t.size)
         if not rising.all():
             segment[~rising] = rising.sum() + log_time_bins(t[~rising], bins_per_decade)
@@ -150,13 +186,17 @@ def is_rig_design(tests, max_samples=MAX_RAW_SAMPLES):
     )
 
 
-def pack_rig(cls, tests, max_samples, bins_per_decade):
-    """Pack tests with circuits, quantised readings, load steps or many samples (``from_tests``)."""
+def pack_rig(cls, tests, max_samples, bins_per_decade, rise=False):
+    """Pack tests with circuits, quantised readings, load steps or many samples (``from_tests``).
+
+    ``rise``: keep each first loading's visible rise unbinned (:func:`rise_end`), for ramps
+    whose length is sampled.
+    """
     columns, histograms, n_points = [], [], 0
     for t in tests:
         y = np.log(t.current_A)
         if t.time_s.size > max_samples:
-            labels, since = _bin_labels(t, bins_per_decade)
+            labels, since = _bin_labels(t, bins_per_decade, rise_end(t) if rise else 0.0)
             time, mean, count, scatter = bin_statistics(t.time_s - since, y, labels)
             time = time + since[np.flatnonzero(np.diff(labels, prepend=-1))]
         else:
