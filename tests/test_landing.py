@@ -114,3 +114,16 @@ def test_a_protocol_with_a_ramp_and_no_onset_is_predicted_with_its_landing_drawn
         low, high = (np.asarray(test[q])[rising] for q in ("q05", "q95"))
         inside.append((observed >= low) & (observed <= high))
     assert np.concatenate(inside).size > 50 and np.concatenate(inside).mean() > 0.9
+
+
+def test_an_onset_found_from_the_reading_under_a_ramp_may_lag_by_the_ramp(tmp_path):
+    # the load written from the first row: the landing is found where the reading reaches 10 %
+    # of its late level, which a settling weight does part-way through its ramp — tens of
+    # milliseconds after the load began, not one sample; the window covers the whole ramp
+    data, truth = _rig(tmp_path, 0.3, False, "jump.csv", weight_from_start=True)
+    for test in data.tests:
+        lag = test.onset_s - truth["onset_s"]
+        assert test.onset_source == "reading" and test.onset_window_s == pytest.approx(0.31)
+        assert 0.02 < lag < test.onset_window_s  # more than a sample late, inside the window
+    step, truth = _rig(tmp_path, 0.0, False, "jump-step.csv", weight_from_start=True)
+    assert step.tests[0].onset_window_s == pytest.approx(0.01)

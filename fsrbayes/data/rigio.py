@@ -232,7 +232,6 @@ def rig_tests(
                 )
         else:
             t_on = float(t[first])
-        window = float(t[first] - t[first - 1]) if onset is None and first > 0 else 0.0
         keep = idx[first:][loaded[first:]]  # unloaded rows after the onset carry no reading
         steps = None
         if changes.size:
@@ -254,6 +253,12 @@ def rig_tests(
                     int(lines[first]),
                     "ramp_s",
                 )
+
+        # how long before the first loaded row the load may have begun: one sample; a jump in
+        # the reading comes while a weight settles, up to its ramp after the load began
+        window = float(t[first] - t[first - 1]) if onset is None and first > 0 else 0.0
+        if onset_from == "reading" and window > 0:
+            window += ramp_s
 
         # a weight still settling: its first rows may read an open circuit (in a protocol too;
         # its empty readings are not one)
