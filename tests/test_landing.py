@@ -7,6 +7,8 @@ samples by percents, which a 100 Hz log resolves. The posterior then samples ``l
 where in the interval before the first loaded row the load began.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -121,9 +123,23 @@ def test_an_onset_found_from_the_reading_under_a_ramp_may_lag_by_the_ramp(tmp_pa
     # of its late level, which a settling weight does part-way through its ramp — tens of
     # milliseconds after the load began, not one sample; the window covers the whole ramp
     data, truth = _rig(tmp_path, 0.3, False, "jump.csv", weight_from_start=True)
+    params = {**truth["specimens"][data.specimens[0]]["params"], "sigma_rel": 0.002}
+    sensor = load_sensor("fsr402")
+    given = LogPosterior.for_sensor(SpecimenData.select(data), sensor)
+    # the bench's ramp is in the ramp_s column; sampled instead, the window follows each draw's
+    hidden = replace(SpecimenData.select(data), ramp_s=None)
+    fitted = LogPosterior.for_sensor(hidden, sensor, ramp="fitted")
+    lags = np.array([test.onset_s - truth["onset_s"] for test in data.tests])
     for test in data.tests:
-        lag = test.onset_s - truth["onset_s"]
-        assert test.onset_source == "reading" and test.onset_window_s == pytest.approx(0.31)
-        assert 0.02 < lag < test.onset_window_s  # more than a sample late, inside the window
+        assert test.onset_source == "reading" and test.onset_window_s == pytest.approx(0.01)
+    assert np.all((lags > 0.02) & (lags < 0.3))  # more than a sample late: inside the ramp
+    # at the bench's landings, a share of the sample interval and the ramp, the weight is on at
+    # the ramp's end less each test's lag — the given ramp's and each draw's sampled one alike
+    shares = {f"landing[{k}]": lag / 0.31 for k, lag in enumerate(lags)}
+    ramps = {f"ramp_s[{k}]": 0.3 for k in range(lags.size)}
+    for posterior, x in ((given, shares), (fitted, shares | ramps)):
+        np.testing.assert_allclose(
+            posterior.loading_end(_at(posterior, params, **x)), 0.3 - lags, rtol=1e-12
+        )
     step, truth = _rig(tmp_path, 0.0, False, "jump-step.csv", weight_from_start=True)
     assert step.tests[0].onset_window_s == pytest.approx(0.01)

@@ -151,14 +151,21 @@ def _bench_posterior(spec, sigma_rel, seed, model, bench, ramp="given"):
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model, ramp=ramp)
     # where the bench's onset lies in each test's interval before its first loaded row, and its
     # ramps where the fit samples them
+    ramps = np.broadcast_to(truth["ramp_s"], (len(data.tests),))
+    # a jump in the reading may lag the load by the ramp as well as by one sample
+    windows = [
+        test.onset_window_s + (ramp_s if test.onset_source == "reading" else 0.0)
+        for test, ramp_s in zip(data.tests, ramps, strict=True)
+    ]
     nuisance = {
-        name: (test.onset_s - truth["onset_s"]) / test.onset_window_s
-        if test.onset_window_s > 0
+        name: (test.onset_s - truth["onset_s"]) / window
+        if window > 0
         else 0.5  # an onset known: the landing moves nothing
-        for name, test in zip(landing_names(len(data.tests)), data.tests, strict=True)
+        for name, test, window in zip(
+            landing_names(len(data.tests)), data.tests, windows, strict=True
+        )
         if name in posterior.names
     }
-    ramps = np.broadcast_to(truth["ramp_s"], (len(data.tests),))
     nuisance.update(
         {name: float(r) for name, r in zip(ramp_names(len(data.tests)), ramps, strict=True)}
         if ramp == "fitted"

@@ -97,8 +97,9 @@ class CreepTest:
     """Seconds the first loading takes, rising linearly from the onset (0: a step)."""
     onset_window_s: float = field(default=0.0, compare=False, repr=False)
     """How long before the first loaded sample the load may have begun: the interval from the
-    last unloaded sample when the onset is the first loaded row (``load`` or ``reading``); 0
-    when the ``onset_s`` column gives it or no sample precedes it."""
+    last unloaded sample when the onset is the first loaded row (``load`` or ``reading``; a
+    jump in the reading comes while a weight settles, so it may lag the load by its ramp too);
+    0 when the ``onset_s`` column gives it or no sample precedes it."""
 
     @property
     def key(self):

@@ -254,11 +254,9 @@ def rig_tests(
                     "ramp_s",
                 )
 
-        # how long before the first loaded row the load may have begun: one sample; a jump in
-        # the reading comes while a weight settles, up to its ramp after the load began
+        # how long before the first loaded row the load may have begun: one sample (a jump in
+        # the reading may come later still, up to the weight's ramp: onset_source "reading")
         window = float(t[first] - t[first - 1]) if onset is None and first > 0 else 0.0
-        if onset_from == "reading" and window > 0:
-            window += ramp_s
 
         # a weight still settling: its first rows may read an open circuit (in a protocol too;
         # its empty readings are not one)

@@ -105,6 +105,9 @@ class SpecimenData:
         interval from the last unloaded sample when the onset was not given (0: known). A
         loading ramp makes that lag matter; the posterior then samples where in the interval
         the load began (``landing[k]``). None: every onset known.
+    onset_in_ramp : ndarray of bool, shape (C,), optional
+        Whether each test's onset was found from the reading's jump, which comes while a weight
+        settles: it may lag the load by the test's ramp as well as by ``onset_window``.
     counts : CountHistograms, optional
         The whole-count readings of quantised tests, per observed point (their likelihood is
         the count's probability). None: every reading is continuous.
@@ -128,6 +131,7 @@ class SpecimenData:
     ramp_index: np.ndarray = None
     counts: CountHistograms = None
     onset_window: np.ndarray = None
+    onset_in_ramp: np.ndarray = None
 
     @classmethod
     def from_tests(
@@ -333,6 +337,7 @@ class SpecimenData:
             ramp_s=rows(self.ramp_s),
             ramp_index=self.ramp_rows()[tests],
             onset_window=rows(self.onset_window),
+            onset_in_ramp=rows(self.onset_in_ramp),
         )
 
     def ramp_rows(self):
@@ -372,6 +377,7 @@ class SpecimenData:
             self.ramp_s,
             self.ramp_index,
             self.onset_window,
+            self.onset_in_ramp,
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())

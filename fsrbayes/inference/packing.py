@@ -239,4 +239,7 @@ def pack_rig(cls, tests, max_samples, bins_per_decade, rise=False):
         onset_window=np.array([t.onset_window_s for t in tests])
         if any(t.onset_window_s > 0 for t in tests)
         else None,
+        onset_in_ramp=np.array([t.onset_source == "reading" for t in tests])
+        if any(t.onset_source == "reading" for t in tests)
+        else None,
     )

@@ -335,9 +335,21 @@ class LogPosterior(PriorScaledTarget):
         return np.where(valid, log_current, -np.inf)
 
     def _lag(self, x):
-        """How long before t = 0 each test's load began, shape (W, C) (its sampled landing)."""
-        share = np.atleast_2d(np.asarray(x, dtype=float))[:, self._landings]
-        return share[:, self.data.ramp_rows()] * self.data.onset_window
+        """How long before t = 0 each test's load began, shape (W, C) (its sampled landing).
+
+        The landing's share of the sample interval before the first loaded row — of that
+        interval and the test's ramp (given, or this draw's) where the onset was found from the
+        reading's jump, which comes while the weight settles.
+        """
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        rows = self.data.ramp_rows()
+        window = self.data.onset_window
+        if self.data.onset_in_ramp is not None:
+            ramp = self.data.ramp_s if self.data.ramp_s is not None else 0.0
+            if self._ramps:
+                ramp = x[:, self._ramps][:, rows]
+            window = window + np.where(self.data.onset_in_ramp, ramp, 0.0)
+        return x[:, self._landings][:, rows] * window
 
     def loading_end(self, x=None):
         """Return when each test's first loading is complete, shape (C,): its ramp's end, or 0.
