@@ -99,6 +99,13 @@ for _entry in (
     Parameter(
         "ramp_s", "s", "nuisance", None, "loading ramp: the weight's load rises linearly over it"
     ),
+    Parameter(
+        "landing",
+        "–",
+        "nuisance",
+        None,
+        "where in the interval before the first loaded sample the load began (share of it)",
+    ),
 ):
     register_parameter(_entry)
 
