@@ -323,7 +323,7 @@ def test_a_sampled_ramp_s_rise_is_kept_out_of_the_bins(tmp_path):
     kept = SpecimenData.select(hidden, ramp="fitted")
     early = binned.time_s[binned.mask] < rise_end(hidden.tests[0])
     assert np.all(kept.weight[kept.time_s < rise_end(hidden.tests[0])] == 1.0)
-    assert binned.weight[binned.mask][early].max() > 1.0  # the rise was binned before
+    assert binned.weight[binned.mask][early].max() > 1.0  # packed as a given ramp's: binned
     assert (
         SpecimenData.select(step, ramp="fitted").fingerprint()
         == SpecimenData.select(step).fingerprint()

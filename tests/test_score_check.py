@@ -44,7 +44,7 @@ def test_a_fitted_ramp_at_the_bench_s_ramp_is_the_bench_s(truth):
     # the same weight, its ramp in the readings only and sampled by the fit (ramp="fitted"): at
     # the bench's ramps and landings the likelihood is the bench's too — the rise the readings
     # show is kept out of the log-spaced bins (packing.rise_end), or a bin straddling the ramp's
-    # end reads the kink as noise (the noise level's score was 208 standard errors off)
+    # end reads the kink as noise, far off in the noise level's score
     bench = {"ramp_s": 0.3, "ramp_column": False}
     check = score_check(truth, truth["sigma_rel"], 12, ramp="fitted", **BENCH, **bench)
     mean_p, variance_p = check.p_values()

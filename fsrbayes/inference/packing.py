@@ -119,8 +119,8 @@ def rise_end(test, bins_per_decade=BINS_PER_DECADE):
     it is on. Over the first :data:`RISE_CAP_S` seconds of the first segment, the readings'
     log-spaced bin means (:func:`bin_log_time`) are compared bin to bin; the rise ends
     :data:`RISE_MARGIN` times past the last bin from which they climb faster than
-    :data:`RISE_SLOPE` per decade. Only the packing uses it — the samples before it are kept one
-    by one — so a rise found where there is none costs time, not accuracy.
+    :data:`RISE_SLOPE` per decade. It sets only which samples are kept one by one, not the
+    model: a rise found where there is none costs time, not accuracy.
     """
     end = RISE_CAP_S if test.load_steps is None else min(RISE_CAP_S, test.load_steps[0][1])
     inside = (test.time_s > 0) & (test.time_s < end)
