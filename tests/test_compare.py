@@ -14,6 +14,10 @@ from fsrbayes.inference.samplers import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
+FALLBACK_LADDER = LadderSettings(
+    n_temps=3, burn=10, steps=100, replicates=2, n_walkers=32, n_batches=10
+)
+"""Just enough ladder for an error bar: the fallback test checks the path taken, not the value."""
 TINY_PILOT = SamplerSettings(n_ensembles=2, chunk=50, min_steps=100, max_steps=100)
 FEW_STARTS = ModeSearch(n_starts=3)
 
@@ -207,7 +211,7 @@ def test_the_bridge_path_falls_back_on_the_ladder_when_the_fit_does_not_converge
         [small.data.specimens[0]],
         seed=1,
         path="bridge",
-        settings=TINY,
+        settings=FALLBACK_LADDER,
         fit_settings=budget,
         with_loo=False,
     )

@@ -265,11 +265,35 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     jsonschema.validate(json.loads(json.dumps(payload)), diagnose_schema())
 
 
+def test_the_hand_conversion_holds_each_test_at_its_first_v_fsr_where_the_sensor_creeps_more(
+    tmp_path,
+):
+    """validation/divider_bias.py's hand conversion writes each test at the V_FSR of its first
+    sample, without the fixed resistor. At the truth, held there the sensor's current drifts by
+    more than the divider's does: as the FSR creeps, the divider moves voltage to the fixed
+    resistor — the damping a constant-voltage fit reads as less creep (the fits: the slow test
+    below)."""
+    from validation.divider_bias import constant_voltage_tests
+
+    path, truth = _rig(tmp_path, reading="vout_V", noise_rel=0.0)
+    data = read_csv(path)
+    for test, held in zip(data.tests, constant_voltage_tests(data), strict=True):
+        assert held.rm_ohm == 0.0 and held.readout is None
+        assert held.voltage_V == pytest.approx(test.voltage_V - test.current_A[0] * test.rm_ohm)
+        divider = _noiseless(truth, test)
+        params = truth["specimens"][test.specimen]["params"]
+        fixed = solve_current(params, held.voltage_V, test.stress_Pa, test.time_s).current
+        assert fixed[0] == pytest.approx(divider[0], rel=1e-4)
+        divider_drift, fixed_drift = divider[-1] / divider[0] - 1, fixed[-1] / fixed[0] - 1
+        assert 0 < divider_drift < 0.8 * fixed_drift, (divider_drift, fixed_drift)
+
+
+@pytest.mark.slow
 def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drift():
     """The default rig fitted with its divider recovers the sensor's drift at constant V_FSR;
     converted by hand to constant voltages, the fit reads the divider's damping as a sensor that
     creeps less, and misplaces its contact law and Kelvin element (Laplace approximations at the
-    MAP; validation/divider_bias.py)."""
+    MAP; validation/divider_bias.py). Slow: two Laplace fits of a 10-minute rig, ~1–3 min."""
     from validation.divider_bias import PROBE_V, format_parameters, run
 
     rows = run(seed=0, n_draws=200, n_starts=4)
