@@ -92,6 +92,10 @@ def test_population_defaults_come_from_the_specimen_prior():
     prior = load_sensor("a201").prior_for("burgers")
     population = Population(prior)
     assert "sigma_rel" not in population.names and "s0" in population.names
+    # every noise model's parameters stay the specimen's own (AR(1)'s correlation time included)
+    for noise in (("sigma_rel", "nu"), ("sigma_rel", "noise_tau")):
+        names = Population(load_sensor("a201").prior_for("burgers", noise)).names
+        assert not set(noise) & set(names) and len(names) == len(population.names)
     k = population.names.index("s0")
     assert population.log_scale[k] and population.centre[k] == pytest.approx(np.log(4.41e-9))
     assert population.scale[k] == pytest.approx(0.1)

@@ -14,6 +14,7 @@ __all__ = [
     "PARAMETERS",
     "Parameter",
     "parameter_units",
+    "parameters_of_role",
     "physical_parameters",
     "population_scatter",
     "register_parameter",
@@ -115,9 +116,16 @@ def parameter_units():
     return {name: p.unit for name, p in PARAMETERS.items()}
 
 
+def parameters_of_role(role):
+    """Names of the parameters of one role (:data:`ROLES`), in table order."""
+    if role not in ROLES:
+        raise ValueError(f"role must be one of {ROLES}, got {role!r}")
+    return tuple(name for name, p in PARAMETERS.items() if p.role == role)
+
+
 def physical_parameters():
     """Names of the physical parameters, in table order."""
-    return tuple(name for name, p in PARAMETERS.items() if p.role == "physical")
+    return parameters_of_role("physical")
 
 
 def population_scatter():

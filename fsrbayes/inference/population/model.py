@@ -31,15 +31,17 @@ import numpy as np
 
 from ...data.distributions import Distribution
 from ...data.prior import JointPrior
+from ...physics.parameters import parameters_of_role
 from ...utils import HALF_LOG_2PI, logsumexp
 from ..posterior import PriorScaledTarget
 
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
-NOISE_PARAMETERS = ("sigma_rel", "nu", "ramp_s", "landing")
-"""Per-specimen nuisance parameters: not pooled across specimens (a fitted loading ramp —
-``ramp_s[k]``, one per test — is the experimenter's hand, not the sensor; a landing
-``landing[k]``, the logger's clock)."""
+NOISE_PARAMETERS = parameters_of_role("nuisance")
+"""Per-specimen nuisance parameters, the parameter table's ``nuisance`` role: not pooled across
+specimens (the noise model — ``sigma_rel``, Student-t's ``nu``, AR(1)'s ``noise_tau`` — is the
+rig's; a fitted loading ramp ``ramp_s[k]``, one per test, the experimenter's hand; a landing
+``landing[k]``, the logger's clock). A nuisance parameter registered later is left out too."""
 
 _QUANTILES = (np.arange(4000) + 0.5) / 4000
 
@@ -83,7 +85,9 @@ class Population:
 
     def __init__(self, prior, names=None):
         names = (
-            tuple(n for n in prior.names if n.split("[", 1)[0] not in NOISE_PARAMETERS)
+            tuple(
+                n for n in prior.names if n.split("[", 1)[0] not in parameters_of_role("nuisance")
+            )
             if names is None
             else tuple(names)
         )
