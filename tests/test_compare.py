@@ -204,7 +204,7 @@ def test_the_bridge_path_fits_each_model_and_agrees_with_savage_dickey():
 
 
 def test_the_bridge_path_falls_back_on_the_ladder_when_the_fit_does_not_converge(small):
-    budget = SamplerSettings(n_ensembles=2, chunk=50, min_steps=100, max_steps=100)
+    budget = SamplerSettings(n_ensembles=2, chunk=50, min_steps=100, max_steps=100, map_starts=2)
     out = fsrbayes.compare(
         small.data,
         ["zener", "burgers"],

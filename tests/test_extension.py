@@ -19,7 +19,7 @@ from fsrbayes.inference.population import fit_specimens
 from fsrbayes.inference.samplers import SamplerSettings
 from fsrbayes.physics import effects, models, parameters, rheology
 
-SHORT = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100)
+SHORT = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100, map_starts=2)
 LAW, EFFECT = "toy-logcreep", "toy-leak"
 
 

@@ -73,7 +73,9 @@ def test_specimen_fits_keep_the_others_when_one_worker_dies(monkeypatch):
     # Fork start method: the workers inherit the patched module attribute.
     monkeypatch.setattr(hierarchical, "_fit_one", _fit_one_or_die)
     sim = synthetic.simulate("a201", n_specimens=3, voltages=[1.0], forces=[4.9], samples=5, seed=2)
-    short = SamplerSettings(n_ensembles=2, chunk=20, max_steps=20, min_steps=20, transport_rounds=0)
+    short = SamplerSettings(
+        n_ensembles=2, chunk=20, max_steps=20, min_steps=20, transport_rounds=0, map_starts=2
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         fits = fit_specimens(sim.data, processes=2, settings=short, rng=1)
@@ -117,6 +119,8 @@ def test_cli_hierarchical_fit_reports_the_failed_specimen_and_keeps_the_rest(
                     "20",
                     "--max-steps",
                     "20",
+                    "--map-starts",
+                    "2",
                 ]
             )
     finally:

@@ -223,6 +223,28 @@ def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_pat
         fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
 
 
+@pytest.mark.parametrize("map_starts, ensembles, searched", [(8, 2, 8), (1, 2, 2), (3, 2, 3)])
+def test_the_map_search_runs_the_settings_starts(
+    small, monkeypatch, map_starts, ensembles, searched
+):
+    """``SamplerSettings.map_starts`` optimisations, and never fewer than the ensembles."""
+    from fsrbayes.inference import fit as fit_module
+
+    class Searched(Exception):
+        pass
+
+    def search(posterior, rng, n_starts, **options):
+        raise Searched(n_starts)
+
+    monkeypatch.setattr(fit_module, "find_map", search)
+    settings = replace(FAST, map_starts=map_starts, n_ensembles=ensembles)
+    with pytest.raises(Searched) as ran:
+        fsrbayes.fit(small.data, rng=7, settings=settings)
+    assert ran.value.args == (searched,)
+    with pytest.raises(ValueError, match="map_starts must be >= 1, got 0"):
+        replace(FAST, map_starts=0)
+
+
 def test_a_resumed_fit_keeps_its_map_search_and_gives_the_uninterrupted_chain(
     small, result, tmp_path, monkeypatch
 ):
@@ -281,6 +303,9 @@ def test_cli_fit_bad_input(csv_file, tmp_path):
     assert result.returncode == 2 and "--specimen 'nobody' is not in" in result.stderr
     result = cli("fit", str(csv_file), "--out", str(tmp_path / "y"), "--model", "maxwell")
     assert result.returncode == 2 and "the first term must be one of" in result.stderr
+    result = cli("fit", str(csv_file), "--out", str(tmp_path / "w"), "--map-starts", "0")
+    assert result.returncode == 2 and "--map-starts must be >= 1, got 0" in result.stderr
+    assert not (tmp_path / "w").exists()
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")
     result = cli("fit", str(csv_file), "--out", str(a_file / "z"))

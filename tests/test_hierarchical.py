@@ -361,7 +361,7 @@ def _small_bench(n_specimens=2):
 
 
 SHORT_FIT = SamplerSettings(
-    n_ensembles=2, chunk=50, max_steps=100, min_steps=100, transport_rounds=1
+    n_ensembles=2, chunk=50, max_steps=100, min_steps=100, transport_rounds=1, map_starts=2
 )
 
 

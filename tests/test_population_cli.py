@@ -34,6 +34,8 @@ def hierarchical_fit(tmp_path_factory):
         "50",
         "--max-steps",
         "100",
+        "--map-starts",
+        "2",
         "--no-plots",
         "--processes",
         "2",

@@ -105,6 +105,12 @@ def build_parser():
         "--chunk", type=int, default=500, help="steps between convergence checks and checkpoints"
     )
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
+    fit_.add_argument(
+        "--map-starts",
+        type=int,
+        default=8,
+        help="optimisations of the MAP search before sampling (default 8; at least --ensembles)",
+    )
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
     fit_.add_argument(
         "--coordinates",

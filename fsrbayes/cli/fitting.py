@@ -42,10 +42,12 @@ def cmd_fit(args):
         raise UsageError(
             f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
         )
-    out = Path(args.out)
-    writable(out)
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
+    if args.map_starts < 1:
+        raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
+    out = Path(args.out)
+    writable(out)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,
@@ -54,6 +56,7 @@ def cmd_fit(args):
         max_steps=args.max_steps,
         min_steps=min(args.chunk, args.max_steps),
         processes=processes,
+        map_starts=args.map_starts,
     )
     if args.sampler == "tempered":
         settings = _tempered_settings(args)

@@ -57,8 +57,9 @@ __all__ = [
     "PINNED_TRANSPORT_ROUNDS",
 ]
 
-MAP_STARTS = 8
-"""Optimisations per fit (from the best prior draws); their optima are sorted into regions."""
+MAP_STARTS = SamplerSettings.map_starts
+"""Optimisations per fit by default (from the best prior draws; ``SamplerSettings.map_starts``);
+their optima are sorted into regions."""
 
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2)
@@ -369,7 +370,7 @@ def sample_posterior(
     optima : array_like, shape (K, ndim), optional
         Maximum-a-posteriori points in the unconstrained parameters, best first, that an earlier
         search found (e.g. a :func:`~fsrbayes.inference.evidence.laplace.laplace_fit`'s mode);
-        the ensembles start around them and no new search runs. Default: :data:`MAP_STARTS`
+        the ensembles start around them and no new search runs. Default: ``settings.map_starts``
         optimisations as in :func:`fit`.
     rng : int or numpy.random.Generator, optional
     settings : SamplerSettings, optional
@@ -397,7 +398,7 @@ def sample_posterior(
         optima = find_map(
             posterior,
             generator,
-            n_starts=max(MAP_STARTS, settings.n_ensembles),
+            n_starts=max(settings.map_starts, settings.n_ensembles),
             maxiter=MAP_ITERATIONS,
             processes=settings.processes,
             refine=None if coordinates == "prior" else polish_along_pins,

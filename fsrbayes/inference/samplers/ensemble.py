@@ -115,6 +115,11 @@ class SamplerSettings:
         (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
         coordinates, which the chain then under-samples while reporting convergence; the affine
         map does not (the closed-form bent ridge, VALIDATION.md).
+    map_starts : int
+        Optimisations of the maximum-a-posteriori search a fit runs before sampling (from the
+        best prior draws; at least ``n_ensembles``). Their optima are sorted into separate
+        regions, where the ensembles start. Fewer starts search faster where the posterior has
+        one region; the default is what the fits were validated with.
     check_growth : float
         Once the chain is long, convergence is checked and the checkpoint written only after it
         has grown by this share since the last check, rounded down to whole chunks (so every
@@ -139,8 +144,11 @@ class SamplerSettings:
     quadratic_map: bool | None = None
     extra_transport_rounds: int = 0
     check_growth: float = 0.05
+    map_starts: int = 8
 
     def __post_init__(self):
+        if self.map_starts < 1:
+            raise ValueError(f"map_starts must be >= 1, got {self.map_starts}")
         if not 0.0 <= self.check_growth < 1.0:
             raise ValueError(f"check_growth must be in [0, 1), got {self.check_growth}")
         if self.transport_rounds is not None and self.transport_rounds < 0:
