@@ -141,5 +141,10 @@ def test_an_onset_found_from_the_reading_under_a_ramp_may_lag_by_the_ramp(tmp_pa
         np.testing.assert_allclose(
             posterior.loading_end(_at(posterior, params, **x)), 0.3 - lags, rtol=1e-12
         )
+        # the window a landing is a share of: the sample interval and the ramp (0.31 s)
+        window = posterior.landing_window(_at(posterior, params, **x))
+        np.testing.assert_allclose(window, np.full((1, lags.size), 0.31), rtol=1e-9)
+    x = _at(fitted, params, **shares, **{f"ramp_s[{k}]": 0.5 for k in range(lags.size)})
+    np.testing.assert_allclose(fitted.landing_window(x), 0.51, rtol=1e-9)  # each draw's ramp
     step, truth = _rig(tmp_path, 0.0, False, "jump-step.csv", weight_from_start=True)
     assert step.tests[0].onset_window_s == pytest.approx(0.01)

@@ -149,27 +149,26 @@ def _bench_posterior(spec, sigma_rel, seed, model, bench, ramp="given"):
         data = read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0])
     packed = SpecimenData.select(data, data.specimens[0], ramp=ramp)
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor), model=model, ramp=ramp)
-    # where the bench's onset lies in each test's interval before its first loaded row, and its
-    # ramps where the fit samples them
+    # the bench's ramps where the fit samples them, and where its onset lies in the interval each
+    # test's landing is a share of (the posterior's own window, with those ramps)
     ramps = np.broadcast_to(truth["ramp_s"], (len(data.tests),))
-    # a jump in the reading may lag the load by the ramp as well as by one sample
-    windows = [
-        test.onset_window_s + (ramp_s if test.onset_source == "reading" else 0.0)
-        for test, ramp_s in zip(data.tests, ramps, strict=True)
-    ]
-    nuisance = {
-        name: (test.onset_s - truth["onset_s"]) / window
-        if window > 0
-        else 0.5  # an onset known: the landing moves nothing
-        for name, test, window in zip(
-            landing_names(len(data.tests)), data.tests, windows, strict=True
-        )
-        if name in posterior.names
-    }
-    nuisance.update(
+    nuisance = (
         {name: float(r) for name, r in zip(ramp_names(len(data.tests)), ramps, strict=True)}
         if ramp == "fitted"
         else {}
+    )
+    x = np.array([nuisance.get(name, 0.0) for name in posterior.names])
+    windows = posterior.landing_window(x)[0]
+    nuisance.update(
+        {
+            name: (test.onset_s - truth["onset_s"]) / window
+            if window > 0
+            else 0.5  # an onset known: the landing moves nothing
+            for name, test, window in zip(
+                landing_names(len(data.tests)), data.tests, windows, strict=True
+            )
+            if name in posterior.names
+        }
     )
     return posterior, nuisance
 

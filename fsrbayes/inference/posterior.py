@@ -334,22 +334,27 @@ class LogPosterior(PriorScaledTarget):
             valid &= (ramps < self._ramp_limit)[..., None]
         return np.where(valid, log_current, -np.inf)
 
-    def _lag(self, x):
-        """How long before t = 0 each test's load began, shape (W, C) (its sampled landing).
+    def landing_window(self, x):
+        """Return the interval each test's sampled landing is a share of, shape (W, C), in s.
 
-        The landing's share of the sample interval before the first loaded row — of that
-        interval and the test's ramp (given, or this draw's) where the onset was found from the
-        reading's jump, which comes while the weight settles.
+        The sample interval before the first loaded row; that interval and the test's ramp
+        (given, or this draw's ``ramp_s[k]``) where the onset was found from the reading's jump,
+        which comes while the weight settles. ``landing[k]`` = lag / window.
         """
         x = np.atleast_2d(np.asarray(x, dtype=float))
-        rows = self.data.ramp_rows()
-        window = self.data.onset_window
+        window = 0.0 if self.data.onset_window is None else self.data.onset_window
+        window = np.broadcast_to(window, (len(x), self.data.n_tests))
         if self.data.onset_in_ramp is not None:
             ramp = self.data.ramp_s if self.data.ramp_s is not None else 0.0
             if self._ramps:
-                ramp = x[:, self._ramps][:, rows]
+                ramp = x[:, self._ramps][:, self.data.ramp_rows()]
             window = window + np.where(self.data.onset_in_ramp, ramp, 0.0)
-        return x[:, self._landings][:, rows] * window
+        return window
+
+    def _lag(self, x):
+        """How long before t = 0 each test's load began, shape (W, C) (its sampled landing)."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        return x[:, self._landings][:, self.data.ramp_rows()] * self.landing_window(x)
 
     def loading_end(self, x=None):
         """Return when each test's first loading is complete, shape (C,): its ramp's end, or 0.
