@@ -19,7 +19,9 @@ from fsrbayes.inference.calibration import (
     sbc_ranks,
 )
 
-TINY = replace(SBC_SETTINGS, chunk=50, min_steps=100, max_steps=100, transport_rounds=1)
+TINY = replace(
+    SBC_SETTINGS, chunk=50, min_steps=100, max_steps=100, transport_rounds=1, map_starts=2
+)
 
 
 def _normal_mean_sbc(n_reps, n_draws, *, sd_factor=1.0, shift=0.0, seed=0, n_obs=5):

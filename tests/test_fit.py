@@ -138,6 +138,8 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
         "200",
         "--seed",
         "3",
+        "--map-starts",
+        "2",
     ]
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     checkpoint = out / "checkpoint.npz"
