@@ -362,6 +362,33 @@ def test_the_rig_coverage_study_pools_its_intervals_and_flags_too_few():
     assert summary["lowest_count"] == 6 and summary["too_few"] == ["c"]
 
 
+def test_the_truth_s_log_posterior_rank_is_one_among_prior_draws_and_zero_far_off(tmp_path):
+    """The coverage study's one-number check: the share of draws whose log-posterior lies below
+    the truth's. A rig's truth beats every draw of the prior (rank 1); a parameter set the data
+    reject lies below every draw near the truth (rank 0)."""
+    from validation.rig_coverage import coverage_summary, truth_log_posterior_rank
+
+    path, truth = _rig(tmp_path)
+    posterior = LogPosterior.for_sensor(SpecimenData.select(read_csv(path)), load_sensor("fsr402"))
+    params = truth["specimens"]["fsr402-01"]["params"] | {"sigma_rel": truth["rig"]["noise_rel"]}
+    rng = np.random.default_rng(0)
+    prior_draws = posterior.prior.sample(rng, 200)
+    assert truth_log_posterior_rank(posterior, prior_draws, params) == 1.0
+    at_truth = np.array([params[n] for n in posterior.names])
+    near = posterior.prior.to_constrained(
+        posterior.prior.to_unconstrained(at_truth) + 1e-6 * rng.standard_normal((50, at_truth.size))
+    )
+    off = params | {"s0": 1.2 * params["s0"]}
+    assert truth_log_posterior_rank(posterior, near, off) == 0.0
+    rows = [
+        {"converged": True, "inside": {"a": True}, "truth_log_posterior_rank": r}
+        for r in (0.01, 0.3, 0.6, 0.9)
+    ]
+    summary = coverage_summary(rows)
+    assert summary["log_posterior_rank_below_5pct"] == 0.25
+    assert 0 < summary["log_posterior_rank_ks_p"] <= 1
+
+
 def test_a_coverage_rig_draws_its_specimen_and_noise_from_the_fit_prior():
     from validation.rig_coverage import simulate_truth
 

@@ -22,6 +22,9 @@ parameters and 7/10 for 6 %, so one parameter's share cannot be held to a narrow
 summary pools all parameters' intervals (12 × n, expected share 0.9; the intervals of one rig are
 not independent, so the pooled share is a check, not a test with a nominal rate) and flags a
 parameter whose count is below the binomial's 1 % quantile — too few inside to be a 90 % interval.
+Each rig also records where the truth's log-posterior density ranks among its draws
+(:func:`truth_log_posterior_rank`): uniform over rigs when the fit is right, and a test that sees
+every direction of the posterior at once.
 """
 
 import argparse
@@ -43,7 +46,13 @@ from fsrbayes.inference import SpecimenData
 from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
 
-__all__ = ["rig_replication", "simulate_truth", "coverage_summary", "format_coverage"]
+__all__ = [
+    "rig_replication",
+    "simulate_truth",
+    "coverage_summary",
+    "format_coverage",
+    "truth_log_posterior_rank",
+]
 
 NOMINAL = 0.9
 FLAG_QUANTILE = 0.01
@@ -110,6 +119,7 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
     seconds = time.perf_counter() - start
     draws = result.draws().reshape(-1, result.posterior.ndim)
     low, high = np.percentile(draws, [5, 95], axis=0)
+    rank = truth_log_posterior_rank(result.posterior, draws, params)
     names = [n for n in result.posterior.names if n != "sigma_rel"]
     index = {n: i for i, n in enumerate(result.posterior.names)}
     return {
@@ -124,7 +134,21 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
         "report": result.run.report.worst(),
         "inside": {n: bool(low[index[n]] <= params[n] <= high[index[n]]) for n in names},
         "truth_quantile": {n: float(np.mean(draws[:, index[n]] < params[n])) for n in names},
+        "truth_log_posterior_rank": rank,
     }
+
+
+def truth_log_posterior_rank(posterior, draws, params):
+    """Share of the posterior draws whose log-posterior density lies below the truth's.
+
+    The density is taken in the prior-scaled coordinates u, whatever the chains moved in. For a
+    truth drawn from the prior and a right posterior this share is uniform on (0, 1) over rigs:
+    one number per rig that sees every direction at once, where the per-parameter intervals see
+    one each — a posterior too narrow or off the truth along any direction puts it near 0.
+    """
+    u = posterior.prior.to_unconstrained(np.asarray(draws, dtype=float))
+    truth = posterior.prior.to_unconstrained(np.array([[params[n] for n in posterior.names]]))
+    return float(np.mean(posterior(u) < posterior(truth)[0]))
 
 
 def coverage_summary(rows):
@@ -136,7 +160,9 @@ def coverage_summary(rows):
         ``pooled`` (share of all intervals holding the truth), ``inside`` (per parameter: count
         of rigs), ``n_rigs``, ``lowest_count`` (the binomial's :data:`FLAG_QUANTILE` quantile at
         :data:`NOMINAL`) and ``too_few`` (parameters whose count is below it), ``converged``
-        (count of converged rigs).
+        (count of converged rigs); where the rows hold the truths' log-posterior ranks
+        (:func:`truth_log_posterior_rank`), ``log_posterior_rank_below_5pct`` (calibrated: 0.05)
+        and ``log_posterior_rank_ks_p`` (their Kolmogorov–Smirnov test against uniform).
     """
     names = list(rows[0]["inside"])
     inside = {n: int(sum(r["inside"][n] for r in rows)) for n in names}
@@ -148,6 +174,19 @@ def coverage_summary(rows):
         "inside": inside,
         "lowest_count": lowest,
         "too_few": [n for n in names if inside[n] < lowest],
+        **_rank_summary(
+            [r["truth_log_posterior_rank"] for r in rows if "truth_log_posterior_rank" in r]
+        ),
+    }
+
+
+def _rank_summary(ranks):
+    """The truths' log-posterior ranks: their share below 0.05 and the KS test against uniform."""
+    if not ranks:
+        return {}
+    return {
+        "log_posterior_rank_below_5pct": float(np.mean(np.array(ranks) < 0.05)),
+        "log_posterior_rank_ks_p": float(scipy.stats.kstest(ranks, "uniform").pvalue),
     }
 
 
@@ -156,6 +195,11 @@ def format_coverage(rows):
         f"seed {r['seed']}: {'converged' if r['converged'] else 'NOT converged'}, "
         f"{r['steps']} steps, tau {r['tau_max']:.0f}, {r['seconds']:.0f} s, inside "
         f"{sum(r['inside'].values())}/{len(r['inside'])}"
+        + (
+            f", truth's log-posterior rank {r['truth_log_posterior_rank']:.3f}"
+            if "truth_log_posterior_rank" in r
+            else ""
+        )
         for r in rows
     ]
     summary = coverage_summary(rows)
@@ -165,6 +209,11 @@ def format_coverage(rows):
         + f"; pooled {summary['pooled']:.3f} ({summary['converged']}/{n} converged; fewer than "
         f"{summary['lowest_count']}/{n} inside: {', '.join(summary['too_few']) or 'none'})"
     )
+    if "log_posterior_rank_ks_p" in summary:
+        lines.append(
+            f"truths' log-posterior ranks: {summary['log_posterior_rank_below_5pct']:.3f} below "
+            f"0.05 (calibrated 0.05), KS p {summary['log_posterior_rank_ks_p']:.3f} against uniform"
+        )
     return "\n".join(lines)
 
 
