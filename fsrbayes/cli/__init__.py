@@ -9,7 +9,7 @@ import sys
 from .._version import __version__
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
-from ..inference.fit import COORDINATES, FIT_COORDINATES
+from ..inference.fit import COORDINATES, FIT_COORDINATES, MAP_STARTS
 from ..inference.parallel import JobError
 from ..inference.posterior import RAMPS
 from ..physics.effects import EFFECTS
@@ -108,8 +108,11 @@ def build_parser():
     fit_.add_argument(
         "--map-starts",
         type=int,
-        default=8,
-        help="optimisations of the MAP search before sampling (default 8; at least --ensembles)",
+        default=MAP_STARTS,
+        help=(
+            "optimisations of the MAP search before sampling (default %(default)s; at least "
+            "--ensembles)"
+        ),
     )
     fit_.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
     fit_.add_argument(
