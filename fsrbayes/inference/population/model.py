@@ -84,13 +84,10 @@ class Population:
     """
 
     def __init__(self, prior, names=None):
-        names = (
-            tuple(
-                n for n in prior.names if n.split("[", 1)[0] not in parameters_of_role("nuisance")
-            )
-            if names is None
-            else tuple(names)
-        )
+        if names is None:
+            nuisance = parameters_of_role("nuisance")
+            names = tuple(n for n in prior.names if n.split("[", 1)[0] not in nuisance)
+        names = tuple(names)
         unknown = [n for n in names if n not in prior.names]
         if unknown or not names:
             raise ValueError(
