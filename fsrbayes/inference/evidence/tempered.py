@@ -73,7 +73,7 @@ class TemperedSettings:
         the arms' far ends and the ladders under-sample them (x's 99.9 % quantile 2.8 instead of
         3.09; affine charts: 3.06–3.11).
     rhat_target, tau_factor, ess_target : float
-        Convergence criteria (as :class:`~fsrbayes.inference.samplers.ensemble.SamplerSettings`).
+        Convergence criteria (as :class:`~fsrbayes.inference.samplers.settings.SamplerSettings`).
     processes : int
         Worker processes for the ladders (and the groups' searches).
     """

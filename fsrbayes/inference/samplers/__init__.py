@@ -2,7 +2,8 @@
 
 :func:`run_ensembles` runs several independent emcee ensembles in chunks until the split
 R-hat across ensembles, the kept chain's length in autocorrelation times and the bulk ESS all
-hold (:mod:`.convergence`, :class:`SamplerSettings`), with checkpoints (:mod:`.checkpoint`);
+hold (:mod:`.convergence`; the criteria in :class:`SamplerSettings`, :mod:`.settings`), with
+checkpoints (:mod:`.checkpoint`);
 :mod:`.transport` straightens the posterior during warm-up and supplies the independence
 proposals, :mod:`.warmup` fits and tests them round by round, and :mod:`.coordinates` samples a
 target in coordinates of the caller's choosing.
@@ -11,14 +12,8 @@ target in coordinates of the caller's choosing.
 from .checkpoint import CheckpointMismatch, check_checkpoint, load_kept
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import round_trips
-from .ensemble import (
-    EnsembleRun,
-    SamplerSettings,
-    ensemble_moves,
-    even_index,
-    run_ensembles,
-    walkers_for,
-)
+from .ensemble import EnsembleRun, ensemble_moves, even_index, run_ensembles
+from .settings import SamplerSettings, walkers_for
 from .transport import IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap
 
 __all__ = [

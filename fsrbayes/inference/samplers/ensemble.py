@@ -38,173 +38,19 @@ from ..parallel import fork_pool, single_threaded_blas
 from .checkpoint import load_checkpoint, save_checkpoint
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import SampledLogProb, sampled_start
+from .settings import SamplerSettings
 from .transport import MappedLogProb
 from .warmup import MAP_CHECK, even_index, map_settled, transport_maps, warmup_rounds
 
 __all__ = [
     "MAP_CHECK",
     "EnsembleRun",
-    "SamplerSettings",
     "ensemble_moves",
     "even_index",
     "map_settled",
     "run_ensembles",
-    "walkers_for",
     "warmup_rounds",
 ]
-
-
-def walkers_for(n_walkers, ndim):
-    """Walkers per ensemble: ``n_walkers`` checked (even, >= 2·ndim), or max(32, 4·ndim)."""
-    if n_walkers is not None:
-        if n_walkers < 2 * ndim or n_walkers % 2:
-            raise ValueError(f"n_walkers must be even and >= 2·ndim = {2 * ndim}, got {n_walkers}")
-        return n_walkers
-    return max(32, 4 * ndim + (4 * ndim) % 2)
-
-
-TRANSPORT_ROUNDS = 3
-"""Warm-up rounds by default (``SamplerSettings.transport_rounds`` None)."""
-
-
-@dataclass(frozen=True)
-class SamplerSettings:
-    """How long and how hard to sample.
-
-    Attributes
-    ----------
-    n_ensembles : int
-        Independent ensembles (chains for R-hat); at least 2.
-    n_walkers : int or None
-        Walkers per ensemble; default max(32, 4·ndim), even.
-    chunk : int
-        Steps between convergence checks (and checkpoints) while the chain is short; see
-        ``check_growth``.
-    max_steps : int
-        Step budget per ensemble.
-    min_steps : int
-        Never stop before this.
-    rhat_target, tau_factor, ess_target : float
-        The convergence criteria of the module docstring.
-    de_fraction : float
-        Share of differential-evolution moves; the rest are stretch moves.
-    processes : int
-        Worker processes running ensembles side by side (1: in this process). Each ensemble
-        carries its own random state, so the chains are the same either way.
-    transport_rounds : int or None
-        Warm-up chunks, each followed by a refit of every ensemble's transport map (module
-        docstring), at most half of ``max_steps``; 0 samples the target's coordinates directly and
-        discards the first half of the chain. None: :data:`TRANSPORT_ROUNDS`, unless the caller
-        knows better for its coordinates (a fit in pinned coordinates runs one).
-    independence_fraction : float
-        Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
-        fitted to each ensemble's warm-up draws in the map's coordinates,
-        :class:`~fsrbayes.inference.samplers.transport.MixtureProposal`);
-        needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. Too large
-        a share slows mixing again: walkers that reach a region the proposal under-covers wait
-        there for an accepted jump, and only the ensemble moves carry them on (the share was
-        chosen by the autocorrelation times in BENCHMARKS.md).
-    extra_transport_rounds : int
-        Warm-up chunks that may be added, one at a time, while the map fails its test on the
-        draws it produced (module docstring); warm-up never takes more than half of
-        ``max_steps``. Off by default: it speeds up some creep posteriors and kept another from
-        converging (BENCHMARKS.md, "Speed round two").
-    quadratic_map : bool or None
-        The transport map's form: quadratic (None: up to
-        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
-        (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
-        coordinates, which the chain then under-samples while reporting convergence; the affine
-        map does not (the closed-form bent ridge, VALIDATION.md).
-    map_starts : int
-        Optimisations of the maximum-a-posteriori search a fit runs before sampling (from the
-        best prior draws; at least ``n_ensembles``). Their optima are sorted into separate
-        regions, where the ensembles start. Fewer starts search faster where the posterior has
-        one region; the default is what the fits were validated with.
-    check_growth : float
-        Once the chain is long, convergence is checked and the checkpoint written only after it
-        has grown by this share since the last check, rounded down to whole chunks (so every
-        chunk up to ``2 · chunk / check_growth`` steps). Both cost time in proportion to the
-        chain's length: checked every chunk, a long run would spend more time on them than on
-        sampling (BENCHMARKS.md). A fit may then stop up to this share later than the first
-        step at which it met the criteria. 0 checks every chunk.
-    """
-
-    n_ensembles: int = 4
-    n_walkers: int | None = None
-    chunk: int = 500
-    max_steps: int = 20000
-    min_steps: int = 500
-    rhat_target: float = 1.01
-    tau_factor: float = 50.0
-    ess_target: float = 400.0
-    de_fraction: float = 0.8
-    processes: int = 1
-    transport_rounds: int | None = None
-    independence_fraction: float = 0.3
-    quadratic_map: bool | None = None
-    extra_transport_rounds: int = 0
-    check_growth: float = 0.05
-    map_starts: int = 8
-
-    def __post_init__(self):
-        if self.map_starts < 1:
-            raise ValueError(f"map_starts must be >= 1, got {self.map_starts}")
-        if not 0.0 <= self.check_growth < 1.0:
-            raise ValueError(f"check_growth must be in [0, 1), got {self.check_growth}")
-        if self.transport_rounds is not None and self.transport_rounds < 0:
-            raise ValueError(f"transport_rounds must be >= 0, got {self.transport_rounds}")
-        if self.extra_transport_rounds < 0:
-            raise ValueError(
-                f"extra_transport_rounds must be >= 0, got {self.extra_transport_rounds}"
-            )
-        if not 0.0 <= self.independence_fraction < 1.0:
-            raise ValueError(
-                f"independence_fraction must be in [0, 1), got {self.independence_fraction}"
-            )
-
-    @property
-    def rounds(self):
-        """Transport rounds always run: at most half the step budget goes to them."""
-        return min(self.warmup_chunks, self.max_steps // (2 * self.chunk))
-
-    @property
-    def warmup_chunks(self):
-        """``transport_rounds``, or :data:`TRANSPORT_ROUNDS` where it is None."""
-        return TRANSPORT_ROUNDS if self.transport_rounds is None else self.transport_rounds
-
-    @property
-    def max_rounds(self):
-        """Transport rounds at most, the extra ones included (half the step budget at most)."""
-        if not self.rounds:
-            return 0
-        return min(
-            self.warmup_chunks + self.extra_transport_rounds, self.max_steps // (2 * self.chunk)
-        )
-
-    def warmup_steps(self, n_steps, rounds=None):
-        """Return the steps discarded as warm-up out of ``n_steps`` (``rounds``: as run)."""
-        rounds = self.rounds if rounds is None else rounds
-        if rounds:
-            return min(n_steps, rounds * self.chunk)
-        return n_steps // 2
-
-    def walkers_for(self, ndim):
-        """Walkers per ensemble for a target of ``ndim`` dimensions."""
-        return walkers_for(self.n_walkers, ndim)
-
-    def is_check_point(self, n_steps):
-        """Whether convergence is checked, and the checkpoint written, after ``n_steps``.
-
-        After every chunk, and once the chain is long after every ``check_growth`` share of it;
-        the points depend on ``n_steps`` alone, so a resumed run checks where the uninterrupted
-        one would. The step budget is always one.
-        """
-        if n_steps >= self.max_steps:
-            return True
-        point = 0
-        while point < n_steps:
-            point += self.chunk * max(1, int(self.check_growth * point) // self.chunk)
-        return point == n_steps
 
 
 @dataclass
@@ -342,7 +188,7 @@ def run_ensembles(
     log_prob,
     start,
     seed,
-    settings=SamplerSettings(),
+    settings=None,
     *,
     names=(),
     checkpoint=None,
@@ -362,7 +208,8 @@ def run_ensembles(
         Initial walker positions of each ensemble.
     seed : int or numpy.random.SeedSequence
         Seeds one random state per ensemble.
-    settings : SamplerSettings
+    settings : SamplerSettings, optional
+        The defaults when None.
     names : sequence of str
         Parameter names for reports.
     checkpoint : path-like, optional
@@ -383,6 +230,7 @@ def run_ensembles(
     -------
     EnsembleRun
     """
+    settings = SamplerSettings() if settings is None else settings
     start = np.asarray(start, dtype=float)
     n_ens, n_walk, ndim = start.shape
     if n_ens < 2:
