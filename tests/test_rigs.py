@@ -389,6 +389,44 @@ def test_the_truth_s_log_posterior_rank_is_one_among_prior_draws_and_zero_far_of
     assert 0 < summary["log_posterior_rank_ks_p"] <= 1
 
 
+def test_the_misses_a_right_fit_would_give_keep_the_posterior_s_correlations():
+    """Under calibration a rig's count of intervals missing the truth is the count missing a
+    random posterior draw: 0.1 per interval on average, but three parameters that move together
+    miss all at once or none (variance 9 × 0.09 against 3 × 0.09 apart). The summary sets the
+    observed total against the sum of these."""
+    from validation.rig_coverage import (
+        coverage_summary,
+        format_coverage,
+        misses_under_calibration,
+    )
+
+    rng = np.random.default_rng(0)
+    together = np.repeat(rng.standard_normal((100_000, 1)), 3, axis=1)
+    apart = rng.standard_normal((100_000, 3))
+    for draws, variance in ((together, 9 * 0.09), (apart, 3 * 0.09)):
+        low, high = np.percentile(draws, [5, 95], axis=0)
+        mean, var = misses_under_calibration(draws, low, high)
+        assert mean == pytest.approx(0.3, abs=0.005)
+        assert var == pytest.approx(variance, rel=0.05)
+    rows = [
+        {
+            "seed": i,
+            "converged": True,
+            "steps": 1000,
+            "tau_max": 10.0,
+            "seconds": 1.0,
+            "inside": {"a": i % 2 == 0, "b": True, "c": True},
+            "null_misses_mean": 0.3,
+            "null_misses_var": 0.81,
+        }
+        for i in range(20)
+    ]
+    summary = coverage_summary(rows)
+    assert summary["misses"] == 10 and summary["misses_expected"] == pytest.approx(6.0)
+    assert summary["misses_z"] == pytest.approx(4.0 / np.sqrt(20 * 0.81))
+    assert "10 against 6.0 expected under calibration (z +0.99" in format_coverage(rows)
+
+
 def test_a_coverage_rig_draws_its_specimen_and_noise_from_the_fit_prior():
     from validation.rig_coverage import simulate_truth
 

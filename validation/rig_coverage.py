@@ -19,9 +19,10 @@ so a long study can be followed and an interrupted one keeps its rigs).
 How it is judged. A calibrated 90 % interval holds the truth in a rig with probability 0.9, so over
 n rigs a parameter's count inside is Binomial(n, 0.9): with 10 rigs 10/10 happens for 35 % of
 parameters and 7/10 for 6 %, so one parameter's share cannot be held to a narrow band. The
-summary pools all parameters' intervals (12 × n, expected share 0.9; the intervals of one rig are
-not independent, so the pooled share is a check, not a test with a nominal rate) and flags a
-parameter whose count is below the binomial's 1 % quantile — too few inside to be a 90 % interval.
+summary pools all parameters' intervals (12 × n, expected share 0.9) and flags a parameter whose
+count is below the binomial's 1 % quantile — too few inside to be a 90 % interval. The intervals
+of one rig are not independent, so the pooled count is tested against the distribution a right
+fit would give it, read off each rig's own draws (:func:`misses_under_calibration`).
 Each rig also records where the truth's log-posterior density ranks among its draws
 (:func:`truth_log_posterior_rank`): uniform over rigs when the fit is right, and a test that sees
 every direction of the posterior at once.
@@ -52,6 +53,7 @@ __all__ = [
     "coverage_summary",
     "format_coverage",
     "truth_log_posterior_rank",
+    "misses_under_calibration",
 ]
 
 NOMINAL = 0.9
@@ -122,6 +124,8 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
     rank = truth_log_posterior_rank(result.posterior, draws, params)
     names = [n for n in result.posterior.names if n != "sigma_rel"]
     index = {n: i for i, n in enumerate(result.posterior.names)}
+    columns = [index[n] for n in names]
+    null_mean, null_var = misses_under_calibration(draws[:, columns], low[columns], high[columns])
     return {
         "seed": seed,
         "truth": truth,
@@ -135,7 +139,23 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
         "inside": {n: bool(low[index[n]] <= params[n] <= high[index[n]]) for n in names},
         "truth_quantile": {n: float(np.mean(draws[:, index[n]] < params[n])) for n in names},
         "truth_log_posterior_rank": rank,
+        "null_misses_mean": null_mean,
+        "null_misses_var": null_var,
     }
+
+
+def misses_under_calibration(draws, low, high):
+    """Mean and variance of a rig's count of intervals missing a truth drawn from its posterior.
+
+    A right fit's truth is a draw from its posterior, so the count of the rig's intervals
+    ``[low, high]`` (one per column of ``draws``) that miss it has the distribution of the count
+    that miss a random draw — with the posterior's own correlations: a rig whose parameters move
+    together misses several at once or none. Summed over rigs, these give the observed total of
+    misses its expected value and variance under calibration (:func:`coverage_summary`), where
+    12 × n independent intervals would understate the spread.
+    """
+    misses = np.sum((draws < low) | (draws > high), axis=1)
+    return float(misses.mean()), float(misses.var())
 
 
 def truth_log_posterior_rank(posterior, draws, params):
@@ -162,7 +182,11 @@ def coverage_summary(rows):
         :data:`NOMINAL`) and ``too_few`` (parameters whose count is below it), ``converged``
         (count of converged rigs); where the rows hold the truths' log-posterior ranks
         (:func:`truth_log_posterior_rank`), ``log_posterior_rank_below_5pct`` (calibrated: 0.05)
-        and ``log_posterior_rank_ks_p`` (their Kolmogorov–Smirnov test against uniform).
+        and ``log_posterior_rank_ks_p`` (their Kolmogorov–Smirnov test against uniform); where
+        they hold each rig's misses under calibration (:func:`misses_under_calibration`),
+        ``misses``, ``misses_expected`` and ``misses_z`` — the observed total of intervals
+        missing their truth, its expectation and the standardised difference (positive: more
+        misses than a right fit would give; beyond ~2, more than chance).
     """
     names = list(rows[0]["inside"])
     inside = {n: int(sum(r["inside"][n] for r in rows)) for n in names}
@@ -177,6 +201,21 @@ def coverage_summary(rows):
         **_rank_summary(
             [r["truth_log_posterior_rank"] for r in rows if "truth_log_posterior_rank" in r]
         ),
+        **_misses_summary([r for r in rows if "null_misses_var" in r]),
+    }
+
+
+def _misses_summary(rows):
+    """Observed misses against their distribution under calibration, summed over ``rows``."""
+    if not rows:
+        return {}
+    observed = sum(len(r["inside"]) - sum(r["inside"].values()) for r in rows)
+    expected = sum(r["null_misses_mean"] for r in rows)
+    spread = np.sqrt(sum(r["null_misses_var"] for r in rows))
+    return {
+        "misses": int(observed),
+        "misses_expected": float(expected),
+        "misses_z": float((observed - expected) / spread) if spread > 0 else float("nan"),
     }
 
 
@@ -209,6 +248,13 @@ def format_coverage(rows):
         + f"; pooled {summary['pooled']:.3f} ({summary['converged']}/{n} converged; fewer than "
         f"{summary['lowest_count']}/{n} inside: {', '.join(summary['too_few']) or 'none'})"
     )
+    if "misses_z" in summary:
+        n_null = sum("null_misses_var" in r for r in rows)
+        lines.append(
+            f"intervals missing their truth: {summary['misses']} against "
+            f"{summary['misses_expected']:.1f} expected under calibration (z "
+            f"{summary['misses_z']:+.2f}; the {n_null} rigs' own draws)"
+        )
     if "log_posterior_rank_ks_p" in summary:
         lines.append(
             f"truths' log-posterior ranks: {summary['log_posterior_rank_below_5pct']:.3f} below "
