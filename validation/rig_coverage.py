@@ -11,7 +11,7 @@ With ``--truth prior`` each rig's specimen and noise level are drawn from the fi
 from the population sit near the middle of the prior-wide posteriors and over-cover.
 
 Run ``python -m validation.rig_coverage N [FIRST_SEED] [--truth {population,prior}] [--max-steps
-STEPS] [--json OUT]``; prints
+STEPS] [--importance DRAWS] [--json OUT]``; prints
 one line per rig, the share per parameter and the pooled share (:func:`coverage_summary`); with
 ``--json`` every finished rig's row is also written to OUT (rewritten atomically after each rig,
 so a long study can be followed and an interrupted one keeps its rigs).
@@ -25,7 +25,9 @@ of one rig are not independent, so the pooled count is tested against the distri
 fit would give it, read off each rig's own draws (:func:`misses_under_calibration`).
 Each rig also records where the truth's log-posterior density ranks among its draws
 (:func:`truth_log_posterior_rank`): uniform over rigs when the fit is right, and a test that sees
-every direction of the posterior at once.
+every direction of the posterior at once. With ``--importance`` each rig's truth quantiles are
+also re-estimated by importance sampling (:mod:`validation.importance`): a count that falls
+short by the chains' quantiles and not by these says the chains, not the posterior, are at fault.
 """
 
 import argparse
@@ -46,6 +48,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import SpecimenData
 from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
+from validation.importance import importance_quantiles
 
 __all__ = [
     "rig_replication",
@@ -100,12 +103,16 @@ def simulate_truth(seed, truth="population", **rig):
     raise RuntimeError(f"1000 prior draws in a row gave a log the study refuses (seed {seed})")
 
 
-def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, truth="population"):
+def rig_replication(
+    seed, *, fit_seed=None, coordinates=None, settings=None, truth="population", importance=0
+):
     """Simulate and fit one rig; return its per-parameter coverage and convergence.
 
     ``truth`` is where the specimen comes from (:func:`simulate_truth`); ``fit_seed`` (default:
     ``seed``), ``coordinates`` and ``settings`` (default: the fit's, on two processes) are passed
-    to :func:`~fsrbayes.inference.fit.fit`.
+    to :func:`~fsrbayes.inference.fit.fit`. With ``importance`` > 0 the truth's posterior
+    quantiles are also re-estimated from that many importance-sampling draws
+    (:func:`~validation.importance.importance_quantiles`), a check of the chains.
     """
     data, params = simulate_truth(seed, truth)
     settings = settings or replace(FIT_SETTINGS, processes=2)
@@ -126,7 +133,7 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
     index = {n: i for i, n in enumerate(result.posterior.names)}
     columns = [index[n] for n in names]
     null_mean, null_var = misses_under_calibration(draws[:, columns], low[columns], high[columns])
-    return {
+    row = {
         "seed": seed,
         "truth": truth,
         "coordinates": "prior" if result.coordinates is None else "pinned",
@@ -142,6 +149,26 @@ def rig_replication(seed, *, fit_seed=None, coordinates=None, settings=None, tru
         "null_misses_mean": null_mean,
         "null_misses_var": null_var,
     }
+    if importance:
+        chain, _ = result.run.kept()
+        truth_u = result.posterior.prior.to_unconstrained(
+            np.array([params[n] for n in result.posterior.names])
+        )
+        checked = importance_quantiles(
+            result.posterior,
+            chain.reshape(-1, chain.shape[-1]),
+            truth_u,
+            coordinates=result.coordinates,
+            n=importance,
+            rng=seed,
+        )
+        quantile = dict(zip(result.posterior.names, checked["importance"].tolist(), strict=True))
+        row |= {
+            "truth_quantile_importance": {n: quantile[n] for n in names},
+            "inside_importance": {n: bool(0.05 <= quantile[n] <= 0.95) for n in names},
+            "importance_ess": checked["ess"],
+        }
+    return row
 
 
 def misses_under_calibration(draws, low, high):
@@ -202,6 +229,15 @@ def coverage_summary(rows):
             [r["truth_log_posterior_rank"] for r in rows if "truth_log_posterior_rank" in r]
         ),
         **_misses_summary([r for r in rows if "null_misses_var" in r]),
+        **(
+            {
+                "inside_importance": {
+                    n: int(sum(r["inside_importance"][n] for r in rows)) for n in names
+                }
+            }
+            if all("inside_importance" in r for r in rows)
+            else {}
+        ),
     }
 
 
@@ -248,6 +284,11 @@ def format_coverage(rows):
         + f"; pooled {summary['pooled']:.3f} ({summary['converged']}/{n} converged; fewer than "
         f"{summary['lowest_count']}/{n} inside: {', '.join(summary['too_few']) or 'none'})"
     )
+    if "inside_importance" in summary:
+        lines.append(
+            "by importance sampling: "
+            + ", ".join(f"{name} {k}/{n}" for name, k in summary["inside_importance"].items())
+        )
     if "misses_z" in summary:
         n_null = sum("null_misses_var" in r for r in rows)
         lines.append(
@@ -281,11 +322,20 @@ if __name__ == "__main__":
         default="population",
         help="draw each rig's specimen from the sensor's population or from the fit's prior",
     )
+    parser.add_argument(
+        "--importance",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also re-estimate the truth's quantiles from N importance-sampling draws",
+    )
     args = parser.parse_args()
     settings = replace(FIT_SETTINGS, processes=2, max_steps=args.max_steps)
     rows = []
     for seed in range(args.first, args.first + args.n):
-        rows.append(rig_replication(seed, settings=settings, truth=args.truth))
+        rows.append(
+            rig_replication(seed, settings=settings, truth=args.truth, importance=args.importance)
+        )
         print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
         if args.json:
             _write_rows(rows, args.json)
