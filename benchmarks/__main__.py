@@ -2,21 +2,20 @@
 [predict] [likelihood] [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty]
 [hierarchical] [population-sizes] [diagnose] [demo]``.
 
-Without names all run but ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip
-install dynesty``); ``fit`` (converged Burgers fits of one specimen, five seeds, in both
-coordinates), ``rig-fit`` (the divider rig in both coordinates), ``evidence``, ``hierarchical``,
-``population-sizes`` (3, 6, 16 specimens' hyper-posteriors in both coordinates), ``diagnose`` and
-``demo`` take minutes.
+Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
+so numbers from different days can be read against their machine. Without names all run but
+``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip install dynesty``); ``fit``
+(converged Burgers fits of one specimen, five seeds, in both coordinates), ``rig-fit`` (the divider
+rig in both coordinates), ``evidence``, ``hierarchical``, ``population-sizes`` (3, 6, 16 specimens'
+hyper-posteriors in both coordinates), ``diagnose`` and ``demo`` take minutes.
 """
 
 import os
-import platform
 import sys
 
 for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(var, "1")
 
-import numpy as np  # noqa: E402
 
 from benchmarks import (  # noqa: E402
     csv_read,
@@ -28,6 +27,7 @@ from benchmarks import (  # noqa: E402
     hierarchical,
     likelihood,
     long_run,
+    machine,
     population_sizes,
     predict,
     rig_fit,
@@ -64,11 +64,7 @@ def main(names):
     if unknown:
         print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
         return 2
-    print(
-        f"machine: {platform.machine()}, {os.cpu_count()} cores, "
-        f"{platform.processor() or 'cpu n/a'}; python {platform.python_version()}, numpy "
-        f"{np.__version__}"
-    )
+    print(machine.report(machine.run()), flush=True)
     for name in names or [n for n in BENCHMARKS if n not in ("dynesty", "evidence-seeds")]:
         print(BENCHMARKS[name](), flush=True)
     return 0
