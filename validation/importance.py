@@ -29,7 +29,17 @@ __all__ = ["importance_quantiles"]
 
 
 def importance_quantiles(
-    log_prob, draws, point, *, coordinates=None, n=20000, inflate=1.3, df=6, rng=0, batch=500
+    log_prob,
+    draws,
+    point,
+    *,
+    coordinates=None,
+    n=20000,
+    inflate=1.3,
+    df=6,
+    rng=0,
+    batch=500,
+    max_draws=50000,
 ):
     """Posterior CDF of every coordinate at ``point``, by importance sampling and by the chains.
 
@@ -50,6 +60,9 @@ def importance_quantiles(
         Seeds the proposal draws.
     batch : int
         Proposal draws per call of the density (bounds the memory of one call).
+    max_draws : int
+        At most this many of ``draws``, evenly spaced, fit the proposal and give the chains'
+        CDF (a long run's kept chain holds millions).
 
     Returns
     -------
@@ -60,6 +73,7 @@ def importance_quantiles(
         ``without_preimage`` (share of proposal draws with no point of u; 0 in u).
     """
     draws = np.asarray(draws, dtype=float)
+    draws = draws[np.unique(np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int))]
     point = np.asarray(point, dtype=float)
     sampled = draws if coordinates is None else coordinates.to_sampled(draws)
     sampled = sampled[np.isfinite(sampled).all(axis=1)]
