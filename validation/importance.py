@@ -77,14 +77,15 @@ def importance_quantiles(
     point = np.asarray(point, dtype=float)
     sampled = draws if coordinates is None else coordinates.to_sampled(draws)
     sampled = sampled[np.isfinite(sampled).all(axis=1)]
+    # in standardised coordinates: pinned log-currents vary 10⁵ times less than the rest, and
+    # a covariance that spans 10¹⁰ would read as singular
+    centre, scale = sampled.mean(axis=0), sampled.std(axis=0)
     proposal = scipy.stats.multivariate_t(
-        loc=sampled.mean(axis=0),
-        shape=np.cov(sampled.T) * inflate**2,
-        df=df,
-        seed=np.random.default_rng(rng),
+        shape=np.corrcoef(sampled.T) * inflate**2, df=df, seed=np.random.default_rng(rng)
     )
-    w = proposal.rvs(n).reshape(n, -1)
-    log_q = proposal.logpdf(w)
+    z = proposal.rvs(n).reshape(n, -1)
+    w = centre + z * scale
+    log_q = proposal.logpdf(z) - np.sum(np.log(scale))
     if coordinates is None:
         log_p = np.concatenate([log_prob(w[i : i + batch]) for i in range(0, n, batch)])
         u = w
@@ -104,6 +105,6 @@ def importance_quantiles(
         "importance": below,
         "chains": np.mean(draws < point, axis=0),
         "ess": float(ess),
-        "mc_error": np.sqrt(below * (1.0 - below) / ess),
+        "mc_error": np.sqrt(np.clip(below * (1.0 - below), 0.0, None) / ess),
         "without_preimage": float(np.mean(~reached)),
     }

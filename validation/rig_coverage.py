@@ -150,25 +150,34 @@ def rig_replication(
         "null_misses_var": null_var,
     }
     if importance:
-        chain, _ = result.run.kept()
-        truth_u = result.posterior.prior.to_unconstrained(
-            np.array([params[n] for n in result.posterior.names])
-        )
+        row |= _importance_row(result, params, names, importance, seed)
+    return row
+
+
+def _importance_row(result, params, names, n, seed):
+    """The truth's importance-sampled quantiles for a rig's row; a check that fails (a singular
+    proposal, no draw with a preimage) is recorded as ``importance_error``, the fit kept."""
+    chain, _ = result.run.kept()
+    truth_u = result.posterior.prior.to_unconstrained(
+        np.array([params[name] for name in result.posterior.names])
+    )
+    try:
         checked = importance_quantiles(
             result.posterior,
             chain.reshape(-1, chain.shape[-1]),
             truth_u,
             coordinates=result.coordinates,
-            n=importance,
+            n=n,
             rng=seed,
         )
-        quantile = dict(zip(result.posterior.names, checked["importance"].tolist(), strict=True))
-        row |= {
-            "truth_quantile_importance": {n: quantile[n] for n in names},
-            "inside_importance": {n: bool(0.05 <= quantile[n] <= 0.95) for n in names},
-            "importance_ess": checked["ess"],
-        }
-    return row
+    except (ValueError, np.linalg.LinAlgError) as error:
+        return {"importance_error": str(error)}
+    quantile = dict(zip(result.posterior.names, checked["importance"].tolist(), strict=True))
+    return {
+        "truth_quantile_importance": {name: quantile[name] for name in names},
+        "inside_importance": {name: bool(0.05 <= quantile[name] <= 0.95) for name in names},
+        "importance_ess": checked["ess"],
+    }
 
 
 def misses_under_calibration(draws, low, high):
@@ -213,7 +222,10 @@ def coverage_summary(rows):
         they hold each rig's misses under calibration (:func:`misses_under_calibration`),
         ``misses``, ``misses_expected`` and ``misses_z`` — the observed total of intervals
         missing their truth, its expectation and the standardised difference (positive: more
-        misses than a right fit would give; beyond ~2, more than chance).
+        misses than a right fit would give; beyond ~2, more than chance); where rows hold the
+        truths' importance-sampled quantiles, ``importance_rigs`` (how many) and
+        ``inside_importance`` (per parameter: count of those rigs whose importance-sampled 90 %
+        interval holds the truth).
     """
     names = list(rows[0]["inside"])
     inside = {n: int(sum(r["inside"][n] for r in rows)) for n in names}
@@ -229,15 +241,17 @@ def coverage_summary(rows):
             [r["truth_log_posterior_rank"] for r in rows if "truth_log_posterior_rank" in r]
         ),
         **_misses_summary([r for r in rows if "null_misses_var" in r]),
-        **(
-            {
-                "inside_importance": {
-                    n: int(sum(r["inside_importance"][n] for r in rows)) for n in names
-                }
-            }
-            if all("inside_importance" in r for r in rows)
-            else {}
-        ),
+        **_importance_summary([r for r in rows if "inside_importance" in r], names),
+    }
+
+
+def _importance_summary(rows, names):
+    """Per parameter, the rigs whose importance-sampled 90 % interval holds the truth."""
+    if not rows:
+        return {}
+    return {
+        "importance_rigs": len(rows),
+        "inside_importance": {n: int(sum(r["inside_importance"][n] for r in rows)) for n in names},
     }
 
 
@@ -285,9 +299,10 @@ def format_coverage(rows):
         f"{summary['lowest_count']}/{n} inside: {', '.join(summary['too_few']) or 'none'})"
     )
     if "inside_importance" in summary:
+        m = summary["importance_rigs"]
         lines.append(
             "by importance sampling: "
-            + ", ".join(f"{name} {k}/{n}" for name, k in summary["inside_importance"].items())
+            + ", ".join(f"{name} {k}/{m}" for name, k in summary["inside_importance"].items())
         )
     if "misses_z" in summary:
         n_null = sum("null_misses_var" in r for r in rows)
