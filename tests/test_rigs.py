@@ -360,6 +360,18 @@ def test_the_rig_coverage_study_pools_its_intervals_and_flags_too_few():
     assert summary["inside"] == {"a": 10, "b": 9, "c": 5}
     assert summary["pooled"] == pytest.approx(24 / 30)
     assert summary["lowest_count"] == 6 and summary["too_few"] == ["c"]
+    assert "inside_importance" not in summary
+    # rigs whose chains were also checked by importance sampling are counted on their own; a
+    # rig whose check failed keeps its fit's row and is left out of that count
+    for i, row in enumerate(rows):
+        if i == 5:
+            row["importance_error"] = "a singular proposal"
+        else:
+            row["inside_importance"] = {"a": True, "b": True, "c": i % 3 != 0}
+    summary = coverage_summary(rows)
+    assert summary["importance_rigs"] == 9
+    assert summary["inside_importance"] == {"a": 9, "b": 9, "c": 5}
+    assert summary["inside"]["c"] == 5  # the chains' counts as before
 
 
 def test_the_truth_s_log_posterior_rank_is_one_among_prior_draws_and_zero_far_off(tmp_path):
