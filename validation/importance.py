@@ -23,6 +23,7 @@ not return for their own image.
 import numpy as np
 import scipy.stats
 
+from fsrbayes.inference.samplers import even_index
 from fsrbayes.inference.samplers.coordinates import SampledLogProb
 
 __all__ = ["importance_quantiles"]
@@ -73,7 +74,7 @@ def importance_quantiles(
         ``without_preimage`` (share of proposal draws with no point of u; 0 in u).
     """
     draws = np.asarray(draws, dtype=float)
-    draws = draws[np.unique(np.linspace(0, len(draws) - 1, min(len(draws), max_draws)).astype(int))]
+    draws = draws[even_index(len(draws), max_draws)]
     point = np.asarray(point, dtype=float)
     sampled = draws if coordinates is None else coordinates.to_sampled(draws)
     sampled = sampled[np.isfinite(sampled).all(axis=1)]
@@ -86,13 +87,13 @@ def importance_quantiles(
     z = proposal.rvs(n).reshape(n, -1)
     w = centre + z * scale
     log_q = proposal.logpdf(z) - np.sum(np.log(scale))
+    # per draw: [log p, u] in u itself, [log p_w, log p_u, u] through the coordinates
     if coordinates is None:
-        log_p = np.concatenate([log_prob(w[i : i + batch]) for i in range(0, n, batch)])
-        u = w
+        target, u_from = (lambda x: np.column_stack([log_prob(x), x])), 1
     else:
-        target = SampledLogProb(log_prob, coordinates)
-        out = np.concatenate([target(w[i : i + batch]) for i in range(0, n, batch)])
-        log_p, u = out[:, 0], out[:, 2:]
+        target, u_from = SampledLogProb(log_prob, coordinates), 2
+    out = np.concatenate([target(w[i : i + batch]) for i in range(0, n, batch)])
+    log_p, u = out[:, 0], out[:, u_from:]
     reached = np.isfinite(log_p)
     if not reached.any():
         raise ValueError("no proposal draw has a finite posterior density")
