@@ -1,7 +1,7 @@
 """The machine a benchmark run is on, and how fast its cores are on fixed reference loads.
 
-Why. The project's numbers come from shared 2-core machines whose speed per core differs by up
-to ~3× from one day to the next (BENCHMARKS.md). Every ``python -m benchmarks`` run prints this
+Why. The project's numbers come from shared machines whose speed per core differs from one day
+to the next (BENCHMARKS.md records by how much). Every ``python -m benchmarks`` run prints this
 first, so each number can be read against its machine: a pure-Python loop (the interpreter's
 speed, which bounds the per-call overhead of the likelihood and the samplers), numpy's ``exp``
 on 10⁶ doubles (vectorised arithmetic, which bounds the model's solve) — each the best of three
@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 LOOP = 10_000_000
-"""Iterations of the pure-Python reference loop (~1 s on the project's slower machine)."""
+"""Iterations of the pure-Python reference loop (about a second on a 2-core cloud machine)."""
 
 
 def _loop_seconds(_=None):
