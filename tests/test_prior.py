@@ -79,3 +79,16 @@ def test_sensor_prior_samples_and_evaluates(rng):
 def test_fixed_priors_are_refused():
     with pytest.raises(ValueError, match="fixed parameters"):
         JointPrior(("Vth",), (make_distribution({"dist": "fixed", "value": 0.07}),))
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_the_marginal_cdf_is_the_integral_of_the_density_and_makes_draws_uniform(kind, rng):
+    prior = one(kind)
+    dist = prior.dists[0]
+    lower = max(dist.support[0], float(dist.ppf(1e-9)))
+    for q in (0.05, 0.5, 0.95):
+        x = float(dist.ppf(q))
+        mass, _ = integrate.quad(lambda v: np.exp(dist.logpdf(v)), lower, x, limit=400)
+        assert prior.marginal_cdf(np.array([[x]]))[0, 0] == pytest.approx(q, abs=1e-6)
+        assert mass == pytest.approx(q, abs=1e-6)
+    assert stats.kstest(prior.marginal_cdf(prior.sample(rng, 5000))[:, 0], "uniform").pvalue > 1e-3

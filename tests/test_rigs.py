@@ -494,3 +494,37 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     assert summary["converged"] == 10
     assert 0.8 <= summary["pooled"] <= 0.98
     assert not summary["too_few"], summary["inside"]
+
+
+def test_the_study_counts_the_truths_drawn_from_the_priors_tails():
+    """A parameter left at its prior misses exactly the truths from the prior's outer 10 %: the
+    summary counts those truths, how many of them were missed, and the interval's prior mass."""
+    from validation.rig_coverage import coverage_summary, format_coverage
+
+    rng = np.random.default_rng(3)
+    quantiles = rng.uniform(size=200)
+    rows = [
+        {
+            "seed": i,
+            "converged": True,
+            "steps": 1000,
+            "tau_max": 10.0,
+            "seconds": 1.0,
+            # "flat": the posterior is the prior; "pinned": the data pin it around the truth
+            "inside": {"flat": 0.05 <= q <= 0.95, "pinned": True},
+            "truth_prior_quantile": {"flat": q, "pinned": q},
+            "interval_prior_mass": {"flat": 0.9, "pinned": 0.01},
+        }
+        for i, q in enumerate(quantiles)
+    ]
+    summary = coverage_summary(rows)
+    tails = int(np.sum((quantiles < 0.05) | (quantiles > 0.95)))
+    assert summary["outside_prior_90"] == {"flat": tails, "pinned": tails}
+    assert summary["misses_in_prior_tails"] == {"flat": tails, "pinned": 0}
+    assert summary["inside"]["flat"] == 200 - tails
+    assert summary["interval_prior_mass"] == {"flat": 0.9, "pinned": 0.01}
+    assert f"of 200: flat {tails} ({tails}; 0.90), pinned {tails} (0; 0.01)" in format_coverage(
+        rows
+    )
+    older = [{k: v for k, v in r.items() if k != "truth_prior_quantile"} for r in rows]
+    assert "outside_prior_90" not in coverage_summary(older)

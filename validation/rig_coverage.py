@@ -28,6 +28,9 @@ Each rig also records where the truth's log-posterior density ranks among its dr
 every direction of the posterior at once. With ``--importance`` each rig's truth quantiles are
 also re-estimated by importance sampling (:mod:`validation.importance`): a count that falls
 short by the chains' quantiles and not by these says the chains, not the posterior, are at fault.
+Each rig also records where its truths lie in their priors (:func:`prior_tail_summary`): for a
+parameter the data leave near its prior, the interval misses the truths drawn from the prior's
+outer 10 %, so that parameter's count follows the seeds' luck in drawing them.
 """
 
 import argparse
@@ -56,6 +59,7 @@ __all__ = [
     "coverage_summary",
     "format_coverage",
     "truth_log_posterior_rank",
+    "prior_tail_summary",
     "misses_under_calibration",
 ]
 
@@ -133,6 +137,9 @@ def rig_replication(
     index = {n: i for i, n in enumerate(result.posterior.names)}
     columns = [index[n] for n in names]
     null_mean, null_var = misses_under_calibration(draws[:, columns], low[columns], high[columns])
+    prior = result.posterior.prior
+    truth_in_prior = prior.marginal_cdf(np.array([params[n] for n in prior.names]))
+    ends_in_prior = prior.marginal_cdf(np.vstack([low, high]))
     row = {
         "seed": seed,
         "truth": truth,
@@ -148,6 +155,10 @@ def rig_replication(
         "truth_log_posterior_rank": rank,
         "null_misses_mean": null_mean,
         "null_misses_var": null_var,
+        "truth_prior_quantile": {n: float(truth_in_prior[index[n]]) for n in names},
+        "interval_prior_mass": {
+            n: float(ends_in_prior[1, index[n]] - ends_in_prior[0, index[n]]) for n in names
+        },
     }
     if importance:
         row |= _importance_row(result, params, names, importance, seed)
@@ -225,7 +236,9 @@ def coverage_summary(rows):
         misses than a right fit would give; beyond ~2, more than chance); where rows hold the
         truths' importance-sampled quantiles, ``importance_rigs`` (how many) and
         ``inside_importance`` (per parameter: count of those rigs whose importance-sampled 90 %
-        interval holds the truth).
+        interval holds the truth); where they hold the truths' prior quantiles
+        (:func:`prior_tail_summary`), ``outside_prior_90``, ``misses_in_prior_tails`` and
+        ``interval_prior_mass``.
     """
     names = list(rows[0]["inside"])
     inside = {n: int(sum(r["inside"][n] for r in rows)) for n in names}
@@ -242,6 +255,39 @@ def coverage_summary(rows):
         ),
         **_misses_summary([r for r in rows if "null_misses_var" in r]),
         **_importance_summary([r for r in rows if "inside_importance" in r], names),
+        **prior_tail_summary([r for r in rows if "truth_prior_quantile" in r], names),
+    }
+
+
+def prior_tail_summary(rows, names):
+    """Where the rigs' truths fell in their priors, per parameter.
+
+    A parameter the data hardly inform keeps a posterior close to its prior, and its 90 %
+    interval then misses exactly the truths drawn from the prior's outer 10 %. Its count inside
+    is then the draw's luck more than the fit's: how many of the study's truths landed in the
+    prior's tails is a property of the seeds alone (Binomial(n, 0.1) for a right prior draw),
+    and a shortfall matched by an excess of such truths is that luck.
+
+    Returns
+    -------
+    dict
+        ``outside_prior_90`` (per parameter: rigs whose truth lies outside the prior's central
+        90 %), ``misses_in_prior_tails`` (of those, how many the fit's interval missed) and
+        ``interval_prior_mass`` (per parameter: the median prior mass of the fit's 90 % interval
+        — ~0.9 where the posterior is the prior, small where the data pin the parameter); empty
+        without rows.
+    """
+    if not rows:
+        return {}
+    tail = {
+        n: [r for r in rows if not 0.05 <= r["truth_prior_quantile"][n] <= 0.95] for n in names
+    }
+    return {
+        "outside_prior_90": {n: len(tail[n]) for n in names},
+        "misses_in_prior_tails": {n: sum(not r["inside"][n] for r in tail[n]) for n in names},
+        "interval_prior_mass": {
+            n: float(np.median([r["interval_prior_mass"][n] for r in rows])) for n in names
+        },
     }
 
 
@@ -303,6 +349,16 @@ def format_coverage(rows):
         lines.append(
             "by importance sampling: "
             + ", ".join(f"{name} {k}/{m}" for name, k in summary["inside_importance"].items())
+        )
+    if "outside_prior_90" in summary:
+        m = sum("truth_prior_quantile" in r for r in rows)
+        lines.append(
+            f"truths outside the prior's 90 % (missed; interval's prior mass) of {m}: "
+            + ", ".join(
+                f"{name} {k} ({summary['misses_in_prior_tails'][name]}; "
+                f"{summary['interval_prior_mass'][name]:.2f})"
+                for name, k in summary["outside_prior_90"].items()
+            )
         )
     if "misses_z" in summary:
         n_null = sum("null_misses_var" in r for r in rows)

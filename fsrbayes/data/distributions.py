@@ -144,6 +144,13 @@ class Distribution:
                 return np.clip(a["mu"] + a["sigma"] * z, a["lower"], a["upper"])
         return self._frozen().ppf(q)  # gamma
 
+    def cdf(self, x):
+        """Return the cumulative distribution function at ``x`` (``fixed``: a step at its value)."""
+        x = np.asarray(x, dtype=float)
+        if self.kind == "fixed":
+            return np.where(x >= self.args["value"], 1.0, 0.0)
+        return self._frozen().cdf(x)
+
     def median(self):
         """Return the distribution's median."""
         return float(self.ppf(0.5))

@@ -163,6 +163,11 @@ class JointPrior:
         """Draws of shape ``size + (ndim,)`` (or ``(ndim,)``)."""
         return np.stack([np.asarray(d.sample(rng, size), dtype=float) for d in self.dists], axis=-1)
 
+    def marginal_cdf(self, x):
+        """Each parameter's prior CDF at x (…, ndim) → (…, ndim): where each value lies."""
+        x = np.asarray(x, dtype=float)
+        return np.stack([d.cdf(x[..., k]) for k, d in enumerate(self.dists)], axis=-1)
+
     def log_prob(self, x):
         """Log prior density at x (…, ndim) → (…); −inf outside the support.
 
