@@ -279,9 +279,7 @@ def prior_tail_summary(rows, names):
     """
     if not rows:
         return {}
-    tail = {
-        n: [r for r in rows if not 0.05 <= r["truth_prior_quantile"][n] <= 0.95] for n in names
-    }
+    tail = {n: [r for r in rows if not 0.05 <= r["truth_prior_quantile"][n] <= 0.95] for n in names}
     return {
         "outside_prior_90": {n: len(tail[n]) for n in names},
         "misses_in_prior_tails": {n: sum(not r["inside"][n] for r in tail[n]) for n in names},
