@@ -352,6 +352,37 @@ def test_laplace_start_is_twice_the_posterior_spread():
     np.testing.assert_allclose(np.cov(start.T), 4 * _Gaussian2D.cov, rtol=0.08)
 
 
+class _ThinQuartic:
+    """A rotated log-density with posterior widths from 1 to 1e-4 and a quartic term: steps of
+    1e-3 straddle its thin directions, where the quartic dominates a second difference."""
+
+    ndim = 4
+
+    def __init__(self):
+        q, _ = np.linalg.qr(np.random.default_rng(5).standard_normal((4, 4)))
+        self.to_z = q.T * np.array([1.0, 1e2, 1e3, 1e4])[:, None]  # z = diag(s)·Qᵀ·u
+        self.hessian = -self.to_z.T @ self.to_z
+
+    def __call__(self, u):
+        z = np.atleast_2d(u) @ self.to_z.T
+        return -0.5 * np.sum(z**2, axis=1) - 0.01 * np.sum(z**4, axis=1)
+
+
+def test_whitening_takes_the_hessian_again_where_the_first_steps_straddle_the_sheet():
+    from fsrbayes.inference.optimize import root_covariance, whitening
+
+    target = _ThinQuartic()
+    at = np.zeros(target.ndim)
+
+    def roundness(root):  # Rᵀ·(−H)·R: the identity where R whitens the density exactly
+        return root.T @ -target.hessian @ root
+
+    one_pass = roundness(root_covariance(target, at))
+    assert np.abs(one_pass - np.eye(4)).max() > 0.5  # steps of 1e-3: up to 3x off
+    np.testing.assert_allclose(roundness(whitening(target, at)), np.eye(4), atol=1e-3)
+    np.testing.assert_array_equal(whitening(target, at, passes=1), root_covariance(target, at))
+
+
 def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     # 9 tests x 31 samples: plain L-BFGS-B stopped 19 nats below the true parameters here;
     # the whitened polish must end at or above them — also after the short first phase the fit

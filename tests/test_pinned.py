@@ -219,7 +219,9 @@ def test_round_trip_and_the_jacobian_of_the_inverse(pinned, rig_posterior):
     lost, lost_det = pinned.from_sampled(bad)
     assert np.isnan(lost[:2]).any(axis=1).all() and np.isneginf(lost_det[:2]).all()
     assert np.allclose(lost[2], back[2], rtol=0, atol=1e-12)  # bit-equal on Intel, not on AMD
-    assert lost_det[2] == pytest.approx(log_det[2], abs=1e-9)
+    # its log-determinant comes from forward differences of solves whose last iterations depend
+    # on the batch: equal to ~1e-8 (the density's noise, far below a nat)
+    assert lost_det[2] == pytest.approx(log_det[2], abs=1e-7)
     # log|det du/dw| = −log|det ∂y/∂u_P| against central differences of the forward map
     solved = [posterior.names.index(n) for n in pinned.solved]
     h = 1e-5

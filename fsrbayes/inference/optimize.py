@@ -47,6 +47,25 @@ times the search's time, SciPy's default (2.2e-9) under a nat more again at up t
 (BENCHMARKS.md)."""
 
 
+POLISH_FTOL = 1e-4
+"""The stopping share of :func:`polish`'s L-BFGS-B runs. Whitened (:func:`whitening`), the
+objective is counted in nats from the round's start (|objective| ≲ 1 near the optimum), so a run
+stops where an iteration gains less than ~1e-4 nats, and the rounds go on while a round gains
+more than the polish's ``tol``; the first phase, in the ill-conditioned prior-scaled
+coordinates, keeps :data:`MAP_FTOL`."""
+
+POLISH_PASSES = 4
+"""At most this many Hessians :func:`whitening` takes, each in the coordinates the one before
+whitened."""
+
+WHITENED_STEP = 1e-2
+"""The finite-difference step of :func:`whitening`'s later passes, in whitened units."""
+
+ROUND_ENOUGH = (0.5, 2.0)
+"""A whitening pass whose Hessian's eigenvalues all lie in this range found the coordinates
+before it nearly round (:func:`whitening` stops there)."""
+
+
 class NegativeLogPosterior:
     """−log p(u) and its central-difference gradient from one vectorised call of 2·ndim + 1 points.
 
@@ -90,14 +109,21 @@ class NegativeLogPosterior:
         return (0.0 if self.reference is None else self.reference) - fun
 
 
-def _lbfgs(objective, x0, maxiter):
-    """L-BFGS-B on ``objective`` from ``x0``; return (the optimum's x, its log-posterior)."""
+def _lbfgs(objective, x0, maxiter, ftol=None):
+    """L-BFGS-B on ``objective`` from ``x0``; return (the optimum's x, its log-posterior).
+
+    ``ftol``: the stopping share (default :data:`MAP_FTOL`).
+    """
     result = optimize.minimize(
         objective,
         x0,
         jac=True,
         method="L-BFGS-B",
-        options={"maxiter": maxiter, "maxfun": 2 * maxiter, "ftol": MAP_FTOL},
+        options={
+            "maxiter": maxiter,
+            "maxfun": 2 * maxiter,
+            "ftol": MAP_FTOL if ftol is None else ftol,
+        },
     )
     return result.x, objective.log_posterior(result.fun)
 
@@ -256,6 +282,42 @@ def root_covariance(posterior, u_map, step=1e-3):
     return vectors / np.sqrt(precision)
 
 
+class _Whitened:
+    """log p(u + root·w) as a function of w."""
+
+    def __init__(self, posterior, u, root):
+        self.posterior, self.u, self.root = posterior, u, root
+        self.ndim = posterior.ndim
+
+    def __call__(self, w):
+        return self.posterior(self.u + np.asarray(w) @ self.root.T)
+
+
+def whitening(posterior, u, passes=None):
+    """Return a square root R of the local covariance whose w = R⁻¹(u' − u) make log p round.
+
+    The first pass is :func:`root_covariance` (steps of 1e-3 in u). On a rig's sheet, pinned
+    to ~1e-5 of the prior widths across and curved along, those steps straddle the sheet and
+    its Hessian is off by orders of magnitude in some directions: an L-BFGS-B run in its
+    coordinates crawls, hundreds of iterations gaining ~1e-5 nats each, and stops short. Each
+    further pass takes the Hessian again in the coordinates the last one whitened, with steps of
+    :data:`WHITENED_STEP` there — a hundredth of the local posterior width in every direction —
+    and composes the two; passes stop once one finds the coordinates before it round enough
+    (:data:`ROUND_ENOUGH`), or after ``passes`` (default :data:`POLISH_PASSES`).
+    """
+    root = root_covariance(posterior, u)
+    low, high = ROUND_ENOUGH
+    for _ in range(1, POLISH_PASSES if passes is None else passes):
+        refined = root_covariance(
+            _Whitened(posterior, u, root), np.zeros(posterior.ndim), step=WHITENED_STEP
+        )
+        root = root @ refined
+        precision = 1.0 / np.sum(refined**2, axis=0)  # its columns: eigenvectors / sqrt(λ)
+        if np.all((precision > low) & (precision < high)):
+            break
+    return root
+
+
 def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3, root_cov=None):
     """Return walker starts around a MAP point, overdispersed.
 
@@ -351,12 +413,13 @@ def polish(posterior, u, value, rounds=4, tol=1e-3):
 
     L-BFGS-B in the prior-scaled coordinates stops early on the creep posterior's ridges
     (condition number ~1e8): on a 9-test specimen it ended 19 nats below the true parameters.
-    Whitened, the ridge is round near the optimum and a few rounds walk along it.
+    Whitened (:func:`whitening`), the ridge is round near the optimum and a few rounds walk
+    along it.
     """
     for _ in range(rounds):
-        root = root_covariance(posterior, u)
+        root = whitening(posterior, u)
         objective = NegativeLogPosterior(posterior, basis=root, origin=u)
-        step, found = _lbfgs(objective, np.zeros(posterior.ndim), 2000)
+        step, found = _lbfgs(objective, np.zeros(posterior.ndim), 2000, POLISH_FTOL)
         if not np.isfinite(found) or found <= value + tol:
             if np.isfinite(found) and found > value:
                 u, value = u + root @ step, found
