@@ -401,6 +401,12 @@ def test_the_truth_s_log_posterior_rank_is_one_among_prior_draws_and_zero_far_of
     assert 0 < summary["log_posterior_rank_ks_p"] <= 1
 
 
+def _study_row(seed, **fields):
+    """A coverage study's row for a converged rig, with the given fields."""
+    converged = {"seed": seed, "converged": True, "steps": 1000, "tau_max": 10.0, "seconds": 1.0}
+    return converged | fields
+
+
 def test_the_misses_a_right_fit_would_give_keep_the_posterior_s_correlations():
     """Under calibration a rig's count of intervals missing the truth is the count missing a
     random posterior draw: 0.1 per interval on average, but three parameters that move together
@@ -421,16 +427,12 @@ def test_the_misses_a_right_fit_would_give_keep_the_posterior_s_correlations():
         assert mean == pytest.approx(0.3, abs=0.005)
         assert var == pytest.approx(variance, rel=0.05)
     rows = [
-        {
-            "seed": i,
-            "converged": True,
-            "steps": 1000,
-            "tau_max": 10.0,
-            "seconds": 1.0,
-            "inside": {"a": i % 2 == 0, "b": True, "c": True},
-            "null_misses_mean": 0.3,
-            "null_misses_var": 0.81,
-        }
+        _study_row(
+            i,
+            inside={"a": i % 2 == 0, "b": True, "c": True},
+            null_misses_mean=0.3,
+            null_misses_var=0.81,
+        )
         for i in range(20)
     ]
     summary = coverage_summary(rows)
@@ -503,18 +505,14 @@ def test_the_study_counts_the_truths_drawn_from_the_priors_tails():
 
     rng = np.random.default_rng(3)
     quantiles = rng.uniform(size=200)
+    # "flat": the posterior is the prior; "pinned": the data pin it around the truth
     rows = [
-        {
-            "seed": i,
-            "converged": True,
-            "steps": 1000,
-            "tau_max": 10.0,
-            "seconds": 1.0,
-            # "flat": the posterior is the prior; "pinned": the data pin it around the truth
-            "inside": {"flat": 0.05 <= q <= 0.95, "pinned": True},
-            "truth_prior_quantile": {"flat": q, "pinned": q},
-            "interval_prior_mass": {"flat": 0.9, "pinned": 0.01},
-        }
+        _study_row(
+            i,
+            inside={"flat": 0.05 <= q <= 0.95, "pinned": True},
+            truth_prior_quantile={"flat": q, "pinned": q},
+            interval_prior_mass={"flat": 0.9, "pinned": 0.01},
+        )
         for i, q in enumerate(quantiles)
     ]
     summary = coverage_summary(rows)
