@@ -8,10 +8,9 @@ fifth digit, and so does the CPU (its BLAS kernels and libm): they are kept per 
 (``fit_…@GenuineIntel``, ``fit_…@AuthenticAMD``, the machines CI has run on). They are
 re-recorded from a commit that passed here before (CHANGELOG), never from the code under test —
 unless a commit changes the MAP search on purpose, which then re-records them itself and says so
-in the CHANGELOG. The whitened polish changed after they were recorded (its stopping share
-``optimize.POLISH_FTOL`` 1e-6 → 1e-4, its whitening from one Hessian to up to four,
-``optimize.POLISH_PASSES``): the fits run with the recorded settings, so the pins still check
-every other number of the search and the chain.
+in the CHANGELOG. The fits run with the whitened polish the pins were recorded with
+(``RECORDED_POLISH``: one Hessian, stopping share 1e-6), so the pins check every other number of
+the search and the chain whatever the polish's defaults are.
 """
 
 import platform

@@ -62,8 +62,8 @@ WHITENED_STEP = 1e-2
 """The finite-difference step of :func:`whitening`'s later passes, in whitened units."""
 
 ROUND_ENOUGH = (0.5, 2.0)
-"""A whitening pass whose Hessian's eigenvalues all lie in this range found the coordinates
-before it nearly round (:func:`whitening` stops there)."""
+""":func:`whitening` stops once a pass's Hessian, taken in the current whitened coordinates, has
+every eigenvalue in this range: those coordinates are nearly round."""
 
 
 class NegativeLogPosterior:
@@ -302,7 +302,7 @@ def whitening(posterior, u, passes=None):
     coordinates crawls, hundreds of iterations gaining ~1e-5 nats each, and stops short. Each
     further pass takes the Hessian again in the coordinates the last one whitened, with steps of
     :data:`WHITENED_STEP` there — a hundredth of the local posterior width in every direction —
-    and composes the two; passes stop once one finds the coordinates before it round enough
+    and composes the two; passes stop once that Hessian is close to the identity
     (:data:`ROUND_ENOUGH`), or after ``passes`` (default :data:`POLISH_PASSES`).
     """
     root = root_covariance(posterior, u)
