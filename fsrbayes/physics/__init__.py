@@ -3,7 +3,8 @@
 No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything here is
 numpy/scipy functions of arrays in SI units (barrier height in eV). The smooth law's circuit
 solver also has a numba-compiled point-by-point engine (:mod:`.compiled`, the default of
-:func:`~.solver.solve_bulk`), tested against the numpy one.
+:func:`~.solver.solve_bulk`), tested against the numpy one; a finite-difference gradient's
+neighbours are carried from one solve along the root's tangent (:mod:`.tangent`).
 """
 
 from . import (
@@ -17,6 +18,7 @@ from . import (
     rheology,
     solver,
     superposition,
+    tangent,
     tunneling,
 )
 from .circuits import (
@@ -53,6 +55,7 @@ __all__ = [
     "rheology",
     "solver",
     "superposition",
+    "tangent",
     "tunneling",
     "contact_resistance",
     "effective_area",

@@ -20,8 +20,9 @@ import numpy as np
 from .contact import contact_resistance, effective_area, gap
 from .effects import resolve_effects
 from .models import PeerModel, model_family
-from .solver import solve_bulk
+from .solver import solve_bulk as solve_exactly
 from .superposition import load_of_steps, ramped_load, step_strain, strain_of_steps
+from .tangent import solve_bulk_near_first
 from .tunneling import TUNNELING_LAWS
 
 __all__ = [
@@ -102,7 +103,17 @@ def _current_factor(effects, params, voltage, time, kind):
     return factor
 
 
-def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects=(), time=0.0):
+def _solve(
+    params,
+    voltage,
+    stress,
+    strain,
+    tunneling,
+    extra_series=0.0,
+    effects=(),
+    time=0.0,
+    near_first=False,
+):
     """Solve the paper's circuit with the effects' hooks.
 
     ``effects`` are :class:`~.effects.Effect` objects. A physical effect's current factor f
@@ -110,8 +121,10 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
     series with a resistance R (a divider), V_s = V_FSR + R·f·g(V_FSR) is the undegraded sensor
     in series with R·f, solved as such with f taken at V_FSR of the undegraded solution (one
     fixed-point step). A readout effect's factor scales the reading, after the circuit.
+    ``near_first``: solve with :func:`~.tangent.solve_bulk_near_first`.
     """
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
+    solve_bulk = solve_bulk_near_first if near_first else solve_exactly
     s, area, series = sensor_state(params, stress, strain)
     if effects:
         creep = strain - np.asarray(stress, dtype=float) / params["k1"]
@@ -145,7 +158,16 @@ def _solve(params, voltage, stress, strain, tunneling, extra_series=0.0, effects
 
 
 def _solve_model(
-    params, voltage, stress, strain, family, tunneling, effects=(), time=0.0, extra_series=0.0
+    params,
+    voltage,
+    stress,
+    strain,
+    family,
+    tunneling,
+    effects=(),
+    time=0.0,
+    extra_series=0.0,
+    near_first=False,
 ):
     """Solve the circuit of the model family: a peer model's own, or the paper's implicit one."""
     if isinstance(family, PeerModel):
@@ -157,7 +179,9 @@ def _solve_model(
                 f"the peer model {family.name!r} takes no effects, got {[e.name for e in effects]}"
             )
         return family.solve(params, voltage, stress, strain, extra_series)
-    return _solve(params, voltage, stress, strain, tunneling, extra_series, effects, time)
+    return _solve(
+        params, voltage, stress, strain, tunneling, extra_series, effects, time, near_first
+    )
 
 
 def _check_effect_params(params, effects):
@@ -195,6 +219,7 @@ def solve_current(
     extra_series=0.0,
     load_steps=None,
     first_ramp=None,
+    near_first=False,
 ):
     """Full solution (current, V_bulk, validity, regime) after a stress step at t = 0.
 
@@ -206,7 +231,10 @@ def solve_current(
     (:mod:`~.superposition`) and the contact and area laws see the momentary load ``stress``
     (C, T), by default the steps' own; ``time`` must then be (C, T). ``first_ramp`` (s,
     broadcasting with ``step_time[..., :1]``) lets each test's first step rise linearly over
-    that time, exactly, in the strain and in the default momentary load.
+    that time, exactly, in the strain and in the default momentary load. ``near_first=True``
+    declares the parameter sets (the rows of ``params``' arrays) to be one point and its
+    finite-difference neighbours: the paper's circuit is solved at the first and carried to the
+    others along its tangent (:func:`~.tangent.solve_bulk_near_first`).
 
     Returns
     -------
@@ -235,7 +263,7 @@ def solve_current(
                 weight = step_size[..., :1]
                 stress = ramped_load(stress, weight, first_ramp, time - step_time[..., :1])
     return _solve_model(
-        params, voltage, stress, strain, family, tunneling, effects, time, extra_series
+        params, voltage, stress, strain, family, tunneling, effects, time, extra_series, near_first
     )
 
 
