@@ -35,7 +35,7 @@ from scipy import special
 from ..data.creep import CreepData
 from ..physics.superposition import load_of_steps, ramped_load
 from ..utils import HALF_LOG_2PI
-from .counts import CountHistograms, count_log_likelihood
+from .counts import CountHistograms, count_log_likelihood, count_log_likelihood_near_first
 from .packing import (
     BINS_PER_DECADE,
     MAX_RAW_SAMPLES,
@@ -415,7 +415,14 @@ def ar1_innovations(resid_full, time_s, tau):
 
 
 def log_likelihood_pointwise(
-    log_model, data, sigma_rel, *, likelihood="gaussian", nu=None, noise_tau=None
+    log_model,
+    data,
+    sigma_rel,
+    *,
+    likelihood="gaussian",
+    nu=None,
+    noise_tau=None,
+    near_first=False,
 ):
     """Log-likelihood of every observed sample.
 
@@ -431,6 +438,10 @@ def log_likelihood_pointwise(
         Student-t degrees of freedom.
     noise_tau : ndarray, shape (W,), optional
         Correlation time of the AR(1) noise in s.
+    near_first : bool
+        The rows are one parameter set and its finite-difference neighbours: whole counts'
+        probabilities are taken at the first and carried to the others to first order
+        (:func:`~.counts.count_log_likelihood_near_first`).
 
     Returns
     -------
@@ -460,7 +471,8 @@ def log_likelihood_pointwise(
         )
         if data.counts is not None:
             points, first = data.counts.points
-            value[:, points] = count_log_likelihood(at_points, sigma, data.counts, first)
+            count = count_log_likelihood_near_first if near_first else count_log_likelihood
+            value[:, points] = count(at_points, sigma, data.counts, first)
         return np.where(np.isfinite(value), value, -np.inf)
     if likelihood == "ar1":
         tau = np.asarray(noise_tau, dtype=float)
