@@ -19,6 +19,7 @@ from fsrbayes.data import read_csv
 from fsrbayes.data import synthetic as syn
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
+from fsrbayes.inference import optimize
 from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish
@@ -88,14 +89,21 @@ def test_sampled_log_prob_rejects_points_without_a_preimage():
 
 @pytest.fixture(scope="module")
 def rig_search(tmp_path_factory):
-    """A short rig's posterior and a plain two-start search's optima (no polish along pins)."""
+    """A short rig's posterior and a plain two-start search's optima (no polish along pins).
+
+    The search takes its gradients from the model solved at every finite-difference neighbour:
+    with them its second start stops short on the sheet, the case the polish along the pins is
+    for (with the tangent's gradients both starts reach the optimum to 0.2 nats).
+    """
     text, truth = simulate_rig(
         1, seed=3, duration_s=60.0, rate_hz=20.0, weights_g=(133.0, 170.0, 255.0)
     )
     data = read_csv(write_rig(text, truth, tmp_path_factory.mktemp("rig") / "rig.csv")[0])
     packed = SpecimenData.select(data, None)
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor))
-    return posterior, find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=100)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(optimize, "TANGENT_GRADIENT", False)
+        return posterior, find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=100)
 
 
 @pytest.fixture(scope="module")

@@ -20,6 +20,7 @@ __all__ = [
     "MAP_ITERATIONS",
     "NESTED_DEPTH",
     "NegativeLogPosterior",
+    "TANGENT_GRADIENT",
     "ensemble_start",
     "find_map",
     "laplace_start",
@@ -66,6 +67,12 @@ ROUND_ENOUGH = (0.5, 2.0)
 every eigenvalue in this range: those coordinates are nearly round."""
 
 
+TANGENT_GRADIENT = True
+"""Whether :class:`NegativeLogPosterior` evaluates a target's finite-difference neighbours
+through its ``log_posterior_near_first`` (where it has one: the circuit solved once and carried
+to the neighbours along its tangent) instead of solving the model at each of them."""
+
+
 class NegativeLogPosterior:
     """−log p(u) and its central-difference gradient from one vectorised call of 2·ndim + 1 points.
 
@@ -77,6 +84,10 @@ class NegativeLogPosterior:
     to |fun| (:data:`MAP_FTOL`), and a high-rate log's log-density is ~10⁶ nats in absolute
     terms, most of it a constant of the data — counted from zero, the search would stop where an
     iteration gains less than ~0.007 nats, which on a ridge is tens of nats short of the optimum.
+
+    A target with a ``log_posterior_near_first(u)`` method (:class:`~.posterior.LogPosterior`)
+    is called through it (:data:`TANGENT_GRADIENT`): the 2·ndim neighbours then cost the model's
+    explicit parts but not its circuit solves.
     """
 
     def __init__(self, posterior, step=1e-5, basis=None, origin=None):
@@ -95,7 +106,10 @@ class NegativeLogPosterior:
 
     def __call__(self, w):
         """Return −log p and its gradient at whitened coordinates ``w``."""
-        values = self.posterior(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
+        evaluate = self.posterior
+        if TANGENT_GRADIENT:
+            evaluate = getattr(self.posterior, "log_posterior_near_first", evaluate)
+        values = evaluate(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
         if self.reference is None and np.isfinite(values[0]):
             self.reference = values[0]
         values = (0.0 if self.reference is None else self.reference) - values
@@ -219,6 +233,10 @@ class _Slice:
 
     def __call__(self, v):
         return self.posterior(self.full(v))
+
+    def log_posterior_near_first(self, v):
+        """Return the posterior's near-first evaluation (:class:`NegativeLogPosterior`), if any."""
+        return getattr(self.posterior, "log_posterior_near_first", self.posterior)(self.full(v))
 
 
 def nested_starts(posterior, u_best, depth=NESTED_DEPTH):

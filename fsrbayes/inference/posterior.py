@@ -296,6 +296,23 @@ class LogPosterior(PriorScaledTarget):
             for name in wanted
         }
 
+    _near_first = False
+
+    def log_posterior_near_first(self, u):
+        """Return the log-posterior at rows ``u`` (W, ndim): one point and its neighbours.
+
+        For a finite-difference gradient: every row but the first lies within a small step of the
+        first, so the circuit is solved at the first and carried to the others along its tangent
+        (:func:`fsrbayes.physics.tangent.solve_bulk_near_first`), and whole counts' probabilities
+        likewise (:func:`~.counts.count_log_likelihood_near_first`); the rest of the model and
+        the likelihood are evaluated at every row. Any other rows get wrong values.
+        """
+        self._near_first = True
+        try:
+            return self(u)
+        finally:
+            self._near_first = False
+
     def log_model_current(self, x, time_s=None):
         """Return log I of the model, shape (W, C, T).
 
@@ -326,6 +343,7 @@ class LogPosterior(PriorScaledTarget):
             extra_series=0.0 if self.data.extra_series is None else self.data.series()[:, None],
             load_steps=steps,
             first_ramp=first_ramp,
+            near_first=self._near_first,
         )
         with np.errstate(divide="ignore", invalid="ignore"):
             log_current = np.log(solution.current)
@@ -396,6 +414,7 @@ class LogPosterior(PriorScaledTarget):
             likelihood=self.likelihood,
             nu=params.get("nu"),
             noise_tau=params.get("noise_tau"),
+            near_first=self._near_first,
         )
 
     def log_prior(self, u):
