@@ -369,7 +369,7 @@ class _ThinQuartic:
 
 
 def test_whitening_takes_the_hessian_again_where_the_first_steps_straddle_the_sheet():
-    from fsrbayes.inference.optimize import root_covariance, whitening
+    from fsrbayes.inference.optimize import compact_root_covariance, root_covariance, whitening
 
     target = _ThinQuartic()
     at = np.zeros(target.ndim)
@@ -380,7 +380,25 @@ def test_whitening_takes_the_hessian_again_where_the_first_steps_straddle_the_sh
     one_pass = roundness(root_covariance(target, at))
     assert np.abs(one_pass - np.eye(4)).max() > 0.5  # steps of 1e-3: up to 3x off
     np.testing.assert_allclose(roundness(whitening(target, at)), np.eye(4), atol=1e-3)
-    np.testing.assert_array_equal(whitening(target, at, passes=1), root_covariance(target, at))
+    np.testing.assert_array_equal(
+        whitening(target, at, passes=1), compact_root_covariance(target, at)
+    )
+
+
+def test_the_compact_hessian_is_exact_on_a_quadratic_as_the_corners_one():
+    from fsrbayes.inference.optimize import compact_root_covariance, root_covariance
+
+    q, _ = np.linalg.qr(np.random.default_rng(6).standard_normal((5, 5)))
+    to_z = q.T * np.array([1.0, 3.0, 10.0, 0.5, 2.0])[:, None]
+
+    def quadratic(u):
+        return -0.5 * np.sum((np.atleast_2d(u) @ to_z.T) ** 2, axis=1)
+
+    quadratic.ndim = 5
+    at = np.random.default_rng(7).standard_normal(5)
+    for root in (compact_root_covariance(quadratic, at), root_covariance(quadratic, at)):
+        # Rᵀ·(−H)·R is the identity where R is a square root of the covariance
+        np.testing.assert_allclose(root.T @ to_z.T @ to_z @ root, np.eye(5), atol=1e-6)
 
 
 def test_map_search_reaches_the_truth_on_a_ridged_posterior():

@@ -91,9 +91,9 @@ def test_sampled_log_prob_rejects_points_without_a_preimage():
 def rig_search(tmp_path_factory):
     """A short rig's posterior and a plain two-start search's optima (no polish along pins).
 
-    The search takes its gradients from the model solved at every finite-difference neighbour:
-    with them its second start stops short on the sheet, the case the polish along the pins is
-    for (with the tangent's gradients both starts reach the optimum to 0.2 nats).
+    The search as it was before the circuit's tangent and the compact Hessians: its second start
+    stops short on the sheet, the case the polish along the pins is for (with the tangent's
+    gradients both starts reach the optimum to 0.2 nats).
     """
     text, truth = simulate_rig(
         1, seed=3, duration_s=60.0, rate_hz=20.0, weights_g=(133.0, 170.0, 255.0)
@@ -103,6 +103,7 @@ def rig_search(tmp_path_factory):
     posterior = LogPosterior.for_sensor(packed, load_sensor(packed.sensor))
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(optimize, "TANGENT_GRADIENT", False)
+        patch.setattr(optimize, "COMPACT_WHITENING", False)
         return posterior, find_map(posterior, np.random.default_rng(1), n_starts=2, maxiter=100)
 
 

@@ -9,9 +9,9 @@ fifth digit, and so does the CPU (its BLAS kernels and libm): they are kept per 
 re-recorded from a commit that passed here before (CHANGELOG), never from the code under test —
 unless a commit changes the MAP search on purpose, which then re-records them itself and says so
 in the CHANGELOG. The fits run with the MAP search the pins were recorded with
-(``RECORDED_SEARCH``: a polish with one Hessian and a stopping share of 1e-6, gradients from the
-model solved at every finite-difference neighbour), so the pins check every other number of the
-search and the chain whatever the search's defaults are.
+(``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points and a stopping
+share of 1e-6, gradients from the model solved at every finite-difference neighbour), so the pins
+check every other number of the search and the chain whatever the search's defaults are.
 """
 
 import platform
@@ -67,7 +67,12 @@ def params():
     return p
 
 
-RECORDED_SEARCH = {"POLISH_FTOL": 1e-6, "POLISH_PASSES": 1, "TANGENT_GRADIENT": False}
+RECORDED_SEARCH = {
+    "POLISH_FTOL": 1e-6,
+    "POLISH_PASSES": 1,
+    "TANGENT_GRADIENT": False,
+    "COMPACT_WHITENING": False,
+}
 
 
 @pytest.mark.parametrize("model, seed", [("burgers", 7), ("zener+area-creep", 8)])
