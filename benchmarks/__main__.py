@@ -1,5 +1,5 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty]
+[predict] [likelihood] [map-search] [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty]
 [hierarchical] [population-sizes] [diagnose] [demo]``.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
@@ -7,7 +7,8 @@ so numbers from different days can be read against their machine. Without names 
 ``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip install dynesty``); ``fit``
 (converged Burgers fits of one specimen, five seeds, in both coordinates), ``rig-fit`` (the divider
 rig in both coordinates), ``evidence``, ``hierarchical``, ``population-sizes`` (3, 6, 16 specimens'
-hyper-posteriors in both coordinates), ``diagnose`` and ``demo`` take minutes.
+hyper-posteriors in both coordinates), ``map-search`` (the MAP search before and after its
+tangent gradients and compact Hessians), ``diagnose`` and ``demo`` take minutes.
 """
 
 import os
@@ -28,6 +29,7 @@ from benchmarks import (  # noqa: E402
     likelihood,
     long_run,
     machine,
+    map_search,
     population_sizes,
     predict,
     rig_fit,
@@ -44,6 +46,7 @@ BENCHMARKS = {
     "likelihood": lambda: "\n".join(
         [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
     ),
+    "map-search": lambda: map_search.report(map_search.run()),
     "long-run": lambda: "\n".join(
         [long_run.report(long_run.run()), long_run.report(long_run.run(check_growth=0.0))]
     ),
