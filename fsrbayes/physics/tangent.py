@@ -121,9 +121,14 @@ def solve_bulk_near_first(
     row, a first row with a point outside the validity domain, at the paper law's jump, or at
     zero voltage or current.
 
-    Parameters and Returns
-    ----------------------
-    As :func:`~.solver.solve_bulk` (the compiled engine, its default tolerances).
+    Parameters
+    ----------
+    voltage, series_resistance, gap, barrier, area, law, threshold
+        As :func:`~.solver.solve_bulk` (the compiled engine, its default tolerances).
+
+    Returns
+    -------
+    BulkSolution
     """
     arrays = [voltage, series_resistance, gap, barrier, area]
     if threshold is not None:
