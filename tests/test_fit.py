@@ -308,6 +308,9 @@ def test_cli_fit_bad_input(csv_file, tmp_path):
     result = cli("fit", str(csv_file), "--out", str(tmp_path / "w"), "--map-starts", "0")
     assert result.returncode == 2 and "--map-starts must be >= 1, got 0" in result.stderr
     assert not (tmp_path / "w").exists()
+    result = cli("fit", str(csv_file), "--out", str(tmp_path / "v"), "--check-every", "-5")
+    assert result.returncode == 2 and "--check-every must be >= 1, got -5" in result.stderr
+    assert "Traceback" not in result.stderr and not (tmp_path / "v").exists()
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")
     result = cli("fit", str(csv_file), "--out", str(a_file / "z"))

@@ -196,6 +196,37 @@ def test_the_check_schedule_and_an_interrupt_leave_the_chains_as_they_were(tmp_p
     assert np.array_equal(resumed.chain, run.chain)
 
 
+def test_a_finer_check_grid_stops_sooner_with_the_same_chain():
+    """Checks every ``check_every`` steps stop a run at the first of them that meets the
+    criteria; in the target's own coordinates the chain is the one a run checked every chunk
+    samples."""
+    start = MU + np.random.default_rng(5).normal(size=(2, 16, 3)) * 3 * SD
+    coarse = SamplerSettings(
+        n_ensembles=2, chunk=60, max_steps=6000, min_steps=60, transport_rounds=0, check_growth=0
+    )
+    fine = replace(coarse, check_every=20)
+    assert [n for n in range(1, 241) if fine.is_check_point(n)] == list(range(20, 241, 20))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        a = run_ensembles(Gaussian(), start, seed=6, settings=coarse)
+        b = run_ensembles(Gaussian(), start, seed=6, settings=fine)
+        assert a.report.converged and b.report.converged
+        n_a, n_b = a.chain.shape[1], b.chain.shape[1]
+        assert n_b % 20 == 0 and n_a % 60 == 0 and n_a - 60 < n_b <= n_a
+        assert n_b < n_a  # here (seed 6) the fine grid met the criteria 20 steps sooner
+        assert np.array_equal(b.chain, a.chain[:, :n_b])
+        # the fine run stops at the first point of its grid where the criteria hold
+        shorter = replace(fine, max_steps=n_b - 20, min_steps=n_b - 20)
+        assert not run_ensembles(Gaussian(), start, seed=6, settings=shorter).report.converged
+        # through a transport map the fine run converges too, on its own grid
+        mapped = run_ensembles(
+            Gaussian(), start, seed=6, settings=replace(fine, transport_rounds=1)
+        )
+        assert mapped.report.converged and mapped.chain.shape[1] % 20 == 0
+    with pytest.raises(ValueError, match="check_every must be >= 1"):
+        SamplerSettings(check_every=0)
+
+
 @pytest.mark.parametrize("model", ["burgers"])
 def test_prior_only_posterior_recovers_the_prior(model):
     sim = syn.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5, seed=1)

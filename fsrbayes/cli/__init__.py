@@ -9,7 +9,7 @@ import sys
 from .._version import __version__
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
-from ..inference.fit import COORDINATES, FIT_COORDINATES, MAP_STARTS
+from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS
 from ..inference.parallel import JobError
 from ..inference.posterior import RAMPS
 from ..physics.effects import EFFECTS
@@ -102,7 +102,15 @@ def build_parser():
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
     fit_.add_argument(
-        "--chunk", type=int, default=500, help="steps between convergence checks and checkpoints"
+        "--chunk", type=int, default=500, help="steps of a warm-up round (default %(default)s)"
+    )
+    fit_.add_argument(
+        "--check-every",
+        type=int,
+        help=(
+            f"steps between convergence checks and checkpoints (default {CHECK_EVERY}, or "
+            "--chunk if that is shorter)"
+        ),
     )
     fit_.add_argument("--max-steps", type=int, default=20000, help="step budget per ensemble")
     fit_.add_argument(

@@ -33,7 +33,7 @@ def cmd_fit(args):
     Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen.
     """
     from ..discrepancy import fit_checks
-    from ..inference.fit import DesignWarning, fit
+    from ..inference.fit import CHECK_EVERY, DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
 
@@ -46,6 +46,8 @@ def cmd_fit(args):
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     if args.map_starts < 1:
         raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
+    if args.check_every is not None and args.check_every < 1:
+        raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
     out = Path(args.out)
     writable(out)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
@@ -57,6 +59,7 @@ def cmd_fit(args):
         min_steps=min(args.chunk, args.max_steps),
         processes=processes,
         map_starts=args.map_starts,
+        check_every=args.check_every or min(CHECK_EVERY, args.chunk),
     )
     if args.sampler == "tempered":
         settings = _tempered_settings(args)

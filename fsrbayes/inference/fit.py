@@ -49,6 +49,7 @@ __all__ = [
     "DesignWarning",
     "ADC_MIN_COUNTS",
     "MAP_STARTS",
+    "CHECK_EVERY",
     "MAP_ITERATIONS",
     "SAMPLERS",
     "FIT_SETTINGS",
@@ -62,11 +63,16 @@ MAP_STARTS = SamplerSettings.map_starts
 their optima are sorted into regions."""
 
 
-FIT_SETTINGS = SamplerSettings(n_ensembles=2)
+CHECK_EVERY = 250
+"""Steps between a fit's convergence checks by default (``SamplerSettings.check_every``): half a
+chunk, so a fit whose chain meets the criteria stops up to 250 steps sooner than one checked at
+the warm-up's 500-step rounds (BENCHMARKS.md)."""
+
+FIT_SETTINGS = SamplerSettings(n_ensembles=2, check_every=CHECK_EVERY)
 """The per-specimen fit's default: two ensembles (one per core on a 2-core machine), the default
-criteria and budget. More ensembles cost more per step on 2 cores and, on bent ridges, converged
-less often within the budget (BENCHMARKS.md). The validations (SBC, recovery, the population
-study) run two ensembles too."""
+criteria and budget, checked every :data:`CHECK_EVERY` steps. More ensembles cost more per step
+on 2 cores and, on bent ridges, converged less often within the budget (BENCHMARKS.md). The
+validations (SBC, recovery, the population study) run two ensembles too."""
 
 PINNED_TRANSPORT_ROUNDS = 1
 """Warm-up rounds of a fit in pinned coordinates of plain data (one reading per sample at a

@@ -24,8 +24,8 @@ goes on in chunks until all three criteria hold or ``max_steps`` is spent; then 
 :class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded random
 state, so the same seed gives the same chains, and a checkpoint (written atomically at every
 convergence check, and when the run is interrupted) resumes a run exactly where it stopped.
-Checks come after every chunk, and once the chain is long after every ``check_growth`` share of
-it: a check's cost grows with the chain.
+Checks come after every chunk (or every ``check_every`` steps), and once the chain is long after
+every ``check_growth`` share of it: a check's cost grows with the chain.
 """
 
 import warnings
@@ -288,7 +288,7 @@ def run_ensembles(
                     )
                 if report.converged or at_budget:
                     break
-            steps = min(settings.chunk, settings.max_steps - n_steps)
+            steps = settings.steps_to_pause(n_steps)
             # the maps depend on the first `end` steps only: refitted while warm-up goes on
             end = min(n_steps // settings.chunk, warmup[0]) * settings.chunk
             if end != maps_end:

@@ -36,8 +36,8 @@ class SamplerSettings:
     n_walkers : int or None
         Walkers per ensemble; default max(32, 4·ndim), even.
     chunk : int
-        Steps between convergence checks (and checkpoints) while the chain is short; see
-        ``check_growth``.
+        Steps of a warm-up round (see ``transport_rounds``), and between convergence checks (and
+        checkpoints) while ``check_every`` is None.
     max_steps : int
         Step budget per ensemble.
     min_steps : int
@@ -85,6 +85,14 @@ class SamplerSettings:
         chain's length: checked every chunk, a long run would spend more time on them than on
         sampling (BENCHMARKS.md). A fit may then stop up to this share later than the first
         step at which it met the criteria. 0 checks every chunk.
+    check_every : int or None
+        Steps between convergence checks (and checkpoints) while the chain is short, counted
+        from the start like ``chunk``; None: ``chunk``. The run pauses at both grids' points, so
+        a grid finer than the warm-up's rounds lets it stop sooner once it meets the criteria
+        (the criteria are the same). A pause changes nothing in the target's own coordinates;
+        where the walkers move through a transport map or sampling coordinates, their positions
+        go back and forth through them at a pause, to round-off, and the chain goes on from
+        there (as it does at every chunk's end).
     """
 
     n_ensembles: int = 4
@@ -103,8 +111,11 @@ class SamplerSettings:
     extra_transport_rounds: int = 0
     check_growth: float = 0.05
     map_starts: int = 8
+    check_every: int | None = None
 
     def __post_init__(self):
+        if self.check_every is not None and self.check_every < 1:
+            raise ValueError(f"check_every must be >= 1 or None, got {self.check_every}")
         if self.map_starts < 1:
             raise ValueError(f"map_starts must be >= 1, got {self.map_starts}")
         if not 0.0 <= self.check_growth < 1.0:
@@ -159,7 +170,21 @@ class SamplerSettings:
         """
         if n_steps >= self.max_steps:
             return True
+        return self._next_check(n_steps - 1) == n_steps
+
+    def _next_check(self, n_steps):
+        """Return the first check point after ``n_steps`` (the step budget at most)."""
+        grid = self.chunk if self.check_every is None else self.check_every
         point = 0
-        while point < n_steps:
-            point += self.chunk * max(1, int(self.check_growth * point) // self.chunk)
-        return point == n_steps
+        while point <= n_steps:
+            point += grid * max(1, int(self.check_growth * point) // grid)
+        return min(point, self.max_steps)
+
+    def steps_to_pause(self, n_steps):
+        """Return the steps from ``n_steps`` to the run's next pause.
+
+        A run pauses at a check point or at the end of a chunk (where the warm-up refits its
+        maps), whichever comes first.
+        """
+        next_chunk = (n_steps // self.chunk + 1) * self.chunk
+        return min(self._next_check(n_steps), next_chunk, self.max_steps) - n_steps
