@@ -39,6 +39,7 @@ and draws its walkers' start in them (:func:`pinned_start`).
 import numpy as np
 import scipy.linalg
 
+from .broyden import accept_steps, propose_steps
 from .optimize import ensemble_start, polish
 from .posterior import LogPosterior, noise_parameters
 from .samplers.coordinates import SampledLogProb
@@ -219,39 +220,34 @@ class PinnedCoordinates:
     def _root(self, u, target):
         """Solve y(u_P, u_F) = target from u; return (found, u, −log|det ∂y/∂u_P| at the root).
 
-        Broyden's method: the inverse Jacobian starts as the anchor's and each iteration updates
-        it from the step it took (one model evaluation per iteration, against K + 1 for Newton's
-        finite differences); a step into the model's invalid domain is halved. The Jacobian of
-        the log-determinant is taken at the root by forward differences.
+        Broyden's method (:mod:`.broyden`): the inverse Jacobian starts as the anchor's and each
+        iteration updates it from the step it took (one model evaluation per iteration, against
+        K + 1 for Newton's finite differences); a step into the model's invalid domain is halved.
+        The Jacobian of the log-determinant is taken at the root by forward differences.
         """
-        n, k = len(u), self._solved.size
+        n = len(u)
         found = np.zeros(n, dtype=bool)
         inverse = np.repeat(self._inv_solved[None], n, axis=0)
         y = self.log_current(u)
-        active = np.flatnonzero(np.isfinite(y).all(axis=1))
-        step = np.zeros((n, k))
+        active = np.isfinite(y).all(axis=1)
         shrink = np.ones(n)
         for iteration in range(MAX_ITER + 1):
-            residual = target[active] - y[active]
-            done = np.abs(residual).max(axis=1) <= TOLERANCE
-            found[active[done]] = True
-            active, residual = active[~done], residual[~done]
-            if not active.size or iteration == MAX_ITER:
-                break
-            step[active] = np.einsum("nij,nj->ni", inverse[active], residual) * shrink[active, None]
-            with np.errstate(divide="ignore"):  # a zero step (shrunk to nothing) stays zero
-                largest = np.abs(step[active]).max(axis=1)
-                step[active] *= np.minimum(1.0, MAX_STEP / largest)[:, None]
-            trial = u[active].copy()
-            trial[:, self._solved] += step[active]
-            y_trial = self.log_current(trial)
-            moved = np.isfinite(y_trial).all(axis=1)
-            shrink[active] = np.where(moved, 1.0, 0.5 * shrink[active])  # retried shorter
-            self._broyden(
-                inverse, active[moved], step[active[moved]], y_trial[moved] - y[active[moved]]
+            rows, trial, step = propose_steps(
+                u,
+                y,
+                target,
+                inverse,
+                shrink,
+                active,
+                found,
+                self._solved,
+                TOLERANCE,
+                MAX_STEP,
+                iteration == MAX_ITER,
             )
-            u[active[moved]] = trial[moved]
-            y[active[moved]] = y_trial[moved]
+            if not trial.size:
+                break
+            accept_steps(u, y, inverse, shrink, rows, trial, step, self.log_current(trial))
         log_det = np.full(n, -np.inf)
         if found.any():
             jacobian = self._jacobian(u[found], self._solved, y=y[found])
@@ -259,20 +255,6 @@ class PinnedCoordinates:
             log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
             found &= np.isfinite(log_det)
         return found, u, log_det
-
-    @staticmethod
-    def _broyden(inverse, rows, step, change):
-        """Broyden's ("good") update of the inverse Jacobians ``inverse[rows]`` in place."""
-        h_change = np.einsum("nij,nj->ni", inverse[rows], change)
-        step_h = np.einsum("ni,nij->nj", step, inverse[rows])
-        denominator = np.einsum("ni,ni->n", step, h_change)
-        ok = np.abs(denominator) > 1e-300
-        update = (
-            (step - h_change)[:, :, None]
-            * step_h[:, None, :]
-            / np.where(ok, denominator, 1.0)[:, None, None]
-        )
-        inverse[rows[ok]] += update[ok]
 
     def describe(self):
         """Return a JSON-ready summary: the solved parameters and their reference tests."""

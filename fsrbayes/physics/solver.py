@@ -248,9 +248,9 @@ def solve_bulk(
     arrays = [voltage, series_resistance, gap, barrier, area]
     if law == "paper":
         arrays.append(threshold)
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in arrays))
-    shape = arrays[0].shape
-    flat = [np.ascontiguousarray(x).ravel() for x in arrays]
+    arrays = [np.asarray(x, dtype=float) for x in arrays]
+    shape = np.broadcast(*arrays).shape
+    flat = [_flat(x, shape) for x in arrays]
     if law != "paper":
         flat.append(None)
     if engine == "compiled":
@@ -266,6 +266,15 @@ def solve_bulk(
         regime=regime.reshape(shape),
         iterations=iterations,
     )
+
+
+def _flat(x, shape):
+    """Return x broadcast to ``shape`` as a flat contiguous array (a view where x has the shape)."""
+    if x.shape == shape:
+        return np.ascontiguousarray(x).ravel()
+    out = np.empty(shape)
+    out[...] = x
+    return out.ravel()
 
 
 def _solve_blocks(flat, law, finish, max_iter):
