@@ -28,7 +28,9 @@ likelihood itself compares.
 The inverse u(w) is a K-dimensional root search, by Broyden's method from the linearisation at
 the anchor (the anchor's inverse Jacobian updated by every step, steps capped at :data:`MAX_STEP`
 prior widths, at most :data:`MAX_ITER` iterations), with the model evaluated at the K reference
-points only; the log-determinant comes from forward differences at the root.
+points only — compiled end to end for a stress step on a Burgers or Zener sensor
+(:mod:`fsrbayes.physics.compiled_creep`) — and the log-determinant from forward differences at
+the root.
 Where no root is found the density is −inf — the proposal is rejected. The inverse is never
 needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 
@@ -39,9 +41,11 @@ and draws its walkers' start in them (:func:`pinned_start`).
 import numpy as np
 import scipy.linalg
 
+from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
+from ..physics.solver import FINISH
 from .broyden import accept_steps, propose_steps
 from .optimize import ensemble_start, polish
-from .posterior import LogPosterior, noise_parameters
+from .posterior import LogPosterior, is_landing, is_ramp, noise_parameters
 from .samplers.coordinates import SampledLogProb
 
 __all__ = [
@@ -147,6 +151,7 @@ class PinnedCoordinates:
             tunneling=posterior.tunneling,
             likelihood=posterior.likelihood,
         )
+        self._step_model = _StepModel.of(self._at_references)
         self._y0 = self.log_current(self.anchor[None])[0]
         self._inv_solved = np.linalg.inv(full[self._rows][:, self._solved])
         self._jac_free = full[self._rows][:, self._free]
@@ -163,6 +168,8 @@ class PinnedCoordinates:
         """
         x = self.posterior.prior.to_constrained(np.atleast_2d(u))
         with np.errstate(all="ignore"):
+            if rows is None and self._step_model is not None:  # compiled, where it applies
+                return self._step_model(x)
             if rows is None:  # the model at the K reference points only
                 return self._finite(self._at_references.log_model_current(x)[..., 0])
             log_current = self.posterior.log_model_current(x, self._times)
@@ -263,6 +270,61 @@ class PinnedCoordinates:
             "reference_tests": [c for c, _ in self.references],
             "reference_time_s": [float(self._times.flat[r]) for r in self._rows],
         }
+
+
+class _StepModel:
+    """The model at the reference points compiled (:mod:`~fsrbayes.physics.compiled_creep`).
+
+    For a stress step on a Burgers or Zener sensor without effects, ramps or a circuit around
+    it — the reference posterior's log-current to rounding, without the generic path's cost.
+    """
+
+    def __init__(self, posterior):
+        data = posterior.data
+        sampled = {name: i for i, name in enumerate(posterior.names)}
+        self.paper = posterior.tunneling == "paper"
+        fixed = {"Rpar": 0.0, "sigma0": 0.0, **posterior.fixed}  # solve_current's defaults
+        if not self.paper:
+            fixed["Vth"] = 0.0  # unused by the smooth law
+        if posterior.rheology == "zener":
+            fixed["inv_b1"] = 0.0  # Burgers with b1 → ∞
+            sampled.pop("inv_b1", None)
+        self.source = np.array([sampled.get(n, -1) for n in STEP_PARAMETERS], dtype=np.int64)
+        self.fixed = np.array([fixed.get(n, np.nan) for n in STEP_PARAMETERS])
+        self.voltage = np.ascontiguousarray(data.voltage_V, dtype=float)
+        self.stress = np.ascontiguousarray(data.stress_Pa, dtype=float)
+        self.time = np.ascontiguousarray(data.time_s[:, 0], dtype=float)
+
+    @classmethod
+    def of(cls, posterior):
+        """Return the compiled model of ``posterior`` (one sample per test), or None."""
+        data = posterior.data
+        if (
+            posterior.rheology not in ("burgers", "zener")
+            or posterior.effect_objects
+            or not data.plain
+            or data.first_ramps() is not None
+            or any(is_ramp(n) or is_landing(n) for n in posterior.names)
+            or data.time_s.shape != (data.n_tests, 1)
+        ):
+            return None
+        model = cls(posterior)
+        unknown = np.isnan(model.fixed) & (model.source < 0)
+        return None if unknown.any() else model
+
+    def __call__(self, x):
+        """Log I at the reference points, (W, ndim) physical parameters → (W, K); NaN: invalid."""
+        return step_log_current(
+            np.ascontiguousarray(x, dtype=float),
+            self.source,
+            self.fixed,
+            self.voltage,
+            self.stress,
+            self.time,
+            self.paper,
+            FINISH,
+            100,
+        )
 
 
 def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):

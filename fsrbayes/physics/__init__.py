@@ -3,13 +3,16 @@
 No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything here is
 numpy/scipy functions of arrays in SI units (barrier height in eV). The smooth law's circuit
 solver also has a numba-compiled point-by-point engine (:mod:`.compiled`, the default of
-:func:`~.solver.solve_bulk`), tested against the numpy one; a finite-difference gradient's
-neighbours are carried from one solve along the root's tangent (:mod:`.tangent`).
+:func:`~.solver.solve_bulk`), tested against the numpy one; the whole model of a stress step on
+a Burgers or Zener sensor is compiled too, for many small evaluations (:mod:`.compiled_creep`); a
+finite-difference gradient's neighbours are carried from one solve along the root's tangent
+(:mod:`.tangent`).
 """
 
 from . import (
     circuits,
     compiled,
+    compiled_creep,
     constants,
     contact,
     effects,
@@ -47,6 +50,7 @@ from .tunneling import paper_peak_voltage, tunneling_current
 __all__ = [
     "circuits",
     "compiled",
+    "compiled_creep",
     "constants",
     "contact",
     "effects",

@@ -50,7 +50,7 @@ from .compiled_kernels import (
 )
 from .constants import KAPPA
 
-__all__ = ["solve_compiled"]
+__all__ = ["solve_compiled", "solve_points"]
 
 LOG_KAPPA, LOG_THREE_QUARTERS, LOG_PEAK_FACTOR = (
     math.log(KAPPA),
@@ -308,7 +308,7 @@ def _solve_short_smooth(v, log_v, s, va, sqrt_va, log_va, log_a):
 
 
 @numba.njit(**JIT)
-def _solve_all(
+def solve_points(
     voltage,
     rs_in,
     s_in,
@@ -444,7 +444,7 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
     v_bulk = np.empty(n)
     regime = np.empty(n, dtype=np.int8)
     paper = threshold is not None
-    iterations = _solve_all(
+    iterations = solve_points(
         voltage,
         series_resistance,
         gap,

@@ -1,0 +1,81 @@
+"""The compiled stress-step model is the generic one (solve_current) to rounding, and is used."""
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.data import synthetic
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.pinned import PinnedCoordinates
+from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.physics.compiled_creep import STEP_PARAMETERS, step_log_current
+from fsrbayes.physics.sensor import solve_current
+from fsrbayes.physics.solver import FINISH
+
+VOLTAGE = np.array([0.2, 1.0, 3.0, -1.0, 2.0, 0.5])
+STRESS = np.array([2e4, 5e4, 1e5, 5e4, 3e5, 1e4])
+TIME = np.array([0.0, 60.0, 3600.0, 10.0, 1e5, 5.0])
+
+
+@pytest.mark.parametrize("model", ["burgers", "zener"])
+@pytest.mark.parametrize("tunneling", ["smooth", "paper"])
+def test_the_compiled_step_is_solve_current_to_rounding(model, tunneling):
+    sensor = fsrbayes.load_sensor("a201")
+    prior = sensor.prior_for(model)
+    x = prior.sample(np.random.default_rng(4), 300)
+    fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
+    params = {n: x[:, i, None] for i, n in enumerate(prior.names)} | fixed
+    expected = solve_current(
+        params, VOLTAGE, STRESS, TIME, rheology=model, tunneling=tunneling
+    )  # one point per column, every parameter set a row
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_expected = np.log(expected.current)
+    log_expected[~(expected.valid & (expected.current > 0))] = np.nan
+    sampled = {n: i for i, n in enumerate(prior.names)}
+    source = np.array([sampled.get(n, -1) for n in STEP_PARAMETERS], dtype=np.int64)
+    values = {"Rpar": 0.0, "sigma0": 0.0, **fixed, **({"inv_b1": 0.0} if model == "zener" else {})}
+    if model == "zener":
+        source[STEP_PARAMETERS.index("inv_b1")] = -1
+    constants = np.array([values.get(n, np.nan) for n in STEP_PARAMETERS])
+    got = step_log_current(
+        x, source, constants, VOLTAGE, STRESS, TIME, tunneling == "paper", FINISH, 100
+    )
+    assert np.array_equal(np.isnan(got), np.isnan(log_expected))
+    assert np.isnan(got[:, 3]).all()  # a negative voltage: the current is negative, log undefined
+    assert np.isfinite(got).sum() > 1000  # most draws are valid
+    np.testing.assert_allclose(got, log_expected, rtol=0, atol=1e-12, equal_nan=True)
+
+
+def test_a_closed_gap_is_invalid():
+    sensor = fsrbayes.load_sensor("a201")
+    p = sensor.params
+    x = np.array([[p[n] if n in p else 0.0 for n in STEP_PARAMETERS]])
+    source = np.arange(len(STEP_PARAMETERS), dtype=np.int64)
+    x[0, STEP_PARAMETERS.index("k1")] = 5e4  # strain σ/k1 = 2 at 1e5 Pa: the gap s0(1 − ε) < 0
+    got = step_log_current(
+        x,
+        source,
+        np.zeros(len(STEP_PARAMETERS)),
+        VOLTAGE[:3],
+        STRESS[:3],
+        TIME[:3],
+        False,
+        FINISH,
+        100,
+    )
+    assert np.isnan(got[0, 2]) and np.isfinite(got[0, 0])
+
+
+@pytest.mark.parametrize("model", ["zener", "burgers+area-creep"])
+def test_pinned_coordinates_use_it_where_it_applies_and_agree_with_the_posterior(model):
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=9, seed=3
+    )
+    data = SpecimenData.select(sim.data, None)
+    posterior = LogPosterior.for_sensor(data, fsrbayes.load_sensor(data.sensor), model=model)
+    pins = PinnedCoordinates(posterior, np.zeros(posterior.ndim))
+    u = np.random.default_rng(1).normal(scale=0.3, size=(40, posterior.ndim))
+    rows = [2 * c + (when == "last") for c, when in pins.references]
+    compiled = "+" not in model
+    assert (pins._step_model is not None) == compiled
+    np.testing.assert_allclose(pins.log_current(u), pins.log_current(u, rows), rtol=0, atol=1e-12)
