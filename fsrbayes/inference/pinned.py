@@ -275,8 +275,8 @@ class PinnedCoordinates:
 class _StepModel:
     """The model at the reference points compiled (:mod:`~fsrbayes.physics.compiled_creep`).
 
-    For a stress step on a Burgers or Zener sensor without effects, ramps or a circuit around
-    it — the reference posterior's log-current to rounding, without the generic path's cost.
+    For a stress step on a Burgers or Zener sensor without effects or ramps, alone or in a
+    divider — the reference posterior's log-current to rounding, without the generic path's cost.
     """
 
     def __init__(self, posterior):
@@ -294,6 +294,7 @@ class _StepModel:
         self.voltage = np.ascontiguousarray(data.voltage_V, dtype=float)
         self.stress = np.ascontiguousarray(data.stress_Pa, dtype=float)
         self.time = np.ascontiguousarray(data.time_s[:, 0], dtype=float)
+        self.extra = np.ascontiguousarray(data.series(), dtype=float)
 
     @classmethod
     def of(cls, posterior):
@@ -302,7 +303,7 @@ class _StepModel:
         if (
             posterior.rheology not in ("burgers", "zener")
             or posterior.effect_objects
-            or not data.plain
+            or data.step_time is not None
             or data.first_ramps() is not None
             or any(is_ramp(n) or is_landing(n) for n in posterior.names)
             or data.time_s.shape != (data.n_tests, 1)
@@ -321,6 +322,7 @@ class _StepModel:
             self.voltage,
             self.stress,
             self.time,
+            self.extra,
             self.paper,
             FINISH,
             100,

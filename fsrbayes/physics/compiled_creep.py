@@ -1,9 +1,10 @@
 """The log-current of a Burgers (or Zener) sensor after a stress step, at a few points, in one call.
 
 The model of :func:`fsrbayes.physics.sensor.solve_current` for its simplest and commonest case —
-a stress step held from t = 0, a Burgers or Zener creep law, no effects, the sensor alone at its
-sourcing voltage — compiled end to end: creep compliance (eq. 17), gap (eq. 18), effective area
-(eq. 6), contact resistance (eq. 5) and the circuit (eq. 4, :func:`~.compiled.solve_points`).
+a stress step held from t = 0, a Burgers or Zener creep law, no effects, the sensor at its
+sourcing voltage or in a voltage divider — compiled end to end: creep compliance (eq. 17), gap
+(eq. 18), effective area (eq. 6), contact resistance (eq. 5) and the circuit (eq. 4,
+:func:`~.compiled.solve_points`).
 
 Why. A root search in the pinned coordinates (:mod:`fsrbayes.inference.pinned`) evaluates the
 model at ~10 reference points for a few dozen parameter sets, sixteen times per proposal. At that
@@ -44,7 +45,7 @@ STEP_PARAMETERS = (
 
 
 @numba.njit(**JIT)
-def step_log_current(x, source, fixed, voltage, stress, time, paper, finish, max_iter):
+def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter):
     """Return log I at every point for every parameter set, NaN outside the validity domain.
 
     Parameters
@@ -56,6 +57,9 @@ def step_log_current(x, source, fixed, voltage, stress, time, paper, finish, max
         ``fixed[j]`` where ``source[j]`` is −1 (Zener: ``inv_b1`` fixed at 0).
     voltage, stress, time : ndarray, shape (K,)
         Each point's sourcing voltage (V), stress (Pa) and time since the step (s).
+    extra : ndarray, shape (K,)
+        Resistance in series with the sensor at each point (Ω; a divider's load resistor, with
+        ``voltage`` its supply), 0 for the sensor alone.
     paper : bool
         The paper's tunneling law (threshold ``Vth``), else the smooth law.
     finish, max_iter
@@ -102,7 +106,8 @@ def step_log_current(x, source, fixed, voltage, stress, time, paper, finish, max
             v[point] = voltage[c]
             gap[point] = s0 * (1.0 - sigma * compliance)  # eq. 18
             area[point] = a0 + a1 * sigma**a2  # eq. 6
-            series[point] = 2.0 * (rpar + rc0 / (sigma + sigma0) ** alpha)  # eq. 5, two contacts
+            contacts = 2.0 * (rpar + rc0 / (sigma + sigma0) ** alpha)  # eq. 5, two contacts
+            series[point] = contacts + extra[c]
             barrier[point] = va
             threshold[point] = vth if paper else voltage[c]
     current = np.empty(m)
