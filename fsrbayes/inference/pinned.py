@@ -42,6 +42,7 @@ import numpy as np
 import scipy.linalg
 
 from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
+from ..physics.rheology import BURGERS, ZENER
 from ..physics.solver import FINISH
 from .broyden import accept_steps, propose_steps
 from .optimize import ensemble_start, polish
@@ -286,7 +287,7 @@ class _StepModel:
         fixed = {"Rpar": 0.0, "sigma0": 0.0, **posterior.fixed}  # solve_current's defaults
         if not self.paper:
             fixed["Vth"] = 0.0  # unused by the smooth law
-        if posterior.rheology == "zener":
+        if posterior.family is ZENER:
             fixed["inv_b1"] = 0.0  # Burgers with b1 → ∞
             sampled.pop("inv_b1", None)
         self.source = np.array([sampled.get(n, -1) for n in STEP_PARAMETERS], dtype=np.int64)
@@ -301,7 +302,7 @@ class _StepModel:
         """Return the compiled model of ``posterior`` (one sample per test), or None."""
         data = posterior.data
         if (
-            posterior.rheology not in ("burgers", "zener")
+            not (posterior.family is BURGERS or posterior.family is ZENER)  # eq. 17's laws
             or posterior.effect_objects
             or data.step_time is not None
             or data.first_ramps() is not None
