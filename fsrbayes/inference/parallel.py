@@ -9,6 +9,7 @@ import concurrent.futures
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
 from concurrent.futures.process import BrokenProcessPool
@@ -221,13 +222,23 @@ def map_jobs(
     return results
 
 
+_blas_controller = {"modules": -1, "controller": None}
+
+
 def single_threaded_blas():
     """Context in which BLAS runs on one thread.
 
     Walker batches make small matrices (e.g. 24 × 22 by 22 × 2000 in the two-stage target):
     OpenBLAS's threads cost 12× the product itself there (0.92 ms against 0.078 ms per call on
     this machine), and worse when two sampling processes share two cores.
-    """
-    from threadpoolctl import threadpool_limits
 
-    return threadpool_limits(limits=1, user_api="blas")
+    The loaded BLAS libraries are looked up once and again only after an import (a new module
+    may bring its own BLAS): the look-up scans every shared library of the process, ~20× the
+    cost of setting the limit, and samplers enter this context once per chunk of steps.
+    """
+    from threadpoolctl import ThreadpoolController
+
+    if _blas_controller["modules"] != len(sys.modules):
+        _blas_controller["controller"] = ThreadpoolController()
+        _blas_controller["modules"] = len(sys.modules)
+    return _blas_controller["controller"].limit(limits=1, user_api="blas")
