@@ -11,8 +11,9 @@ from scipy import integrate, stats
 from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.coordinates import NonCentredCoordinates
-from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget, KernelProposal
+from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget
 from fsrbayes.inference.population.model import Population, TwoStageTarget
+from fsrbayes.inference.population.proposals import KernelProposal
 from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 

@@ -11,13 +11,15 @@ those blocks for every walker:
 1. each specimen j in turn, conditional on the walker's Λ:
    p(u_j | Λ, y_j) ∝ π(u_j) L_j(u_j) p(θ_j | Λ) / π(θ_j) (u_j in the specimen's prior-scaled
    coordinates, :class:`~fsrbayes.inference.population.model.JointTarget`), updated by
-   * an independence Metropolis–Hastings step from :class:`KernelProposal`, a Gaussian kernel
-     mixture over the specimen's own per-specimen posterior draws (the two-stage route's fits)
-     with a defensive Student-t, exact for any proposal — the draws already follow the curved
-     s0–Va ridge that defeats Gaussian proposals, and
-   * a differential-evolution step within the block, red–blue split over the ensemble's walkers
-     (each walker's target depends on its own Λ; the proposal uses only the other half's
-     current positions, so it is symmetric given them, as in emcee's own moves);
+   * an independence Metropolis–Hastings step from a density fitted to the specimen's own
+     posterior draws (the two-stage route's fits), exact for any proposal
+     (:mod:`~.proposals`): a Gaussian kernel mixture over the draws, which already follow the
+     curved s0–Va ridge that defeats Gaussian proposals, or a Student-t pushed through a
+     transport map fitted to them, which straightens the ridge; and
+   * a differential-evolution step within the block (in the map's coordinates where there is
+     one), red–blue split over the ensemble's walkers (each walker's target depends on its own
+     Λ; the proposal uses only the other half's current positions, so it is symmetric given
+     them, as in emcee's own moves);
 2. the hyper-parameters: for each p, μ_p | ω_p, z drawn exactly (normal prior, normal
    likelihood) and log ω_p | μ_p, z by random-walk Metropolis (half-normal prior), a few rounds;
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
@@ -34,88 +36,16 @@ cached blocks, so it equals :meth:`JointTarget.__call__` exactly (tested).
 
 import emcee
 import numpy as np
-from scipy.special import gammaln
 
-from ...utils import logsumexp
+from ...data.prior import JointPrior
 from .model import JointTarget
+from .proposals import PROPOSALS
 
-__all__ = ["KernelProposal", "GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
+__all__ = ["GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
 GIBBS_WALKERS = 32
 """Walkers per ensemble for the Gibbs route: each walker is its own Gibbs chain (the ensemble
 only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply."""
-
-
-class KernelProposal:
-    """Independence proposal for one block of the Gibbs sweep.
-
-    Independence proposal for one block: a Gaussian kernel mixture over draws, plus a defensive
-    multivariate Student-t.
-
-    Parameters
-    ----------
-    draws : ndarray (N, d)
-        Draws of the block (e.g. a per-specimen posterior in its u coordinates).
-    n_centres : int
-        Kernel centres, evenly thinned from ``draws``.
-    defensive : float
-        Weight of the Student-t (``dof`` degrees of freedom, twice the draws' covariance): it
-        keeps the proposal's tails heavier than any conditional of the block.
-    """
-
-    def __init__(self, draws, n_centres=256, defensive=0.1, dof=5.0):
-        draws = np.asarray(draws, dtype=float)
-        if draws.ndim != 2 or len(draws) < draws.shape[1] + 2 or not np.all(np.isfinite(draws)):
-            raise ValueError(
-                f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}"
-            )
-        n, d = draws.shape
-        self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
-        self.mean = draws.mean(axis=0)
-        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
-        m = len(self.centres)
-        bandwidth = (4.0 / ((d + 2.0) * m)) ** (1.0 / (d + 4.0))  # Silverman's rule
-        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * cov)
-        self.t_chol = np.linalg.cholesky(2.0 * cov)
-        self.white_centres = np.linalg.solve(self.kernel_chol, self.centres.T).T
-        self.defensive, self.dof, self.d = float(defensive), float(dof), d
-
-    def sample(self, random, n):
-        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
-        pick = random.randint(len(self.centres), size=n)
-        kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
-        chi = random.chisquare(self.dof, size=n) / self.dof
-        heavy = (
-            self.mean
-            + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
-        )
-        return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
-
-    def log_density(self, u):
-        """Log q(u) for u (n, d)."""
-        u = np.atleast_2d(u)
-        white = np.linalg.solve(self.kernel_chol, u.T).T
-        dist2 = (
-            np.sum(white**2, axis=1)[:, None]
-            + np.sum(self.white_centres**2, axis=1)[None, :]
-            - 2.0 * white @ self.white_centres.T
-        )
-        log_kernel = (
-            logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1)
-            - np.log(len(self.centres))
-            - np.sum(np.log(np.diag(self.kernel_chol)))
-            - 0.5 * self.d * np.log(2 * np.pi)
-        )
-        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
-        nu, d = self.dof, self.d
-        log_t = (
-            gammaln((nu + d) / 2)
-            - gammaln(nu / 2)
-            - 0.5 * d * np.log(nu * np.pi)
-            - np.sum(np.log(np.diag(self.t_chol)))
-            - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu)
-        )
-        return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
 
 
 class GibbsJointTarget(JointTarget):
@@ -131,6 +61,10 @@ class GibbsJointTarget(JointTarget):
         or ``HierarchicalResult.specimen_draws`` of a two-stage result).
     hyper_rounds : int
         Rounds of (exact μ draw, Metropolis log ω step) per sweep.
+    proposal : {"kernel", "map"}
+        The specimen blocks' independence proposal (:data:`PROPOSALS`): a kernel mixture over the
+        draws (:class:`~.proposals.KernelProposal`) or a Student-t through a transport map
+        fitted to them (:class:`~.proposals.MapProposal`).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
@@ -152,19 +86,22 @@ class GibbsJointTarget(JointTarget):
         n_centres=256,
         weak_ratio=None,
         shift_scale=1.0,
+        proposal="kernel",
     ):
         super().__init__(population, specimens)
+        if proposal not in PROPOSALS:
+            raise ValueError(f"proposal must be one of {sorted(PROPOSALS)}, got {proposal!r}")
         if len(proposal_draws) != len(self.specimens):
             raise ValueError(
                 f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
                 f"{len(proposal_draws)}"
             )
+        options = {"n_centres": n_centres} if proposal == "kernel" else {}
         self.proposals = [
-            KernelProposal(
-                spec.prior.to_unconstrained(np.asarray(d, dtype=float)), n_centres=n_centres
-            )
+            PROPOSALS[proposal](spec.prior.to_unconstrained(np.asarray(d, dtype=float)), **options)
             for spec, d in zip(self.specimens, proposal_draws, strict=False)
         ]
+        self.proposal = proposal
         self.hyper_rounds = int(hyper_rounds)
         z = [
             population.to_z(np.asarray(d, dtype=float)[:, population.index])[0]
@@ -180,6 +117,11 @@ class GibbsJointTarget(JointTarget):
         """Population parameters the specimens' own data barely identify (posterior sd of z above
         ``weak_ratio`` × the spread of the specimens' medians): they get the shift-and-scale move.
         """
+        self.column_priors = {
+            p: JointPrior((population.prior.names[c],), (population.prior.dists[c],))
+            for p, c in ((p, int(population.index[p])) for p in self.weak)
+        }
+        """Each shift-and-scaled parameter's own prior (its column's log|dx/du|)."""
         self.shift_steps = shift_scale * 2.4 * between / np.sqrt(len(z))
         self.scale_step = shift_scale * 2.4 / np.sqrt(2.0 * len(z))
 
@@ -282,12 +224,16 @@ class BlockGibbsMove(emcee.moves.Move):
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
         moved = [independence]
+        chart = getattr(proposal, "map", None)  # DE in the map's straightened coordinates
         for active, other in ((half[: n // 2], half[n // 2 :]), (half[n // 2 :], half[: n // 2])):
             first = random.randint(len(other), size=len(active))
             second = random.randint(len(other) - 1, size=len(active))
             second += second >= first  # two distinct walkers of the other half
             step = gamma * (1.0 + 1e-5 * random.standard_normal(len(active)))[:, None]
-            u_new = self.u[j][active] + step * (self.u[j][other[first]] - self.u[j][other[second]])
+            at = self.u[j] if chart is None else chart.inverse(self.u[j])
+            new = at[active] + step * (at[other[first]] - at[other[second]])
+            with np.errstate(over="ignore", invalid="ignore"):
+                u_new = new if chart is None else chart.forward(new)
             moved.append(self._accept(j, active, u_new, 0.0, random))
         return independence, np.concatenate(moved[1:]).mean()
 
@@ -322,45 +268,62 @@ class BlockGibbsMove(emcee.moves.Move):
 
         Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε, z'_j = μ' + e^ε
         (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take when the data
-        barely identify p per specimen (ω_p then mixes over hundreds of sweeps).
+        barely identify p per specimen (ω_p then mixes over hundreds of sweeps). A specimen's
+        other parameters stay where they are — or, where its proposal has a transport map
+        (:class:`~.proposals.MapProposal`), they keep their map coordinates v and follow z_jp
+        along the ridge the map straightened (a parameter on the A0–A1–A2 ridge of eq. 6 cannot
+        move alone).
 
-        In (μ, log ω, z) coordinates the map has Jacobian e^{Jε} and leaves every population
-        density term N(z_j; μ, ω) but its −J·log ω unchanged, so the Metropolis ratio is
-        ΔΣ_j log L_j + Δ log p(μ) + Δ log p(ω) + ε (support of π enforced by the blocks).
+        The Metropolis ratio is taken in the coordinates (μ, log ω, z_jp, the rest's u or v), in
+        which the move has Jacobian e^{Jε} (the map's diagonal is constant): the change of each
+        specimen's conditional log-density in u, less the change of log|dx/du| of p's column,
+        plus that of log|dx/dz|, plus Δ log p(μ) + Δ log p(ω) + ε + Jε.
         """
         pop, t = self.population, self.target
         n = len(self.mu)
+        rows = np.arange(n)
         delta = t.shift_steps[p] * random.standard_normal(n)
         eps = t.scale_step * random.standard_normal(n)
         z = pop.to_z(self.x)[0][..., p]  # (W, J)
-        mu_new, omega_new = self.mu[:, p] + delta, self.omega[:, p] * np.exp(eps)
-        z_new = mu_new[:, None] + np.exp(eps)[:, None] * (z - self.mu[:, p][:, None])
+        mu_new, omega_new = self.mu.copy(), self.omega.copy()
+        mu_new[:, p] += delta
+        omega_new[:, p] *= np.exp(eps)
+        z_new = mu_new[:, p, None] + np.exp(eps)[:, None] * (z - self.mu[:, p][:, None])
         value_new = np.where(
             pop.log_scale[p], np.exp(np.where(pop.log_scale[p], z_new, 0.0)), z_new
         )
-        column = pop.index[p]
+        column, column_prior = pop.index[p], t.column_priors[p]
+        m, s = pop.centre[p], pop.scale[p]
+        log_alpha = (
+            -0.5 * ((mu_new[:, p] - m) ** 2 - (self.mu[:, p] - m) ** 2) / s**2
+            - 0.5 * (omega_new[:, p] ** 2 - self.omega[:, p] ** 2) / s**2
+            + (1 + len(t.specimens)) * eps
+        )
         news = []
-        for j, spec in enumerate(t.specimens):
-            physical = spec.prior.from_unconstrained(self.u[j])[0]
-            physical[:, column] = value_new[:, j]
+        for j in range(len(t.specimens)):
             with np.errstate(all="ignore"):
-                u_new = spec.prior.to_unconstrained(physical)
+                u_column = column_prior.to_unconstrained(value_new[:, j, None])[:, 0]
+                chart = getattr(t.proposals[j], "map", None)
+                if chart is None:
+                    u_new = self.u[j].copy()
+                    u_new[:, column] = u_column
+                else:
+                    u_new = chart.forward(chart.inverse(self.u[j]), fixed=(column, u_column))
             bad = ~np.all(np.isfinite(u_new), axis=1)
             u_new[bad] = self.u[j][bad]
             lp, like, x = self._evaluate_block(j, u_new)
-            news.append((u_new, np.where(bad, -np.inf, lp), np.where(bad, -np.inf, like), x))
-        like_new = np.stack([v[2] for v in news], axis=1)
-        m, s = pop.centre[p], pop.scale[p]
-        with np.errstate(invalid="ignore", over="ignore"):
-            log_alpha = (
-                np.sum(like_new - self.like, axis=1)
-                - 0.5 * ((mu_new - m) ** 2 - (self.mu[:, p] - m) ** 2) / s**2
-                - 0.5 * (omega_new**2 - self.omega[:, p] ** 2) / s**2
-                + eps
-            )
-        take = np.all(np.isfinite(like_new), axis=1) & (
-            np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf)
-        )
+            lp, like = np.where(bad, -np.inf, lp), np.where(bad, -np.inf, like)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                new = lp + pop.log_ratio(x, mu_new, omega_new)
+                old = self._conditional(j, self.block_lp[:, j], self.x[:, j], rows)
+                column_jacobian = (
+                    column_prior.from_unconstrained(u_new[:, column, None])[1]
+                    - column_prior.from_unconstrained(self.u[j][:, column, None])[1]
+                )
+                log_x = np.log(x[:, p]) - np.log(self.x[:, j, p]) if pop.log_scale[p] else 0.0
+                log_alpha = log_alpha + new - old - column_jacobian + log_x
+            news.append((u_new, lp, like, x))
+        take = np.isfinite(log_alpha) & (np.log(random.uniform(size=n)) < log_alpha)
         for j, (u_new, lp, like, x) in enumerate(news):
             self.u[j][take], self.block_lp[take, j], self.like[take, j], self.x[take, j] = (
                 u_new[take],
@@ -368,7 +331,7 @@ class BlockGibbsMove(emcee.moves.Move):
                 like[take],
                 x[take],
             )
-        self.mu[take, p], self.omega[take, p] = mu_new[take], omega_new[take]
+        self.mu[take, p], self.omega[take, p] = mu_new[take, p], omega_new[take, p]
         return take.mean()
 
     # -- emcee's interface -------------------------------------------------------------------

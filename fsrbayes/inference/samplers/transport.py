@@ -157,23 +157,29 @@ class TriangularMap:
             quadratic,
         )
 
-    def forward(self, v):
+    def forward(self, v, fixed=None):
         """Map v (…, ndim) back to u.
 
         u(v) for v (…, ndim); walkers proposed far out may overflow to inf/NaN (the target then
-        rejects them).
+        rejects them). ``fixed = (i, values)`` sets u_i to ``values`` (…) instead of its stage's
+        mean + c_i·v_i: the later coordinates then follow it along the map at their own v (the
+        ridge the map straightened moves with u_i; the Jacobian of the later coordinates
+        with respect to their v stays the constant diagonal).
         """
         v = np.asarray(v, dtype=float)
         u = np.empty_like(v)
         z = np.empty_like(v)
         with np.errstate(over="ignore", invalid="ignore"):
             for stage, i in enumerate(self.order):
-                previous = list(self.order[:stage])
-                mean = (
-                    self.intercept[i]
-                    + _features(z[..., previous], self.quadratic) @ self.weights[stage]
-                )
-                u[..., i] = mean + self.diagonal[i] * v[..., i]
+                if fixed is not None and i == fixed[0]:
+                    u[..., i] = fixed[1]
+                else:
+                    previous = list(self.order[:stage])
+                    mean = (
+                        self.intercept[i]
+                        + _features(z[..., previous], self.quadratic) @ self.weights[stage]
+                    )
+                    u[..., i] = mean + self.diagonal[i] * v[..., i]
                 z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
         return u
 

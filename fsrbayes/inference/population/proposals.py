@@ -1,0 +1,147 @@
+"""Independence proposals for the specimen blocks of the Gibbs route (:mod:`.gibbs`).
+
+Each specimen's conditional given the population is proposed from a density fitted to that
+specimen's own posterior draws; the Metropolis–Hastings ratio carries q, so any proposal is exact.
+"""
+
+import numpy as np
+from scipy.special import gammaln
+
+from ...utils import logsumexp
+from ..samplers.transport import TriangularMap, student_t_draws, student_t_log_density
+
+__all__ = ["KernelProposal", "MapProposal", "PROPOSALS"]
+
+
+class KernelProposal:
+    """Independence proposal for one block of the Gibbs sweep.
+
+    Independence proposal for one block: a Gaussian kernel mixture over draws, plus a defensive
+    multivariate Student-t.
+
+    Parameters
+    ----------
+    draws : ndarray (N, d)
+        Draws of the block (e.g. a per-specimen posterior in its u coordinates).
+    n_centres : int
+        Kernel centres, evenly thinned from ``draws``.
+    defensive : float
+        Weight of the Student-t (``dof`` degrees of freedom, twice the draws' covariance): it
+        keeps the proposal's tails heavier than any conditional of the block.
+    """
+
+    def __init__(self, draws, n_centres=256, defensive=0.1, dof=5.0):
+        draws = np.asarray(draws, dtype=float)
+        if draws.ndim != 2 or len(draws) < draws.shape[1] + 2 or not np.all(np.isfinite(draws)):
+            raise ValueError(
+                f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}"
+            )
+        n, d = draws.shape
+        self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
+        self.mean = draws.mean(axis=0)
+        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
+        m = len(self.centres)
+        bandwidth = (4.0 / ((d + 2.0) * m)) ** (1.0 / (d + 4.0))  # Silverman's rule
+        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * cov)
+        self.t_chol = np.linalg.cholesky(2.0 * cov)
+        self.white_centres = np.linalg.solve(self.kernel_chol, self.centres.T).T
+        self.defensive, self.dof, self.d = float(defensive), float(dof), d
+
+    def sample(self, random, n):
+        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        pick = random.randint(len(self.centres), size=n)
+        kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
+        chi = random.chisquare(self.dof, size=n) / self.dof
+        heavy = (
+            self.mean
+            + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
+        )
+        return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
+
+    def log_density(self, u):
+        """Log q(u) for u (n, d)."""
+        u = np.atleast_2d(u)
+        white = np.linalg.solve(self.kernel_chol, u.T).T
+        dist2 = (
+            np.sum(white**2, axis=1)[:, None]
+            + np.sum(self.white_centres**2, axis=1)[None, :]
+            - 2.0 * white @ self.white_centres.T
+        )
+        log_kernel = (
+            logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1)
+            - np.log(len(self.centres))
+            - np.sum(np.log(np.diag(self.kernel_chol)))
+            - 0.5 * self.d * np.log(2 * np.pi)
+        )
+        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
+        nu, d = self.dof, self.d
+        log_t = (
+            gammaln((nu + d) / 2)
+            - gammaln(nu / 2)
+            - 0.5 * d * np.log(nu * np.pi)
+            - np.sum(np.log(np.diag(self.t_chol)))
+            - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu)
+        )
+        return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
+
+
+class MapProposal:
+    """Independence proposal for one block: a Student-t pushed through a transport map.
+
+    A :class:`~fsrbayes.inference.samplers.transport.TriangularMap` fitted to the block's draws
+    straightens their curved ridges (the A0–A1–A2 ridge of the area law, eq. 6; the s0–Va ridge
+    of the tunneling block): in its coordinates v the draws are close to a Gaussian, so
+    u = T(v), v ~ Student-t (scale fitted to the draws' v), proposes along the ridge with an exact
+    density, q(u) = t(v(u)) / |du/dv| (the map's Jacobian is constant). A defensive Student-t in u
+    (twice the draws' covariance), as in :class:`KernelProposal`, keeps the tails heavier than any
+    conditional of the block. The map is quadratic where the draws suffice for it (4 per feature),
+    linear otherwise.
+
+    Parameters
+    ----------
+    draws : ndarray (N, d)
+    defensive : float
+        Weight of the defensive Student-t.
+    dof : float
+        Degrees of freedom of both Student-t's.
+    """
+
+    def __init__(self, draws, defensive=0.1, dof=5.0):
+        draws = np.asarray(draws, dtype=float)
+        if draws.ndim != 2 or len(draws) < 4 * draws.shape[1] or not np.all(np.isfinite(draws)):
+            raise ValueError(
+                f"MapProposal needs finite draws of shape (N >= 4 d, d), got {draws.shape}"
+            )
+        n, d = draws.shape
+        quadratic = n >= 4 * (d + d * (d + 1) // 2)
+        self.map = TriangularMap.fit(draws, quadratic=quadratic)
+        v = self.map.inverse(draws)
+        self.v_chol = np.linalg.cholesky(np.cov(v, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d))
+        self.log_det = self.map.log_det_jacobian + np.sum(np.log(np.diag(self.v_chol)))
+        self.mean = draws.mean(axis=0)
+        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
+        self.t_chol = np.linalg.cholesky(2.0 * cov)
+        self.t_log_det = np.sum(np.log(np.diag(self.t_chol)))
+        self.defensive, self.dof, self.d = float(defensive), float(dof), d
+
+    def sample(self, random, n):
+        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        mapped = self.map.forward(student_t_draws(random, n, self.d, self.dof) @ self.v_chol.T)
+        heavy = self.mean + student_t_draws(random, n, self.d, self.dof) @ self.t_chol.T
+        return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, mapped)
+
+    def log_density(self, u):
+        """Log q(u) for u (n, d)."""
+        u = np.atleast_2d(u)
+        with np.errstate(over="ignore", invalid="ignore"):
+            v = np.linalg.solve(self.v_chol, self.map.inverse(u).T).T
+            log_map = student_t_log_density(v, self.dof) - self.log_det
+        log_map = np.where(np.isnan(log_map), -np.inf, log_map)
+        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
+        log_t = student_t_log_density(y, self.dof) - self.t_log_det
+        with np.errstate(divide="ignore"):  # defensive = 0: the map's Student-t alone
+            return np.logaddexp(np.log1p(-self.defensive) + log_map, np.log(self.defensive) + log_t)
+
+
+PROPOSALS = {"kernel": KernelProposal, "map": MapProposal}
+"""The specimen blocks' independence proposals, by the name :class:`GibbsJointTarget` takes."""
