@@ -62,9 +62,10 @@ class GibbsJointTarget(JointTarget):
     hyper_rounds : int
         Rounds of (exact μ draw, Metropolis log ω step) per sweep.
     proposal : {"kernel", "map"}
-        The specimen blocks' independence proposal (:data:`PROPOSALS`): a kernel mixture over the
-        draws (:class:`~.proposals.KernelProposal`) or a Student-t through a transport map
-        fitted to them (:class:`~.proposals.MapProposal`).
+        The specimen blocks' independence proposal (:data:`PROPOSALS`): a Student-t through a
+        transport map fitted to the draws (:class:`~.proposals.MapProposal`, default; the blocks'
+        DE steps then move in its coordinates) or a kernel mixture over them
+        (:class:`~.proposals.KernelProposal`).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
@@ -86,7 +87,7 @@ class GibbsJointTarget(JointTarget):
         n_centres=256,
         weak_ratio=None,
         shift_scale=1.0,
-        proposal="kernel",
+        proposal="map",
     ):
         super().__init__(population, specimens)
         if proposal not in PROPOSALS:
