@@ -102,7 +102,6 @@ class GibbsJointTarget(JointTarget):
             PROPOSALS[proposal](spec.prior.to_unconstrained(np.asarray(d, dtype=float)), **options)
             for spec, d in zip(self.specimens, proposal_draws, strict=False)
         ]
-        self.proposal = proposal
         self.hyper_rounds = int(hyper_rounds)
         z = [
             population.to_z(np.asarray(d, dtype=float)[:, population.index])[0]

@@ -5,12 +5,31 @@ specimen's own posterior draws; the Metropolis–Hastings ratio carries q, so an
 """
 
 import numpy as np
-from scipy.special import gammaln
 
 from ...utils import logsumexp
 from ..samplers.transport import TriangularMap, student_t_draws, student_t_log_density
 
 __all__ = ["KernelProposal", "MapProposal", "PROPOSALS"]
+
+
+class _DefensiveStudentT:
+    """A multivariate Student-t in u with twice the draws' covariance.
+
+    The part of either proposal that keeps its tails heavier than any conditional of the block.
+    """
+
+    def __init__(self, draws, dof):
+        d = draws.shape[1]
+        self.mean = draws.mean(axis=0)
+        self.cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
+        self.chol = np.linalg.cholesky(2.0 * self.cov)
+        self.log_det = np.sum(np.log(np.diag(self.chol)))
+        self.dof = dof
+
+    def log_density(self, u):
+        """Log density at u (n, d)."""
+        y = np.linalg.solve(self.chol, (u - self.mean).T).T
+        return student_t_log_density(y, self.dof) - self.log_det
 
 
 class KernelProposal:
@@ -38,12 +57,10 @@ class KernelProposal:
             )
         n, d = draws.shape
         self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
-        self.mean = draws.mean(axis=0)
-        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
+        self.heavy = _DefensiveStudentT(draws, float(dof))
         m = len(self.centres)
         bandwidth = (4.0 / ((d + 2.0) * m)) ** (1.0 / (d + 4.0))  # Silverman's rule
-        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * cov)
-        self.t_chol = np.linalg.cholesky(2.0 * cov)
+        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * self.heavy.cov)
         self.white_centres = np.linalg.solve(self.kernel_chol, self.centres.T).T
         self.defensive, self.dof, self.d = float(defensive), float(dof), d
 
@@ -53,8 +70,8 @@ class KernelProposal:
         kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
         chi = random.chisquare(self.dof, size=n) / self.dof
         heavy = (
-            self.mean
-            + (random.standard_normal((n, self.d)) @ self.t_chol.T) / np.sqrt(chi)[:, None]
+            self.heavy.mean
+            + (random.standard_normal((n, self.d)) @ self.heavy.chol.T) / np.sqrt(chi)[:, None]
         )
         return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
 
@@ -73,15 +90,7 @@ class KernelProposal:
             - np.sum(np.log(np.diag(self.kernel_chol)))
             - 0.5 * self.d * np.log(2 * np.pi)
         )
-        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
-        nu, d = self.dof, self.d
-        log_t = (
-            gammaln((nu + d) / 2)
-            - gammaln(nu / 2)
-            - 0.5 * d * np.log(nu * np.pi)
-            - np.sum(np.log(np.diag(self.t_chol)))
-            - 0.5 * (nu + d) * np.log1p(np.sum(y**2, axis=1) / nu)
-        )
+        log_t = self.heavy.log_density(u)
         return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
 
 
@@ -118,16 +127,13 @@ class MapProposal:
         v = self.map.inverse(draws)
         self.v_chol = np.linalg.cholesky(np.cov(v, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d))
         self.log_det = self.map.log_det_jacobian + np.sum(np.log(np.diag(self.v_chol)))
-        self.mean = draws.mean(axis=0)
-        cov = np.cov(draws, rowvar=False).reshape(d, d) + 1e-12 * np.eye(d)
-        self.t_chol = np.linalg.cholesky(2.0 * cov)
-        self.t_log_det = np.sum(np.log(np.diag(self.t_chol)))
+        self.heavy = _DefensiveStudentT(draws, float(dof))
         self.defensive, self.dof, self.d = float(defensive), float(dof), d
 
     def sample(self, random, n):
         """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
         mapped = self.map.forward(student_t_draws(random, n, self.d, self.dof) @ self.v_chol.T)
-        heavy = self.mean + student_t_draws(random, n, self.d, self.dof) @ self.t_chol.T
+        heavy = self.heavy.mean + student_t_draws(random, n, self.d, self.dof) @ self.heavy.chol.T
         return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, mapped)
 
     def log_density(self, u):
@@ -137,8 +143,7 @@ class MapProposal:
             v = np.linalg.solve(self.v_chol, self.map.inverse(u).T).T
             log_map = student_t_log_density(v, self.dof) - self.log_det
         log_map = np.where(np.isnan(log_map), -np.inf, log_map)
-        y = np.linalg.solve(self.t_chol, (u - self.mean).T).T
-        log_t = student_t_log_density(y, self.dof) - self.t_log_det
+        log_t = self.heavy.log_density(u)
         with np.errstate(divide="ignore"):  # defensive = 0: the map's Student-t alone
             return np.logaddexp(np.log1p(-self.defensive) + log_map, np.log(self.defensive) + log_t)
 
