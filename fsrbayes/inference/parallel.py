@@ -233,8 +233,8 @@ def single_threaded_blas():
     this machine), and worse when two sampling processes share two cores.
 
     The loaded BLAS libraries are looked up once and again only after an import (a new module
-    may bring its own BLAS): the look-up scans every shared library of the process, ~20× the
-    cost of setting the limit, and samplers enter this context once per chunk of steps.
+    may bring its own BLAS): the look-up scans every shared library of the process, which costs
+    far more than setting the limit, and samplers enter this context once per chunk of steps.
     """
     from threadpoolctl import ThreadpoolController
 
