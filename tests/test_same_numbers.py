@@ -10,8 +10,9 @@ re-recorded from a commit that passed here before (CHANGELOG), never from the co
 unless a commit changes the MAP search on purpose, which then re-records them itself and says so
 in the CHANGELOG. The fits run with the MAP search the pins were recorded with
 (``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points and a stopping
-share of 1e-6, gradients from the model solved at every finite-difference neighbour), so the pins
-check every other number of the search and the chain whatever the search's defaults are.
+share of 1e-6, gradients from the model solved at every finite-difference neighbour) and the
+transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off), so the pins check
+every other number of the search and the chain whatever those defaults are.
 """
 
 import platform
@@ -24,7 +25,7 @@ import pytest
 import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import optimize
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers import SamplerSettings, transport
 from fsrbayes.physics import loading
 from fsrbayes.physics.sensor import current_history
 
@@ -79,6 +80,7 @@ RECORDED_SEARCH = {
 def test_a_short_fit_gives_the_recorded_chain(model, seed, monkeypatch):
     for name, value in RECORDED_SEARCH.items():
         monkeypatch.setattr(optimize, name, value)
+    monkeypatch.setattr(transport, "STACKED_FEATURES", False)  # the maps' recorded evaluation
     data = syn.simulate(
         "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
     ).data

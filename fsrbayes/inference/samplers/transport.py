@@ -20,12 +20,13 @@ Marzouk, SIAM/ASA JUQ 6, 645, 2018.)
 """
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.special import gammaln
 
 from ...utils import logsumexp
+from .transport_kernels import forward_rows, inverse_rows
 
 __all__ = [
     "TriangularMap",
@@ -59,6 +60,28 @@ def _features(z, quadratic=True):
         return z
     j, k = _pairs(m)
     return np.concatenate([z, z[..., j] * z[..., k]], axis=-1)
+
+
+STACKED_FEATURES = True
+"""Evaluate a quadratic map's passes compiled, from one stacked feature array per row
+(:mod:`.transport_kernels`): each stage appends its coordinate's features instead of rebuilding
+those of all earlier ones. The same numbers to rounding; False gives the stage-by-stage numpy
+evaluation, bit for bit (the regression pins of ``tests/test_same_numbers.py`` were recorded
+with it)."""
+
+
+def _stacked_layout(ndim):
+    """Positions of stage i's features [z_j, z_j·z_k (j ≤ k)] in the stacked array.
+
+    The stacked array holds, for each stage t in turn, [z_t, z_0·z_t, z_1·z_t, …, z_t·z_t]: its
+    first t(t + 3)/2 columns are exactly the features of the stages before t.
+    """
+    offset = [t * (t + 3) // 2 for t in range(ndim + 1)]
+    layout = []
+    for i in range(ndim):
+        j, k = _pairs(i)
+        layout.append(np.concatenate([np.array(offset[:i], dtype=int), np.add(offset, 1)[k] + j]))
+    return offset, layout
 
 
 @dataclass(frozen=True)
@@ -167,6 +190,8 @@ class TriangularMap:
         with respect to their v stays the constant diagonal).
         """
         v = np.asarray(v, dtype=float)
+        if STACKED_FEATURES and self.quadratic:
+            return self._forward_stacked(v, fixed)
         u = np.empty_like(v)
         z = np.empty_like(v)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -183,10 +208,44 @@ class TriangularMap:
                 z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
         return u
 
+    @cached_property
+    def _stacked(self):
+        """(column offsets, stacked weights (features, ndim)) of :data:`STACKED_FEATURES`."""
+        offset, layout = _stacked_layout(self.ndim)
+        stacked = np.zeros((offset[-1], self.ndim))
+        for stage, i in enumerate(self.order):
+            stacked[layout[stage], i] = self.weights[stage]
+        return offset, stacked
+
+    def _compiled_arguments(self):
+        offset, stacked = self._stacked
+        return (
+            np.asarray(self.order, dtype=np.int64),
+            self.intercept,
+            self.diagonal,
+            self.centre,
+            self.spread,
+            stacked,
+            np.asarray(offset, dtype=np.int64),
+        )
+
+    def _forward_stacked(self, v, fixed):
+        """:meth:`forward` by :func:`~.transport_kernels.forward_rows`."""
+        rows = np.ascontiguousarray(v.reshape(-1, self.ndim))
+        index, values = -1, np.zeros(len(rows))
+        if fixed is not None:
+            index = int(fixed[0])
+            values = np.ascontiguousarray(np.broadcast_to(fixed[1], v.shape[:-1]), dtype=float)
+            values = values.reshape(-1)
+        return forward_rows(rows, *self._compiled_arguments(), index, values).reshape(v.shape)
+
     def inverse(self, u):
         """v(u) for u (…, ndim)."""
         u = np.asarray(u, dtype=float)
         z = (u - self.centre) / self.spread
+        if STACKED_FEATURES and self.quadratic:
+            rows = np.ascontiguousarray(u.reshape(-1, self.ndim))
+            return inverse_rows(rows, *self._compiled_arguments()).reshape(u.shape)
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
             mean = (
