@@ -26,7 +26,7 @@ import numpy as np
 from scipy.special import gammaln
 
 from ...utils import logsumexp
-from .transport_kernels import forward_rows, inverse_rows
+from .transport_kernels import map_rows
 
 __all__ = [
     "TriangularMap",
@@ -230,14 +230,15 @@ class TriangularMap:
         )
 
     def _forward_stacked(self, v, fixed):
-        """:meth:`forward` by :func:`~.transport_kernels.forward_rows`."""
+        """:meth:`forward` by :func:`~.transport_kernels.map_rows`."""
         rows = np.ascontiguousarray(v.reshape(-1, self.ndim))
         index, values = -1, np.zeros(len(rows))
         if fixed is not None:
             index = int(fixed[0])
             values = np.ascontiguousarray(np.broadcast_to(fixed[1], v.shape[:-1]), dtype=float)
             values = values.reshape(-1)
-        return forward_rows(rows, *self._compiled_arguments(), index, values).reshape(v.shape)
+        arguments = self._compiled_arguments()
+        return map_rows(rows, False, *arguments, index, values).reshape(v.shape)
 
     def inverse(self, u):
         """v(u) for u (…, ndim)."""
@@ -245,7 +246,8 @@ class TriangularMap:
         z = (u - self.centre) / self.spread
         if STACKED_FEATURES and self.quadratic:
             rows = np.ascontiguousarray(u.reshape(-1, self.ndim))
-            return inverse_rows(rows, *self._compiled_arguments()).reshape(u.shape)
+            arguments = self._compiled_arguments()
+            return map_rows(rows, True, *arguments, -1, np.zeros(0)).reshape(u.shape)
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
             mean = (

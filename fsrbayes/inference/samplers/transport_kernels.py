@@ -10,7 +10,7 @@ Here the features are kept stacked per row — for each stage t in turn [z_t, z_
 import numba
 import numpy as np
 
-__all__ = ["forward_rows", "inverse_rows"]
+__all__ = ["map_rows"]
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -24,32 +24,16 @@ def _append_features(features, z, stage, start):
 
 
 @numba.njit(**JIT)
-def forward_rows(v, order, intercept, diagonal, centre, spread, stacked, offset, fixed, values):
-    """u(v) for rows v (n, d); ``fixed`` ≥ 0 sets u[:, fixed] to ``values`` (n,) instead."""
-    n, d = v.shape
-    u = np.empty((n, d))
-    z = np.empty(d)
-    features = np.empty(offset[d])
-    for r in range(n):
-        for stage in range(d):
-            i = order[stage]
-            if i == fixed:
-                u[r, i] = values[r]
-            else:
-                mean = intercept[i]
-                for f in range(offset[stage]):
-                    mean += features[f] * stacked[f, i]
-                u[r, i] = mean + diagonal[i] * v[r, i]
-            z[stage] = (u[r, i] - centre[i]) / spread[i]
-            _append_features(features, z, stage, offset[stage])
-    return u
+def map_rows(
+    x, inverse, order, intercept, diagonal, centre, spread, stacked, offset, fixed, values
+):
+    """u(v) for rows x = v (n, d), or v(u) for rows x = u when ``inverse``.
 
-
-@numba.njit(**JIT)
-def inverse_rows(u, order, intercept, diagonal, centre, spread, stacked, offset):
-    """v(u) for rows u (n, d)."""
-    n, d = u.shape
-    v = np.empty((n, d))
+    Forward, ``fixed`` ≥ 0 sets u[:, fixed] to ``values`` (n,) instead of its stage's
+    mean + c_i·v_i; the later stages follow it.
+    """
+    n, d = x.shape
+    out = np.empty((n, d))
     z = np.empty(d)
     features = np.empty(offset[d])
     for r in range(n):
@@ -58,7 +42,12 @@ def inverse_rows(u, order, intercept, diagonal, centre, spread, stacked, offset)
             mean = intercept[i]
             for f in range(offset[stage]):
                 mean += features[f] * stacked[f, i]
-            v[r, i] = (u[r, i] - mean) / diagonal[i]
-            z[stage] = (u[r, i] - centre[i]) / spread[i]
+            if inverse:
+                u_i = x[r, i]
+                out[r, i] = (u_i - mean) / diagonal[i]
+            else:
+                u_i = values[r] if i == fixed else mean + diagonal[i] * x[r, i]
+                out[r, i] = u_i
+            z[stage] = (u_i - centre[i]) / spread[i]
             _append_features(features, z, stage, offset[stage])
-    return v
+    return out
