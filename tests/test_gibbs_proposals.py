@@ -10,7 +10,7 @@ from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.gibbs import GibbsJointTarget
 from fsrbayes.inference.population.model import Population
-from fsrbayes.inference.population.proposals import MapProposal
+from fsrbayes.inference.population.proposals import ConditionalMapProposal, MapProposal
 
 WIDE = Distribution("normal", {"mu": 0.0, "sigma": 10.0})
 PRIOR = JointPrior(("theta", "phi"), (WIDE, WIDE))
@@ -77,7 +77,53 @@ def test_the_map_proposal_is_a_normalised_density_of_its_own_draws():
         MapProposal(x[:5])
 
 
-@pytest.mark.parametrize("proposal", ["kernel", "map"])
+def banana_draws(rng, n=600):
+    x = rng.standard_normal((n, 2))
+    x[:, 1] = 0.3 * x[:, 1] + x[:, 0] ** 2
+    return x
+
+
+def box_mass(q, a=(-1.0, 1.0), b=(0.0, 1.0)):
+    """The probability of a box under a proposal's density, by quadrature."""
+    a, b = np.linspace(*a, 801), np.linspace(*b, 401)
+    grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
+    density = np.exp(q.log_density(grid)).reshape(len(a), len(b))
+    return integrate.trapezoid(integrate.trapezoid(density, b, axis=1), a)
+
+
+def test_the_conditioned_proposal_is_normalised_and_leans_to_each_walkers_population():
+    """θ pooled, N(μ, ω²) in the population, N(0, 10²) the interim prior: for each walker's (μ, ω)
+    the conditioned part integrates to 1, its draws follow the mixture's density, and it sits
+    nearer the conditional (own posterior × N(μ, ω²) / interim) than the own posterior does."""
+    x = banana_draws(np.random.default_rng(0))
+    pooled = (x[:, :1], -stats.norm.logpdf(x[:, 0], 0.0, 10.0))
+    a, b = np.linspace(-12, 12, 961), np.linspace(-12, 40, 2081)
+    grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
+    alone = ConditionalMapProposal(x, pooled, conditioned=1.0)
+    mixed = ConditionalMapProposal(x, pooled)
+    for mu, omega in ((1.5, 0.7), (-1.0, 0.3)):
+        rows = np.ones((len(grid), 1))
+        density = np.exp(alone.given(mu * rows, omega * rows).log_density(grid))
+        total = integrate.trapezoid(
+            integrate.trapezoid(density.reshape(len(a), len(b)), b, axis=1), a
+        )
+        assert total == pytest.approx(1.0, abs=2e-3), (mu, omega)
+        n = 200000
+        q = mixed.given(np.full((n, 1), mu), np.full((n, 1), omega))
+        draws = q.sample(np.random.RandomState(1), n)
+        box = (np.abs(draws[:, 0]) < 1) & (draws[:, 1] > 0) & (draws[:, 1] < 1)
+        mass = box_mass(mixed.given(np.full((801 * 401, 1), mu), np.full((801 * 401, 1), omega)))
+        assert box.mean() == pytest.approx(mass, abs=4 * np.sqrt(mass / n) + 5e-3)
+        # the conditional's mean of θ, by quadrature over the draws' own N(0, 1) in θ
+        theta = np.linspace(-8, 8, 16001)
+        w = stats.norm.pdf(theta) * stats.norm.pdf(theta, mu, omega) / stats.norm.pdf(theta, 0, 10)
+        exact = integrate.trapezoid(w * theta, theta) / integrate.trapezoid(w, theta)
+        lean = alone.given(np.full((n, 1), mu), np.full((n, 1), omega))
+        got = lean.sample(np.random.RandomState(2), n)[:, 0].mean()
+        assert abs(got - exact) < 0.1 * omega < abs(x[:, 0].mean() - exact), (got, exact)
+
+
+@pytest.mark.parametrize("proposal", ["kernel", "map", "conditional"])
 def test_sweeps_keep_the_conditional_of_a_curved_block(proposal):
     """Hyper-parameters held (no hyper rounds): every specimen block must sample its conditional
     given them — the independence step and the DE step (in the map's coordinates for "map")."""

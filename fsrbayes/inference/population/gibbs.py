@@ -13,9 +13,10 @@ those blocks for every walker:
    coordinates, :class:`~fsrbayes.inference.population.model.JointTarget`), updated by
    * an independence Metropolis–Hastings step from a density fitted to the specimen's own
      posterior draws (the two-stage route's fits), exact for any proposal
-     (:mod:`~.proposals`): a Gaussian kernel mixture over the draws, which already follow the
-     curved s0–Va ridge that defeats Gaussian proposals, or a Student-t pushed through a
-     transport map fitted to them, which straightens the ridge; and
+     (:mod:`~.proposals`): a Student-t pushed through a transport map fitted to the draws,
+     which straightens the curved s0–Va and A0–A1–A2 ridges that defeat Gaussian proposals,
+     its centre and scale moved towards the conditional given the walker's Λ (by default), or
+     fitted to the draws alone, or a Gaussian kernel mixture over the draws; and
    * a differential-evolution step within the block (in the map's coordinates where there is
      one), red–blue split over the ensemble's walkers (each walker's target depends on its own
      Λ; the proposal uses only the other half's current positions, so it is symmetric given
@@ -25,9 +26,10 @@ those blocks for every walker:
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
    shift-and-scale move of (μ_p, ω_p, every z_jp) — the non-centred direction.
 
-The slowest direction is ω of the area law's coefficients: each specimen's A0–A1–A2 ridge
-(eq. 6) mixes slowly inside its block. Costs and autocorrelation times on the 16-specimen bench
-are in BENCHMARKS.md.
+The slowest direction is ω of the area law's coefficient A0: given the specimens' A0, which
+the data pin only along each specimen's A0–A1–A2 ridge (eq. 6), the spread is nearly fixed, and
+the specimens' A0 given ω move only within it (the centred funnel). Costs and autocorrelation
+times on the 16-specimen bench are in BENCHMARKS.md.
 
 Each sweep costs two likelihood evaluations per specimen and walker (the same as two steps of a
 single-specimen fit of every specimen); the joint log-density emcee stores is assembled from the
@@ -61,10 +63,12 @@ class GibbsJointTarget(JointTarget):
         or ``HierarchicalResult.specimen_draws`` of a two-stage result).
     hyper_rounds : int
         Rounds of (exact μ draw, Metropolis log ω step) per sweep.
-    proposal : {"kernel", "map"}
+    proposal : {"conditional", "map", "kernel"}
         The specimen blocks' independence proposal (:data:`PROPOSALS`): a Student-t through a
-        transport map fitted to the draws (:class:`~.proposals.MapProposal`, default; the blocks'
-        DE steps then move in its coordinates) or a kernel mixture over them
+        transport map fitted to the draws, moved towards each walker's conditional given its Λ
+        (:class:`~.proposals.ConditionalMapProposal`, default; the blocks' DE steps move in the
+        map's coordinates), the same map's Student-t fitted to the draws alone
+        (:class:`~.proposals.MapProposal`), or a kernel mixture over the draws
         (:class:`~.proposals.KernelProposal`).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
@@ -87,7 +91,7 @@ class GibbsJointTarget(JointTarget):
         n_centres=256,
         weak_ratio=None,
         shift_scale=1.0,
-        proposal="map",
+        proposal="conditional",
     ):
         super().__init__(population, specimens)
         if proposal not in PROPOSALS:
@@ -97,11 +101,15 @@ class GibbsJointTarget(JointTarget):
                 f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
                 f"{len(proposal_draws)}"
             )
-        options = {"n_centres": n_centres} if proposal == "kernel" else {}
-        self.proposals = [
-            PROPOSALS[proposal](spec.prior.to_unconstrained(np.asarray(d, dtype=float)), **options)
-            for spec, d in zip(self.specimens, proposal_draws, strict=False)
-        ]
+        self.proposals = []
+        for spec, d in zip(self.specimens, proposal_draws, strict=False):
+            d = np.asarray(d, dtype=float)
+            options = {"n_centres": n_centres} if proposal == "kernel" else {}
+            if proposal == "conditional":
+                x = d[:, population.index]
+                z, log_jacobian = population.to_z(x)
+                options["pooled"] = (z, log_jacobian - population.interim.log_prob(x))
+            self.proposals.append(PROPOSALS[proposal](spec.prior.to_unconstrained(d), **options))
         self.hyper_rounds = int(hyper_rounds)
         z = [
             population.to_z(np.asarray(d, dtype=float)[:, population.index])[0]
@@ -215,7 +223,9 @@ class BlockGibbsMove(emcee.moves.Move):
 
     def _specimen(self, j, random):
         n = len(self.u[j])
-        proposal = self.target.proposals[j]
+        fitted = self.target.proposals[j]
+        given = getattr(fitted, "given", None)  # a proposal that depends on the walker's Λ
+        proposal = fitted if given is None else given(self.mu, self.omega)
         rows = np.arange(n)
         u_new = proposal.sample(random, n)
         log_extra = proposal.log_density(self.u[j]) - proposal.log_density(u_new)
@@ -224,7 +234,7 @@ class BlockGibbsMove(emcee.moves.Move):
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
         moved = [independence]
-        chart = getattr(proposal, "map", None)  # DE in the map's straightened coordinates
+        chart = getattr(fitted, "map", None)  # DE in the map's straightened coordinates
         for active, other in ((half[: n // 2], half[n // 2 :]), (half[n // 2 :], half[: n // 2])):
             first = random.randint(len(other), size=len(active))
             second = random.randint(len(other) - 1, size=len(active))
