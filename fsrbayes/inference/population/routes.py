@@ -72,7 +72,9 @@ class HierarchicalResult:
     log_likelihood_mc_sd : float or None
         Two-stage: Monte-Carlo sd of log L(Λ), median over the hyper-posterior.
     specimen_draws : list of ndarray or None
-        Two-stage from fits: each specimen's draws of all its parameters (S, D), under π.
+        Two-stage from fits: each specimen's draws of all its parameters (up to 10·``n_draws``
+        of them, evenly over its chain), under π: the joint route's start and its Gibbs
+        proposals.
     """
 
     population: Population
@@ -229,11 +231,10 @@ def two_stage(
         labels = list(fits)
         results = list(fits.values())
         population = population or Population(results[0].posterior.prior)
-        full = [
-            _thin(r.draws(10 * n_draws).reshape(-1, r.posterior.ndim), n_draws) for r in results
-        ]
-        full = [d[: min(len(x) for x in full)] for d in full]
-        draws = [d[:, population.index] for d in full]
+        pools = [r.draws(10 * n_draws).reshape(-1, r.posterior.ndim) for r in results]
+        thinned = [_thin(d, n_draws) for d in pools]
+        draws = [d[: min(len(x) for x in thinned), population.index] for d in thinned]
+        full = pools  # the joint route's proposals and start: more draws fit its maps better
     else:
         full = None
         if population is None:
