@@ -242,7 +242,7 @@ def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
 
 def test_gibbs_joint_matches_the_analytic_hyper_posterior():
     """All 8 specimens (the ensemble route above needs a minute for 5): blocked Gibbs sweeps with
-    kernel proposals from each specimen's own posterior draws."""
+    the default proposals, fitted to each specimen's own posterior draws."""
     population = Population(INTERIM)
     specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
     result = joint(
