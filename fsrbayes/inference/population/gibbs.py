@@ -74,11 +74,10 @@ class GibbsJointTarget(JointTarget):
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
         shift-and-scale move of (μ_p, ω_p, all z_jp) per sweep (one likelihood evaluation of every
-        specimen each). Off by default (None): on a weakly identified normal–normal toy 0.5 raised
-        the ESS of ω 1.7–5× at equal cost, but on the 16-specimen bench (A0 and inv_b1 selected,
-        ratios 0.85 and 0.66) it doubled the cost of a sweep and left τ of ω_A0 at 271 sweeps
-        (250 without): A0 lies on each specimen's A0–A1–A2 ridge of the area law, so moving A0
-        alone leaves the ridge and is rejected.
+        specimen each; where the proposal has a transport map, the specimen's other parameters
+        follow along it). Off by default (None): on the 16-specimen bench the move on A0 alone
+        shortens the autocorrelation of ω_A0 by about as much as it adds to a sweep's cost
+        (BENCHMARKS.md), and which parameters it selects depends on the data.
     """
 
     def __init__(
