@@ -76,7 +76,7 @@ class GibbsJointTarget(JointTarget):
         shift-and-scale move of (μ_p, ω_p, all z_jp) per sweep (one likelihood evaluation of every
         specimen each; where the proposal has a transport map, the specimen's other parameters
         follow along it). Off by default (None): on the 16-specimen bench the move on A0 alone
-        shortens the autocorrelation of ω_A0 by about as much as it adds to a sweep's cost
+        shortened the autocorrelation of ω_A0 only a little more than it lengthened a sweep
         (BENCHMARKS.md), and which parameters it selects depends on the data.
     """
 
