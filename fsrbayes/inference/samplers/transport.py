@@ -218,6 +218,7 @@ class TriangularMap:
         return offset, stacked
 
     def _compiled_arguments(self):
+        """Return the map's arrays in the order :func:`~.transport_kernels.map_rows` takes them."""
         offset, stacked = self._stacked
         return (
             np.asarray(self.order, dtype=np.int64),
@@ -243,11 +244,11 @@ class TriangularMap:
     def inverse(self, u):
         """v(u) for u (…, ndim)."""
         u = np.asarray(u, dtype=float)
-        z = (u - self.centre) / self.spread
         if STACKED_FEATURES and self.quadratic:
             rows = np.ascontiguousarray(u.reshape(-1, self.ndim))
             arguments = self._compiled_arguments()
             return map_rows(rows, True, *arguments, -1, np.zeros(0)).reshape(u.shape)
+        z = (u - self.centre) / self.spread
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
             mean = (
