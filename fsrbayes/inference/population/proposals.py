@@ -136,12 +136,17 @@ class MapProposal:
         heavy = self.heavy.mean + student_t_draws(random, n, self.d, self.dof) @ self.heavy.chol.T
         return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, mapped)
 
-    def log_density(self, u):
-        """Log q(u) for u (n, d)."""
-        u = np.atleast_2d(u)
+    def white(self, u):
+        """Return the map's standardised coordinates w = C⁻¹ v(u) of u (n, d), C = ``v_chol``."""
         with np.errstate(over="ignore", invalid="ignore"):
-            v = np.linalg.solve(self.v_chol, self.map.inverse(u).T).T
-            log_map = student_t_log_density(v, self.dof) - self.log_det
+            return np.linalg.solve(self.v_chol, self.map.inverse(u).T).T
+
+    def log_density(self, u, white=None):
+        """Log q(u) for u (n, d); ``white``: :meth:`white` of u, if already at hand."""
+        u = np.atleast_2d(u)
+        white = self.white(u) if white is None else white
+        with np.errstate(over="ignore", invalid="ignore"):
+            log_map = student_t_log_density(white, self.dof) - self.log_det
         log_map = np.where(np.isnan(log_map), -np.inf, log_map)
         log_t = self.heavy.log_density(u)
         with np.errstate(divide="ignore"):  # defensive = 0: the map's Student-t alone
@@ -189,7 +194,7 @@ class ConditionalMapProposal(MapProposal):
     ):
         super().__init__(draws, defensive=defensive, dof=dof)
         z, h = (np.asarray(a, dtype=float) for a in pooled)
-        w = np.linalg.solve(self.v_chol, self.map.inverse(np.asarray(draws, dtype=float)).T).T
+        w = self.white(np.asarray(draws, dtype=float))
         self.w_mean = w.mean(axis=0)
         design = np.column_stack([np.ones(len(w)), w - self.w_mean])
         coef = np.linalg.lstsq(design, z, rcond=None)[0]  # z ≈ c + B (w − w̄)
@@ -235,20 +240,17 @@ class _Conditioned:
     def log_density(self, u):
         """Log q(u) of walker i's proposal at row i of u (n, d)."""
         base = self.base
+        w = base.white(u)
         with np.errstate(over="ignore", invalid="ignore"):
-            w = np.linalg.solve(base.v_chol, base.map.inverse(u).T).T
             y = np.einsum("nji,nj->ni", self.chol, w - self.mean)  # Lᵀ (w − m)
             log_conditioned = (
-                student_t_log_density(y, base.conditioned_dof)
-                + self.log_det_chol
-                - base.map.log_det_jacobian
-                - np.sum(np.log(np.diag(base.v_chol)))
+                student_t_log_density(y, base.conditioned_dof) + self.log_det_chol - base.log_det
             )
         log_conditioned = np.where(np.isnan(log_conditioned), -np.inf, log_conditioned)
         with np.errstate(divide="ignore"):
             return np.logaddexp(
                 np.log(base.conditioned) + log_conditioned,
-                np.log1p(-base.conditioned) + base.log_density(u),
+                np.log1p(-base.conditioned) + base.log_density(u, white=w),
             )
 
 
