@@ -1,3 +1,10 @@
+import os
+
+# The suite runs on two pytest-xdist workers, one per core of the machine it is sized for; BLAS
+# threads on top of them only oversubscribe the cores (OpenBLAS's waiting threads spin). Set
+# before numpy loads, so the workers, their forked pools and the subprocesses all inherit it.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import numpy as np
 import pytest
 

@@ -3,7 +3,7 @@
 import importlib
 import sys
 
-from threadpoolctl import threadpool_info
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from fsrbayes.inference import parallel
 from fsrbayes.inference.parallel import single_threaded_blas
@@ -14,12 +14,14 @@ def _blas_threads():
 
 
 def test_blas_runs_on_one_thread_inside_and_as_before_after():
-    before = _blas_threads()
-    assert before, "no BLAS library loaded"
-    for _ in range(2):  # the second time from the cached look-up
-        with single_threaded_blas():
-            assert set(_blas_threads().values()) == {1}
-        assert _blas_threads() == before
+    # two threads before (the suite's own setting is one: tests/conftest.py)
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = _blas_threads()
+        assert before and set(before.values()) == {2}, before
+        for _ in range(2):  # the second time from the cached look-up
+            with single_threaded_blas():
+                assert set(_blas_threads().values()) == {1}
+            assert _blas_threads() == before
 
 
 def test_the_libraries_are_looked_up_again_after_an_import():
