@@ -100,20 +100,18 @@ class GibbsJointTarget(JointTarget):
                 f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
                 f"{len(proposal_draws)}"
             )
+        draws = [np.asarray(d, dtype=float) for d in proposal_draws]
+        pooled = [d[:, population.index] for d in draws]
+        z, log_jacobians = zip(*(population.to_z(x) for x in pooled), strict=True)
         self.proposals = []
-        for spec, d in zip(self.specimens, proposal_draws, strict=False):
-            d = np.asarray(d, dtype=float)
+        for spec, d, x, z_j, log_jacobian in zip(
+            self.specimens, draws, pooled, z, log_jacobians, strict=False
+        ):
             options = {"n_centres": n_centres} if proposal == "kernel" else {}
             if proposal == "conditional":
-                x = d[:, population.index]
-                z, log_jacobian = population.to_z(x)
-                options["pooled"] = (z, log_jacobian - population.interim.log_prob(x))
+                options["pooled"] = (z_j, log_jacobian - population.interim.log_prob(x))
             self.proposals.append(PROPOSALS[proposal](spec.prior.to_unconstrained(d), **options))
         self.hyper_rounds = int(hyper_rounds)
-        z = [
-            population.to_z(np.asarray(d, dtype=float)[:, population.index])[0]
-            for d in proposal_draws
-        ]
         within = np.median([np.std(v, axis=0) for v in z], axis=0)
         between = np.std([np.median(v, axis=0) for v in z], axis=0) + 1e-12
         self.weak = (
