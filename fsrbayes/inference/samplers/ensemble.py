@@ -39,6 +39,7 @@ from .checkpoint import load_checkpoint, save_checkpoint
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import SampledLogProb, sampled_start
 from .settings import SamplerSettings
+from .stepping import step_ensemble, steps_alone
 from .transport import MappedLogProb
 from .warmup import MAP_CHECK, even_index, map_settled, transport_maps, warmup_rounds
 
@@ -129,18 +130,24 @@ def _advance(
         if own_moves is not None
         else ensemble_moves(de_fraction, proposal, independence_fraction)
     )
-    sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
-    sampler.random_state = random_state
-    state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
-    with single_threaded_blas():
-        sampler.run_mcmc(state, steps, skip_initial_state_check=True)
+    if steps_alone(moves):
+        with single_threaded_blas():
+            chain, values, blobs, accepted, random_state = step_ensemble(
+                target, moves, position, log_prob_start, random_state, steps
+            )
+    else:
+        sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
+        sampler.random_state = random_state
+        state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
+        with single_threaded_blas():
+            sampler.run_mcmc(state, steps, skip_initial_state_check=True)
+        chain, values, blobs = sampler.get_chain(), sampler.get_log_prob(), sampler.get_blobs()
+        accepted, random_state = sampler.backend.accepted, sampler.random_state
     if coordinates is not None:  # the blobs hold (log p_u, u) of every stored state
-        blobs = sampler.get_blobs()
-        return blobs[..., 1:], blobs[..., 0], sampler.backend.accepted, sampler.random_state
-    chain, values = sampler.get_chain(), sampler.get_log_prob()
+        return blobs[..., 1:], blobs[..., 0], accepted, random_state
     if transport is not None:
         chain, values = transport.forward(chain), values - transport.log_det_jacobian
-    return chain, values, sampler.backend.accepted, sampler.random_state
+    return chain, values, accepted, random_state
 
 
 def _progress_bar(settings, done):

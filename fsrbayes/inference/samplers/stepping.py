@@ -1,0 +1,193 @@
+"""emcee's ensemble moves, stepped without its per-walker Python loops, to the same numbers.
+
+:class:`emcee.EnsembleSampler` spends more time on itself than a cheap vectorised target costs:
+per step it draws the move with ``RandomState.choice``, copies the random state out with
+``get_state()``, converts the target's values walker by walker into Python floats and, in every
+red–blue half-step, draws each walker's acceptance uniform with its own ``rand()`` call.
+:func:`step_ensemble` runs the same moves with array operations in place of those loops:
+:class:`~emcee.moves.StretchMove` and :class:`~emcee.moves.DEMove`, whose proposals are restated
+here to emcee 3.1's arithmetic, and :class:`~emcee.moves.MHMove`, whose ``get_proposal`` it
+calls. It draws the same random numbers in the same order from the same ``RandomState``, so every
+stored position, log-density, blob and acceptance count equals emcee's bit for bit
+(``tests/test_stepping.py`` runs both), and the checkpoints keep emcee's random-state tuple. Any
+other move (a target's own, such as the population's blocked Gibbs sweep) is left to emcee:
+:func:`steps_alone` says which.
+"""
+
+import functools
+
+import emcee
+import numpy as np
+
+__all__ = ["step_ensemble", "steps_alone"]
+
+_RED_BLUE = (emcee.moves.StretchMove, emcee.moves.DEMove)
+
+
+def steps_alone(moves):
+    """Return True when :func:`step_ensemble` reproduces emcee for these (move, weight) pairs."""
+    return all(
+        type(move) in (*_RED_BLUE, emcee.moves.MHMove)
+        and (type(move) is emcee.moves.MHMove or move.nsplits == 2)
+        for move, _ in moves
+    )
+
+
+def _log_prob(target, coords):
+    """Return the target's log-densities (W,) and blobs (W, …) or None, as emcee reads them.
+
+    A target may return (W,) values or (W, 1 + k) rows: the first column the log-density, the rest
+    blobs (a single blob column is squeezed to (W,), as emcee does).
+    """
+    if not np.isfinite(coords).all():
+        if np.isinf(coords).any():
+            raise ValueError("At least one parameter value was infinite")
+        raise ValueError("At least one parameter value was NaN")
+    values = np.asarray(target(coords), dtype=float)
+    if values.ndim == 2 and values.shape[1] > 1:
+        log_prob, blobs = values[:, 0].copy(), values[:, 1:].copy()
+        if blobs.shape[1] == 1:
+            blobs = blobs[:, 0]
+    else:
+        log_prob, blobs = values.reshape(len(coords)).copy(), None
+    if np.any(np.isnan(log_prob)):
+        raise ValueError("Probability function returned NaN")
+    return log_prob, blobs
+
+
+class _Walkers:
+    """The ensemble's current positions, log-densities and blobs, updated in place."""
+
+    def __init__(self, coords, log_prob, blobs):
+        self.coords, self.log_prob, self.blobs = coords, log_prob, blobs
+
+    def take(self, chosen, coords, log_prob, blobs, accepted):
+        """Move the ``chosen`` walkers whose proposals were ``accepted`` (emcee's ``update``)."""
+        moved = chosen & accepted
+        kept = accepted[chosen]
+        self.coords[moved] = coords[kept]
+        self.log_prob[moved] = log_prob[kept]
+        if blobs is not None:
+            if self.blobs is None:
+                raise ValueError(
+                    "If you start sampling with a given log_prob, you also need to provide the"
+                    " current list of blobs at that position."
+                )
+            self.blobs[moved] = blobs[kept]
+
+
+@functools.lru_cache(maxsize=4)
+def _pairs(n):
+    """Return the (first, second) walker indices of all ordered pairs of distinct walkers."""
+    rows, cols = np.tril_indices(n, -1)
+    return np.concatenate([rows, cols]), np.concatenate([cols, rows])
+
+
+def _stretch_proposal(move, own, others, random):
+    """Goodman & Weare's stretch of each walker towards a random other (emcee's, to its numbers)."""
+    n_own, ndim = own.shape
+    zz = ((move.a - 1.0) * random.rand(n_own) + 1) ** 2.0 / move.a
+    factors = (ndim - 1.0) * np.log(zz)
+    partners = others[random.randint(len(others), size=(n_own,))]
+    return partners - (partners - own) * zz[:, None], factors
+
+
+def _differential_proposal(move, own, others, random):
+    """Step along the difference of two other walkers (ter Braak's differential evolution).
+
+    The pair is drawn uniformly among ordered pairs of distinct walkers, the scale γ₀(1 + σ·N(0,
+    1)) with γ₀ = 2.38/√(2·ndim) unless given (Nelson et al. 2013; emcee's ``DEMove``, to its
+    numbers).
+    """
+    first, second = _pairs(len(others))
+    chosen = random.randint(0, len(first), size=len(own))
+    gamma = move.g0 * (1 + move.sigma * random.randn(len(own), 1))
+    return own + gamma * (others[second[chosen]] - others[first[chosen]]), np.zeros(len(own))
+
+
+def _red_blue(move, target, walkers, random):
+    """One red–blue step of a stretch or DE move (emcee's ``RedBlueMove.propose``)."""
+    n_walk, ndim = walkers.coords.shape
+    if n_walk < 2 * ndim and not move.live_dangerously:
+        raise RuntimeError(
+            "It is unadvisable to use a red-blue move with fewer walkers than twice the number"
+            " of dimensions."
+        )
+    move.setup(walkers.coords)
+    accepted = np.zeros(n_walk, dtype=bool)
+    halves = np.arange(n_walk) % 2
+    if move.randomize_split:
+        random.shuffle(halves)
+    for half in (0, 1):
+        chosen = halves == half
+        propose = (
+            _stretch_proposal if type(move) is emcee.moves.StretchMove else _differential_proposal
+        )
+        proposed, factors = propose(move, walkers.coords[chosen], walkers.coords[~chosen], random)
+        log_prob, blobs = _log_prob(target, proposed)
+        uniforms = random.rand(int(chosen.sum()))
+        accepted[chosen] = factors + log_prob - walkers.log_prob[chosen] > np.log(uniforms)
+        walkers.take(chosen, proposed, log_prob, blobs, accepted)
+    return accepted
+
+
+def _metropolis(move, target, walkers, random):
+    """One independence (or any MH) step for every walker (emcee's ``MHMove.propose``)."""
+    n_walk, ndim = walkers.coords.shape
+    if move.ndim is not None and move.ndim != ndim:
+        raise ValueError("Dimension mismatch in proposal")
+    proposed, factors = move.get_proposal(walkers.coords, random)
+    log_prob, blobs = _log_prob(target, proposed)
+    accepted = np.log(random.rand(n_walk)) < log_prob - walkers.log_prob + factors
+    walkers.take(np.ones(n_walk, dtype=bool), proposed, log_prob, blobs, accepted)
+    return accepted
+
+
+def step_ensemble(target, moves, position, log_prob, random_state, steps):
+    """Run ``steps`` ensemble steps as :meth:`emcee.EnsembleSampler.run_mcmc` would.
+
+    Parameters
+    ----------
+    target : callable
+        Vectorised log-density, (W, ndim) → (W,) or (W, 1 + k) with blobs.
+    moves : list of (emcee move, weight)
+        Stretch, DE and MH moves only (:func:`steps_alone`).
+    position : ndarray, shape (W, ndim)
+    log_prob : ndarray, shape (W,), or None
+        The target at ``position``; computed when None.
+    random_state : tuple
+        A ``RandomState.get_state()``; the run draws from it in emcee's order.
+    steps : int
+
+    Returns
+    -------
+    chain : ndarray, shape (steps, W, ndim)
+    log_prob : ndarray, shape (steps, W)
+    blobs : ndarray, shape (steps, W, …), or None
+    accepted : ndarray of int, shape (W,)
+    random_state : tuple
+    """
+    random = np.random.RandomState()
+    random.set_state(random_state)
+    kinds, weights = zip(*moves, strict=True)
+    weights = np.atleast_1d(weights).astype(float)
+    cdf = (weights / np.sum(weights)).cumsum()
+    cdf /= cdf[-1]
+    coords = np.array(position, dtype=float)
+    n_walk, ndim = coords.shape
+    blobs = None
+    if log_prob is None:
+        log_prob, blobs = _log_prob(target, coords)
+    walkers = _Walkers(coords, np.array(log_prob, dtype=float), blobs)
+    chain = np.empty((steps, n_walk, ndim))
+    values = np.empty((steps, n_walk))
+    stored_blobs = None if blobs is None else np.empty((steps, *blobs.shape))
+    accepted = np.zeros(n_walk, dtype=int)
+    for i in range(steps):
+        move = kinds[int(cdf.searchsorted(random.random_sample(), side="right"))]
+        step = _metropolis if type(move) is emcee.moves.MHMove else _red_blue
+        accepted += step(move, target, walkers, random)
+        chain[i], values[i] = walkers.coords, walkers.log_prob
+        if stored_blobs is not None:
+            stored_blobs[i] = walkers.blobs
+    return chain, values, stored_blobs, accepted, random.get_state()
