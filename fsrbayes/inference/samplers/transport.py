@@ -19,10 +19,11 @@ costs efficiency, never correctness. (A second-order instance of the transport m
 Marzouk, SIAM/ASA JUQ 6, 645, 2018.)
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.special import gammaln
 
 from ...utils import logsumexp
@@ -394,6 +395,19 @@ class IndependenceProposal:
     mean: np.ndarray
     chol: np.ndarray
     dof: float = 10.0
+    inverse_chol: np.ndarray = field(init=False, repr=False, compare=False)
+    """L⁻¹, so whitening is one product (the inner loops call it on every independence step)."""
+    log_norm: float = field(init=False, repr=False, compare=False)
+    """log g at the mean: the Student-t's normalisation less log|det L|."""
+
+    def __post_init__(self):
+        chol = np.atleast_2d(np.asarray(self.chol, dtype=float))
+        d = chol.shape[0]
+        object.__setattr__(self, "inverse_chol", solve_triangular(chol, np.eye(d), lower=True))
+        log_det = float(np.sum(np.log(np.abs(np.diag(chol)))))
+        object.__setattr__(
+            self, "log_norm", float(student_t_log_density(np.zeros(d), self.dof)) - log_det
+        )
 
     @classmethod
     def fit(cls, draws, dof=10.0, inflate=1.0):
@@ -403,13 +417,16 @@ class IndependenceProposal:
         return cls(draws.mean(axis=0), np.linalg.cholesky(cov), float(dof))
 
     def whiten(self, x):
-        """Return x in the proposal's whitened coordinates."""
-        return np.linalg.solve(self.chol, (np.asarray(x, dtype=float) - self.mean).T).T
+        """Return x in the proposal's whitened coordinates, L⁻¹(x − mean)."""
+        return (np.asarray(x, dtype=float) - self.mean) @ self.inverse_chol.T
 
     def log_density(self, x):
         """Return log g(x), normalised."""
-        log_det = float(np.sum(np.log(np.abs(np.diag(self.chol)))))
-        return student_t_log_density(self.whiten(x), self.dof) - log_det
+        w = self.whiten(x)
+        r2 = np.einsum("...i,...i->...", w, w)
+        if np.isinf(self.dof):
+            return self.log_norm - 0.5 * r2
+        return self.log_norm - 0.5 * (self.dof + w.shape[-1]) * np.log1p(r2 / self.dof)
 
     def draw(self, random, n):
         """Draw n samples (n, d) of g."""
@@ -486,4 +503,5 @@ class MixtureProposal:
             chosen = which == k
             if chosen.any():
                 new[chosen] = component.draw(random, int(chosen.sum()))
-        return new, self.log_density(coords) - self.log_density(new)
+        log_g = self.log_density(np.concatenate([coords, new]))
+        return new, log_g[:n] - log_g[n:]
