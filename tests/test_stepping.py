@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from fsrbayes.inference.samplers.ensemble import ensemble_moves
+from fsrbayes.inference.samplers.independence import MixtureProposal
 from fsrbayes.inference.samplers.stepping import step_ensemble, steps_alone
-from fsrbayes.inference.samplers.transport import MixtureProposal
 
 NDIM, N_WALK = 5, 12
 

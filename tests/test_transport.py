@@ -7,13 +7,12 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.samplers.transport import (
+from fsrbayes.inference.samplers.independence import (
     IndependenceProposal,
-    MappedLogProb,
     MixtureProposal,
-    TriangularMap,
     student_t_log_density,
 )
+from fsrbayes.inference.samplers.transport import MappedLogProb, TriangularMap
 from fsrbayes.inference.samplers.warmup import map_settled, warmup_rounds
 
 BEND, WIDTH = 1.0, 0.05

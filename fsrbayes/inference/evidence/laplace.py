@@ -26,7 +26,7 @@ import numpy as np
 from ...utils import HALF_LOG_2PI
 from ..optimize import MAP_ITERATIONS, find_map, polish, root_covariance
 from ..pinned import map_refinement
-from ..samplers import ensemble_moves
+from ..samplers import ensemble_moves, step_ensemble
 from .estimate import EvidenceEstimate
 
 __all__ = ["LocalDraws", "LaplaceFit", "laplace_fit", "local_laplace_fit"]
@@ -97,19 +97,16 @@ class LaplaceFit:
         -------
         ndarray, shape (n, ndim)
         """
-        import emcee
-
         d = self.posterior.ndim
         n_walkers = n_walkers or max(32, 2 * d + 2)
         start = self.u_map + 0.1 * rng.standard_normal((n_walkers, d)) @ self.root_cov.T
         bad = ~np.isfinite(self.posterior(start))
         start[bad] = self.u_map + 1e-4 * rng.standard_normal((int(bad.sum()), d))
-        sampler = emcee.EnsembleSampler(
-            n_walkers, d, self.posterior, vectorize=True, moves=ensemble_moves(0.2)
-        )
-        sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
-        sampler.run_mcmc(start, steps)
-        kept = sampler.get_chain(discard=steps // 2, flat=True)
+        random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
+        chain = step_ensemble(
+            self.posterior, ensemble_moves(0.2), start, None, random_state, steps
+        )[0]
+        kept = chain[steps // 2 :].reshape(-1, d)
         index = np.linspace(0, len(kept) - 1, n).round().astype(int)
         x, _ = self.posterior.prior.from_unconstrained(kept[index])
         return x

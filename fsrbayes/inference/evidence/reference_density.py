@@ -12,12 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from ..samplers.transport import (
-    IndependenceProposal,
-    TriangularMap,
-    student_t_draws,
-    student_t_log_density,
-)
+from ..samplers.independence import IndependenceProposal, student_t_draws, student_t_log_density
+from ..samplers.transport import TriangularMap
 from .ladder import evaluate_target
 
 __all__ = ["MixtureReference", "ReferenceDensity", "ReferencedTarget"]

@@ -7,7 +7,8 @@ specimen's own posterior draws; the Metropolis–Hastings ratio carries q, so an
 import numpy as np
 
 from ...utils import logsumexp
-from ..samplers.transport import TriangularMap, student_t_draws, student_t_log_density
+from ..samplers.independence import student_t_draws, student_t_log_density
+from ..samplers.transport import TriangularMap
 
 __all__ = ["ConditionalMapProposal", "KernelProposal", "MapProposal", "PROPOSALS"]
 

@@ -3,18 +3,21 @@
 :func:`run_ensembles` runs several independent emcee ensembles in chunks until the split
 R-hat across ensembles, the kept chain's length in autocorrelation times and the bulk ESS all
 hold (:mod:`.convergence`; the criteria in :class:`SamplerSettings`, :mod:`.settings`), with
-checkpoints (:mod:`.checkpoint`);
-:mod:`.transport` straightens the posterior during warm-up and supplies the independence
-proposals, :mod:`.warmup` fits and tests them round by round, and :mod:`.coordinates` samples a
-target in coordinates of the caller's choosing.
+checkpoints (:mod:`.checkpoint`), each ensemble stepped by :func:`step_ensemble` (:mod:`.stepping`:
+emcee's moves to emcee's numbers, without its per-walker loops);
+:mod:`.transport` straightens the posterior during warm-up, :mod:`.independence` supplies the
+independence proposals, :mod:`.warmup` fits and tests them round by round, and
+:mod:`.coordinates` samples a target in coordinates of the caller's choosing.
 """
 
 from .checkpoint import CheckpointMismatch, check_checkpoint, load_kept
 from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import round_trips
 from .ensemble import EnsembleRun, ensemble_moves, even_index, run_ensembles
+from .independence import IndependenceProposal, MixtureProposal
 from .settings import SamplerSettings, walkers_for
-from .transport import IndependenceProposal, MappedLogProb, MixtureProposal, TriangularMap
+from .stepping import step_ensemble
+from .transport import MappedLogProb, TriangularMap
 
 __all__ = [
     "CheckpointMismatch",
@@ -33,5 +36,6 @@ __all__ = [
     "ensemble_moves",
     "even_index",
     "run_ensembles",
+    "step_ensemble",
     "walkers_for",
 ]

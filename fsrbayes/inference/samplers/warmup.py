@@ -1,7 +1,7 @@
 """Warm-up of the ensemble sampler: the transport maps, their test, and how many rounds run.
 
 After each warm-up chunk a :class:`~.transport.TriangularMap` (and the independence proposal's
-:class:`~.transport.MixtureProposal`) is fitted to the later half of the warm-up so far
+:class:`~.independence.MixtureProposal`) is fitted to the later half of the warm-up so far
 (:func:`transport_maps`); after the last, the map is tested on the draws it produced
 (:func:`map_settled`), and :func:`warmup_rounds` decides whether one more round runs. Everything
 here is a deterministic function of the stored chains, so a resumed run decides the same
@@ -11,7 +11,8 @@ here is a deterministic function of the stored chains, so a resumed run decides 
 import numpy as np
 
 from .coordinates import sampled_draws
-from .transport import MixtureProposal, TriangularMap
+from .independence import MixtureProposal
+from .transport import TriangularMap
 
 __all__ = ["MAP_CHECK", "even_index", "map_settled", "transport_maps", "warmup_rounds"]
 
