@@ -1,6 +1,6 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [map-search] [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [dynesty]
-[hierarchical] [population-sizes] [diagnose] [demo]``.
+[predict] [likelihood] [engine] [map-search] [long-run] [fit] [rig-fit] [evidence]
+[evidence-seeds] [dynesty] [hierarchical] [population-sizes] [diagnose] [demo]``.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
 so numbers from different days can be read against their machine. Without names all run but
@@ -23,6 +23,7 @@ from benchmarks import (  # noqa: E402
     demo,
     diagnose,
     dynesty_check,
+    engine,
     evidence,
     fit,
     hierarchical,
@@ -46,6 +47,7 @@ BENCHMARKS = {
     "likelihood": lambda: "\n".join(
         [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
     ),
+    "engine": lambda: engine.report(engine.run()),
     "map-search": lambda: map_search.report(map_search.run()),
     "long-run": lambda: "\n".join(
         [long_run.report(long_run.run()), long_run.report(long_run.run(check_growth=0.0))]
