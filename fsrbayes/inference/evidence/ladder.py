@@ -276,30 +276,35 @@ def _run_ladder(target, betas, settings, seed):
     top = []
     tried = np.zeros(n_temps - 1)
     accepted = np.zeros(n_temps - 1)
+    # Swaps exchange walkers' slots, not their states: slot[k, w] is the row of the stacked
+    # (prior draws, rungs) states that sits in rung k as walker w.
+    slot_of = np.arange(n_temps * n_walk).reshape(n_temps, n_walk)
     for t in range(settings.steps):
         rungs.step()
         u0 = prior_draws()
         lp0, ll0 = evaluate_target(target, u0)
-        coords = np.concatenate([u0[None], rungs.coords])
-        lps = np.concatenate([lp0[None], rungs.lp])
-        lls = np.concatenate([ll0[None], rungs.ll])
+        coords = np.concatenate([u0[None], rungs.coords]).reshape(n_temps * n_walk, -1)
+        lps = np.concatenate([lp0[None], rungs.lp]).reshape(-1)
+        lls = np.concatenate([ll0[None], rungs.ll]).reshape(-1)
+        slot = slot_of.copy()
         if settings.swap:
             for k in range(n_temps - 1, 0, -1):
                 partner = rng.permutation(n_walk)
                 with np.errstate(invalid="ignore"):
-                    log_accept = (betas[k] - betas[k - 1]) * (lls[k - 1][partner] - lls[k])
+                    log_accept = (betas[k] - betas[k - 1]) * (
+                        lls[slot[k - 1, partner]] - lls[slot[k]]
+                    )
                 swap = np.log(rng.uniform(size=n_walk)) < np.where(
                     np.isnan(log_accept), -np.inf, log_accept
                 )
                 tried[k - 1] += n_walk
                 accepted[k - 1] += swap.sum()
-                for arrays in (coords, lls, lps):
-                    mine, theirs = arrays[k][swap].copy(), arrays[k - 1][partner[swap]].copy()
-                    arrays[k][swap], arrays[k - 1][partner[swap]] = theirs, mine
-            rungs.coords, rungs.lp, rungs.ll = coords[1:].copy(), lps[1:].copy(), lls[1:].copy()
-        ll[:, t] = lls
+                theirs = partner[swap]
+                slot[k, swap], slot[k - 1, theirs] = slot[k - 1, theirs], slot[k, swap]
+            rungs.coords, rungs.lp, rungs.ll = coords[slot[1:]], lps[slot[1:]], lls[slot[1:]]
+        ll[:, t] = lls[slot]
         if t in keep:
-            top.append(coords[-1].copy())
+            top.append(coords[slot[-1]])
     return ll, accepted / np.maximum(tried, 1), np.array(top)
 
 
