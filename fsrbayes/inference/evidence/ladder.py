@@ -154,9 +154,8 @@ def _tempered(lp, ll, beta):
     Log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of
     the model).
     """
-    beta = np.broadcast_to(beta, np.shape(lp))
     with np.errstate(invalid="ignore"):
-        value = lp + beta * ll
+        value = lp + beta * ll  # beta broadcasts against lp (a scalar, or one per rung)
     return np.where(np.isfinite(lp) & np.isfinite(ll), value, -np.inf)
 
 
