@@ -11,26 +11,12 @@ import time
 import emcee
 import numpy as np
 
-import fsrbayes
-from fsrbayes.data import synthetic
-from fsrbayes.inference import LogPosterior, SpecimenData
+from benchmarks.likelihood import benchmark_specimen
 from fsrbayes.inference.samplers import MixtureProposal, ensemble_moves, step_ensemble
 
 
 def _gaussian(u):
     return -0.5 * np.sum(u * u, axis=1)
-
-
-def _specimen():
-    sim = synthetic.simulate(
-        "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=13, seed=5
-    )
-    posterior = LogPosterior.for_sensor(
-        SpecimenData.from_tests(sim.data.tests), fsrbayes.load_sensor("a201")
-    )
-    truth = sim.truth["specimens"]["a201-01"]["params"]
-    centre = posterior.prior.to_unconstrained(np.array([truth[n] for n in posterior.names]))
-    return posterior, centre
 
 
 def _with_emcee(target, moves, position, random_state, steps):
@@ -48,7 +34,7 @@ def _with_stepper(target, moves, position, random_state, steps):
 def run(steps=400, repeats=3):
     """Time both engines side by side; returns one row per target and move mix."""
     rng = np.random.default_rng(0)
-    posterior, centre = _specimen()
+    posterior, centre = benchmark_specimen(samples=13)
     targets = {
         "12-d Gaussian": (_gaussian, np.zeros(12), 1.0),
         f"Burgers specimen ({posterior.ndim}-d)": (posterior, centre, 0.002),

@@ -15,28 +15,17 @@ from dataclasses import replace
 
 import numpy as np
 
-from fsrbayes.data import synthetic
-from fsrbayes.data.sensors import load_sensor
+from benchmarks.likelihood import benchmark_specimen
 from fsrbayes.inference.evidence.bridge import bridge_from_fit
 from fsrbayes.inference.evidence.ladder import LadderSettings, log_evidence
 from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER, referenced_log_evidence
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
-from fsrbayes.inference.likelihood import SpecimenData
-from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers import ConvergenceWarning
 
 
 def specimen_posterior(model, samples=21):
-    """The benchmark specimen: a simulated A201 (seed 5), 9 creep tests × ``samples``."""
-    sim = synthetic.simulate(
-        "a201",
-        n_specimens=1,
-        voltages=[0.2, 1.0, 3.0],
-        forces=[1.96, 4.9, 9.8],
-        samples=samples,
-        seed=5,
-    )
-    return LogPosterior.for_sensor(SpecimenData.select(sim.data), load_sensor("a201"), model=model)
+    """The benchmark specimen's log-posterior under ``model`` (``benchmark_specimen``)."""
+    return benchmark_specimen(samples, model)[0]
 
 
 def fit_and_bridge(model, samples=21, seed=1, processes=2):

@@ -9,16 +9,31 @@ from fsrbayes.data import synthetic
 from fsrbayes.inference import LogPosterior, SpecimenData
 
 
-def run(n_walkers=48, repeats=20):
-    """Time the vectorised Burgers log-posterior on a walker ensemble near the truth."""
+def benchmark_specimen(samples=61, model="burgers"):
+    """The benchmarks' specimen: a simulated A201 (seed 5), 9 creep tests × ``samples``.
+
+    Returns its log-posterior under ``model`` and u at the truth.
+    """
     sim = synthetic.simulate(
-        "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=61, seed=5
+        "a201",
+        n_specimens=1,
+        voltages=[0.2, 1.0, 3.0],
+        forces=[1.96, 4.9, 9.8],
+        samples=samples,
+        seed=5,
     )
     posterior = LogPosterior.for_sensor(
-        SpecimenData.from_tests(sim.data.tests), fsrbayes.load_sensor("a201")
+        SpecimenData.select(sim.data), fsrbayes.load_sensor("a201"), model=model
     )
     truth = sim.truth["specimens"]["a201-01"]["params"]
-    u0 = posterior.prior.to_unconstrained(np.array([truth[n] for n in posterior.names]))
+    return posterior, posterior.prior.to_unconstrained(
+        np.array([truth.get(n, np.nan) for n in posterior.names])
+    )
+
+
+def run(n_walkers=48, repeats=20):
+    """Time the vectorised Burgers log-posterior on a walker ensemble near the truth."""
+    posterior, u0 = benchmark_specimen()
     u = u0 + 0.01 * np.random.default_rng(0).standard_normal((n_walkers, posterior.ndim))
     posterior(u)
     best = float("inf")
@@ -70,6 +85,7 @@ def run_rig(n_walkers=52, repeats=20, ramps=(0.3, 0.2, 0.45, 0.25)):
         data = SpecimenData.select(read_csv(write_rig(text, truth, Path(folder) / "rig.csv")[0]))
     params = next(iter(truth["specimens"].values()))["params"] | {"sigma_rel": 0.002}
     params |= {f"ramp_s[{k}]": r for k, r in enumerate(ramps)}
+    params |= {f"landing[{k}]": 0.5 for k in range(len(ramps))}  # mid-interval onsets
     rng = np.random.default_rng(0)
     timings = {}
     for ramp, packed in (
