@@ -19,7 +19,9 @@ from an equal mixture of Student-t's, one fitted to each ensemble's share of the
 in the straightened coordinates (ensembles started in separate regions each describe their own),
 frozen with the map: a walker can cross the whole posterior in one accepted step (the
 autocorrelation times this buys are in BENCHMARKS.md). The stored chains are always in the target's
-own coordinates. With k = 0 the first half of the chain is the warm-up, at every check. Sampling
+own coordinates. With k = 0 the first half of the chain is the warm-up, at every check. Each
+chunk is stepped by :func:`~.stepping.step_ensemble` (emcee's moves, to emcee's numbers, without
+its per-walker loops; a target with moves of its own runs in emcee itself). Sampling
 goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
 :class:`ConvergenceWarning` carrying the numbers is issued. Each ensemble has its own seeded random
 state, so the same seed gives the same chains, and a checkpoint (written atomically at every

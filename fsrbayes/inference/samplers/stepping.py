@@ -114,15 +114,13 @@ def _red_blue(move, target, walkers, random):
             " of dimensions."
         )
     move.setup(walkers.coords)
+    propose = _stretch_proposal if type(move) is emcee.moves.StretchMove else _differential_proposal
     accepted = np.zeros(n_walk, dtype=bool)
     halves = np.arange(n_walk) % 2
     if move.randomize_split:
         random.shuffle(halves)
     for half in (0, 1):
         chosen = halves == half
-        propose = (
-            _stretch_proposal if type(move) is emcee.moves.StretchMove else _differential_proposal
-        )
         proposed, factors = propose(move, walkers.coords[chosen], walkers.coords[~chosen], random)
         log_prob, blobs = _log_prob(target, proposed)
         uniforms = random.rand(int(chosen.sum()))
