@@ -110,7 +110,7 @@ class TriangularMap:
         """Number of dimensions."""
         return len(self.order)
 
-    @property
+    @cached_property
     def log_det_jacobian(self):
         """Log |du/dv| (constant)."""
         return float(np.sum(np.log(self.diagonal)))
