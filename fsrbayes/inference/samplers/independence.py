@@ -29,19 +29,31 @@ def student_t_log_density(w, dof):
     """Return the normalised log density of a standard multivariate Student-t.
 
     Normalised log density of a standard multivariate Student-t (``dof = inf``: Gaussian) at w (…,
-    d).
+    d): :func:`_log_normalisation` plus :func:`_log_kernel`.
     """
     w = np.asarray(w, dtype=float)
-    d = w.shape[-1]
+    return _log_normalisation(w.shape[-1], dof) + _log_kernel(w, dof)
+
+
+def _log_normalisation(d, dof):
+    """Log of the standard d-dimensional Student-t's density at 0."""
+    if np.isinf(dof):
+        return -0.5 * d * np.log(2.0 * np.pi)
+    return gammaln(0.5 * (dof + d)) - gammaln(0.5 * dof) - 0.5 * d * np.log(dof * np.pi)
+
+
+def _log_kernel(w, dof):
+    """Log of the standard Student-t's density at w (…, d) relative to its value at 0."""
     r2 = np.sum(w * w, axis=-1)
     if np.isinf(dof):
-        return -0.5 * r2 - 0.5 * d * np.log(2.0 * np.pi)
-    return (
-        gammaln(0.5 * (dof + d))
-        - gammaln(0.5 * dof)
-        - 0.5 * d * np.log(dof * np.pi)
-        - 0.5 * (dof + d) * np.log1p(r2 / dof)
-    )
+        return -0.5 * r2
+    return -0.5 * (dof + w.shape[-1]) * np.log1p(r2 / dof)
+
+
+def _log_ratio(log_density, coords, new):
+    """Return ln g(x) − ln g(x') of an independence proposal, g taken at both in one call."""
+    log_g = log_density(np.concatenate([coords, new]))
+    return log_g[: len(coords)] - log_g[len(coords) :]
 
 
 def student_t_draws(random, n, d, dof):
@@ -84,9 +96,7 @@ class IndependenceProposal:
         d = chol.shape[0]
         object.__setattr__(self, "inverse_chol", solve_triangular(chol, np.eye(d), lower=True))
         log_det = float(np.sum(np.log(np.abs(np.diag(chol)))))
-        object.__setattr__(
-            self, "log_norm", float(student_t_log_density(np.zeros(d), self.dof)) - log_det
-        )
+        object.__setattr__(self, "log_norm", float(_log_normalisation(d, self.dof)) - log_det)
 
     @classmethod
     def fit(cls, draws, dof=10.0, inflate=1.0):
@@ -101,11 +111,7 @@ class IndependenceProposal:
 
     def log_density(self, x):
         """Return log g(x), normalised."""
-        w = self.whiten(x)
-        r2 = np.einsum("...i,...i->...", w, w)
-        if np.isinf(self.dof):
-            return self.log_norm - 0.5 * r2
-        return self.log_norm - 0.5 * (self.dof + w.shape[-1]) * np.log1p(r2 / self.dof)
+        return self.log_norm + _log_kernel(self.whiten(x), self.dof)
 
     def draw(self, random, n):
         """Draw n samples (n, d) of g."""
@@ -115,7 +121,7 @@ class IndependenceProposal:
         """Propose for emcee: (new coordinates, ln g(x) − ln g(x'))."""
         coords = np.asarray(coords, dtype=float)
         new = self.draw(random, coords.shape[0])
-        return new, self.log_density(coords) - self.log_density(new)
+        return new, _log_ratio(self.log_density, coords, new)
 
 
 @dataclass(frozen=True)
@@ -182,5 +188,4 @@ class MixtureProposal:
             chosen = which == k
             if chosen.any():
                 new[chosen] = component.draw(random, int(chosen.sum()))
-        log_g = self.log_density(np.concatenate([coords, new]))
-        return new, log_g[:n] - log_g[n:]
+        return new, _log_ratio(self.log_density, coords, new)
