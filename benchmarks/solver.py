@@ -1,6 +1,8 @@
 """Vectorised current solver versus a per-point ``scipy.optimize.brentq`` loop.
 
-Both laws are timed with both engines (compiled, numpy) in the same run.
+Both laws are timed with both engines (compiled, numpy) in the same run, the compiled one also
+with Newton started from the previous root of each row (``ROW_PREDICTION`` 0) instead of the
+default extrapolation from the row's last roots.
 
 The per-point loop is how a Matlab ``fzero`` script solves the implicit equation
 V = V_bulk + 2·Rc·I(V_bulk): one scalar root-find per (voltage, stress, time) point, calling
@@ -14,7 +16,17 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from fsrbayes.physics import rheology, sensor, solver, tunneling
+from fsrbayes.physics import compiled, rheology, sensor, solver, tunneling
+
+CONFIGURATIONS = (
+    ("smooth", "compiled", None),
+    ("smooth", "compiled", 0),
+    ("smooth", "numpy", None),
+    ("paper", "compiled", None),
+    ("paper", "compiled", 0),
+    ("paper", "numpy", None),
+)
+"""(law, engine, ROW_PREDICTION or None for the default)."""
 
 
 def _workload(params, n_walkers, rng):
@@ -55,60 +67,66 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
     """Time both solvers; return a list of result rows (dicts)."""
     rng = np.random.default_rng(seed)
     v, rs, s, phi, a, vth = _workload(params, n_walkers, rng)
-    n = v.size
     rows = []
-    for law, engine in (
-        ("smooth", "compiled"),
-        ("smooth", "numpy"),
-        ("paper", "compiled"),
-        ("paper", "numpy"),
-    ):
-        threshold = vth if law == "paper" else None
-        solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine)
-        seconds = _time(
-            lambda law=law, threshold=threshold, engine=engine: solver.solve_bulk(
-                v, rs, s, phi, a, law=law, threshold=threshold, engine=engine
-            ),
-            repeats,
-        )
-        pick = rng.choice(
-            np.flatnonzero(solution.valid.ravel() & ~solution.at_jump.ravel()),
-            n_loop,
-            replace=False,
-        )
-        flat = [x.ravel()[pick] for x in (v, rs, s, phi, a, vth)]
-        loop_seconds = _time(
-            lambda flat=flat, law=law: [_brentq_point(*pt, law) for pt in zip(*flat, strict=False)],
-            1,
-        )
-        loop_current = np.array([_brentq_point(*pt, law) for pt in zip(*flat, strict=False)])
-        agree = np.max(np.abs(loop_current / solution.current.ravel()[pick] - 1.0))
-        rate = n / seconds
-        loop_rate = n_loop / loop_seconds
-        rows.append(
-            {
-                "law": f"{law}/{engine}",
-                "points": n,
-                "vectorised_per_s": rate,
-                "loop_per_s": loop_rate,
-                "speedup": rate / loop_rate,
-                "max_rel_diff": agree,
-                "iterations": solution.iterations,
-            }
-        )
+    default = compiled.ROW_PREDICTION
+    for law, engine, prediction in CONFIGURATIONS:
+        compiled.ROW_PREDICTION = default if prediction is None else prediction
+        try:
+            rows.append(_row(v, rs, s, phi, a, vth, law, engine, n_loop, repeats, rng))
+        finally:
+            compiled.ROW_PREDICTION = default
+        if prediction is not None:
+            rows[-1]["law"] += f" (start: {['previous root', 'secant', 'parabola'][prediction]})"
     return rows
 
 
+def _row(v, rs, s, phi, a, vth, law, engine, n_loop, repeats, rng):
+    """One configuration's rates against the brentq loop on a random subset of its points."""
+    n = v.size
+    threshold = vth if law == "paper" else None
+    solution = solver.solve_bulk(v, rs, s, phi, a, law=law, threshold=threshold, engine=engine)
+    seconds = _time(
+        lambda law=law, threshold=threshold, engine=engine: solver.solve_bulk(
+            v, rs, s, phi, a, law=law, threshold=threshold, engine=engine
+        ),
+        repeats,
+    )
+    pick = rng.choice(
+        np.flatnonzero(solution.valid.ravel() & ~solution.at_jump.ravel()),
+        n_loop,
+        replace=False,
+    )
+    flat = [x.ravel()[pick] for x in (v, rs, s, phi, a, vth)]
+    loop_seconds = _time(
+        lambda flat=flat, law=law: [_brentq_point(*pt, law) for pt in zip(*flat, strict=False)],
+        1,
+    )
+    loop_current = np.array([_brentq_point(*pt, law) for pt in zip(*flat, strict=False)])
+    agree = np.max(np.abs(loop_current / solution.current.ravel()[pick] - 1.0))
+    rate = n / seconds
+    loop_rate = n_loop / loop_seconds
+    return {
+        "law": f"{law}/{engine}",
+        "points": n,
+        "vectorised_per_s": rate,
+        "loop_per_s": loop_rate,
+        "speedup": rate / loop_rate,
+        "max_rel_diff": agree,
+        "iterations": solution.iterations,
+    }
+
+
 def report(rows):
+    width = max(15, *(len(r["law"]) for r in rows))
     lines = [
         "solver benchmark (single thread, OMP/MKL threads = "
         f"{os.environ.get('OMP_NUM_THREADS', 'unset')})",
-        f"{'law/engine':15s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} "
+        f"{'law/engine':{width}s} {'points':>9s} {'vectorised/s':>14s} {'brentq loop/s':>14s} "
         f"{'speed-up':>9s} {'max |rel diff|':>15s} {'max iter':>8s}",
     ]
     for r in rows:
         lines.append(
-            f"{r['law']:15s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} "
+            f"{r['law']:{width}s} {r['points']:9d} {r['vectorised_per_s']:14,.0f} "
             f"{r['loop_per_s']:14,.0f} {r['speedup']:9.0f} {r['max_rel_diff']:15.1e} "
             f"{r['iterations']:8d}"
         )

@@ -47,6 +47,7 @@ from .compiled_kernels import (
     log_or_nan,
     log_prefactor_10,
     newton_in_logit,
+    predicted_start,
 )
 from .constants import KAPPA
 
@@ -58,6 +59,14 @@ LOG_KAPPA, LOG_THREE_QUARTERS, LOG_PEAK_FACTOR = (
     math.log(2.0 / 2.96),
 )
 """log κ; log of eq. 9's 3/4; log of the 2/2.96 in eq. 11's b = (2/2.96)·κ s sqrt(Va)."""
+
+ROW_PREDICTION = 2
+"""How Newton's start at a point is predicted from the roots before it on its row (a creep test
+of one walker, along which only the gap s changes): 0 the previous root ℓ itself, 1 the secant
+through the last two roots' (s, ℓ), 2 the parabola through the last three. ℓ(s) is smooth
+along a row, so the parabola starts Newton within O(Δs³) of the root and saves it about one
+evaluation a point (BENCHMARKS.md). The root is the same to rounding whatever the start;
+``tests/test_same_numbers.py`` pins the currents recorded with 0."""
 
 
 @numba.njit(**JIT)
@@ -80,9 +89,10 @@ def _solve_row_point(
 
     The constants of :func:`~fsrbayes.physics.tunneling.prepare_intermediate`,
     :func:`~fsrbayes.physics.tunneling.prepare_forward` and the ohmic conductance are
-    assembled from logs: only log s changes along a row. ``warm_ell`` (the previous point's
-    root on the same row, NaN for none) starts Newton if the point's root is on the same branch
-    (``warm_regime``); otherwise the numpy solver's starts are used.
+    assembled from logs: only log s changes along a row. ``warm_ell`` (predicted from the
+    row's previous roots, :func:`~.compiled_kernels.predicted_start`; NaN for none) starts Newton
+    if the point's root is on their branch (``warm_regime``); otherwise the numpy solver's
+    starts are used.
     """
     opacity = KAPPA * s * sqrt_va
     ks = KAPPA * s
@@ -231,7 +241,8 @@ def _solve_paper_point(
     closed-form root if it lies below Vth; else the branch holding the root from the sign of
     eq. 10's h at Va; the jump point if h is already ≥ 0 at the branch's lower end; outside
     the domain if the root lies past eq. 11's peak; else Newton on the branch, warm-started
-    from the previous point's root on the same branch.
+    from the row's previous roots where they lie on the same branch (``warm_ell``, predicted by
+    :func:`~.compiled_kernels.predicted_start`).
     """
     ks = KAPPA * s
     opacity = ks * sqrt_va
@@ -322,22 +333,25 @@ def solve_points(
     current,
     v_bulk,
     regime,
+    prediction,
 ):
     """Fill ``current``, ``v_bulk``, ``regime`` point by point; returns the most iterations.
 
     A *row* is a run of consecutive points sharing V, R_s, Va, A (and Vth for the paper law):
     one creep test of one walker, along which only the gap s creeps. Row constants are computed
-    once, and each point starts Newton from the previous point's root when both lie on the same
-    branch: the gap moves little between samples, so Newton needs about two evaluations instead
-    of four. The warm start changes the result only at rounding level (Newton's last step leaves
-    ~finish²).
+    once, and where a point lies on the same branch as the row's previous roots, Newton starts
+    from their extrapolation to its gap (``prediction``, :data:`ROW_PREDICTION`): the gap moves
+    little between samples, so Newton needs one or two evaluations instead of four. The start
+    changes the result only at rounding level (Newton's last step leaves ~finish²).
     """
     iterations = 0
     n = voltage.size
     v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = vth = math.nan
     log_vth = log_v_minus_vth = r_minus_va = r_plus_va = math.nan
     row_ok = False
-    warm_ell, warm_regime = math.nan, -1
+    warm_regime = -1
+    # the row's last three roots on the branch warm_regime, latest first: gaps s_k, logits ℓ_k
+    s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
     for i in range(n):
         rs, va, a = rs_in[i], va_in[i], a_in[i]
         if i == 0 or not (
@@ -367,7 +381,8 @@ def solve_points(
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
                 log_v, log_rs = log_or_nan(v), log_or_nan(rs)
                 log_v_minus_va = log_or_nan(v - va)
-            warm_ell, warm_regime = math.nan, -1
+            warm_regime = -1
+            s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
         s = s_in[i]
         # tunneling.smooth_law_is_valid: an opaque barrier, s > 0.
         if not (row_ok and s > 0 and KAPPA * s * sqrt_va > OPACITY_LIMIT):
@@ -377,6 +392,7 @@ def solve_points(
             log_g9 = log_ohmic_conductance(KAPPA * s * sqrt_va, log_prefactor_10(log_a, s))
             current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, OHMIC
             continue
+        start = predicted_start(s, prediction, s_1, ell_1, s_2, ell_2, s_3, ell_3)
         if paper:
             magnitude, x, point_regime, ell, its = _solve_paper_point(
                 v,
@@ -394,7 +410,7 @@ def solve_points(
                 log_vth,
                 log_v_minus_vth,
                 s,
-                warm_ell,
+                start,
                 warm_regime,
                 peak_table,
                 finish,
@@ -414,7 +430,7 @@ def solve_points(
                 sqrt_va,
                 log_va,
                 log_a,
-                warm_ell,
+                start,
                 warm_regime,
                 finish,
                 max_iter,
@@ -423,11 +439,15 @@ def solve_points(
         regime[i] = point_regime
         if point_regime == INVALID:
             current[i], v_bulk[i] = math.nan, math.nan
-            warm_ell, warm_regime = math.nan, -1
+            warm_regime = -1
+            s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
             continue
         current[i], v_bulk[i] = sign * magnitude, sign * x
         if its > 0:
-            warm_ell, warm_regime = ell, point_regime
+            if point_regime != warm_regime:  # a new branch: its roots start the history
+                s_1 = ell_1 = s_2 = ell_2 = math.nan
+            s_3, ell_3, s_2, ell_2, s_1, ell_1 = s_2, ell_2, s_1, ell_1, s, ell
+            warm_regime = point_regime
             iterations = max(iterations, its)
     return iterations
 
@@ -437,7 +457,7 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
 
     ``threshold`` (Vth, V) selects the paper law; None the smooth law. Returns (current, v_bulk,
     regime, iterations) as :func:`~fsrbayes.physics.solver.solve_bulk` fills them: NaN current
-    and V_bulk where the regime is invalid (0).
+    and V_bulk where the regime is invalid (0). Newton's starts follow :data:`ROW_PREDICTION`.
     """
     n = voltage.size
     current = np.empty(n)
@@ -458,5 +478,6 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
         current,
         v_bulk,
         regime,
+        ROW_PREDICTION,
     )
     return current, v_bulk, regime, int(iterations)

@@ -45,7 +45,9 @@ STEP_PARAMETERS = (
 
 
 @numba.njit(**JIT)
-def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter):
+def step_log_current(
+    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction
+):
     """Return log I at every point for every parameter set, NaN outside the validity domain.
 
     Parameters
@@ -64,6 +66,8 @@ def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, fini
         The paper's tunneling law (threshold ``Vth``), else the smooth law.
     finish, max_iter
         As in :func:`~fsrbayes.physics.solver.solve_bulk`.
+    prediction : int
+        Newton's starts along a row (:data:`~.compiled.ROW_PREDICTION`).
 
     Returns
     -------
@@ -127,6 +131,7 @@ def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, fini
         current,
         v_bulk,
         regime,
+        prediction,
     )
     out = np.empty((n, k))
     for i in range(n):

@@ -43,6 +43,7 @@ __all__ = [
     "log_prefactor_10",
     "logit",
     "newton_in_logit",
+    "predicted_start",
 ]
 
 SQRT_HALF, SQRT_THREE_HALVES, OPACITY_LIMIT = (
@@ -172,3 +173,22 @@ def newton_in_logit(branch, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish,
             ell_new = fallback(lo, hi)
         ell = ell_new
     return math.nan, math.nan, math.nan, max_iter
+
+
+@numba.njit(**JIT)
+def predicted_start(s, order, s_1, ell_1, s_2, ell_2, s_3, ell_3):
+    """Newton's start at gap s from the row's last roots ℓ_k at gaps s_k (k = 1 the latest).
+
+    The previous root (``order`` 0, or fewer distinct earlier roots than the order needs), the
+    secant through the last two (1) or Newton's divided-difference parabola through the last
+    three (2); NaN history entries mean no root. A start outside the branch's bracket is
+    replaced by :func:`newton_in_logit`'s own.
+    """
+    if order == 0 or not (s_2 == s_2 and s_2 != s_1):  # NaN ≠ NaN: no second root
+        return ell_1
+    slope = (ell_1 - ell_2) / (s_1 - s_2)
+    start = ell_1 + slope * (s - s_1)
+    if order >= 2 and s_3 == s_3 and s_3 != s_2 and s_3 != s_1:
+        slope_before = (ell_2 - ell_3) / (s_2 - s_3)
+        start += (slope - slope_before) / (s_1 - s_3) * (s - s_1) * (s - s_2)
+    return start
