@@ -344,6 +344,9 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
     log p(u(w)) walks along the sheet however it curves. Each round takes new pins at the
     current point, polishes along them, maps back and polishes once in u; rounds stop when one
     gains less than ``tol`` nats, and a point where the data pin nothing is returned as it is.
+    Where a later round's pins gain nothing, its polish in u still runs: on a curved sheet a
+    polish in u stops while each of its rounds still gains a little, and its next start goes
+    on from there.
 
     Parameters
     ----------
@@ -358,7 +361,7 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
     (ndarray, float)
         The refined point and its log-posterior (never below ``value``).
     """
-    for _ in range(rounds):
+    for round_ in range(rounds):
         try:
             pins = PinnedCoordinates(posterior, u)
         except ValueError:
@@ -366,9 +369,10 @@ def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):
         along = _SampledColumn(pins, LOG_P_U)  # no Jacobian: its optimum is the MAP point in u
         w = pins.to_sampled(u[None])
         w_best, found = polish(along, w[0], along(w)[0])
-        if not np.isfinite(found) or found <= value + tol:
-            break
-        u_new = pins.from_sampled(w_best[None])[0][0]
+        moved = np.isfinite(found) and found > value + tol
+        if not moved and round_ == 0:
+            break  # the point as given, polished in u, and the sheet adds nothing
+        u_new = pins.from_sampled(w_best[None])[0][0] if moved else u
         u_new, found = polish(posterior, u_new, posterior(u_new[None])[0])
         if not np.isfinite(found) or found <= value + tol:
             break
