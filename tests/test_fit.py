@@ -388,6 +388,34 @@ def test_whitening_takes_the_hessian_again_where_the_first_steps_straddle_the_sh
     )
 
 
+class _Slab:
+    """A Gaussian in 3-d, 1e-6 wide in its last direction and −inf beyond 5 widths of it: a
+    stencil of 1e-3 steps leaves the support there, as it leaves a rig's sheet in pinned
+    coordinates where the root search finds no point."""
+
+    ndim = 3
+    scale = np.array([1.0, 0.5, 1e-6])
+
+    def __call__(self, u):
+        z = np.atleast_2d(u) / self.scale
+        return np.where(np.abs(z[:, 2]) < 5.0, -0.5 * np.sum(z**2, axis=1), -np.inf)
+
+
+def test_whitening_shrinks_its_first_steps_where_they_leave_the_support(monkeypatch):
+    from fsrbayes.inference import optimize
+
+    target = _Slab()
+    at = np.array([0.3, -0.2, 0.0])
+    widths = np.sqrt(np.sum(optimize.whitening(target, at) ** 2, axis=1))  # sd along each axis
+    np.testing.assert_allclose(widths, target.scale, rtol=1e-3)
+    start = np.array([1.0, 1.0, 2e-6])
+    u, value = optimize.polish(target, start, target(start)[0])
+    assert value == pytest.approx(0.0, abs=1e-3) and np.abs(u[2]) < 1e-8
+    monkeypatch.setattr(optimize, "STEP_SHRINKS", 0)  # as before: the thin axis gets the prior's 1
+    widths = np.sqrt(np.sum(optimize.whitening(target, at) ** 2, axis=1))
+    assert widths[2] > 0.1
+
+
 def test_the_compact_hessian_is_exact_on_a_quadratic_as_the_corners_one():
     from fsrbayes.inference.optimize import compact_root_covariance, root_covariance
 

@@ -9,8 +9,9 @@ fifth digit, and so does the CPU (its BLAS kernels and libm): they are kept per 
 re-recorded from a commit that passed here before (CHANGELOG), never from the code under test —
 unless a commit changes the MAP search on purpose, which then re-records them itself and says so
 in the CHANGELOG. The fits run with the MAP search the pins were recorded with
-(``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points and a stopping
-share of 1e-6, gradients from the model solved at every finite-difference neighbour) and the
+(``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points at steps that never
+shrink and a stopping share of 1e-6, gradients from the model solved at every finite-difference
+neighbour) and the
 transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off), so the pins check
 every other number of the search and the chain whatever those defaults are. Every test here
 solves the circuit with Newton started at the previous root of its row (``ROW_PREDICTION`` 0),
@@ -81,6 +82,7 @@ RECORDED_SEARCH = {
     "POLISH_PASSES": 1,
     "TANGENT_GRADIENT": False,
     "COMPACT_WHITENING": False,
+    "STEP_SHRINKS": 0,
 }
 
 

@@ -1,8 +1,8 @@
 """Optimisers on a vectorised log-density in unconstrained space: MAP points, regions, starts.
 
 Everything a sampler needs before it runs: maximum-a-posteriori points from the best prior
-draws (:func:`find_map`) refined in whitened coordinates (:func:`polish`), the square root of
-the Laplace covariance (:func:`root_covariance`), profile optima near nested models
+draws (:func:`find_map`) refined in whitened coordinates (:func:`polish`, its Hessians from
+:mod:`.hessians`, whose :func:`root_covariance` it re-exports), profile optima near nested models
 (:func:`nested_starts`), the sorting of optima into separate posterior regions
 (:func:`separate_regions`, :func:`start_regions`) and walker starts around a mode
 (:func:`laplace_start`, :func:`ensemble_start`). The functions take any callable target with
@@ -13,6 +13,13 @@ evidence, the Laplace approximation and the population routes share them.
 import numpy as np
 from scipy import optimize
 
+from .hessians import (
+    compact_hessian,
+    compact_root_covariance,
+    corner_hessian,
+    covariance_root,
+    root_covariance,
+)
 from .parallel import fork_pool, single_threaded_blas
 
 __all__ = [
@@ -66,6 +73,13 @@ WHITENED_STEP = 1e-2
 COMPACT_WHITENING = True
 """Whether :func:`whitening` takes its Hessians with :func:`compact_root_covariance` (half the
 points of :func:`root_covariance`'s)."""
+
+STEP_SHRINKS = 4
+"""At most this many times :func:`whitening`'s first pass shrinks its steps (by
+:data:`STEP_SHRINK`) where its stencil leaves the posterior's support; 0 never."""
+
+STEP_SHRINK = 30.0
+"""The factor each of those shrinks divides the steps by (1e-3 down to ~1.2e-9 in four)."""
 
 ROUND_ENOUGH = (0.5, 2.0)
 """:func:`whitening` stops once a pass's Hessian, taken in the current whitened coordinates, has
@@ -273,70 +287,6 @@ def nested_starts(posterior, u_best, depth=NESTED_DEPTH):
     return np.array(starts).reshape(-1, posterior.ndim)
 
 
-def root_covariance(posterior, u_map, step=1e-3):
-    """Return a square root of the Laplace covariance at ``u_map``.
-
-    Return a square root of the Laplace covariance at ``u_map`` (columns scaled by
-    1/sqrt(precision)).
-
-    The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
-    vectorised call. Directions where it is not negative definite get the prior's scale
-    (u-space is prior-scaled, so 1).
-    """
-    n = posterior.ndim
-    eye = step * np.eye(n)
-    i, j = np.triu_indices(n)
-    corners = np.concatenate(
-        [
-            u_map + eye[i] + eye[j],
-            u_map + eye[i] - eye[j],
-            u_map - eye[i] + eye[j],
-            u_map - eye[i] - eye[j],
-        ]
-    )
-    f = posterior(corners).reshape(4, -1)
-    with np.errstate(invalid="ignore"):  # −inf − −inf: a corner outside the support, zeroed below
-        upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
-    hessian = np.zeros((n, n))
-    hessian[i, j] = upper
-    hessian[j, i] = upper
-    return _root_of(hessian)
-
-
-def _root_of(hessian):
-    """Eigenvectors / sqrt(precision) of −hessian; a direction not negative definite gets 1."""
-    precision, vectors = np.linalg.eigh(-np.where(np.isfinite(hessian), hessian, 0.0))
-    precision = np.where(precision > 1e-12, precision, 1.0)
-    return vectors / np.sqrt(precision)
-
-
-def compact_root_covariance(posterior, u, step=1e-3):
-    """:func:`root_covariance` from ndim² + ndim + 1 points instead of 2·ndim·(ndim + 1).
-
-    H_ii = [f(+e_i) + f(−e_i) − 2 f(0)] / h², and for i ≠ j
-    H_ij = [f(+e_i+e_j) + f(−e_i−e_j) − f(±e_i) − f(±e_j) + 2 f(0)] / (2 h²) (steps of h),
-    both O(h²) like the corners' stencil, in half the model evaluations. For the whitening of
-    the MAP search (:func:`whitening`, :data:`COMPACT_WHITENING`); the Laplace approximation
-    keeps :func:`root_covariance`.
-    """
-    n = posterior.ndim
-    eye = step * np.eye(n)
-    i, j = np.triu_indices(n, k=1)
-    pairs = eye[i] + eye[j]
-    f = posterior(np.concatenate([u[None], u + eye, u - eye, u + pairs, u - pairs]))
-    centre, plus, minus = f[0], f[1 : n + 1], f[n + 1 : 2 * n + 1]
-    pair_plus, pair_minus = f[2 * n + 1 : 2 * n + 1 + len(i)], f[2 * n + 1 + len(i) :]
-    with np.errstate(invalid="ignore"):  # a point outside the support: zeroed in _root_of
-        diagonal = (plus + minus - 2 * centre) / step**2
-        upper = (pair_plus + pair_minus - plus[i] - minus[i] - plus[j] - minus[j] + 2 * centre) / (
-            2 * step**2
-        )
-    hessian = np.diag(diagonal)
-    hessian[i, j] = upper
-    hessian[j, i] = upper
-    return _root_of(hessian)
-
-
 class _Whitened:
     """log p(u + root·w) as a function of w."""
 
@@ -359,9 +309,15 @@ def whitening(posterior, u, passes=None):
     :data:`WHITENED_STEP` there — a hundredth of the local posterior width in every direction —
     and composes the two; passes stop once that Hessian is close to the identity
     (:data:`ROUND_ENOUGH`), or after ``passes`` (default :data:`POLISH_PASSES`).
+
+    Where the first pass's stencil leaves the posterior's support (a point at −inf: in pinned
+    coordinates a step of 1e-3 can leave the sheet the root search finds), its steps shrink by
+    :data:`STEP_SHRINK` until every point is finite (:data:`STEP_SHRINKS` times at most):
+    a direction the stencil could not measure would otherwise get the prior's scale, and the
+    later passes, stepping a hundredth of that, would leave the support there too.
     """
     hessian_root = compact_root_covariance if COMPACT_WHITENING else root_covariance
-    root = hessian_root(posterior, u)
+    root = covariance_root(_first_hessian(posterior, u))
     low, high = ROUND_ENOUGH
     for _ in range(1, POLISH_PASSES if passes is None else passes):
         refined = hessian_root(
@@ -372,6 +328,18 @@ def whitening(posterior, u, passes=None):
         if np.all((precision > low) & (precision < high)):
             break
     return root
+
+
+def _first_hessian(posterior, u, step=1e-3):
+    """Return :func:`whitening`'s first Hessian, its steps shrunk until its stencil is finite."""
+    hessian_of = compact_hessian if COMPACT_WHITENING else corner_hessian
+    hessian = hessian_of(posterior, u, step)
+    for _ in range(STEP_SHRINKS):
+        if np.isfinite(hessian).all():
+            break
+        step /= STEP_SHRINK
+        hessian = hessian_of(posterior, u, step)
+    return hessian
 
 
 def laplace_start(posterior, u_map, rng, shape, *, overdispersion=2.0, step=1e-3, root_cov=None):
