@@ -45,9 +45,8 @@ def corner_hessian(posterior, u_map, step):
         ]
     )
     f = posterior(corners).reshape(4, -1)
-    with np.errstate(
-        invalid="ignore"
-    ):  # −inf − −inf: a corner outside the support, zeroed in covariance_root
+    # −inf − −inf: a corner outside the support, zeroed in covariance_root
+    with np.errstate(invalid="ignore"):
         upper = (f[0] - f[1] - f[2] + f[3]) / (4 * step * step)
     hessian = np.zeros((n, n))
     hessian[i, j] = upper
