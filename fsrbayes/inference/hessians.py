@@ -24,9 +24,9 @@ def root_covariance(posterior, u_map, step=1e-3):
     Return a square root of the Laplace covariance at ``u_map`` (columns scaled by
     1/sqrt(precision)).
 
-    The Hessian of log p(u) comes from central differences, all 4·ndim² points in one
-    vectorised call. Directions where it is not negative definite get the prior's scale
-    (u-space is prior-scaled, so 1).
+    The Hessian of log p(u) comes from central differences at the corners of every pair of
+    directions, all 2·ndim·(ndim + 1) points in one vectorised call. Directions where it is not
+    negative definite get the prior's scale (u-space is prior-scaled, so 1).
     """
     return covariance_root(corner_hessian(posterior, u_map, step))
 

@@ -316,12 +316,12 @@ def whitening(posterior, u, passes=None):
     a direction the stencil could not measure would otherwise get the prior's scale, and the
     later passes, stepping a hundredth of that, would leave the support there too.
     """
-    hessian_root = compact_root_covariance if COMPACT_WHITENING else root_covariance
-    root = covariance_root(_first_hessian(posterior, u))
+    hessian_of = compact_hessian if COMPACT_WHITENING else corner_hessian
+    root = covariance_root(_first_hessian(hessian_of, posterior, u))
     low, high = ROUND_ENOUGH
     for _ in range(1, POLISH_PASSES if passes is None else passes):
-        refined = hessian_root(
-            _Whitened(posterior, u, root), np.zeros(posterior.ndim), step=WHITENED_STEP
+        refined = covariance_root(
+            hessian_of(_Whitened(posterior, u, root), np.zeros(posterior.ndim), WHITENED_STEP)
         )
         root = root @ refined
         precision = 1.0 / np.sum(refined**2, axis=0)  # its columns: eigenvectors / sqrt(λ)
@@ -330,9 +330,8 @@ def whitening(posterior, u, passes=None):
     return root
 
 
-def _first_hessian(posterior, u, step=1e-3):
+def _first_hessian(hessian_of, posterior, u, step=1e-3):
     """Return :func:`whitening`'s first Hessian, its steps shrunk until its stencil is finite."""
-    hessian_of = compact_hessian if COMPACT_WHITENING else corner_hessian
     hessian = hessian_of(posterior, u, step)
     for _ in range(STEP_SHRINKS):
         if np.isfinite(hessian).all():
