@@ -6,7 +6,10 @@ of all still-active walkers together. The model call is the caller's; what happe
 calls — residuals, the quasi-Newton step, its cap, the halving of a step that left the model's
 domain and Broyden's ("good") update of each walker's inverse Jacobian — is a few dozen tiny
 array operations, whose fixed cost in numpy exceeded the model's own on 24 walkers. Here it is
-one compiled call per iteration on each side of the model call.
+one compiled call per iteration on each side of the model call. Rows are copied and counted
+in loops rather than with slice assignments and ``np.flatnonzero``: numba compiles a slice
+assignment's shape check with its error message, which more than doubled these kernels' first
+compilation in every new process.
 
 The searches are stored row by row: ``u`` (n, ndim) the points, of which the columns ``solved``
 move; ``y`` (n, K) the model at ``u``; ``inverse`` (n, K, K) the inverse Jacobians
@@ -55,7 +58,15 @@ def propose_steps(u, y, target, inverse, shrink, active, found, solved, toleranc
         if largest <= tolerance:
             found[i] = True
             active[i] = False
-    rows = np.flatnonzero(active)
+    still = 0
+    for i in range(n):
+        still += active[i]
+    rows = np.empty(still, dtype=np.int64)
+    r = 0
+    for i in range(n):
+        if active[i]:
+            rows[r] = i
+            r += 1
     m = 0 if last else rows.size
     trial = np.empty((m, u.shape[1]))
     step = np.empty((m, k))
@@ -76,7 +87,8 @@ def propose_steps(u, y, target, inverse, shrink, active, found, solved, toleranc
         if not factor >= 1.0:  # a zero step (shrunk to nothing) stays zero
             for a in range(k):
                 step[r, a] *= factor
-        trial[r] = u[i]
+        for j in range(u.shape[1]):
+            trial[r, j] = u[i, j]
         for a in range(k):
             trial[r, solved[a]] += step[r, a]
     return rows, trial, step
@@ -120,6 +132,7 @@ def accept_steps(u, y, inverse, shrink, rows, trial, step, y_trial):
                 scale = (step[r, a] - h_change[a]) / denominator
                 for b in range(k):
                     inverse[i, a, b] += scale * step_h[b]
-        u[i] = trial[r]
+        for j in range(u.shape[1]):
+            u[i, j] = trial[r, j]
         for j in range(k):
             y[i, j] = y_trial[r, j]

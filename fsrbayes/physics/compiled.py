@@ -349,7 +349,9 @@ def solve_points(
     v = sign = log_v = log_rs = log_v_minus_va = sqrt_va = log_va = log_a = vth = math.nan
     log_vth = log_v_minus_vth = r_minus_va = r_plus_va = math.nan
     row_ok = False
-    warm_regime = -1
+    # no branch yet; an int64, not the literal -1, for which numba would compile the point
+    # solvers a second time
+    warm_regime = np.int64(-1)
     # the row's last three roots on the branch warm_regime, latest first: gaps s_k, logits ℓ_k
     s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
     for i in range(n):
@@ -381,7 +383,7 @@ def solve_points(
                 sqrt_va, log_va, log_a = math.sqrt(va), math.log(va), math.log(a)
                 log_v, log_rs = log_or_nan(v), log_or_nan(rs)
                 log_v_minus_va = log_or_nan(v - va)
-            warm_regime = -1
+            warm_regime = np.int64(-1)
             s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
         s = s_in[i]
         # tunneling.smooth_law_is_valid: an opaque barrier, s > 0.
@@ -439,7 +441,7 @@ def solve_points(
         regime[i] = point_regime
         if point_regime == INVALID:
             current[i], v_bulk[i] = math.nan, math.nan
-            warm_regime = -1
+            warm_regime = np.int64(-1)
             s_1 = ell_1 = s_2 = ell_2 = s_3 = ell_3 = math.nan
             continue
         current[i], v_bulk[i] = sign * magnitude, sign * x

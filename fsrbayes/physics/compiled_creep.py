@@ -44,7 +44,6 @@ STEP_PARAMETERS = (
 """The parameters :func:`step_log_current` reads, in the order of its ``source`` and ``fixed``."""
 
 
-@numba.njit(**JIT)
 def step_log_current(
     x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction
 ):
@@ -72,6 +71,31 @@ def step_log_current(
     Returns
     -------
     ndarray, shape (W, K)
+    """
+    return _step_log_current(
+        x,
+        source,
+        fixed,
+        voltage,
+        stress,
+        time,
+        extra,
+        paper,
+        finish,
+        max_iter,
+        prediction,
+        PEAK_TABLE,
+    )
+
+
+@numba.njit(**JIT)
+def _step_log_current(
+    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction, peak_table
+):
+    """:func:`step_log_current` compiled, with eq. 11's peak table an argument.
+
+    numba freezes a global array as a read-only constant, and a read-only array would compile a
+    second copy of the circuit solver (:func:`~.compiled.solve_points`).
     """
     n, k = x.shape[0], voltage.size
     m = n * k
@@ -125,7 +149,7 @@ def step_log_current(
         area,
         threshold,
         paper,
-        PEAK_TABLE,
+        peak_table,
         finish,
         max_iter,
         current,
