@@ -29,16 +29,24 @@ def codes_of(values):
     return codes, list(table)
 
 
-def logsumexp(values, axis=0):
+def logsumexp(values, axis=0, overwrite_input=False):
     """Return log Σ exp(values) along ``axis`` (−inf where every term is −inf).
 
     Written out rather than :func:`scipy.special.logsumexp`, whose argument checks cost more than
     the sum on the small arrays of the samplers' inner loops (BENCHMARKS.md, "logsumexp").
+    With ``overwrite_input`` (a float array the caller no longer needs) the terms are formed in
+    ``values`` itself: on arrays of megabytes, allocating the temporaries costs as much as the
+    arithmetic. The result is the same to the bit.
     """
     top = np.max(values, axis=axis, keepdims=True)
     top = np.where(np.isfinite(top), top, 0.0)
+    if overwrite_input:
+        terms = np.subtract(values, top, out=values)
+        np.exp(terms, out=terms)
+    else:
+        terms = np.exp(values - top)
     with np.errstate(divide="ignore"):
-        return np.log(np.sum(np.exp(values - top), axis=axis)) + np.squeeze(top, axis=axis)
+        return np.log(np.sum(terms, axis=axis)) + np.squeeze(top, axis=axis)
 
 
 def first_sign_change(x, values):

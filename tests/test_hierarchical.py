@@ -139,6 +139,22 @@ def test_two_stage_matches_the_analytic_hyper_posterior():
     assert result.log_likelihood_mc_sd < 0.1
 
 
+def test_the_two_stage_likelihood_is_each_specimen_s_log_mean_weight():
+    """log L(Λ) = Σ_j log mean_s p(θ_js | Λ)/π(θ_js), the weights' sums formed in place."""
+    from scipy.special import logsumexp
+
+    population = Population(INTERIM)
+    target = TwoStageTarget(population, exact_specimen_draws(300, np.random.default_rng(5)))
+    u = np.random.default_rng(6).standard_normal((7, 2))
+    u[3, 1] = -np.inf  # ω = 0: outside the hyper-prior's support
+    _, log_like = target.log_prior_and_likelihood(u)
+    hyper, _ = population.hyper_prior.from_unconstrained(u)
+    ok = np.arange(7) != 3
+    expected = logsumexp(target.log_weights(hyper[ok]), axis=2).sum(axis=1) - 8 * np.log(300)
+    assert log_like[3] == -np.inf
+    np.testing.assert_allclose(log_like[ok], expected, rtol=1e-12)
+
+
 def _funnel(n_parameters=8, n_draws=300, seed=4):
     """Three precise specimens of a population of ``n_parameters`` independent normal parameters.
 

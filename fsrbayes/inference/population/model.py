@@ -213,7 +213,9 @@ class TwoStageTarget(PriorScaledTarget):
         precision = 1.0 / (omega * omega)
         coefficients = np.concatenate([-0.5 * precision, mu * precision], axis=1)
         walker = np.sum(-0.5 * mu * mu * precision - np.log(omega), axis=1)
-        values = coefficients @ self.features.T + walker[:, None] + self.offset[None, :]
+        values = coefficients @ self.features.T
+        values += walker[:, None]  # in place: (W, J·S) arrays of megabytes
+        values += self.offset[None, :]
         return values.reshape(len(mu), self.n_specimens, self.n_draws)
 
     def log_prior_and_likelihood(self, u, with_likelihood=True):
@@ -225,7 +227,9 @@ class TwoStageTarget(PriorScaledTarget):
         ok = np.isfinite(log_prior) & np.all(hyper[:, self.population.size :] > 0, axis=1)
         if ok.any() and with_likelihood:
             with np.errstate(all="ignore"):
-                per_specimen = logsumexp(self.log_weights(hyper[ok]), axis=2) - np.log(self.n_draws)
+                per_specimen = logsumexp(
+                    self.log_weights(hyper[ok]), axis=2, overwrite_input=True
+                ) - np.log(self.n_draws)
                 log_like[ok] = per_specimen.sum(axis=1)
         return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(
             np.isnan(log_like), -np.inf, log_like
@@ -239,7 +243,9 @@ class TwoStageTarget(PriorScaledTarget):
     def effective_draws(self, hyper):
         """Return each specimen's effective draws (Σw)²/Σw² at hyper-parameters (W, 2P) → (W, J)."""
         log_w = self.log_weights(hyper)
-        return np.exp(2 * logsumexp(log_w, axis=2) - logsumexp(2 * log_w, axis=2))
+        return np.exp(
+            2 * logsumexp(log_w, axis=2) - logsumexp(2 * log_w, axis=2, overwrite_input=True)
+        )
 
     def log_likelihood_variance(self, hyper):
         """Monte-Carlo variance of the estimated log L(Λ) (delta method): Σ_j (1/ESS_j − 1/S)."""
