@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 
 import fsrbayes
 from fsrbayes import load_sensor
-from fsrbayes.physics import DomainError, DomainWarning, solve_bulk, solve_current
+from fsrbayes.physics import DomainError, DomainWarning, compiled_paper, solve_bulk, solve_current
 from fsrbayes.physics import compiled as compiled_solver
 from fsrbayes.physics import tunneling as tl
 from fsrbayes.physics.compiled_kernels import predicted_start
@@ -329,6 +329,59 @@ def test_compiled_engine_matches_on_creep_rows_with_warm_starts(
             }
         ),
     )
+
+
+def test_warm_paper_law_points_skip_only_checks_their_root_answers(a201, rng, monkeypatch):
+    """A point warm on its row's branch runs Newton before the jump and peak checks and skips
+    them when the root lies well inside the branch. Run in Python (the compiled helpers called
+    from it) with the skip and without it (an infinite margin): the same currents, bulk voltages,
+    regimes and roots to the bit, on rows that cross Va, jump and pass eq. 11's peak — with
+    the warm points' jump and peak checks skipped."""
+    walkers = {k: v * np.exp(0.3 * rng.standard_normal((4, 1, 1))) for k, v in a201.items()}
+    sigma = np.array([2e4, 8e4, 2e5, 3e5, 1e5, 3e5])[:, None]
+    t = np.concatenate([[0.0], np.geomspace(1, 3600, 30)])
+    s, area, series = sensor_state(walkers, sigma, creep_strain(sigma, t, walkers))
+    voltage = np.array([0.05, 0.2, 1.0, 3.0, 6.0, 12.0])[:, None]
+    flat = [
+        np.ascontiguousarray(np.broadcast_to(x, s.shape), dtype=float).ravel()
+        for x in (voltage, series, s, walkers["Va"], area, walkers["Vth"])
+    ]
+    # and a row whose gap creeps through the jump at Va (test_jump_at_va_returns_the_jump_point)
+    gap, va, jump_area, rs = 4.3e-9, 0.229, 1e-16, 2e4
+    middle = 0.5 * (
+        tl.simmons_intermediate(va, gap, va, jump_area)
+        + tl.simmons_high_voltage(va, gap, va, jump_area)
+    )
+    row = (va + rs * middle, rs, gap * np.geomspace(1.1, 0.9, 60), va, jump_area, 0.073)
+    flat = [np.concatenate([f, np.broadcast_to(x, (60,))]) for f, x in zip(flat, row, strict=True)]
+    point = compiled_paper.solve_paper_point
+    calls = {"checks": 0}
+
+    def counted(function):
+        def wrapper(*args):
+            calls["checks"] += 1
+            return function(*args)
+
+        return wrapper
+
+    compiled_paper._paper_branch_h(3, 1.0, 2.0, 0.0, 0.0, 0.0, 0.5)  # compiled before the spy
+    monkeypatch.setattr(compiled_solver, "solve_paper_point", point.py_func)
+    for name in ("_log_current_at_va", "_paper_branch_h_logs", "_paper_branch_h"):
+        monkeypatch.setattr(compiled_paper, name, counted(getattr(compiled_paper, name)))
+    results, checks = [], []
+    for margin in (compiled_paper.WARM_MARGIN, np.inf):
+        monkeypatch.setattr(compiled_paper, "WARM_MARGIN", margin)
+        out = (np.empty(flat[0].size), np.empty(flat[0].size), np.empty(flat[0].size, np.int8))
+        calls["checks"] = 0
+        compiled_solver.solve_points.py_func(
+            *flat[:6], True, compiled_solver.PEAK_TABLE, 1e-10, 60, *out, 2
+        )
+        results.append(out)
+        checks.append(calls["checks"])
+    for skipped, full in zip(*results, strict=True):
+        np.testing.assert_array_equal(skipped, full)
+    assert set(np.unique(results[1][2])) == {0, 1, 2, 3, 5}  # 0: past eq. 11's peak
+    assert checks[0] < 0.8 * checks[1], checks  # the jump and peak checks of warm points
 
 
 def test_the_predicted_start_is_exact_for_a_polynomial_of_its_order():

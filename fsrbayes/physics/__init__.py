@@ -3,7 +3,8 @@
 No randomness, no I/O, and no import of emcee, ArviZ or matplotlib: everything here is
 numpy/scipy functions of arrays in SI units (barrier height in eV). The smooth law's circuit
 solver also has a numba-compiled point-by-point engine (:mod:`.compiled`, the default of
-:func:`~.solver.solve_bulk`), tested against the numpy one; the whole model of a stress step on
+:func:`~.solver.solve_bulk`; the paper law's point in :mod:`.compiled_paper`), tested against the
+numpy one; the whole model of a stress step on
 a Burgers or Zener sensor is compiled too, for many small evaluations (:mod:`.compiled_creep`); a
 finite-difference gradient's neighbours are carried from one solve along the root's tangent
 (:mod:`.tangent`).
@@ -13,6 +14,7 @@ from . import (
     circuits,
     compiled,
     compiled_creep,
+    compiled_paper,
     constants,
     contact,
     effects,
@@ -51,6 +53,7 @@ __all__ = [
     "circuits",
     "compiled",
     "compiled_creep",
+    "compiled_paper",
     "constants",
     "contact",
     "effects",

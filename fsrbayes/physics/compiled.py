@@ -4,8 +4,9 @@ The same algorithm as :mod:`fsrbayes.physics.solver` (bracketed Newton in the lo
 ℓ = log(V_bulk/(V − V_bulk)) of eqs. 19–21, bisection when a step leaves the bracket, the last
 step below ``finish`` taken without another evaluation) for the smooth law (eq. 10 below Va,
 the shortened-barrier forward law above it) and the paper law (eq. 9's closed-form root below
-Vth, eq. 10, the corrected eq. 11 up to its peak, the jump points between them), written as one
-loop over points instead of chains of numpy operations on masked arrays. Each point stops at its
+Vth, eq. 10, the corrected eq. 11 up to its peak, the jump points between them: one point of it
+in :mod:`~.compiled_paper`), written as one loop over points instead of chains of numpy
+operations on masked arrays. Each point stops at its
 own convergence, nothing is allocated per iteration, and the transcendental functions run back
 to back, so it is faster than the numpy version (BENCHMARKS.md), which stays the reference
 (``solve_bulk(..., engine="numpy")``).
@@ -27,21 +28,16 @@ import numpy as np
 
 from .compiled_kernels import (
     FORWARD,
-    HIGH,
     INTERMEDIATE,
     INVALID,
     JIT,
-    JUMP,
-    LOG_CURRENT_SCALE,
     OHMIC,
     OPACITY_LIMIT,
     PEAK_TABLE,
     SQRT_HALF,
     SQRT_THREE_HALVES,
-    evaluate_branch,
     forward,
     forward_constants,
-    high,
     intermediate,
     log_ohmic_conductance,
     log_or_nan,
@@ -49,16 +45,10 @@ from .compiled_kernels import (
     newton_in_logit,
     predicted_start,
 )
+from .compiled_paper import solve_paper_point
 from .constants import KAPPA
 
 __all__ = ["solve_compiled", "solve_points"]
-
-LOG_KAPPA, LOG_THREE_QUARTERS, LOG_PEAK_FACTOR = (
-    math.log(KAPPA),
-    math.log(0.75),
-    math.log(2.0 / 2.96),
-)
-"""log κ; log of eq. 9's 3/4; log of the 2/2.96 in eq. 11's b = (2/2.96)·κ s sqrt(Va)."""
 
 ROW_PREDICTION = 2
 """How Newton's start at a point is predicted from the roots before it on its row (a creep test
@@ -159,156 +149,6 @@ def _solve_row_point(
 
 
 @numba.njit(**JIT)
-def _peak_voltage(log_opacity, va, peak_log_b, peak_log_u):
-    """Return where eq. 11 stops increasing, but not below Va (``tunneling.paper_peak_voltage``).
-
-    From log(κ s sqrt(Va)); np.interp on the table, its bin found from the log-uniform grid
-    instead of by bisection.
-    """
-    log_b = LOG_PEAK_FACTOR + log_opacity
-    last = peak_log_b.size - 1
-    position = (log_b - peak_log_b[0]) / (peak_log_b[last] - peak_log_b[0]) * last
-    if not position > 0:
-        log_u = peak_log_u[0]
-    elif position >= last:
-        log_u = peak_log_u[last]
-    else:
-        j = min(int(position), last - 1)
-        while j > 0 and peak_log_b[j] > log_b:
-            j -= 1
-        while j < last - 1 and peak_log_b[j + 1] <= log_b:
-            j += 1
-        slope = (peak_log_u[j + 1] - peak_log_u[j]) / (peak_log_b[j + 1] - peak_log_b[j])
-        log_u = slope * (log_b - peak_log_b[j]) + peak_log_u[j]
-    return max(va * math.exp(log_u), va)
-
-
-@numba.njit(**JIT)
-def _log_current_at_va(branch, log_pre, c, va, log_va, r_minus_va, r_plus_va):
-    """Return log I of a paper-law branch at V_bulk = Va, without the slope.
-
-    The operations of ``tunneling.evaluate_intermediate`` (eq. 10, with its r∓ = sqrt(Va ∓ Va/2)
-    given as row constants) or ``tunneling.evaluate_high_voltage`` (eq. 11, q = sqrt(3)) at
-    V = Va, in the same order, so the values are the same to the bit.
-    """
-    if branch == HIGH:
-        q = math.sqrt(1.0 + 2.0 * va / va)
-        diff = math.exp(-c / va) - q * q * math.exp(-c * q / va)
-        return log_pre + 2.0 * log_va + math.log(diff)
-    em1 = math.expm1(-c * va / (r_plus_va + r_minus_va))
-    bracket = -(va - 0.5 * va) * em1 - va * (1.0 + em1)
-    return log_pre - c * r_minus_va + math.log(bracket)
-
-
-@numba.njit(**JIT)
-def _paper_branch_h(branch, x, v, log_rs, c0, c1, c2):
-    """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch (``solver._branch_h``)."""
-    return _paper_branch_h_logs(branch, x, log_or_nan(x), log_or_nan(v - x), log_rs, c0, c1, c2)
-
-
-@numba.njit(**JIT)
-def _paper_branch_h_logs(branch, x, log_x, log_v_minus_x, log_rs, c0, c1, c2):
-    """:func:`_paper_branch_h` with log x and log(V − x) given (at x = Va: row constants)."""
-    return log_rs + evaluate_branch(branch, x, log_x, c0, c1, c2, 0.0)[0] - log_v_minus_x
-
-
-@numba.njit(**JIT)
-def _solve_paper_point(
-    v,
-    log_v,
-    rs,
-    log_rs,
-    va,
-    sqrt_va,
-    log_va,
-    log_v_minus_va,
-    r_minus_va,
-    r_plus_va,
-    log_a,
-    vth,
-    log_vth,
-    log_v_minus_vth,
-    s,
-    warm_ell,
-    warm_regime,
-    peak_table,
-    finish,
-    max_iter,
-):
-    """One valid point with V > 0 of the paper law: (|I|, V_bulk, regime, ℓ, iterations).
-
-    The decisions of ``solver._solve_block`` for ``law="paper"``, in the same order: eq. 9's
-    closed-form root if it lies below Vth; else the branch holding the root from the sign of
-    eq. 10's h at Va; the jump point if h is already ≥ 0 at the branch's lower end; outside
-    the domain if the root lies past eq. 11's peak; else Newton on the branch, warm-started
-    from the row's previous roots where they lie on the same branch (``warm_ell``, predicted by
-    :func:`~.compiled_kernels.predicted_start`).
-    """
-    ks = KAPPA * s
-    opacity = ks * sqrt_va
-    log_s = math.log(s)  # log(s) once: eq. 10's prefactor, eq. 9's log conductance, eq. 11's peak
-    log_opacity = LOG_KAPPA + log_s + 0.5 * log_va
-    log_pre10 = LOG_CURRENT_SCALE + log_a - 2.0 * log_s
-    log_g9 = LOG_THREE_QUARTERS + log_opacity + log_pre10 - opacity
-    log_pre_high = log_pre10 + math.log(0.55) - log_va
-    c_high = (2.0 / 2.96) * ks * va * sqrt_va
-    if rs == 0:
-        # No series resistance: the whole voltage is across the bulk.
-        if v < vth:
-            return v * math.exp(log_g9), v, OHMIC, math.nan, 0
-        if v < va:
-            return (
-                math.exp(intermediate(v, log_v, log_pre10, ks, va)[0]),
-                v,
-                INTERMEDIATE,
-                math.nan,
-                0,
-            )
-        if v > _peak_voltage(log_opacity, va, peak_table[0], peak_table[1]):
-            return math.nan, math.nan, INVALID, math.nan, 0
-        return math.exp(high(v, log_v, log_pre_high, c_high, va)[0]), v, HIGH, math.nan, 0
-    conductance = math.exp(log_g9)
-    x_ohmic = v / (1.0 + rs * conductance)
-    if x_ohmic < vth:  # eq. 9 is linear: its root is closed form
-        return x_ohmic * conductance, x_ohmic, OHMIC, math.nan, 0
-    h10_va = math.inf
-    if v > va:
-        h10_va = (
-            log_rs
-            + _log_current_at_va(INTERMEDIATE, log_pre10, ks, va, log_va, r_minus_va, r_plus_va)
-            - log_v_minus_va
-        )
-    peak = math.nan
-    if h10_va >= 0:
-        branch, lower, upper, c0, c1 = INTERMEDIATE, vth, min(v, va), log_pre10, ks
-    elif h10_va < 0:
-        peak = _peak_voltage(log_opacity, va, peak_table[0], peak_table[1])
-        branch, lower, upper, c0, c1 = HIGH, va, min(v, peak), log_pre_high, c_high
-    else:
-        return math.nan, math.nan, INVALID, math.nan, 0
-    if branch == HIGH:
-        h_lower = (
-            log_rs
-            + _log_current_at_va(HIGH, c0, c1, va, log_va, r_minus_va, r_plus_va)
-            - log_v_minus_va
-        )
-    else:
-        h_lower = _paper_branch_h_logs(branch, lower, log_vth, log_v_minus_vth, log_rs, c0, c1, va)
-    if h_lower >= 0:
-        # The circuit line passes the law's jump: the current is set by the series resistance.
-        return (v - lower) / rs, lower, JUMP, math.nan, 0
-    if branch == HIGH and v > peak and _paper_branch_h(HIGH, peak, v, log_rs, c0, c1, va) < 0:
-        return math.nan, math.nan, INVALID, math.nan, 0
-    start = warm_ell
-    if warm_regime != branch:
-        start = -(log_rs + log_g9 + math.log((2.0 / 3.0) * (1.0 - 2.0 / opacity)))
-    x, log_i, ell, its = newton_in_logit(
-        branch, v, log_v, lower, upper, start, c0 + log_rs, c1, va, 0.0, finish, max_iter
-    )
-    return math.exp(log_i - log_rs), x, branch, ell, its
-
-
-@numba.njit(**JIT)
 def _solve_short_smooth(v, log_v, s, va, sqrt_va, log_va, log_a):
     """Solve the smooth law with no series resistance: (|I|, regime) at V_bulk = V."""
     log_pre10 = log_prefactor_10(log_a, s)
@@ -396,7 +236,7 @@ def solve_points(
             continue
         start = predicted_start(s, prediction, s_1, ell_1, s_2, ell_2, s_3, ell_3)
         if paper:
-            magnitude, x, point_regime, ell, its = _solve_paper_point(
+            magnitude, x, point_regime, ell, its = solve_paper_point(
                 v,
                 log_v,
                 rs,
