@@ -6,10 +6,9 @@ step below ``finish`` taken without another evaluation) for the smooth law (eq. 
 the shortened-barrier forward law above it) and the paper law (eq. 9's closed-form root below
 Vth, eq. 10, the corrected eq. 11 up to its peak, the jump points between them: one point of it
 in :mod:`~.compiled_paper`), written as one loop over points instead of chains of numpy
-operations on masked arrays. Each point stops at its
-own convergence, nothing is allocated per iteration, and the transcendental functions run back
-to back, so it is faster than the numpy version (BENCHMARKS.md), which stays the reference
-(``solve_bulk(..., engine="numpy")``).
+operations on masked arrays. Each point stops at its own convergence, nothing is allocated per
+iteration, and the transcendental functions run back to back, so it is faster than the numpy
+version (BENCHMARKS.md), which stays the reference (``solve_bulk(..., engine="numpy")``).
 
 The results agree with the numpy solver to rounding (the tests compare both on random and
 edge-case inputs); regimes and validity are decided by the same comparisons, so they agree
