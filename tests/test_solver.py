@@ -346,14 +346,17 @@ def test_warm_paper_law_points_skip_only_checks_their_root_answers(a201, rng, mo
         np.ascontiguousarray(np.broadcast_to(x, s.shape), dtype=float).ravel()
         for x in (voltage, series, s, walkers["Va"], area, walkers["Vth"])
     ]
-    # and a row whose gap creeps through the jump at Va (test_jump_at_va_returns_the_jump_point)
+    # rows whose gap creeps through the jump at Va (test_jump_at_va_returns_the_jump_point), and
+    # through eq. 10's roots below Va < V (then the jump, then eq. 11) and well below V < Va
     gap, va, jump_area, rs = 4.3e-9, 0.229, 1e-16, 2e4
-    middle = 0.5 * (
-        tl.simmons_intermediate(va, gap, va, jump_area)
-        + tl.simmons_high_voltage(va, gap, va, jump_area)
-    )
-    row = (va + rs * middle, rs, gap * np.geomspace(1.1, 0.9, 60), va, jump_area, 0.073)
-    flat = [np.concatenate([f, np.broadcast_to(x, (60,))]) for f, x in zip(flat, row, strict=True)]
+    at_va = tl.simmons_intermediate(va, gap, va, jump_area)
+    middle = 0.5 * (at_va + tl.simmons_high_voltage(va, gap, va, jump_area))
+    creeping = gap * np.geomspace(1.1, 0.9, 60)
+    for v, r in ((va + rs * middle, rs), (0.5, 1e11), (0.15, 1e11)):
+        row = (v, r, creeping, va, jump_area, 0.073)
+        flat = [
+            np.concatenate([f, np.broadcast_to(x, (60,))]) for f, x in zip(flat, row, strict=True)
+        ]
     point = compiled_paper.solve_paper_point
     calls = {"checks": 0}
 
@@ -366,6 +369,7 @@ def test_warm_paper_law_points_skip_only_checks_their_root_answers(a201, rng, mo
 
     compiled_paper._paper_branch_h(3, 1.0, 2.0, 0.0, 0.0, 0.0, 0.5)  # compiled before the spy
     monkeypatch.setattr(compiled_solver, "solve_paper_point", point.py_func)
+    monkeypatch.setattr(compiled_paper, "_inside", compiled_paper._inside.py_func)
     for name in ("_log_current_at_va", "_paper_branch_h_logs", "_paper_branch_h"):
         monkeypatch.setattr(compiled_paper, name, counted(getattr(compiled_paper, name)))
     results, checks = [], []

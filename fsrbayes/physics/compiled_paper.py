@@ -99,6 +99,16 @@ def _paper_branch_h_logs(branch, x, log_x, log_v_minus_x, log_rs, c0, c1, c2):
 
 
 @numba.njit(**JIT)
+def _inside(x, lower, upper, v):
+    """Whether a root x lies more than :data:`WARM_MARGIN`·V inside [lower, upper].
+
+    An upper end at V itself needs no margin: h → +∞ there.
+    """
+    margin = WARM_MARGIN * v
+    return x - lower > margin and (upper == v or upper - x > margin)
+
+
+@numba.njit(**JIT)
 def solve_paper_point(
     v,
     log_v,
@@ -171,7 +181,7 @@ def solve_paper_point(
             INTERMEDIATE, v, log_v, vth, upper, warm_ell, log_pre10 + log_rs, ks, va, 0.0, finish,
             max_iter,
         )  # fmt: skip
-        if its < max_iter and x - vth > WARM_MARGIN * v and upper - x > WARM_MARGIN * v:
+        if its < max_iter and _inside(x, vth, upper, v):
             return math.exp(log_i - log_rs), x, INTERMEDIATE, ell, its
         tried = INTERMEDIATE
     h10_va = math.inf
@@ -193,7 +203,7 @@ def solve_paper_point(
         x, log_i, ell, its = newton_in_logit(
             HIGH, v, log_v, va, upper, warm_ell, c0 + log_rs, c1, va, 0.0, finish, max_iter
         )
-        if its < max_iter and x - va > WARM_MARGIN * v and upper - x > WARM_MARGIN * v:
+        if its < max_iter and _inside(x, va, upper, v):
             return math.exp(log_i - log_rs), x, HIGH, ell, its
         tried = HIGH
     if branch == HIGH:
