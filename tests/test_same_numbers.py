@@ -11,12 +11,11 @@ unless a commit changes the MAP search on purpose, which then re-records them it
 in the CHANGELOG. The fits run with the MAP search the pins were recorded with
 (``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points at steps that never
 shrink and a stopping share of 1e-6, gradients from the model solved at every finite-difference
-neighbour) and the
-transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off), so the pins check
-every other number of the search and the chain whatever those defaults are. Every test here
-solves the circuit with Newton started at the previous root of its row (``ROW_PREDICTION`` 0),
-as the currents were recorded; the default's extrapolated starts give the same roots to
-rounding (``tests/test_solver.py``), not bit for bit.
+neighbour) and the transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off),
+so the pins check every other number of the search and the chain whatever those defaults are.
+Every test here solves the circuit with Newton started at the previous root of its row
+(``ROW_PREDICTION`` 0), as the currents were recorded; the default's extrapolated starts give the
+same roots to rounding (``tests/test_solver.py``), not bit for bit.
 """
 
 import platform

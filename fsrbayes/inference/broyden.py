@@ -58,16 +58,14 @@ def propose_steps(u, y, target, inverse, shrink, active, found, solved, toleranc
         if largest <= tolerance:
             found[i] = True
             active[i] = False
+    rows = np.empty(n, dtype=np.int64)
     still = 0
     for i in range(n):
-        still += active[i]
-    rows = np.empty(still, dtype=np.int64)
-    r = 0
-    for i in range(n):
         if active[i]:
-            rows[r] = i
-            r += 1
-    m = 0 if last else rows.size
+            rows[still] = i
+            still += 1
+    rows = rows[:still]
+    m = 0 if last else still
     trial = np.empty((m, u.shape[1]))
     step = np.empty((m, k))
     for r in range(m):

@@ -41,7 +41,6 @@ and draws its walkers' start in them (:func:`pinned_start`).
 import numpy as np
 import scipy.linalg
 
-from ..physics import compiled
 from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
 from ..physics.rheology import BURGERS, ZENER
 from ..physics.solver import FINISH
@@ -328,7 +327,6 @@ class _StepModel:
             self.paper,
             FINISH,
             100,
-            compiled.ROW_PREDICTION,
         )
 
 

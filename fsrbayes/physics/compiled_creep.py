@@ -20,6 +20,7 @@ import math
 import numba
 import numpy as np
 
+from . import compiled
 from .compiled import solve_points
 from .compiled_kernels import INVALID, JIT, PEAK_TABLE
 
@@ -45,7 +46,7 @@ STEP_PARAMETERS = (
 
 
 def step_log_current(
-    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction
+    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction=None
 ):
     """Return log I at every point for every parameter set, NaN outside the validity domain.
 
@@ -65,8 +66,9 @@ def step_log_current(
         The paper's tunneling law (threshold ``Vth``), else the smooth law.
     finish, max_iter
         As in :func:`~fsrbayes.physics.solver.solve_bulk`.
-    prediction : int
-        Newton's starts along a row (:data:`~.compiled.ROW_PREDICTION`).
+    prediction : int, optional
+        Newton's starts along a row; by default :data:`~.compiled.ROW_PREDICTION`, as
+        :func:`~.compiled.solve_compiled` takes them.
 
     Returns
     -------
@@ -83,7 +85,7 @@ def step_log_current(
         paper,
         finish,
         max_iter,
-        prediction,
+        compiled.ROW_PREDICTION if prediction is None else prediction,
         PEAK_TABLE,
     )
 

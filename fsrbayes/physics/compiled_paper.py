@@ -143,10 +143,9 @@ def solve_paper_point(
     A point warm on its row's branch runs that Newton before the checks: h increases along a
     branch, so a root found more than :data:`WARM_MARGIN`·V inside the bracket (an upper end at
     V needs no margin) means h < 0 at its lower end and h > 0 at its upper one — no jump, not past
-    the peak, and on eq. 10's branch
-    h ≥ 0 at Va (finite there above the opacity limit) — and the checks are skipped. It is the
-    call the decisions would make, so the result is the same to the bit; otherwise the checks
-    run as usual.
+    the peak, and on eq. 10's branch h ≥ 0 at Va (finite there above the opacity limit) — and the
+    checks are skipped. It is the call the decisions would make, so the result is the same to the
+    bit; otherwise the checks run as usual.
     """
     ks = KAPPA * s
     opacity = ks * sqrt_va
