@@ -34,6 +34,7 @@ from ...data.prior import JointPrior
 from ...physics.parameters import parameters_of_role
 from ...utils import HALF_LOG_2PI, logsumexp
 from ..posterior import PriorScaledTarget
+from ..reductions import logsumexp_last
 
 __all__ = ["Population", "TwoStageTarget", "JointTarget", "NOISE_PARAMETERS"]
 
@@ -227,9 +228,7 @@ class TwoStageTarget(PriorScaledTarget):
         ok = np.isfinite(log_prior) & np.all(hyper[:, self.population.size :] > 0, axis=1)
         if ok.any() and with_likelihood:
             with np.errstate(all="ignore"):
-                per_specimen = logsumexp(
-                    self.log_weights(hyper[ok]), axis=2, overwrite_input=True
-                ) - np.log(self.n_draws)
+                per_specimen = logsumexp_last(self.log_weights(hyper[ok])) - np.log(self.n_draws)
                 log_like[ok] = per_specimen.sum(axis=1)
         return np.where(np.isnan(log_prior), -np.inf, log_prior), np.where(
             np.isnan(log_like), -np.inf, log_like
