@@ -84,6 +84,39 @@ def test_the_compiled_passes_equal_the_stage_by_stage_evaluation(monkeypatch):
     np.testing.assert_array_equal(results[True][1][..., 6], np.broadcast_to(held[1], (2, 5)))
 
 
+def test_a_linear_map_evaluated_as_one_affine_map_equals_its_stages(monkeypatch):
+    """A linear map (above ``QUADRATIC_MAX_DIM``) composes to one affine map each way: forward
+    and inverse equal the stage-by-stage evaluation to rounding, in any leading shape; a held
+    coordinate is evaluated stage by stage; a walker at infinity is not finite either way."""
+    from fsrbayes.inference.samplers import transport
+
+    rng = np.random.default_rng(5)
+    ndim = transport.QUADRATIC_MAX_DIM + 8
+    mixing = np.tril(rng.normal(0.0, 0.4, (ndim, ndim))) + np.diag(rng.uniform(0.5, 2.0, ndim))
+    x = rng.standard_normal((2000, ndim)) @ mixing.T + rng.normal(0.0, 3.0, ndim)
+    tmap = TriangularMap.fit(x)
+    assert not tmap.quadratic
+    v = rng.standard_normal((2, 5, ndim)) * 2.0
+    held = (6, np.linspace(-1.0, 1.0, 5))
+    results = {}
+    for stacked in (True, False):
+        monkeypatch.setattr(transport, "STACKED_FEATURES", stacked)
+        results[stacked] = (
+            tmap.forward(v),
+            tmap.inverse(x[:7]),
+            tmap.inverse(x[0]),
+            tmap.inverse(tmap.forward(v)),
+        )
+        assert np.array_equal(tmap.forward(v, fixed=held), tmap._forward_stages(v, held))
+        far = v[0, 0].copy()
+        far[3] = np.inf
+        assert not np.all(np.isfinite(tmap.forward(far)))
+    for got, expected in zip(results[True], results[False], strict=True):
+        assert got.shape == expected.shape
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(results[True][3], v, rtol=1e-10, atol=1e-10)
+
+
 def test_the_map_puts_the_curved_coordinate_last_and_straightens_it(banana_map):
     assert banana_map.order[-1] == 1
     v = banana_map.inverse(banana_draws(20000, np.random.default_rng(2)))

@@ -19,7 +19,7 @@ costs efficiency, never correctness. (A second-order instance of the transport m
 Marzouk, SIAM/ASA JUQ 6, 645, 2018.)
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
@@ -59,9 +59,10 @@ def _features(z, quadratic=True):
 STACKED_FEATURES = True
 """Evaluate a quadratic map's passes compiled, from one stacked feature array per row
 (:mod:`.transport_kernels`): each stage appends its coordinate's features instead of rebuilding
-those of all earlier ones. The same numbers to rounding; False gives the stage-by-stage numpy
-evaluation, bit for bit (the regression pins of ``tests/test_same_numbers.py`` were recorded
-with it)."""
+those of all earlier ones; and a linear map's as the one affine map they compose to
+(:meth:`TriangularMap.affine`), one matrix product per call. The same numbers to rounding;
+False gives the stage-by-stage numpy evaluation, bit for bit (the regression pins of
+``tests/test_same_numbers.py`` were recorded with it)."""
 
 
 def _stacked_layout(ndim):
@@ -186,6 +187,14 @@ class TriangularMap:
         v = np.asarray(v, dtype=float)
         if STACKED_FEATURES and self.quadratic:
             return self._forward_stacked(v, fixed)
+        if STACKED_FEATURES and fixed is None:
+            (offset, matrix), _ = self.affine
+            with np.errstate(over="ignore", invalid="ignore"):
+                return offset + v @ matrix
+        return self._forward_stages(v, fixed)
+
+    def _forward_stages(self, v, fixed=None):
+        """:meth:`forward` stage by stage."""
         u = np.empty_like(v)
         z = np.empty_like(v)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -201,6 +210,24 @@ class TriangularMap:
                     u[..., i] = mean + self.diagonal[i] * v[..., i]
                 z[..., i] = (u[..., i] - self.centre[i]) / self.spread[i]
         return u
+
+    @cached_property
+    def affine(self):
+        """A linear map as the affine maps it composes to: ((b, B), (q, Q)).
+
+        u = b + v·B and v = q + u·Q for rows v, u: each stage's mean is linear in the
+        coordinates before it, so the whole map is affine. Its columns are the stage-by-stage
+        passes of the map's linear part (no intercept, centred at 0) over the unit vectors.
+        """
+        if self.quadratic:
+            raise ValueError("a quadratic map is not affine")
+        zero = np.zeros(self.ndim)
+        unit = np.eye(self.ndim)
+        linear = replace(self, intercept=zero, centre=zero)
+        return (
+            (self._forward_stages(zero), linear._forward_stages(unit)),
+            (self._inverse_stages(zero), linear._inverse_stages(unit)),
+        )
 
     @cached_property
     def _stacked(self):
@@ -242,6 +269,14 @@ class TriangularMap:
             rows = np.ascontiguousarray(u.reshape(-1, self.ndim))
             arguments = self._compiled_arguments()
             return map_rows(rows, True, *arguments, -1, np.zeros(0)).reshape(u.shape)
+        if STACKED_FEATURES:
+            _, (offset, matrix) = self.affine
+            with np.errstate(over="ignore", invalid="ignore"):
+                return offset + u @ matrix
+        return self._inverse_stages(u)
+
+    def _inverse_stages(self, u):
+        """:meth:`inverse` stage by stage."""
         z = (u - self.centre) / self.spread
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
