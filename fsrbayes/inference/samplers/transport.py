@@ -216,8 +216,9 @@ class TriangularMap:
         """A linear map as the affine maps it composes to: ((b, B), (q, Q)).
 
         u = b + v·B and v = q + u·Q for rows v, u: each stage's mean is linear in the
-        coordinates before it, so the whole map is affine. Its columns are the stage-by-stage
-        passes of the map's linear part (no intercept, centred at 0) over the unit vectors.
+        coordinates before it, so the whole map is affine. b and q are the stage-by-stage passes
+        at 0; the rows of B and Q are those of the map's linear part (no intercept, centred at 0)
+        over the unit vectors.
         """
         if self.quadratic:
             raise ValueError("a quadratic map is not affine")
