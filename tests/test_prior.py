@@ -92,3 +92,46 @@ def test_the_marginal_cdf_is_the_integral_of_the_density_and_makes_draws_uniform
         assert prior.marginal_cdf(np.array([[x]]))[0, 0] == pytest.approx(q, abs=1e-6)
         assert mass == pytest.approx(q, abs=1e-6)
     assert stats.kstest(prior.marginal_cdf(prior.sample(rng, 5000))[:, 0], "uniform").pvalue > 1e-3
+
+
+def test_the_compiled_rows_are_the_numpy_transforms_and_densities(rng, monkeypatch):
+    """``prior.COMPILED``: x(u), log|dx/du| and the log-density from the row kernels equal the
+    numpy evaluation by kind and transform to rounding, every kind in one prior (twice, out of
+    order), at ordinary, extreme, infinite and NaN coordinates and outside every support."""
+    from fsrbayes.data import prior as prior_module
+
+    kinds = sorted(SPECS) + ["uniform", "lognormal"]
+    prior = JointPrior(
+        tuple(f"p{k}" for k in range(len(kinds))),
+        tuple(make_distribution(SPECS[kind]) for kind in kinds),
+    )
+    u = rng.normal(0.0, 2.0, (7, 5, prior.ndim))
+    u[0, 0] = 40.0
+    u[0, 1] = -40.0
+    u[0, 2] = np.inf
+    u[0, 3] = -np.inf
+    u[0, 4, ::2] = np.nan
+    u[1, 0] = 0.0
+    x = prior.sample(rng, (6, prior.ndim))[..., 0, :]
+    x[0] = -1.0  # below every support but the normal's
+    x[1] = 1e9  # above the bounded ones
+    x[2, ::3] = np.nan
+    x[3] = 0.0
+    results = {}
+    for compiled in (True, False):
+        monkeypatch.setattr(prior_module, "COMPILED", compiled)
+        results[compiled] = (
+            *prior.from_unconstrained(u),
+            prior.to_constrained(u),
+            prior.log_prob(x),
+            prior.log_prob(prior.from_unconstrained(u[1:])[0]),
+            prior.from_unconstrained(u[1, 1])[1],
+        )
+    for got, expected in zip(results[True], results[False], strict=True):
+        got, expected = np.asarray(got), np.asarray(expected)
+        assert got.shape == expected.shape
+        assert np.array_equal(np.isnan(got), np.isnan(expected))
+        assert np.array_equal(got[np.isinf(expected)], expected[np.isinf(expected)])
+        finite = np.isfinite(expected)
+        np.testing.assert_allclose(got[finite], expected[finite], rtol=1e-13, atol=1e-300)
+    assert np.isneginf(results[True][3][:2]).all() and np.isfinite(results[True][4]).all()

@@ -12,7 +12,8 @@ in the CHANGELOG. The fits run with the MAP search the pins were recorded with
 (``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points at steps that never
 shrink and a stopping share of 1e-6, gradients from the model solved at every finite-difference
 neighbour) and the transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off),
-so the pins check every other number of the search and the chain whatever those defaults are.
+so the pins check every other number of the search and the chain whatever those defaults are;
+the prior's transforms and densities likewise run in numpy (``prior.COMPILED`` off).
 Every test here solves the circuit with Newton started at the previous root of its row
 (``ROW_PREDICTION`` 0), as the currents were recorded; the default's extrapolated starts give the
 same roots to rounding (``tests/test_solver.py``), not bit for bit.
@@ -26,6 +27,7 @@ import numpy as np
 import pytest
 
 import fsrbayes
+from fsrbayes.data import prior
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import optimize
 from fsrbayes.inference.samplers import SamplerSettings, transport
@@ -90,6 +92,7 @@ def test_a_short_fit_gives_the_recorded_chain(model, seed, monkeypatch):
     for name, value in RECORDED_SEARCH.items():
         monkeypatch.setattr(optimize, name, value)
     monkeypatch.setattr(transport, "STACKED_FEATURES", False)  # the maps' recorded evaluation
+    monkeypatch.setattr(prior, "COMPILED", False)  # the prior's recorded evaluation
     data = syn.simulate(
         "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
     ).data

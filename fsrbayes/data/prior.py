@@ -15,7 +15,8 @@ loguniform on [a, b]
     x = exp(log a + (log b − log a)·p); log |dx/du| = log x + log(log b − log a) + log p +
     log(1 − p).
 
-so the density of u is p(x(u))·|dx/du|, proper whenever p is.
+so the density of u is p(x(u))·|dx/du|, proper whenever p is. The samplers' calls run the
+transforms and densities through compiled row kernels (:mod:`.prior_kernels`, :data:`COMPILED`).
 """
 
 from dataclasses import dataclass
@@ -24,8 +25,15 @@ import numpy as np
 from scipy import special
 
 from .distributions import density_constants, log_density
+from .prior_kernels import log_prob_rows, prior_tables, transform_rows
 
-__all__ = ["JointPrior"]
+__all__ = ["COMPILED", "JointPrior"]
+
+COMPILED = True
+"""Evaluate :meth:`JointPrior.from_unconstrained` and :meth:`JointPrior.log_prob` with the compiled
+row kernels of :mod:`.prior_kernels` (the same arithmetic in one pass per row). The same numbers
+to rounding; False gives the numpy evaluation by kind and transform, bit for bit (the regression
+pins of ``tests/test_same_numbers.py`` were recorded with it)."""
 
 _LOG_KINDS = ("lognormal", "halfnormal", "gamma")
 _BOUNDED = ("uniform", "truncnormal", "loguniform")
@@ -148,6 +156,8 @@ class JointPrior:
             )
         object.__setattr__(self, "_transforms", _transforms(self))
         object.__setattr__(self, "_densities", _densities(self))
+        tables = prior_tables(self._transforms, self._densities, self.ndim) if self.ndim else None
+        object.__setattr__(self, "_tables", tables)
 
     @classmethod
     def from_priors(cls, priors, names):
@@ -177,6 +187,11 @@ class JointPrior:
         x = np.asarray(x, dtype=float)
         if not self.ndim:
             return np.zeros(x.shape[:-1])
+        if COMPILED:
+            rows = np.ascontiguousarray(x).reshape(-1, self.ndim)
+            out = np.empty(len(rows))
+            log_prob_rows(rows, self._tables[2], self._tables[3], out)
+            return out.reshape(x.shape[:-1])
         terms = np.empty(x.shape)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             for kind, columns, constants in self._densities:
@@ -192,6 +207,12 @@ class JointPrior:
         sequential ``np.add.accumulate``), so the sum does not depend on how the parameters are
         grouped.
         """
+        if COMPILED and self.ndim:
+            u = np.asarray(u, dtype=float)
+            rows = np.ascontiguousarray(u).reshape(-1, self.ndim)
+            x, log_jac = np.empty(rows.shape), np.empty(len(rows))
+            transform_rows(rows, self._tables[0], self._tables[1], x, log_jac)
+            return x.reshape(u.shape), log_jac.reshape(u.shape[:-1])
         x, columns = self._constrained(u)
         t = self._transforms
         terms = np.empty(x.shape[:-1] + t.log_jac_constants.shape)
@@ -205,6 +226,8 @@ class JointPrior:
 
     def to_constrained(self, u):
         """x(u) alone, for callers that do not need :meth:`from_unconstrained`'s log|dx/du|."""
+        if COMPILED and self.ndim:
+            return self.from_unconstrained(u)[0]
         return self._constrained(u)[0]
 
     def _constrained(self, u):
