@@ -34,9 +34,8 @@ bits."""
 ROUNDING_SHIFT_BITS = int(np.array([ROUNDING_SHIFT]).view(np.int64)[0])
 LOWEST = -700.0
 """Arguments below this are taken here (module docstring)."""
-(T0, T1, T2, T3, T4, T5, T6, T7, T8, T9, T10, T11, T12, T13) = (
-    1.0 / math.factorial(k) for k in range(14)
-)
+TAYLOR = tuple(1.0 / math.factorial(k) for k in range(13, -1, -1))
+"""e^r's Taylor coefficients 1/k!, k = 13 … 0 (Horner's order)."""
 
 
 @numba.njit(fastmath={"contract"}, **JIT)
@@ -48,20 +47,9 @@ def _exp_parts(values, top, mantissa, shifted):
         f = x * INV_LN2 + ROUNDING_SHIFT
         k = f - ROUNDING_SHIFT
         r = (x - k * LN2_HIGH) - k * LN2_LOW
-        p = T13
-        p = p * r + T12
-        p = p * r + T11
-        p = p * r + T10
-        p = p * r + T9
-        p = p * r + T8
-        p = p * r + T7
-        p = p * r + T6
-        p = p * r + T5
-        p = p * r + T4
-        p = p * r + T3
-        p = p * r + T2
-        p = p * r + T1
-        p = p * r + T0
+        p = TAYLOR[0]
+        for coefficient in TAYLOR[1:]:
+            p = p * r + coefficient
         mantissa[i] = p
         shifted[i] = f
 
