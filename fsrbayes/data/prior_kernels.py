@@ -2,12 +2,12 @@
 
 :class:`~.prior.JointPrior` evaluates every distribution kind and transform as a few numpy
 operations over its columns; on the samplers' calls (tens of walkers × ~12 parameters) each of
-those operations costs more in numpy's per-call overhead than in arithmetic, and a log-posterior
-call spends ~10 % of its time there. Here one pass per row does the same arithmetic: each column
-carries a transform code and a density code with their constants (:func:`prior_tables`), and the
-log-Jacobian and log-density terms are added in parameter order, as the numpy version adds them.
-The results agree with the numpy version to rounding (the transcendental functions are the C
-library's here, numpy's own there).
+those operations costs more in numpy's per-call overhead than in arithmetic, a share of every
+log-posterior call that matters most at one walker. Here one pass per row does the same
+arithmetic: each column carries a transform code and a density code with their constants
+(:func:`prior_tables`), and the log-Jacobian and log-density terms are added in parameter order,
+as the numpy version adds them. The results agree with the numpy version to rounding (the
+transcendental functions are the C library's here, numpy's own there).
 """
 
 import math

@@ -96,7 +96,7 @@ def _kill_workers(pool):
 def _import_for_workers():
     """Import what every job's convergence checks load, before the workers are forked.
 
-    ArviZ's statistics take ~1.6 s to import; imported here once, the forked workers inherit
+    ArviZ's statistics take seconds to import; imported here once, the forked workers inherit
     them instead of each importing them again at its first convergence check.
     """
     import arviz_stats  # noqa: F401
