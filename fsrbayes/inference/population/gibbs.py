@@ -201,10 +201,14 @@ class BlockGibbsMove(emcee.moves.Move):
             value = block_lp + pop.log_ratio(x, self.mu[rows], self.omega[rows])
         return np.where(np.isnan(value), -np.inf, value)
 
-    def _accept(self, j, rows, u_new, log_extra, random):
-        """Update walkers ``rows`` of block j, log_extra = log q(old) − log q(new)."""
+    def _accept(self, j, rows, u_new, log_extra, random, current):
+        """Update walkers ``rows`` of block j, log_extra = log q(old) − log q(new).
+
+        ``current`` (W,): block j's conditional log-density at every walker's present state,
+        updated in place where a walker moves (the walker's Λ is fixed while block j runs).
+        """
         lp_new, like_new, x_new = self._evaluate_block(j, u_new)
-        old = self._conditional(j, self.block_lp[rows, j], self.x[rows, j], rows)
+        old = current[rows]
         new = self._conditional(j, lp_new, x_new, rows)
         with np.errstate(invalid="ignore"):
             log_alpha = new - old + log_extra
@@ -212,6 +216,7 @@ class BlockGibbsMove(emcee.moves.Move):
             np.log(random.uniform(size=len(rows))) < np.nan_to_num(log_alpha, nan=-np.inf)
         )
         where = rows[take]
+        current[where] = new[take]
         self.u[j][where] = u_new[take]
         self.block_lp[where, j] = lp_new[take]
         self.like[where, j] = like_new[take]
@@ -224,9 +229,10 @@ class BlockGibbsMove(emcee.moves.Move):
         given = getattr(fitted, "given", None)  # a proposal that depends on the walker's Λ
         proposal = fitted if given is None else given(self.mu, self.omega)
         rows = np.arange(n)
+        current = self._conditional(j, self.block_lp[:, j], self.x[:, j], rows)
         u_new = proposal.sample(random, n)
         log_extra = proposal.log_density(self.u[j]) - proposal.log_density(u_new)
-        independence = self._accept(j, rows, u_new, log_extra, random)
+        independence = self._accept(j, rows, u_new, log_extra, random, current)
         d = self.u[j].shape[1]
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
@@ -241,7 +247,7 @@ class BlockGibbsMove(emcee.moves.Move):
             new = at[active] + step * (at[other[first]] - at[other[second]])
             with np.errstate(over="ignore", invalid="ignore"):
                 u_new = new if chart is None else chart.forward(new)
-            moved.append(self._accept(j, active, u_new, 0.0, random))
+            moved.append(self._accept(j, active, u_new, 0.0, random, current))
         return independence, np.concatenate(moved[1:]).mean()
 
     def _hyper(self, random):
