@@ -19,7 +19,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["logsumexp_last"]
+__all__ = ["exp_into", "logsumexp_last"]
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -64,6 +64,28 @@ def _sum_parts(mantissa, shifted_bits):
     for i in range(mantissa.size):
         total += mantissa[i] * scale[i]
     return total
+
+
+@numba.njit(fastmath={"contract"}, **JIT)
+def _scale_parts(mantissa, shifted_bits, out):
+    """Write mantissa·2^k to ``out``, k from the shifted doubles' bits (:func:`_sum_parts`)."""
+    for i in range(shifted_bits.size):
+        shifted_bits[i] = (shifted_bits[i] - ROUNDING_SHIFT_BITS + 1023) << 52
+    scale = shifted_bits.view(np.float64)
+    for i in range(mantissa.size):
+        out[i] = mantissa[i] * scale[i]
+
+
+@numba.njit(**JIT)
+def exp_into(values, out, mantissa, shifted):
+    """Write e^values to ``out`` (1-d arrays of one size), with the module's vector exponential.
+
+    ``mantissa`` and ``shifted`` are work arrays of the same size (overwritten). Arguments above
+    0 are not supported (callers pass log-probabilities); below −700 they are taken at −700;
+    NaN stays NaN.
+    """
+    _exp_parts(values, 0.0, mantissa, shifted)
+    _scale_parts(mantissa, shifted.view(np.int64), out)
 
 
 @numba.njit(**JIT)
