@@ -81,6 +81,48 @@ def test_count_probabilities_sum_to_one_with_the_top_count_saturating(mean_count
     assert total == pytest.approx(1.0, abs=1e-12)
 
 
+def test_the_vector_normal_tail_matches_scipy_to_its_own_rounding():
+    """ndtr(−|z|) from the Chebyshev series and the vector exponential: as accurate as scipy's
+    (both carry exp(−z²/2)'s relative rounding, ~z²·1e-16), 0 past |z| = 37.4 (below 1e-304)."""
+    from scipy import special
+
+    from fsrbayes.inference.count_kernels import LARGEST, normal_tails
+
+    z = np.concatenate([np.linspace(-37.0, 37.0, 74001), [np.inf, -np.inf, 38.0, np.nan]])
+    got, expected = normal_tails(z), special.ndtr(-np.abs(z))
+    finite = np.abs(z) < LARGEST * np.sqrt(2.0)
+    relative = np.abs(got[finite] / expected[finite] - 1.0)
+    assert np.all(relative <= 3e-16 * (4.0 + z[finite] ** 2)), relative.max()
+    assert list(got[-4:-1]) == [0.0, 0.0, 0.0] and np.isnan(got[-1])
+
+
+def test_the_compiled_count_likelihood_equals_numpy_s_near_and_far_from_the_data(monkeypatch):
+    """``counts.COMPILED``: the kernel gives numpy's values to ~1e-15 relative, at the data, a few
+    noise widths off, and so far off that the counts' probabilities underflow (the tail-safe
+    formula takes over there); −inf and NaN model currents give numpy's −inf and NaN."""
+    from fsrbayes.inference import counts as counts_module
+
+    rng = np.random.default_rng(3)
+    counts = np.rint(300.4 * np.exp(0.004 * rng.standard_normal(3000)))
+    data = SpecimenData.from_tests([_counts_test(counts)])
+    histograms = data.counts
+    points, first = histograms.points
+    sd = np.array([0.004, 0.004, 0.004, 0.0004, 0.004, 0.004, 0.004])
+    shift = np.array([0.0, 3.0, -40.0, 60.0, 0.0, 0.0, 0.0]) * sd
+    log_model = np.log(300.4 * STEP) + shift[:, None] + np.zeros((len(sd), data.n_obs))
+    log_model[4, 7], log_model[5, 3], log_model[6] = -np.inf, np.nan, np.inf
+    monkeypatch.setattr(counts_module, "COMPILED", False)
+    expected = counts_module.count_log_likelihood(log_model, sd[:, None], histograms, first)
+    monkeypatch.setattr(counts_module, "COMPILED", True)
+    got = counts_module.count_log_likelihood(log_model, sd[:, None], histograms, first)
+    assert np.array_equal(np.isfinite(got), np.isfinite(expected))
+    assert np.array_equal(np.isnan(got), np.isnan(expected))
+    assert np.array_equal(got[~np.isfinite(got)], expected[~np.isfinite(expected)], equal_nan=True)
+    finite = np.isfinite(expected)
+    np.testing.assert_allclose(got[finite], expected[finite], rtol=1e-13)
+    assert np.isfinite(expected[2]).all() and expected[2].max() < -500  # 40 sd off: underflows
+
+
 def test_counts_under_half_a_step_recover_a_current_between_counts():
     """Noise of 0.3 counts about 150.3 counts: three readings in four are 150, one is 151. The
     rounding model recovers 150.3 where the counts' mean (what an unbiased rounding error of

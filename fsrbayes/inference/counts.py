@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
+from .count_kernels import count_terms
+
 __all__ = [
     "CountHistograms",
     "count_histograms",
@@ -149,6 +151,12 @@ def log_normal_interval(lower, upper):
     return log_high + tail
 
 
+COMPILED = True
+"""Whether :func:`count_log_likelihood` runs :func:`~.count_kernels.count_terms` (its normal
+tails formed in vector registers; the same values to ~1e-15 relative) instead of numpy and
+scipy's ``ndtr``."""
+
+
 def count_log_likelihood(log_model, sigma, counts, first):
     """Log-likelihood of the whole-count readings at each point that holds them.
 
@@ -171,6 +179,8 @@ def count_log_likelihood(log_model, sigma, counts, first):
     ndarray, shape (W, P)
         Σ n_k·(log P(k) − log q) over the counts read at each point.
     """
+    if COMPILED:
+        return _compiled_count_log_likelihood(log_model, sigma, counts, first)
     z = (counts.log_edge - log_model[:, counts.edge_point]) / sigma
     tail = special.ndtr(-np.abs(z))
     z_low, z_high = z[:, counts.lower], z[:, counts.upper]
@@ -186,6 +196,31 @@ def count_log_likelihood(log_model, sigma, counts, first):
     if far.any():
         log_p[far] = log_normal_interval(z_low[far], z_high[far])
     return np.add.reduceat(counts.multiplicity * (log_p - counts.log_step), first, axis=1)
+
+
+def _compiled_count_log_likelihood(log_model, sigma, counts, first):
+    """:func:`count_log_likelihood` by :func:`~.count_kernels.count_terms` (far counts: here)."""
+    log_model = np.ascontiguousarray(log_model, dtype=float)
+    sigma = np.ascontiguousarray(np.broadcast_to(sigma, (len(log_model), 1)), dtype=float)
+    column = np.repeat(np.arange(len(first)), np.diff(first, append=counts.point.size))
+    sums, far, z = count_terms(
+        log_model,
+        sigma,
+        counts.log_edge,
+        counts.edge_point,
+        counts.lower,
+        counts.upper,
+        counts.multiplicity,
+        counts.log_step,
+        column,
+        len(first),
+    )
+    if far.any():
+        walker, entry = np.nonzero(far)
+        log_p = log_normal_interval(z[walker, counts.lower[entry]], z[walker, counts.upper[entry]])
+        terms = counts.multiplicity[entry] * (log_p - counts.log_step[entry])
+        np.add.at(sums, (walker, column[entry]), terms)
+    return sums
 
 
 NEAR_STEP = 1e-4
