@@ -11,8 +11,10 @@ them into a vector instruction:
 with g a Chebyshev series on [−1, 1] (:data:`ERFC_CHEBYSHEV`; the form of Numerical Recipes'
 ``erfccheb``, its coefficients computed by ``python -m validation.erfc_chebyshev``). The series
 is exact to ~1e-19; the tail's error is that of exp(−a²), as in scipy's (relative ~a²·1e-16),
-and the exponential is :func:`~.reductions.exp_into`'s. ``tests/test_quantised.py`` checks the
-tail against scipy's ``ndtr`` and the likelihood against the numpy version.
+and the exponential is :func:`~.reductions.exp_into`'s. The counts' probabilities are formed in
+one pass and their logarithms in another, by :func:`~.reductions.log_into` (also four at a time).
+``tests/test_quantised.py`` checks the tail against scipy's ``ndtr`` and the likelihood against
+the numpy version.
 """
 
 import math
@@ -20,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .reductions import exp_into
+from .reductions import exp_into, log_into
 
 __all__ = ["ERFC_CHEBYSHEV", "count_terms", "normal_tails"]
 
@@ -157,6 +159,8 @@ def count_terms(
     z_all = np.empty((n_walkers, n_edges))
     argument, prefactor = np.empty(n_edges), np.empty(n_edges)
     tail, mantissa, shifted = np.empty(n_edges), np.empty(n_edges), np.empty(n_edges)
+    probability, log_p = np.empty(n_entries), np.empty(n_entries)
+    work = np.empty(n_entries, dtype=np.int64)
     for w in range(n_walkers):
         z = z_all[w]
         _edge_z(log_edge, edge_point, log_model[w], sigma[w, 0], z)
@@ -167,13 +171,16 @@ def count_terms(
         for e in range(n_entries):
             lo, hi = lower[e], upper[e]
             if z[lo] > 0:
-                probability = tail[lo] - tail[hi]
+                probability[e] = tail[lo] - tail[hi]
             elif z[hi] <= 0:
-                probability = tail[hi] - tail[lo]
+                probability[e] = tail[hi] - tail[lo]
             else:
-                probability = 1.0 - tail[hi] - tail[lo]
-            if probability > FAR:
-                sums[w, column[e]] += multiplicity[e] * (math.log(probability) - log_step[e])
-            else:
+                probability[e] = 1.0 - tail[hi] - tail[lo]
+            if not probability[e] > FAR:
                 far[w, e] = True
+                probability[e] = 1.0  # a placeholder for the vector log
+        log_into(probability, log_p, work)
+        for e in range(n_entries):
+            if not far[w, e]:
+                sums[w, column[e]] += multiplicity[e] * (log_p[e] - log_step[e])
     return sums, far, z_all

@@ -19,7 +19,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["exp_into", "logsumexp_last"]
+__all__ = ["exp_into", "log_into", "logsumexp_last"]
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -86,6 +86,51 @@ def exp_into(values, out, mantissa, shifted):
     """
     _exp_parts(values, 0.0, mantissa, shifted)
     _scale_parts(mantissa, shifted.view(np.int64), out)
+
+
+EXPONENT_ONE = 1023 << 52
+"""The bits of 1.0's exponent field."""
+MANTISSA_BITS = (1 << 52) - 1
+EXPONENT_SHIFT = 0x4330000000000000
+"""The bits of 2⁵²: OR-ed with an integer below 2⁵², the double 2⁵² + that integer."""
+SQRT2 = math.sqrt(2.0)
+ATANH = tuple(2.0 / (2 * k + 1) for k in range(11, -1, -1))
+"""2/(2k + 1), k = 11 … 0: log m = 2 atanh(s) = Σ 2 s^(2k+1)/(2k + 1), s = (m − 1)/(m + 1)."""
+
+
+@numba.njit(fastmath={"contract"}, **JIT)
+def _log_parts(bits, out, exponent_bits):
+    """Write log of positive normal doubles (their ``bits``) to ``out`` (:func:`log_into`)."""
+    for i in range(bits.size):
+        exponent_bits[i] = (bits[i] >> 52) | EXPONENT_SHIFT
+    exponents = exponent_bits.view(np.float64)
+    for i in range(bits.size):
+        exponents[i] -= 4503599627370496.0 + 1023.0  # 2⁵² + the bias
+    mantissas = out.view(np.int64)  # m in [1, 2), written over ``out``
+    for i in range(bits.size):
+        mantissas[i] = (bits[i] & MANTISSA_BITS) | EXPONENT_ONE
+    for i in range(bits.size):
+        m, k = out[i], exponents[i]
+        high = m > SQRT2
+        m = 0.5 * m if high else m
+        k = k + 1.0 if high else k
+        s = (m - 1.0) / (m + 1.0)
+        s2 = s * s
+        p = ATANH[0]
+        for coefficient in ATANH[1:]:
+            p = p * s2 + coefficient
+        out[i] = k * LN2_HIGH + (s * p + k * LN2_LOW)
+
+
+@numba.njit(**JIT)
+def log_into(values, out, work):
+    """Write log(values) to ``out`` for positive, normal, finite ``values`` (1-d, one size).
+
+    ``work`` is an int64 work array of the same size. m·2^k with m in [√½, √2) from the bits,
+    log m = 2 atanh((m − 1)/(m + 1)) by its series to s²³ (remainder < 1e-18 relative), k·ln 2 in
+    Cody and Waite's two parts. Other values give meaningless results (callers select them out).
+    """
+    _log_parts(values.view(np.int64), out, work)
 
 
 @numba.njit(**JIT)
