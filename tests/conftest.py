@@ -20,12 +20,12 @@ LONG_MODULES = (
     "test_demo.py",  # 42
     "test_diagnose.py",  # 41
     "test_rigs.py",  # 39
-    "test_fit_checks.py",  # 38
     "test_fit.py",  # 36
     "test_pinned.py",  # 32
     "test_reference.py",  # 29
     "test_score_check.py",  # 26
     "test_compare.py",  # 24
+    "test_fit_checks.py",  # 22
     "test_evidence_bridge.py",  # 22
     "test_transport.py",  # 20
     "test_sampling.py",  # 19
