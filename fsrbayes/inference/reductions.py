@@ -54,11 +54,17 @@ def _exp_parts(values, top, mantissa, shifted):
         shifted[i] = f
 
 
+@numba.njit(**JIT)
+def _powers_of_two(shifted_bits):
+    """Make each shifted double's bits (k in their low bits) the bits of 2^k, in place."""
+    for i in range(shifted_bits.size):
+        shifted_bits[i] = (shifted_bits[i] - ROUNDING_SHIFT_BITS + 1023) << 52
+
+
 @numba.njit(fastmath={"reassoc", "contract"}, **JIT)
 def _sum_parts(mantissa, shifted_bits):
     """Σ mantissa·2^k: k from the shifted doubles' bits, made into 2^k's exponent field."""
-    for i in range(shifted_bits.size):
-        shifted_bits[i] = (shifted_bits[i] - ROUNDING_SHIFT_BITS + 1023) << 52
+    _powers_of_two(shifted_bits)
     scale = shifted_bits.view(np.float64)
     total = 0.0
     for i in range(mantissa.size):
@@ -69,8 +75,7 @@ def _sum_parts(mantissa, shifted_bits):
 @numba.njit(fastmath={"contract"}, **JIT)
 def _scale_parts(mantissa, shifted_bits, out):
     """Write mantissa·2^k to ``out``, k from the shifted doubles' bits (:func:`_sum_parts`)."""
-    for i in range(shifted_bits.size):
-        shifted_bits[i] = (shifted_bits[i] - ROUNDING_SHIFT_BITS + 1023) << 52
+    _powers_of_two(shifted_bits)
     scale = shifted_bits.view(np.float64)
     for i in range(mantissa.size):
         out[i] = mantissa[i] * scale[i]
