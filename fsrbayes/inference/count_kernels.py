@@ -2,9 +2,9 @@
 
 :func:`~.counts.count_log_likelihood` needs, for every walker, the normal tail ndtr(−|z|) at
 each rounding edge and the logarithm of each count's probability. scipy's ``ndtr`` takes each
-tail through branches one value at a time, and those tails were half of that likelihood's time
-(BENCHMARKS.md). Here the tail is one formula without branches, so the compiler packs four of
-them into a vector instruction:
+tail through branches one value at a time, which makes the tails most of that likelihood's cost
+in numpy (BENCHMARKS.md). Here the tail is one formula without branches, so the compiler packs
+four of them into a vector instruction:
 
     ndtr(−|z|) = ½·erfc(a),   a = |z|/√2,   erfc(a) = t·exp(−a² + g(2t − 1)),   t = 2/(2 + a),
 
@@ -130,15 +130,20 @@ def _tail_parts(z, argument, prefactor):
 
 
 @numba.njit(**JIT)
+def _tails(z, tail, argument, prefactor, mantissa, shifted):
+    """Write ndtr(−|z|) to ``tail``; the other arrays are work space of z's size."""
+    _tail_parts(z, argument, prefactor)
+    exp_into(argument, tail, mantissa, shifted)
+    for g in range(z.size):
+        tail[g] *= prefactor[g]
+
+
+@numba.njit(**JIT)
 def normal_tails(z_values):
     """Return ndtr(−|z|) of a 1-d array, as :func:`count_terms` forms it (for tests)."""
     n = z_values.size
-    argument, prefactor = np.empty(n), np.empty(n)
-    tail, mantissa, shifted = np.empty(n), np.empty(n), np.empty(n)
-    _tail_parts(z_values, argument, prefactor)
-    exp_into(argument, tail, mantissa, shifted)
-    for g in range(n):
-        tail[g] *= prefactor[g]
+    tail = np.empty(n)
+    _tails(z_values, tail, np.empty(n), np.empty(n), np.empty(n), np.empty(n))
     return tail
 
 
@@ -164,10 +169,7 @@ def count_terms(
     for w in range(n_walkers):
         z = z_all[w]
         _edge_z(log_edge, edge_point, log_model[w], sigma[w, 0], z)
-        _tail_parts(z, argument, prefactor)
-        exp_into(argument, tail, mantissa, shifted)
-        for g in range(n_edges):
-            tail[g] *= prefactor[g]
+        _tails(z, tail, argument, prefactor, mantissa, shifted)
         for e in range(n_entries):
             lo, hi = lower[e], upper[e]
             if z[lo] > 0:
