@@ -16,6 +16,7 @@ one sample): :class:`CountHistograms`, built by :func:`count_histograms`, evalua
 """
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy import special
@@ -66,11 +67,16 @@ class CountHistograms:
     multiplicity: np.ndarray
     log_step: np.ndarray
 
-    @property
+    @cached_property
     def points(self):
         """The observed points that hold counts, in order, and their first entries: (P,), (P,)."""
         first = np.flatnonzero(np.diff(self.point, prepend=-1))
         return self.point[first], first
+
+    @cached_property
+    def columns(self):
+        """Each entry's point as a column 0 … P − 1 of :attr:`points` (int array (E,))."""
+        return np.cumsum(np.diff(self.point, prepend=self.point[:1]) != 0)
 
     @property
     def highest_count(self):
@@ -202,7 +208,7 @@ def _compiled_count_log_likelihood(log_model, sigma, counts, first):
     """:func:`count_log_likelihood` by :func:`~.count_kernels.count_terms` (far counts: here)."""
     log_model = np.ascontiguousarray(log_model, dtype=float)
     sigma = np.ascontiguousarray(np.broadcast_to(sigma, (len(log_model), 1)), dtype=float)
-    column = np.repeat(np.arange(len(first)), np.diff(first, append=counts.point.size))
+    column = counts.columns
     sums, far, z = count_terms(
         log_model,
         sigma,
