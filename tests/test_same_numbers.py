@@ -4,8 +4,9 @@
 its string dispatch replaced by registries; a refactoring that changes any number fails here.
 The fits sample the prior-scaled parameters (``coordinates="prior"``), as every fit did then.
 The fits' pins depend on the MAP search's optimiser, so a SciPy release can move them in the
-fifth digit, and so does the CPU (its BLAS kernels and libm): they are kept per CPU vendor
-(``fit_…@GenuineIntel``, ``fit_…@AuthenticAMD``, the machines CI has run on). They are
+fifth digit, and so does the CPU (its BLAS kernels, libm, and numpy's AVX-512 exp and log): they
+are kept per kind of CPU (``fit_…@GenuineIntel``, ``fit_…@AuthenticAMD``,
+``fit_…@AuthenticAMD-avx512``, the machines CI has run on; :func:`_cpu_keys`). They are
 re-recorded from a commit that passed here before (CHANGELOG), never from the code under test —
 unless a commit changes the MAP search on purpose, which then re-records them itself and says so
 in the CHANGELOG. The fits run with the MAP search the pins were recorded with
@@ -37,18 +38,33 @@ from fsrbayes.physics.sensor import current_history
 PINS = np.load(Path(__file__).parent / "data" / "regroup_pins.npz")
 
 
-def _cpu_vendor():
-    """The CPU's vendor id (``GenuineIntel``, ``AuthenticAMD``, …) from /proc/cpuinfo."""
+def _cpu_keys():
+    """The pins' CPU keys to look for, most specific first.
+
+    ``<vendor>-avx512`` where the CPU has AVX-512 (numpy then takes exp and log through its own
+    AVX-512 kernels instead of the C library's, and they differ in the last bit), then the
+    vendor id alone (``GenuineIntel``, ``AuthenticAMD``) from /proc/cpuinfo.
+    """
+    vendor, flags = platform.machine(), set()
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("vendor_id"):
-                return line.split(":", 1)[1].strip()
+                vendor = line.split(":", 1)[1].strip()
+            elif line.startswith("flags"):
+                flags = set(line.split(":", 1)[1].split())
     except OSError:
         pass
-    return platform.machine()
+    return ([f"{vendor}-avx512"] if "avx512f" in flags else []) + [vendor]
 
 
-CPU = _cpu_vendor()
+def _cpu_key(keys=None):
+    """The first of :func:`_cpu_keys` the fit pins were recorded for (the last if none was)."""
+    keys = _cpu_keys() if keys is None else keys
+    recorded = {name.rpartition("@")[2] for name in PINS.files if "@" in name}
+    return next((key for key in keys if key in recorded), keys[-1])
+
+
+CPU = _cpu_key()
 SHORT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 EFFECTS = ("area-creep", "contact-creep", "power-law-creep", "voltage-degradation", "offset-stress")
 
