@@ -462,6 +462,35 @@ def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     np.testing.assert_array_equal(side_by_side, optima)
 
 
+class _Creased:
+    """A log-density with a crease: slope 1 below x = 0, −1000 above, round in the others.
+
+    Its maximum, 0, is at x = 0, y = 2, z = 0. Near the crease a step along the gradient from
+    one side lands on the steep other side, so L-BFGS-B's line search cannot meet its curvature
+    condition, as at the smooth law's V_bulk = Va or the paper law's jumps."""
+
+    ndim = 5
+
+    def __call__(self, u):
+        u = np.atleast_2d(u)
+        return (
+            np.minimum(u[:, 0], -1000.0 * u[:, 0])
+            - 0.5 * (u[:, 1] - 2.0) ** 2
+            - 0.5 * np.sum(u[:, 2:] ** 2, axis=1)
+        )
+
+
+def test_the_polish_crosses_a_crease_where_the_line_search_fails(monkeypatch):
+    from fsrbayes.inference import optimize
+
+    target, start = _Creased(), np.array([-0.5, 0.0, 0.5, 0.1, -0.2])
+    u, value = optimize.polish(target, start, target(start[None])[0])
+    assert value > -1e-3
+    np.testing.assert_allclose(u, [0.0, 2.0, 0.0, 0.0, 0.0], atol=0.05)
+    monkeypatch.setattr(optimize, "ESCAPE_EVALUATIONS", 0)  # L-BFGS-B alone stalls here
+    assert optimize.polish(target, start, target(start[None])[0])[1] < -1.0
+
+
 class _TailedGaussian:
     """A correlated Gaussian in u over (a normal parameter, a half-normal one): the half-normal's
     nested model (x -> 0) lies in the tail, as the Burgers fluidity's Zener limit does."""
