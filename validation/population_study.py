@@ -54,9 +54,9 @@ depends on how the 16 fits' draws happen to fall.)"""
 
 
 JOINT_SETTINGS = SamplerSettings(n_ensembles=4, chunk=250, max_steps=6000, min_steps=500)
-"""The joint (blocked Gibbs) route of the study: 4 ensembles × 32 walkers, 6,000 sweeps (~27 min
-on 2 cores; ~11 τ of ω_A0 kept, so it ends with a ConvergenceWarning — its MCSE still counts
-the autocorrelation)."""
+"""The joint (blocked Gibbs) route of the study: 4 ensembles × ``GIBBS_WALKERS`` walkers, 6,000
+sweeps (~7 min on 2 cores at 16 walkers; ~20 τ of ω_A0 kept, so it ends with a
+ConvergenceWarning — its MCSE still counts the autocorrelation)."""
 
 
 def population_study(

@@ -60,9 +60,11 @@ from .proposals import PROPOSALS
 
 __all__ = ["GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
-GIBBS_WALKERS = 32
+GIBBS_WALKERS = 16
 """Walkers per ensemble for the Gibbs route: each walker is its own Gibbs chain (the ensemble
-only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply."""
+only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply. On the
+16-specimen bench 16 walkers reached the convergence criteria in fewer sweeps than 32 did in
+20,000 (BENCHMARKS.md): a sweep costs half, and τ did not grow."""
 
 
 class GibbsJointTarget(JointTarget):
