@@ -41,20 +41,25 @@ PINS = np.load(Path(__file__).parent / "data" / "regroup_pins.npz")
 def _cpu_keys():
     """The pins' CPU keys to look for, most specific first.
 
-    ``<vendor>-avx512`` where the CPU has AVX-512 (numpy then takes exp and log through its own
-    AVX-512 kernels instead of the C library's, and they differ in the last bit), then the
-    vendor id alone (``GenuineIntel``, ``AuthenticAMD``) from /proc/cpuinfo.
+    ``<vendor>-avx512-f<family>`` and ``<vendor>-avx512`` where the CPU has AVX-512 (numpy then
+    takes exp and log through its own AVX-512 kernels instead of the C library's, and they differ
+    in the last bit — and between CPU families: AMD's Zen 4, family 25, and Zen 5, family 26,
+    give different fits), then the vendor id alone (``GenuineIntel``, ``AuthenticAMD``) from
+    /proc/cpuinfo.
     """
-    vendor, flags = platform.machine(), set()
+    vendor, flags, family = platform.machine(), set(), "?"
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("vendor_id"):
                 vendor = line.split(":", 1)[1].strip()
             elif line.startswith("flags"):
                 flags = set(line.split(":", 1)[1].split())
+            elif line.startswith("cpu family"):
+                family = line.split(":", 1)[1].strip()
     except OSError:
         pass
-    return ([f"{vendor}-avx512"] if "avx512f" in flags else []) + [vendor]
+    wide = [f"{vendor}-avx512-f{family}", f"{vendor}-avx512"] if "avx512f" in flags else []
+    return wide + [vendor]
 
 
 def _cpu_key(keys=None):
