@@ -7,9 +7,9 @@ The fits' pins depend on the MAP search's optimiser, so a SciPy release can move
 fifth digit, and so does the CPU (its BLAS kernels, libm, and numpy's AVX-512 exp and log): they
 are kept per kind of CPU (``fit_…@GenuineIntel``, ``fit_…@AuthenticAMD``,
 ``fit_…@AuthenticAMD-avx512-f25`` and ``-f26``, the machines CI has run on; :func:`_cpu_keys`).
-They are re-recorded from a commit that passed here before (CHANGELOG), never from the code under test —
-unless a commit changes the MAP search on purpose, which then re-records them itself and says so
-in the CHANGELOG. The fits run with the MAP search the pins were recorded with
+They are re-recorded from a commit that passed here before (CHANGELOG), never from the code
+under test — unless a commit changes the MAP search on purpose, which then re-records them
+itself and says so in the CHANGELOG. The fits run with the MAP search the pins were recorded with
 (``RECORDED_SEARCH``: a polish with one Hessian from 2·ndim·(ndim + 1) points at steps that never
 shrink and a stopping share of 1e-6, gradients from the model solved at every finite-difference
 neighbour) and the transport maps evaluated stage by stage in numpy (``STACKED_FEATURES`` off),
