@@ -62,9 +62,9 @@ __all__ = ["GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
 GIBBS_WALKERS = 16
 """Walkers per ensemble for the Gibbs route: each walker is its own Gibbs chain (the ensemble
-only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply. On the
-16-specimen bench 16 walkers reached the convergence criteria in fewer sweeps than 32 did in
-20,000 (BENCHMARKS.md): a sweep costs half, and τ did not grow."""
+only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply. A sweep of 16
+costs half of 32's, and on the 16-specimen bench the slowest autocorrelation time did not grow
+with fewer walkers (BENCHMARKS.md)."""
 
 
 class GibbsJointTarget(JointTarget):
@@ -305,6 +305,7 @@ class BlockGibbsMove(emcee.moves.Move):
         pop = self.population
         z = pop.to_z(self.x)[0]  # (W, J, P)
         grid = HyperConditional(z, pop.centre, pop.scale)
+        log_hyper = self._log_hyper_and_population(self.x, self.mu, self.omega)  # kept current
         n, n_spec = z.shape[0], z.shape[1]
         rates = np.zeros(n_spec)
         for j in range(n_spec):
@@ -324,11 +325,12 @@ class BlockGibbsMove(emcee.moves.Move):
                 log_q = log_q + reverse.log_density(self.u[j])
                 x_all = self.x.copy()
                 x_all[:, j] = x_new
+                log_hyper_new = self._log_hyper_and_population(x_all, mu_new, omega_new)
                 log_alpha = (
                     lp_new
-                    + self._log_hyper_and_population(x_all, mu_new, omega_new)
+                    + log_hyper_new
                     - self.block_lp[:, j]
-                    - self._log_hyper_and_population(self.x, self.mu, self.omega)
+                    - log_hyper
                     + log_q
                     + grid.log_density(self.mu, self.omega)
                     - log_q_new
@@ -343,6 +345,7 @@ class BlockGibbsMove(emcee.moves.Move):
                 x_new[take],
             )
             self.mu[take], self.omega[take] = mu_new[take], omega_new[take]
+            log_hyper[take] = log_hyper_new[take]
             z[take, j] = z_new[take, j]
             grid = grid.where(take, grid_new)
             rates[j] = take.mean()

@@ -59,6 +59,7 @@ class HyperConditional:
             self.mean_z, squares, self.n, self.centre, self.scale, int(nodes)
         )
         self.rise = np.diff(self.log_node, axis=-1)  # cell i: log density ℓ_i + rise_i·t
+        self._predictive = self._predictive_moments()
 
     def where(self, take, other):
         """Return this grid where ``take`` (W,) is False and ``other``'s where it is True."""
@@ -68,6 +69,10 @@ class HyperConditional:
             mine, theirs = getattr(self, name), getattr(other, name)
             mask = take.reshape(take.shape + (1,) * (mine.ndim - 1))
             setattr(chosen, name, np.where(mask, theirs, mine))
+        chosen._predictive = tuple(
+            np.where(take[:, None], theirs, mine)
+            for mine, theirs in zip(self._predictive, other._predictive, strict=True)
+        )
         return chosen
 
     def _mu_given(self, omega):
@@ -113,6 +118,9 @@ class HyperConditional:
 
     def predictive(self):
         """Mean and sd of a new specimen's z, each (W, P): the population integrated over Λ | z."""
+        return self._predictive
+
+    def _predictive_moments(self):
         weight = np.exp(self.log_node - self.log_node.max(axis=-1, keepdims=True))
         weight /= weight.sum(axis=-1, keepdims=True)
         omega = np.exp(self.eta)
