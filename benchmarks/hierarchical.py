@@ -6,8 +6,9 @@ ensembles, a short budget: the reweighting needs a few hundred draws per specime
 converged-to-the-last-digit chain), then samples the 22 hyper-parameters. The speed-up from 1 to 2
 worker processes is measured side by side on the first 4 specimens. The joint route (16 x 12 + 22 =
 214 parameters) runs blocked Gibbs sweeps inside emcee (``fsrbayes.inference.population.gibbs``)
-from the two-stage start, with proposals from the same fits, to convergence; the two routes'
-hyper-parameter means are compared in units of their combined Monte-Carlo error.
+from the two-stage start, with proposals from the same fits, to convergence (its warm-up
+``JOINT_WARMUP_TAU`` autocorrelation times: the report's steps less its kept chain); the two
+routes' hyper-parameter means are compared in units of their combined Monte-Carlo error.
 """
 
 import time

@@ -1,10 +1,19 @@
-"""The autocorrelation time the convergence checks use is emcee's estimate."""
+"""The autocorrelation time the convergence checks use is emcee's estimate; the warm-up of a few
+autocorrelation times keeps a chain's stationary part and drops a transient."""
+
+from dataclasses import replace
 
 import emcee
 import numpy as np
 import pytest
 
-from fsrbayes.inference.samplers.convergence import walker_averaged_tau
+from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.convergence import (
+    convergence_report,
+    ensemble_tau,
+    tau_warmup,
+    walker_averaged_tau,
+)
 
 
 @pytest.mark.parametrize("steps", [1, 7, 64, 1000, 1250])
@@ -23,3 +32,53 @@ def test_walker_averaged_tau_is_emcees_integrated_time(steps):
     finite = np.isfinite(expected)
     assert finite.sum() >= (4 if steps > 1 else 0)
     np.testing.assert_allclose(got[finite], expected[finite], rtol=1e-12)
+
+
+def _ar1(rng, steps, rho, start, shape=(2, 8, 2)):
+    """AR(1) chains (E, steps, W, ndim) of unit stationary variance from ``start``:
+    τ = (1 + ρ)/(1 − ρ)."""
+    n_ens, n_walk, ndim = shape
+    chain = np.empty((n_ens, steps, n_walk, ndim))
+    chain[:, 0] = start
+    noise = rng.standard_normal(chain.shape) * np.sqrt(1.0 - rho**2)
+    for t in range(1, steps):
+        chain[:, t] = rho * chain[:, t - 1] + noise[:, t]
+    return chain
+
+
+def test_the_tau_warmup_keeps_more_than_half_of_a_chain_started_in_its_target():
+    rng = np.random.default_rng(1)
+    chain = _ar1(rng, 6000, 0.9, rng.standard_normal((2, 8, 2)))  # τ = 19
+    warmup, tau = tau_warmup(chain, 10.0)
+    assert 10.0 * tau.max() <= warmup < 12.0 * 19.0
+    np.testing.assert_allclose(tau, 19.0, rtol=0.2)
+    np.testing.assert_array_equal(tau, ensemble_tau(chain[:, warmup:]))
+    assert tau_warmup(chain, np.inf)[0] == 3000  # inf: the first half
+
+
+def test_the_tau_warmup_drops_a_transient():
+    """What it must not keep: the decay from a start 50 sd away (≈ 3 τ long), and a slow trend
+    (5 sd over a third of the chain, which inflates τ of every chain holding it): there it keeps
+    only the second half."""
+    rng = np.random.default_rng(2)
+    far = _ar1(rng, 6000, 0.9, 50.0)
+    warmup, _ = tau_warmup(far, 10.0)
+    assert warmup < 3000 and np.abs(far[:, warmup:]).max() < 6.0
+    trend = np.clip(1.0 - np.arange(6000) / 2000.0, 0.0, None) * 5.0
+    drifting = _ar1(rng, 6000, 0.9, rng.standard_normal((2, 8, 2))) + trend[:, None, None]
+    assert tau_warmup(drifting, 10.0)[0] == 3000
+
+
+def test_the_report_keeps_the_tau_warmup_only_when_asked_and_without_transport_rounds():
+    rng = np.random.default_rng(3)
+    chain = _ar1(rng, 4000, 0.8, rng.standard_normal((2, 8, 2)))  # τ = 9
+    plain = SamplerSettings(n_ensembles=2, transport_rounds=0, min_steps=100)
+    assert convergence_report(chain, plain).n_kept == 2000
+    short = replace(plain, warmup_tau=10.0)
+    report = convergence_report(chain, short)
+    assert 3800 < report.n_kept < 4000 - 10 * report.tau.max() + 1
+    assert report.converged
+    rounds = replace(short, transport_rounds=2, chunk=250)
+    assert convergence_report(chain, rounds).n_kept == 3500  # the transport rounds' warm-up
+    with pytest.raises(ValueError, match="warmup_tau"):
+        SamplerSettings(warmup_tau=0.0)

@@ -15,7 +15,12 @@ from fsrbayes.inference.population.coordinates import NonCentredCoordinates
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget
 from fsrbayes.inference.population.model import Population, TwoStageTarget
 from fsrbayes.inference.population.proposals import KernelProposal
-from fsrbayes.inference.population.routes import ReweightingWarning, joint, two_stage
+from fsrbayes.inference.population.routes import (
+    JOINT_WARMUP_TAU,
+    ReweightingWarning,
+    joint,
+    two_stage,
+)
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
@@ -276,6 +281,24 @@ def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
     assert (
         isinstance(result.target, GibbsJointTarget) and result.run.chain.shape[2] == GIBBS_WALKERS
     )
+    assert_matches(result, analytic_moments())
+
+
+def test_gibbs_joint_started_from_two_stage_discards_only_its_tau_warmup_and_matches():
+    """Started at the two-stage posterior's draws, the joint route discards
+    ``JOINT_WARMUP_TAU`` autocorrelation times, not half the chain, and still matches the
+    closed form within the run's own Monte-Carlo errors."""
+    population = Population(INTERIM)
+    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
+    draws = exact_specimen_draws(1000, np.random.default_rng(1))
+    short = replace(SETTINGS, n_ensembles=2, max_steps=2500)
+    two = two_stage(draws, population, n_draws=1000, settings=short, seed=3)
+    two = replace(two, specimen_draws=draws)  # bare draws: the start needs them as a fit's
+    settings = replace(SETTINGS, n_ensembles=2, chunk=125, min_steps=250)
+    result = joint(specimens, population, settings=settings, seed=4, start_from=two)
+    report = result.run.report
+    warmup = report.n_steps - report.n_kept
+    assert JOINT_WARMUP_TAU * report.tau.max() <= warmup < report.n_steps // 2
     assert_matches(result, analytic_moments())
 
 

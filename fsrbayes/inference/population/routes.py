@@ -35,10 +35,19 @@ __all__ = [
     "fit_specimens",
     "draw_error",
     "MIN_EFFECTIVE_DRAWS",
+    "JOINT_WARMUP_TAU",
 ]
 
 MIN_EFFECTIVE_DRAWS = 50
 """Below this many effective draws for a specimen the two-stage estimate is flagged."""
+
+JOINT_WARMUP_TAU = 10.0
+"""Warm-up of the joint route started from a two-stage result, in autocorrelation times
+(``SamplerSettings.warmup_tau``, where the settings leave it None). Its walkers start at draws of
+the two-stage posterior, which approximates the joint one; half the chain (50 τ and more once it
+converges) is far more than they need to forget the start. The kept chain is held to the same
+criteria; the route's answer with this warm-up and with half the chain discarded is compared in
+BENCHMARKS.md."""
 
 
 class SpecimenFitWarning(UserWarning):
@@ -310,8 +319,10 @@ def joint(
     seed : int
     start_from : HierarchicalResult, optional
         A two-stage result over the same specimens: walkers start from its hyper-posterior
-        draws and, per specimen, draws reweighted to them — no joint MAP search needed. Its
-        fits' draws also feed the Gibbs route's proposals.
+        draws and, per specimen, draws reweighted to them — no joint MAP search needed, and the
+        warm-up discarded is :data:`JOINT_WARMUP_TAU` autocorrelation times rather than half the
+        chain (unless ``settings.warmup_tau`` says otherwise). Its fits' draws also feed the Gibbs
+        route's proposals.
     labels : sequence of str, optional
     method : {"gibbs", "ensemble"}, optional
         ``"gibbs"`` (the default when specimen draws are at hand, from ``start_from`` or
@@ -355,6 +366,8 @@ def joint(
         target = JointTarget(population, specimens)
     start = None
     if start_from is not None:
+        if settings.warmup_tau is None:
+            settings = replace(settings, warmup_tau=JOINT_WARMUP_TAU)
         start = _start_from_two_stage(target, start_from, settings, rng)
     elif method == "gibbs":
         start = _start_from_draws(target, proposal_draws, settings, rng)
@@ -368,7 +381,7 @@ def _start_from_draws(target, draws, settings, rng):
     """Return walkers started from per-specimen draws.
 
     Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at those
-    draws' mean and spread (the warm-up half of the chain is discarded anyway).
+    draws' mean and spread (not a draw of the posterior: the warm-up is half the chain).
     """
     n_walk = _walkers(target, settings)
     n = settings.n_ensembles * n_walk

@@ -4,7 +4,10 @@ The walkers of one affine-invariant ensemble are not independent chains, so each
 chain here (its draws taken step by step over all walkers): rank-normalised split R-hat across
 ensembles (Vehtari et al. 2021), the integrated autocorrelation time τ of each ensemble (emcee's
 walker-averaged estimate) against the kept chain's length, and the bulk effective sample size —
-the smaller of Σ steps·walkers/τ and ArviZ's rank-normalised bulk ESS.
+the smaller of Σ steps·walkers/τ and ArviZ's rank-normalised bulk ESS. All three are taken on
+the chain kept after the warm-up: the transport rounds' steps, or the first half, or (where the
+walkers start at draws of a close approximation of the target) a few autocorrelation times
+(:func:`tau_warmup`).
 """
 
 from dataclasses import asdict, dataclass, field
@@ -12,7 +15,14 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.fft import next_fast_len
 
-__all__ = ["ConvergenceReport", "ConvergenceWarning", "convergence_report", "walker_averaged_tau"]
+__all__ = [
+    "ConvergenceReport",
+    "ConvergenceWarning",
+    "convergence_report",
+    "ensemble_tau",
+    "tau_warmup",
+    "walker_averaged_tau",
+]
 
 
 @dataclass
@@ -116,11 +126,64 @@ def walker_averaged_tau(chain, c=5):
     return taus[window, np.arange(ndim)]
 
 
+def ensemble_tau(chain):
+    """Return the largest τ over ensembles of chains (E, steps, W, ndim), per coordinate.
+
+    At least 1; a coordinate without an estimate (some walker never moved it) gets the chain's
+    length.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
+        tau = np.max([walker_averaged_tau(c) for c in chain], axis=0)
+    return np.where(np.isfinite(tau), np.maximum(tau, 1.0), float(chain.shape[1]))
+
+
+def tau_warmup(chain, factor, longest=None, rounds=4):
+    """Return a warm-up of ``factor`` autocorrelation times and τ of the chain after it.
+
+    The warm-up w is the first w' of w_1 = ⌈factor · τ(after ``longest``)⌉, w_{i+1} =
+    ⌈factor · τ(after w_i)⌉, … (at most ``rounds`` of them) with w' ≥ factor · τ(after w'),
+    τ the largest over coordinates of :func:`ensemble_tau`: the chain it keeps is at least
+    ``factor`` of its own autocorrelation times away from the start. Where no such w' below
+    ``longest`` is found (a long transient inflates τ of every chain that holds it), w is
+    ``longest``.
+
+    Parameters
+    ----------
+    chain : ndarray (E, steps, W, ndim)
+    factor : float
+        Autocorrelation times to discard; ``inf`` gives ``longest``.
+    longest : int, optional
+        The longest warm-up, and the fallback; default half the chain.
+    rounds : int
+        Candidates tried.
+
+    Returns
+    -------
+    warmup : int
+    tau : ndarray (ndim,)
+        :func:`ensemble_tau` of ``chain[:, warmup:]``.
+    """
+    longest = chain.shape[1] // 2 if longest is None else int(longest)
+    tau_longest = ensemble_tau(chain[:, longest:])
+    tau = tau_longest
+    for _ in range(rounds):
+        if not np.isfinite(factor * tau.max()):
+            break
+        candidate = int(np.ceil(factor * tau.max()))
+        if candidate >= longest:
+            break
+        tau = ensemble_tau(chain[:, candidate:])
+        if factor * tau.max() <= candidate:
+            return candidate, tau
+    return longest, tau_longest
+
+
 def convergence_report(chain, settings, names=(), final=True, warmup=None):
     """Return the convergence numbers of chains after the warm-up.
 
     Convergence numbers of chains (E, steps, W, ndim) after the first ``warmup`` steps (default
-    ``settings.warmup_steps``).
+    ``settings.warmup_steps``; with ``settings.warmup_tau`` and no transport rounds, the shorter
+    warm-up of :func:`tau_warmup`, ``warmup`` at most).
 
     With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
     chain is long enough by its autocorrelation time; otherwise they are reported as NaN.
@@ -129,13 +192,13 @@ def convergence_report(chain, settings, names=(), final=True, warmup=None):
     from arviz_stats import rhat as az_rhat
 
     n_ens, n_steps, n_walk, ndim = chain.shape
-    kept = chain[:, settings.warmup_steps(n_steps) if warmup is None else warmup :]
+    start = settings.warmup_steps(n_steps) if warmup is None else warmup
+    if settings.warmup_tau is not None and settings.rounds == 0:
+        start, tau = tau_warmup(chain, settings.warmup_tau, start)
+    else:
+        tau = ensemble_tau(chain[:, start:])
+    kept = chain[:, start:]
     n_kept = kept.shape[1]
-    with np.errstate(invalid="ignore", divide="ignore"):  # a coordinate no walker moved: acf 0/0
-        tau = np.max([walker_averaged_tau(kept[e]) for e in range(n_ens)], axis=0)
-    tau = np.where(
-        np.isfinite(tau), np.maximum(tau, 1.0), float(n_kept)
-    )  # no estimate: as long as the chain
     ess_tau = n_ens * n_kept * n_walk / tau
     long_enough = n_steps >= settings.min_steps and n_kept >= settings.tau_factor * tau.max()
     if not (long_enough and np.all(ess_tau >= settings.ess_target)) and not final:

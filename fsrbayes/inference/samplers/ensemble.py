@@ -19,7 +19,8 @@ from an equal mixture of Student-t's, one fitted to each ensemble's share of the
 in the straightened coordinates (ensembles started in separate regions each describe their own),
 frozen with the map: a walker can cross the whole posterior in one accepted step (the
 autocorrelation times this buys are in BENCHMARKS.md). The stored chains are always in the target's
-own coordinates. With k = 0 the first half of the chain is the warm-up, at every check. Each
+own coordinates. With k = 0 the first half of the chain is the warm-up, at every check — or,
+with ``warmup_tau``, a few autocorrelation times of it (:func:`~.convergence.tau_warmup`). Each
 chunk is stepped by :func:`~.stepping.step_ensemble` (emcee's moves, to emcee's numbers, without
 its per-walker loops; a target with moves of its own runs in emcee itself). Sampling
 goes on in chunks until all three criteria hold or ``max_steps`` is spent; then a
@@ -75,7 +76,7 @@ class EnsembleRun:
     report: ConvergenceReport
 
     def kept(self):
-        """(chain, log_prob) after the warm-up half."""
+        """(chain, log_prob) after the warm-up (``report.n_kept`` steps kept)."""
         start = self.chain.shape[1] - self.report.n_kept
         return self.chain[:, start:], self.log_prob[:, start:]
 

@@ -93,6 +93,14 @@ class SamplerSettings:
         where the walkers move through a transport map or sampling coordinates, their positions
         go back and forth through them at a pause, to round-off, and the chain goes on from
         there (as it does at every chunk's end).
+    warmup_tau : float or None
+        Without transport rounds, discard a warm-up of this many autocorrelation times instead of
+        the chain's first half: the first w steps with w ≥ ``warmup_tau`` · τ of the chain after
+        them (:func:`~fsrbayes.inference.samplers.convergence.tau_warmup`), never more than half.
+        For walkers that start at draws of a close approximation of the target (the joint
+        population route from a two-stage result), where half the chain is far more than the
+        start needs to be forgotten; the kept chain is held to the same criteria, its split R-hat
+        included, which a trend left by the start would fail. None (or ``inf``): the first half.
     """
 
     n_ensembles: int = 4
@@ -112,8 +120,11 @@ class SamplerSettings:
     check_growth: float = 0.05
     map_starts: int = 8
     check_every: int | None = None
+    warmup_tau: float | None = None
 
     def __post_init__(self):
+        if self.warmup_tau is not None and not self.warmup_tau > 0:
+            raise ValueError(f"warmup_tau must be > 0 or None, got {self.warmup_tau}")
         if self.check_every is not None and self.check_every < 1:
             raise ValueError(f"check_every must be >= 1 or None, got {self.check_every}")
         if self.map_starts < 1:
