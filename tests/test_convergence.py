@@ -56,6 +56,18 @@ def test_the_tau_warmup_keeps_more_than_half_of_a_chain_started_in_its_target():
     assert tau_warmup(chain, np.inf)[0] == 3000  # inf: the first half
 
 
+def test_the_tau_warmup_is_only_sought_where_the_chain_after_it_can_converge():
+    """With ``kept_factor`` a chain too short to keep that many τ after the warm-up gets the
+    half (one estimate of τ, as a fixed warm-up costs); the report before the final check too."""
+    rng = np.random.default_rng(4)
+    chain = _ar1(rng, 600, 0.9, rng.standard_normal((2, 8, 2)))  # τ = 19: 50 τ > 600 − 10 τ
+    assert tau_warmup(chain, 10.0)[0] < 300
+    assert tau_warmup(chain, 10.0, kept_factor=50.0)[0] == 300
+    settings = SamplerSettings(n_ensembles=2, transport_rounds=0, min_steps=100, warmup_tau=10.0)
+    assert convergence_report(chain, settings, final=False).n_kept == 300
+    assert convergence_report(chain, settings, final=True).n_kept > 300
+
+
 def test_the_tau_warmup_drops_a_transient():
     """What it must not keep: the decay from a start 50 sd away (≈ 3 τ long), and a slow trend
     (5 sd over a third of the chain, which inflates τ of every chain holding it): there it keeps

@@ -56,8 +56,9 @@ depends on how the 16 fits' draws happen to fall.)"""
 JOINT_SETTINGS = SamplerSettings(n_ensembles=4, chunk=250, max_steps=6000, min_steps=500)
 """The joint (blocked Gibbs) route of the study: 4 ensembles × ``GIBBS_WALKERS`` walkers, 6,000
 sweeps (7–13 min on 2 cores at 16 walkers, 72–126 ms a sweep on the hierarchical benchmark's
-16 specimens; with τ 145–239 of ω_A0 it keeps 12–21 τ, so it ends with a ConvergenceWarning —
-its MCSE still counts the autocorrelation)."""
+16 specimens; with τ 145–239 of ω_A0 and its warm-up of ``JOINT_WARMUP_TAU`` autocorrelation
+times it keeps 15–31 τ, so it ends with a ConvergenceWarning — its MCSE still counts the
+autocorrelation)."""
 
 
 def population_study(
