@@ -239,11 +239,15 @@ class BlockGibbsMove(emcee.moves.Move):
         )
         where = rows[take]
         current[where] = new[take]
+        self._store(j, where, take, u_new, lp_new, like_new, x_new)
+        return take
+
+    def _store(self, j, where, take, u_new, lp_new, like_new, x_new):
+        """Move block j of walkers ``where`` to the proposals' rows ``take``, cache included."""
         self.u[j][where] = u_new[take]
         self.block_lp[where, j] = lp_new[take]
         self.like[where, j] = like_new[take]
         self.x[where, j] = x_new[take]
-        return take
 
     def _specimen(self, j, random):
         """Block j given Λ: an independence step, then DE steps; their acceptance rates."""
@@ -338,12 +342,7 @@ class BlockGibbsMove(emcee.moves.Move):
             take = np.isfinite(lp_new) & (
                 np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf)
             )
-            self.u[j][take] = u_new[take]
-            self.block_lp[take, j], self.like[take, j], self.x[take, j] = (
-                lp_new[take],
-                like_new[take],
-                x_new[take],
-            )
+            self._store(j, take, take, u_new, lp_new, like_new, x_new)
             self.mu[take], self.omega[take] = mu_new[take], omega_new[take]
             log_hyper[take] = log_hyper_new[take]
             z[take, j] = z_new[take, j]
@@ -439,12 +438,7 @@ class BlockGibbsMove(emcee.moves.Move):
             news.append((u_new, lp, like, x))
         take = np.isfinite(log_alpha) & (np.log(random.uniform(size=n)) < log_alpha)
         for j, (u_new, lp, like, x) in enumerate(news):
-            self.u[j][take], self.block_lp[take, j], self.like[take, j], self.x[take, j] = (
-                u_new[take],
-                lp[take],
-                like[take],
-                x[take],
-            )
+            self._store(j, take, take, u_new, lp, like, x)
         self.mu[take, p], self.omega[take, p] = mu_new[take, p], omega_new[take, p]
         return take.mean()
 
