@@ -94,3 +94,83 @@ def test_the_report_keeps_the_tau_warmup_only_when_asked_and_without_transport_r
     assert convergence_report(chain, rounds).n_kept == 3500  # the transport rounds' warm-up
     with pytest.raises(ValueError, match="warmup_tau"):
         SamplerSettings(warmup_tau=0.0)
+
+
+def _mixed_ar1(rng, steps, rhos, n_ens=2, n_walk=8):
+    """AR(1) coordinates of several strengths side by side (E, steps, W, len(rhos))."""
+    columns = [
+        _ar1(rng, steps, rho, rng.standard_normal((n_ens, n_walk, 1)), (n_ens, n_walk, 1))
+        for rho in rhos
+    ]
+    return np.concatenate(columns, axis=-1)
+
+
+@pytest.mark.parametrize("warmup_tau", [None, 10.0])
+def test_a_check_that_looks_at_the_slowest_coordinates_first_reaches_the_full_verdict(warmup_tau):
+    """At every length of a chain whose τ ranges 1–19 over its coordinates, a check before the
+    final one given the slowest coordinates (or the fastest: then it seldom stops early) says
+    converged exactly where the full check does; where it stops early, its τ of those
+    coordinates is the full check's and the others are not computed."""
+    rng = np.random.default_rng(11)
+    rhos = [0.0, 0.3, 0.5, 0.7, 0.8, 0.85, 0.88, 0.9]  # τ = 1 … 19
+    chain = _mixed_ar1(rng, 4200, rhos)
+    settings = SamplerSettings(
+        n_ensembles=2, transport_rounds=0, min_steps=100, warmup_tau=warmup_tau
+    )
+    early = {"slow": 0, "fast": 0}
+    verdicts = set()
+    for n in range(300, 4201, 150):
+        full = convergence_report(chain[:, :n], settings, final=False)
+        verdicts.add(full.converged)
+        for kind, slowest in (("slow", [6, 7]), ("fast", [0, 1])):
+            quick = convergence_report(chain[:, :n], settings, final=False, slowest=slowest)
+            assert quick.converged == full.converged, (n, kind)
+            if np.isnan(quick.tau).any():
+                early[kind] += 1
+                assert not quick.converged and np.isnan(quick.rhat).all()
+                assert np.isnan(np.delete(quick.tau, slowest)).all()
+                assert "not computed" in quick.worst()
+                if warmup_tau is None:  # the same window as the full check's
+                    np.testing.assert_allclose(quick.tau[slowest], full.tau[slowest], rtol=1e-12)
+            else:
+                np.testing.assert_array_equal(quick.tau, full.tau)
+    assert verdicts == {False, True}
+    assert early["slow"] >= 5 and early["fast"] < early["slow"]
+
+
+def test_a_run_that_checks_the_slowest_coordinates_first_samples_and_stops_as_before(monkeypatch):
+    """The same seed gives the same chain, stop and report with the early stop of the checks as
+    without it, and the early stop is taken."""
+    import fsrbayes.inference.samplers.convergence as convergence
+    from fsrbayes.inference.samplers import run_ensembles
+
+    def target(u):
+        u = np.atleast_2d(u)
+        return -0.5 * np.sum((u / np.array([1.0, 0.1, 3.0])) ** 2, axis=1)
+
+    start = np.random.default_rng(2).normal(size=(2, 12, 3))
+    settings = SamplerSettings(
+        n_ensembles=2,
+        chunk=50,
+        min_steps=100,
+        max_steps=6000,
+        transport_rounds=0,
+        check_growth=0,
+    )
+    original = convergence._too_short_for
+    fired = []
+
+    def counted(*args):
+        tau = original(*args)
+        fired.append(tau is not None)
+        return tau
+
+    monkeypatch.setattr(convergence, "_too_short_for", counted)
+    quick = run_ensembles(target, start, seed=5, settings=settings)
+    monkeypatch.setattr(convergence, "_too_short_for", lambda *args: None)
+    full = run_ensembles(target, start, seed=5, settings=settings)
+    assert quick.report.converged and full.report.converged
+    assert np.array_equal(quick.chain, full.chain)
+    np.testing.assert_array_equal(quick.report.tau, full.report.tau)
+    np.testing.assert_array_equal(quick.report.rhat, full.report.rhat)
+    assert sum(fired) >= 3

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft
 
 __all__ = [
+    "SLOWEST",
     "ConvergenceReport",
     "ConvergenceWarning",
     "convergence_report",
@@ -37,7 +38,8 @@ class ConvergenceReport:
     n_kept : int
         Steps per ensemble kept after warm-up.
     tau : ndarray, shape (ndim,)
-        Largest integrated autocorrelation time over ensembles, in steps.
+        Largest integrated autocorrelation time over ensembles, in steps (NaN for coordinates a
+        check before the final one did not need, :func:`convergence_report`).
     rhat : ndarray, shape (ndim,)
     ess_bulk : ndarray, shape (ndim,)
     names : tuple of str
@@ -54,16 +56,20 @@ class ConvergenceReport:
     def worst(self):
         """One line with the limiting numbers."""
         name = lambda i: self.names[i] if self.names else str(i)  # noqa: E731
-        i_t, i_e = int(np.argmax(self.tau)), int(np.argmin(self.ess_bulk))
+        i_t = int(np.nanargmax(self.tau))
         if np.all(np.isnan(self.rhat)):
             rhat = "max R-hat not computed yet"
         else:
             i_r = int(np.nanargmax(self.rhat))
             rhat = f"max R-hat {self.rhat[i_r]:.4f} ({name(i_r)})"
+        if np.all(np.isnan(self.ess_bulk)):
+            ess = "bulk ESS not computed yet"
+        else:
+            i_e = int(np.nanargmin(self.ess_bulk))
+            ess = f"min bulk ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
         return (
             f"after {self.n_steps} steps: {rhat}, kept chain {self.n_kept} steps = "
-            f"{self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), min bulk "
-            f"ESS {self.ess_bulk[i_e]:.0f} ({name(i_e)})"
+            f"{self.n_kept / self.tau[i_t]:.1f} τ (τ = {self.tau[i_t]:.1f}, {name(i_t)}), {ess}"
         )
 
     def as_dict(self):
@@ -93,6 +99,11 @@ class ConvergenceWarning(UserWarning):
 TAU_BLOCK = 4
 """Coordinates transformed together by :func:`walker_averaged_tau`, copied contiguous first so
 the transforms read memory in order and the block stays in cache (timings in BENCHMARKS.md)."""
+
+
+SLOWEST = 2 * TAU_BLOCK
+"""Coordinates whose τ a run's check before the final one estimates first: the slowest at the
+last check (:func:`convergence_report`'s ``slowest``)."""
 
 
 def walker_averaged_tau(chain, c=5):
@@ -190,7 +201,31 @@ def tau_warmup(chain, factor, longest=None, rounds=2, kept_factor=None):
     return longest, tau_longest
 
 
-def convergence_report(chain, settings, names=(), final=True, warmup=None):
+def _too_short_for(chain, settings, start, slowest):
+    """τ of the coordinates ``slowest`` where they alone show the check must fail, else None.
+
+    A lower bound on the largest τ of all coordinates, t = the largest τ of a few of them after
+    the first ``start`` steps, decides a check before the final one (``kept_factor`` =
+    ``tau_factor`` in :func:`tau_warmup`) whenever the chain is too short for t: the kept chain
+    must be ≥ ``tau_factor`` · T long (T ≥ t the largest τ after ``start``) — after ``start``
+    steps, or after a shorter τ warm-up ⌈``warmup_tau`` · T⌉ ≥ ⌈``warmup_tau`` · t⌉, which is only
+    tried where the chain after it is ≥ ``tau_factor`` · T. So the verdict is the full check's.
+    """
+    if slowest is None or len(slowest) == 0:
+        return None
+    n_steps = chain.shape[1]
+    tau = ensemble_tau(chain[:, start:, :, np.asarray(slowest)])
+    t = tau.max()
+    need = settings.tau_factor * t
+    if n_steps - start >= need:
+        return None
+    factor = settings.warmup_tau if settings.rounds == 0 else None
+    if factor is not None and np.isfinite(factor * t) and n_steps - np.ceil(factor * t) >= need:
+        return None
+    return tau
+
+
+def convergence_report(chain, settings, names=(), final=True, warmup=None, slowest=None):
     """Return the convergence numbers of chains after the warm-up.
 
     Convergence numbers of chains (E, steps, W, ndim) after the first ``warmup`` steps (default
@@ -199,13 +234,24 @@ def convergence_report(chain, settings, names=(), final=True, warmup=None):
     chain it keeps can be ``tau_factor`` autocorrelation times long).
 
     With ``final=False`` R-hat and the rank ESS (the costly part) are only computed once the
-    chain is long enough by its autocorrelation time; otherwise they are reported as NaN.
+    chain is long enough by its autocorrelation time; otherwise they are reported as NaN. With
+    ``final=False`` and ``slowest`` (indices of coordinates, e.g. the slowest at the last check)
+    τ is first estimated for those alone; where that shows the chain too short, the report says
+    not converged with τ of those coordinates only (NaN for the others, and for R-hat and ESS):
+    the same verdict as the full check, at a fraction of its cost.
     """
     from arviz_stats import ess as az_ess
     from arviz_stats import rhat as az_rhat
 
     n_ens, n_steps, n_walk, ndim = chain.shape
     start = settings.warmup_steps(n_steps) if warmup is None else warmup
+    if not final:
+        tau_slowest = _too_short_for(chain, settings, start, slowest)
+        if tau_slowest is not None:
+            tau = np.full(ndim, np.nan)
+            tau[np.asarray(slowest)] = tau_slowest
+            nan = np.full(ndim, np.nan)
+            return ConvergenceReport(False, n_steps, n_steps - start, tau, nan, nan, tuple(names))
     if settings.warmup_tau is not None and settings.rounds == 0:
         kept_factor = None if final else settings.tau_factor
         start, tau = tau_warmup(chain, settings.warmup_tau, start, kept_factor=kept_factor)

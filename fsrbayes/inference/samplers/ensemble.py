@@ -28,7 +28,9 @@ goes on in chunks until all three criteria hold or ``max_steps`` is spent; then 
 state, so the same seed gives the same chains, and a checkpoint (written atomically at every
 convergence check, and when the run is interrupted) resumes a run exactly where it stopped.
 Checks come after every chunk (or every ``check_every`` steps), and once the chain is long after
-every ``check_growth`` share of it: a check's cost grows with the chain.
+every ``check_growth`` share of it: a check's cost grows with the chain. A check first estimates
+τ of the ``SLOWEST`` coordinates of the last one, and stops there where those alone show the
+chain too short (the full check's verdict, :func:`~.convergence.convergence_report`).
 """
 
 import warnings
@@ -39,7 +41,7 @@ import numpy as np
 
 from ..parallel import fork_pool, single_threaded_blas
 from .checkpoint import load_checkpoint, save_checkpoint
-from .convergence import ConvergenceReport, ConvergenceWarning, convergence_report
+from .convergence import SLOWEST, ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import SampledLogProb, sampled_start
 from .settings import SamplerSettings
 from .stepping import step_ensemble, steps_alone
@@ -274,6 +276,7 @@ def run_ensembles(
     if settings.processes > 1:
         pool = fork_pool(min(settings.processes, n_ens))
     report = None
+    slowest = None  # the coordinates with the largest τ at the last check
     warmup = None
     maps, maps_end = None, None
     bar = _progress_bar(settings, stored.n_steps) if progress else None
@@ -290,11 +293,13 @@ def run_ensembles(
             ):
                 at_budget = n_steps >= settings.max_steps
                 report = convergence_report(
-                    chains, settings, names, final=at_budget, warmup=warmup_steps
+                    chains, settings, names, final=at_budget, warmup=warmup_steps, slowest=slowest
                 )
+                slowest = np.argsort(np.nan_to_num(report.tau, nan=-np.inf))[-SLOWEST:]
                 if bar is not None:
                     bar.set_postfix_str(
-                        f"τ max {report.tau.max():.0f}, kept {report.n_kept} steps", refresh=True
+                        f"τ max {np.nanmax(report.tau):.0f}, kept {report.n_kept} steps",
+                        refresh=True,
                     )
                 if report.converged or at_budget:
                     break
