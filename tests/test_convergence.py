@@ -174,3 +174,34 @@ def test_a_run_that_checks_the_slowest_coordinates_first_samples_and_stops_as_be
     np.testing.assert_array_equal(quick.report.tau, full.report.tau)
     np.testing.assert_array_equal(quick.report.rhat, full.report.rhat)
     assert sum(fired) >= 3
+
+
+def test_rank_rhat_and_bulk_ess_are_arviz_to_the_last_bit():
+    """Chains of random walks, with long runs of repeated values (rejected steps: ties) and
+    rounded values (many ties), odd and even lengths, a constant chain, too-short chains and
+    non-finite draws (ArviZ's own path) — equal to ``arviz_stats`` exactly."""
+    from arviz_stats import ess, rhat
+
+    from fsrbayes.inference.samplers.convergence import bulk_ess, rank_rhat
+
+    rng = np.random.default_rng(1)
+    cases = []
+    for trial in range(24):
+        chains, draws = int(rng.integers(2, 6)), int(rng.integers(8, 1500))
+        x = np.cumsum(rng.standard_normal((chains, draws)), axis=1) * rng.uniform(0.01, 1.0)
+        if trial % 3 == 0:
+            stay = rng.uniform(size=x.shape) < 0.6
+            for t in range(1, draws):
+                x[:, t] = np.where(stay[:, t], x[:, t - 1], x[:, t])
+        if trial % 4 == 0:
+            x = np.round(x, 1)
+        cases.append(x)
+    cases += [np.full((3, 40), 2.5), rng.standard_normal((2, 5)), rng.standard_normal((4, 9))]
+    cases[-1][1, 3] = np.inf
+    for x in cases:
+        with np.errstate(invalid="ignore"):
+            expected_rhat = rhat(x, method="rank", chain_axis=0, draw_axis=1)
+            expected_ess = ess(x, method="bulk", chain_axis=0, draw_axis=1)
+            got_rhat, got_ess = rank_rhat(x), bulk_ess(x)
+        np.testing.assert_array_equal(got_rhat, expected_rhat)
+        np.testing.assert_array_equal(got_ess, expected_ess)

@@ -14,13 +14,17 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft
+from scipy.special import ndtri
 
 __all__ = [
     "SLOWEST",
     "ConvergenceReport",
     "ConvergenceWarning",
+    "bulk_ess",
     "convergence_report",
     "ensemble_tau",
+    "normal_scores",
+    "rank_rhat",
     "tau_warmup",
     "walker_averaged_tau",
 ]
@@ -201,6 +205,68 @@ def tau_warmup(chain, factor, longest=None, rounds=2, kept_factor=None):
     return longest, tau_longest
 
 
+def normal_scores(values):
+    """Rank-normalised values, ArviZ's z-scale (Vehtari et al. 2021), to the last bit.
+
+    Φ⁻¹((r − 3/8)/(n + 1/4)) of the average ranks r over all n values, taken from one unstable
+    sort (ties get their group's mean position, whichever order the sort left them in) rather than
+    scipy's ``rankdata``, whose stable sort is ~6× slower on the draws of a long chain.
+    """
+    flat = np.asarray(values, dtype=float).ravel()
+    order = np.argsort(flat)
+    ordered = flat[order]
+    first = np.empty(flat.size, dtype=bool)
+    first[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
+    starts = np.flatnonzero(first)
+    ends = np.append(starts[1:], flat.size) - 1
+    ranks = np.empty(flat.size)
+    ranks[order] = ((starts + ends) / 2.0 + 1.0)[np.cumsum(first) - 1]
+    c = 3 / 8
+    return ndtri((ranks - c) / (flat.size - 2 * c + 1)).reshape(np.shape(values))  # = norm.ppf
+
+
+def _split_chains(draws):
+    """Each chain (row) of ``draws`` as its two halves (the middle draw of an odd one dropped)."""
+    half = draws.shape[1] // 2
+    return np.vstack((draws[:, :half], draws[:, -half:]))
+
+
+def _fast_path(draws):
+    return draws.shape[1] >= 8 and bool(np.all(np.isfinite(draws)))
+
+
+def rank_rhat(draws):
+    """ArviZ's rank-normalised split R-hat (``method="rank"``) of draws (chains, draws).
+
+    The larger of the bulk and tail R-hat of the split chains' :func:`normal_scores` (and of
+    their distances from the median), equal to ``arviz_stats.rhat(..., method="rank")``.
+    """
+    from arviz_stats import rhat
+
+    if not _fast_path(draws):
+        return float(rhat(draws, method="rank", chain_axis=0, draw_axis=1))
+    split = _split_chains(draws)
+    bulk = rhat(normal_scores(split), method="identity", chain_axis=0, draw_axis=1)
+    folded = normal_scores(np.abs(split - np.median(split)))
+    return float(max(bulk, rhat(folded, method="identity", chain_axis=0, draw_axis=1)))
+
+
+def bulk_ess(draws):
+    """ArviZ's bulk effective sample size (``method="bulk"``) of draws (chains, draws).
+
+    The ESS of the split chains' :func:`normal_scores`, equal to
+    ``arviz_stats.ess(..., method="bulk")``.
+    """
+    from arviz_stats import ess
+
+    if not _fast_path(draws):
+        return float(ess(draws, method="bulk", chain_axis=0, draw_axis=1))
+    return float(
+        ess(normal_scores(_split_chains(draws)), method="identity", chain_axis=0, draw_axis=1)
+    )
+
+
 def _too_short_for(chain, settings, start, slowest):
     """τ of the coordinates ``slowest`` where they alone show the check must fail, else None.
 
@@ -240,9 +306,6 @@ def convergence_report(chain, settings, names=(), final=True, warmup=None, slowe
     not converged with τ of those coordinates only (NaN for the others, and for R-hat and ESS):
     the same verdict as the full check, at a fraction of its cost.
     """
-    from arviz_stats import ess as az_ess
-    from arviz_stats import rhat as az_rhat
-
     n_ens, n_steps, n_walk, ndim = chain.shape
     start = settings.warmup_steps(n_steps) if warmup is None else warmup
     if not final:
@@ -268,19 +331,9 @@ def convergence_report(chain, settings, names=(), final=True, warmup=None, slowe
             False, n_steps, n_kept, tau, nan, np.minimum(ess_tau, np.inf), tuple(names)
         )
     per_ensemble = kept.reshape(n_ens, n_kept * n_walk, ndim)  # step-major: draws keep time order
-    rhat = np.array(
-        [
-            az_rhat(per_ensemble[..., k], method="rank", chain_axis=0, draw_axis=1)
-            for k in range(ndim)
-        ]
-    )
     walkers_as_chains = np.moveaxis(kept, 2, 1).reshape(n_ens * n_walk, n_kept, ndim)
-    ess_rank = np.array(
-        [
-            az_ess(walkers_as_chains[..., k], method="bulk", chain_axis=0, draw_axis=1)
-            for k in range(ndim)
-        ]
-    )
+    rhat = np.array([rank_rhat(per_ensemble[..., k]) for k in range(ndim)])
+    ess_rank = np.array([bulk_ess(walkers_as_chains[..., k]) for k in range(ndim)])
     ess = np.minimum(ess_tau, ess_rank)
     converged = bool(
         long_enough and np.all(rhat < settings.rhat_target) and np.all(ess >= settings.ess_target)
