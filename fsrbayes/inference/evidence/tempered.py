@@ -35,9 +35,9 @@ import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import stats
 
 from ..samplers import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
+from ..samplers.convergence import normal_scores, rank_rhat
 from .ladder import LadderSettings
 from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
 
@@ -154,25 +154,16 @@ def tempered_run(posterior, settings=TEMPERED_SETTINGS, seed=0, names=()):
     return EnsembleRun(chain, log_prob, acceptance, report), evidence
 
 
-def _rank_normal(x):
-    """Pooled rank-normalised values (Vehtari et al. 2021): Φ⁻¹((r − 3/8)/(N + 1/4)), shape kept."""
-    ranks = stats.rankdata(x, axis=None).reshape(x.shape)
-    return stats.norm.ppf((ranks - 0.375) / (x.size + 0.25))
-
-
 def tempered_report(chain, settings=TEMPERED_SETTINGS, names=()):
     """Convergence numbers of β = 1 draws (R ladders, T steps, W slots, ndim) (module docstring)."""
     from arviz_stats import ess as az_ess
-    from arviz_stats import rhat as az_rhat
 
     n_ladders, n_steps, n_walk, ndim = chain.shape
     per_ladder = chain.reshape(n_ladders, n_steps * n_walk, ndim)  # step-major: time order kept
-    rhat = np.array(
-        [az_rhat(per_ladder[..., k], method="rank", chain_axis=0, draw_axis=1) for k in range(ndim)]
-    )
+    rhat = np.array([rank_rhat(per_ladder[..., k]) for k in range(ndim)])
     tau, ess = np.empty(ndim), np.empty(ndim)
     for k in range(ndim):
-        z = _rank_normal(chain[..., k])
+        z = normal_scores(chain[..., k])  # pooled over ladders, steps and slots
         means = z.mean(axis=2)  # (R, T)
         with np.errstate(invalid="ignore", divide="ignore"):
             ess_means = float(az_ess(means, method="mean", chain_axis=0, draw_axis=1))
