@@ -12,8 +12,9 @@ course or voltage dependence of its own (the package's effect code is not used):
 - ``findley-creep``: extra gap creep σ·ψ·t^0.5 — Findley's law with an exponent the catalogue's
   default does not have.
 
-The base is Burgers with the smooth law and white noise; the circuit and tunneling law are the
-package's (they are not what is tested). Two magnitudes per mechanism. What is asked: the effect
+The base is Burgers (restated apart from the model's code, :mod:`fsrbayes.data.independent`) with
+the smooth law and white noise; the circuit, stress laws and tunneling law are the package's (they
+are not what is tested). Two magnitudes per mechanism. What is asked: the effect
 named (or a documented equivalent) and the named extension at least halving the gap's excess
 over the band. Run ``python -m validation.foreign_forms``.
 """
@@ -25,10 +26,10 @@ import time
 import numpy as np
 
 from fsrbayes.data import CreepData, CreepTest
+from fsrbayes.data.independent import burgers_strain
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import PAPER_FORCES_N, draw_specimens
 from fsrbayes.discrepancy import diagnose
-from fsrbayes.physics.rheology import burgers_compliance, fluidity
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
 from validation.rates import outcome
@@ -58,9 +59,7 @@ def data_set(mechanism, magnitude, seed, sensor="a201"):
     tests = []
     for v in VOLTAGES:
         for sigma in s.stress(np.array(PAPER_FORCES_N)):
-            strain = sigma * burgers_compliance(
-                t, params["k1"], params["k2"], params["b2"], fluidity(params)
-            )
+            strain = burgers_strain(params, sigma, t)
             if mechanism == "findley-creep":
                 strain = strain + sigma * magnitude / params["k1"] * (t / 3600.0) ** 0.5
             gap_m, area, series = sensor_state(params, sigma, strain)

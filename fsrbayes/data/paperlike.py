@@ -32,16 +32,13 @@ and at 2 V. It also names the catalogue effects that stand for each mechanism
 (:data:`CATALOGUE_EQUIVALENTS`), for checking what ``fsrbayes diagnose`` names.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .._version import __version__
 from ..physics.constants import DRIFT_TIME_S
-from ..physics.effects import Effect
-from ..physics.sensor import current as model_current
 from ..utils import first_sign_change
 from .creep import CreepData, CreepTest
+from .independent import bench_creep_current, burgers_strain
 from .sensors import load_sensor
 from .synthetic import (
     PAPER_FORCES_N,
@@ -110,31 +107,19 @@ def _stretched(time, tau, beta):
     return -np.expm1(-((t / tau) ** beta))
 
 
-@dataclass(frozen=True)
-class _Mechanisms(Effect):
-    """The bench's hidden mechanisms as a state hook of the sensor model (not in the catalogue).
-
-    It reads the test's voltage and stress from the parameters ``bench_voltage_V`` and
-    ``bench_stress_Pa`` (arrays broadcasting with the grid), which :func:`bench_current` sets.
-    """
-
-    def adjust_state(self, params, area, series, creep_strain, time):
-        voltage, stress = params["bench_voltage_V"], params["bench_stress_Pa"]
-        log_area = (
-            -params["area_loss"]
-            * (stress / params["bench_mid_stress_Pa"])
-            * _stretched(time, params["area_tau_s"], params["area_beta"])
-        )
-        onset = params["path_onset_V"]
-        with np.errstate(over="ignore"):
-            switch = 1.0 / (1.0 + np.exp(-(voltage - onset) / params["path_width_V"]))
-        log_area = log_area - params["path_loss"] * (voltage / onset) * switch * _stretched(
-            time, params["path_tau_s"], params["path_beta"]
-        )
-        return area * np.exp(log_area), series
-
-
-_HIDDEN = _Mechanisms("paper-like-bench", (), {}, "the paper-like bench's hidden mechanisms")
+def _hidden_log_area(params, voltage, stress, time):
+    """ln(A/A(σ)) of the bench's two mechanisms at V_FSR, stress and time (module docstring)."""
+    log_area = (
+        -params["area_loss"]
+        * (stress / params["bench_mid_stress_Pa"])
+        * _stretched(time, params["area_tau_s"], params["area_beta"])
+    )
+    onset = params["path_onset_V"]
+    with np.errstate(over="ignore"):
+        switch = 1.0 / (1.0 + np.exp(-(voltage - onset) / params["path_width_V"]))
+    return log_area - params["path_loss"] * (voltage / onset) * switch * _stretched(
+        time, params["path_tau_s"], params["path_beta"]
+    )
 
 
 def draw_mechanisms(sensor, n, rng):
@@ -166,13 +151,11 @@ def bench_current(params, voltages, stresses, times, mid_stress):
     """
     volts = np.asarray(voltages, dtype=float)[:, None, None]
     loads = np.asarray(stresses, dtype=float)[None, :, None]
-    full = {
-        **params,
-        "bench_voltage_V": volts,
-        "bench_stress_Pa": loads,
-        "bench_mid_stress_Pa": float(mid_stress),
-    }
-    return model_current(full, volts, loads, np.asarray(times, dtype=float), effects=(_HIDDEN,))
+    times = np.asarray(times, dtype=float)
+    full = {**params, "bench_mid_stress_Pa": float(mid_stress)}
+    strain = burgers_strain(params, loads, times)
+    log_area = _hidden_log_area(full, volts, loads, times)
+    return bench_creep_current(params, volts, loads, strain, log_area=log_area)
 
 
 def _drift_over_voltages(params, grid, stresses, mid_stress, time_s):
