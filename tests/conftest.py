@@ -16,6 +16,13 @@ from fsrbayes import load_sensor
 # them, so that the two workers finish together instead of one of them running a long module
 # alone at the end. A module missing from the list only runs later; the order changes no result.
 LONG_MODULES = (
+    # the validation tier (pytest -m validation), one core each
+    "test_sbc.py",  # ~600 s
+    "test_diagnose_tier.py",  # ~300 s
+    "test_specimen_coverage.py",  # ~200 s
+    "test_evidence_nulls.py",  # ~150 s
+    "test_predict_coverage.py",  # ~150 s
+    # the default suite
     "test_hierarchical.py",  # 53 s
     "test_demo.py",  # 42
     "test_diagnose.py",  # 41

@@ -125,7 +125,7 @@ def test_figure12_tests_pick_the_nearest_stress_then_each_nearest_voltage_once()
     assert figure12_tests(data, (0.2, 7.0), 50e3) == [0, 2]
 
 
-@pytest.mark.slow
+@pytest.mark.validation
 def test_the_full_plans_specimen_posteriors_are_converged_emcee_runs_from_the_laplace_mode():
     """The full plan's per-specimen fits run emcee to convergence and report it (one FSR 402
     specimen's 33 tests, the base model only; ~45 s — the slow story tests check every specimen
