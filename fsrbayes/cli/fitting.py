@@ -32,7 +32,6 @@ def cmd_fit(args):
 
     Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen.
     """
-    from ..discrepancy import fit_checks
     from ..inference.fit import CHECK_EVERY, DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
@@ -93,15 +92,7 @@ def cmd_fit(args):
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
-        checks = fit_checks(result, args.seed)
-        if not checks["passed"]:
-            worst = "; ".join(f["message"] for f in checks["failed"][:3])
-            print(
-                f"fsrbayes fit: warning: {specimen}: the model does not fit these data "
-                f"({len(checks['failed'])} check(s) fail: {worst}); see 'checks' in summary.json, "
-                "and 'fsrbayes diagnose' for where and what is missing",
-                file=sys.stderr,
-            )
+        checks = _checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
         if args.plots:
             _fit_plots(folder)
@@ -119,6 +110,25 @@ def cmd_fit(args):
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
     return 0
+
+
+def _checked_fit(specimen, result, seed):
+    """Run the posterior predictive checks of one specimen's fit; warn on stderr when any fails.
+
+    Returns the checks' dict, stored as ``checks`` in the specimen's summary.json.
+    """
+    from ..discrepancy import fit_checks
+
+    checks = fit_checks(result, seed)
+    if not checks["passed"]:
+        worst = "; ".join(f["message"] for f in checks["failed"][:3])
+        print(
+            f"fsrbayes fit: warning: {specimen}: the model does not fit these data "
+            f"({len(checks['failed'])} check(s) fail: {worst}); see 'checks' in summary.json, "
+            "and 'fsrbayes diagnose' for where and what is missing",
+            file=sys.stderr,
+        )
+    return checks
 
 
 def _tempered_settings(args):
@@ -223,7 +233,8 @@ def _fit_hierarchical(args, data, settings, out):
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)
-                summaries[specimen] = save_fit(result, folder / specimen)
+                checks = _checked_fit(specimen, result, args.seed)
+                summaries[specimen] = save_fit(result, folder / specimen, extra={"checks": checks})
                 print(
                     f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
                     f"{result.run.report.worst()}",
