@@ -134,10 +134,16 @@ def test_cli_calibrate_writes_json_and_figure_and_refuses_bad_bins(tmp_path, cap
             "1",
         ]
     )
-    assert code in (0, 1)
     record = json.loads((out / "sbc.json").read_text())
     assert record["n_reps"] == 2 and record["bins"] == 5 and len(record["histogram"]) == 13
-    assert code == (0 if record["calibrated"] else 1)
+    # Two replications cannot reject calibration: two ranks in one of 5 bins give chi2 p = 0.092 at
+    # worst, every coverage level's 99 % binomial range for 2 is [0, 1], and KS falls below
+    # alpha/(2Q) = 0.01/26 only for two ranks at one end with tiny jitters (here KS p >= 0.027).
+    # So the run is calibrated, and the command says so by exit code 0.
+    assert min(record["p_chi2"].values()) >= 0.09, record["p_chi2"]
+    assert all(c["range_99"] == [0.0, 1.0] for c in record["coverage"].values())
+    assert record["calibrated"] is True and record["failures"] == []
+    assert code == 0
     assert (out / "rank_histograms.png").stat().st_size > 10_000
     capsys.readouterr()
     assert main(["calibrate", "--out", str(out), "--draws", "99", "--bins", "7"]) == 2
@@ -172,8 +178,11 @@ def test_cli_calibrate_with_the_tempered_sampler(tmp_path, capsys):
             "1",
         ]
     )
-    assert code in (0, 1)
     record = json.loads((out / "sbc.json").read_text())
+    # One replication cannot fail the verdict (chi2 p >= 0.41, coverage ranges [0, 1], KS p =
+    # twice the tail of one jittered rank): calibrated, exit code 0.
+    assert record["n_reps"] == 1 and record["calibrated"] is True and record["failures"] == []
+    assert code == 0
     assert record["info"]["settings"]["ladder"]["steps"] == 250
     assert np.isfinite(record["info"]["replications"][0]["log_z"])
     capsys.readouterr()

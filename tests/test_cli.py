@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import fsrbayes
 from tests.commandline import fsrbayes_command
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
@@ -40,7 +41,49 @@ def test_forward_command_marks_invalid_points():
         "paper",
     )
     assert result.returncode == 0, result.stderr
-    assert "invalid" in result.stdout
+    lines = result.stdout.splitlines()
+    assert lines[0] == (
+        "Tekscan FlexiForce A201-1: drift(3600 s) in %, rheology burgers, tunneling paper"
+    )
+    assert lines[1].split() == ["stress", "\\", "V_FSR", "1", "V", "9", "V"]
+    params = dict(fsrbayes.load_sensor("a201").params)
+    # 1 V: the drift fsrbayes.drift gives, to the table's two decimals; 9 V: past eq. 11's peak
+    cells = lines[2].split()
+    assert cells[:2] == ["200", "kPa"] and cells[3] == "invalid"
+    expected = fsrbayes.drift(params, 1.0, 2e5, 3600.0, tunneling="paper")
+    assert abs(float(cells[2]) - expected) <= 0.005 + 1e-9, (cells, expected)
+    with pytest.raises(fsrbayes.DomainError):
+        fsrbayes.drift(params, 9.0, 2e5, 3600.0, tunneling="paper")
+    assert lines[3:] == [
+        "'invalid': outside the paper law's validity domain (eq. 11 past its peak); try "
+        "--tunneling smooth"
+    ]
+    # every cell of a larger table, from forces (the sensor's area) at another time; all valid,
+    # so no 'invalid' note
+    sensor = fsrbayes.load_sensor("fsr402")
+    result = run(
+        "forward",
+        "--sensor",
+        "FSR 402",
+        "--voltages",
+        "0.1,0.5,2",
+        "--forces",
+        "1,5",
+        "--time",
+        "600",
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0] == "Interlink FSR 402: drift(600 s) in %, rheology burgers, tunneling smooth"
+    assert len(lines) == 4 and "invalid" not in result.stdout
+    stresses = sensor.stress(np.array([1.0, 5.0]))
+    expected = fsrbayes.drift(
+        dict(sensor.params), np.array([0.1, 0.5, 2.0]), stresses[:, None], 600.0
+    )
+    for row, sigma, values in zip(lines[2:], stresses, expected, strict=True):
+        cells = row.split()
+        assert cells[:2] == [f"{sigma / 1e3:.0f}", "kPa"]
+        np.testing.assert_allclose([float(c) for c in cells[2:]], values, rtol=0, atol=0.005)
 
 
 @pytest.mark.parametrize(

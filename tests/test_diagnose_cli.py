@@ -44,7 +44,8 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert result.returncode == 0, result.stderr
     assert "verdict: missing-effect: area-creep" in result.stdout
     payload = json.loads(out.read_text())
-    jsonschema = pytest.importorskip("jsonschema")
+    import jsonschema
+
     jsonschema.validate(payload, diagnose_schema())
     assert payload["verdict"] == "missing-effect" and payload["effect"] == "area-creep"
     assert payload["gap_after"] < payload["gap_before"] and "quarter" in payload["gap_metric"]

@@ -140,7 +140,8 @@ def test_fits_with_the_toy_model_in_two_worker_processes(toy_sensor):
 
 
 def test_fits_with_the_toy_model_on_a_dask_cluster(toy_sensor):
-    distributed = pytest.importorskip("dask.distributed")
+    from dask import distributed
+
     sim = _toy_data(toy_sensor, n_specimens=2, samples=9, seed=4)
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None

@@ -1,6 +1,7 @@
 """Faults: a job that raises or whose worker process dies is named, and the others' results are
 kept."""
 
+import json
 import os
 import signal
 import warnings
@@ -194,15 +195,34 @@ def test_an_unwritable_output_folder_is_refused_before_sampling(monkeypatch, tmp
     assert time.perf_counter() - started < 10
 
 
-def test_output_estimate_counts_the_checkpoint_and_the_posterior():
+def test_output_estimate_counts_the_checkpoint_and_the_posterior(tmp_path):
+    """What matters of the estimate: the disk check (1.2 x the estimate free) leaves room for
+    everything a fit writes. A real fit, small, against it; and the checkpoint's part grows with
+    the step budget and the ensembles, as a checkpoint of every step does."""
     from fsrbayes.cli.common import fit_output_bytes
+    from tests.commandline import fsrbayes_command
 
-    settings = SamplerSettings(n_ensembles=4, max_steps=20000)
-    # 4 ensembles x 20,000 steps x 48 walkers x (12 + 1) float64 = 399 MB of checkpoint at most.
-    assert (
-        fit_output_bytes(549, 9, 12, settings)
-        == 4 * 20000 * 48 * 13 * 8 + 2000 * (12 + 2 * 549 + 9 * 62) * 8
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[1.0], forces=[4.9, 9.8], samples=11, seed=2
     )
+    data, _ = synthetic.write_simulation(sim, tmp_path / "d.csv")
+    out = tmp_path / "fit"
+    run = fsrbayes_command(
+        "fit", data, "--out", out, "--ensembles", "2", "--chunk", "50", "--max-steps", "100",
+        "--map-starts", "2", "--no-plots",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    written = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
+    ndim = len(json.loads((out / "summary.json").read_text())["parameters"])
+    settings = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100)
+    estimate = fit_output_bytes(22, 2, ndim, settings)
+    # the checkpoint alone is its part of the estimate: the step budget's chain (and a little npz)
+    checkpoint = fit_output_bytes(22, 2, ndim, settings, max_draws=0)
+    assert 0.9 * checkpoint < (out / "checkpoint.npz").stat().st_size <= 1.2 * checkpoint
+    assert written <= 1.2 * estimate, (written, estimate)
+    more = SamplerSettings(n_ensembles=4, chunk=50, max_steps=1000)
+    growth = fit_output_bytes(22, 2, ndim, more) - estimate
+    assert growth == 19 * checkpoint  # 2 -> 4 ensembles, 100 -> 1000 steps: 20x the checkpoint
 
 
 def test_cli_hierarchical_fit_with_fewer_than_two_fits_left_says_why(monkeypatch, tmp_path, capsys):

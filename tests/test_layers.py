@@ -57,7 +57,9 @@ def test_importing_physics_loads_no_sampler_or_plotting_library():
         "import sys, fsrbayes.physics, fsrbayes; print(','.join(sorted(m for m in "
         f"{sorted(HEAVY)!r} if m in sys.modules)))"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
     assert out.stdout.strip() == ""
 
 

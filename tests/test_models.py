@@ -85,7 +85,17 @@ def test_every_parameter_has_a_proper_prior(name, rng):
     "alias", ["A201", "FlexiForce A201-1", "flexiforce", "FSR 402", "interlink", "fsr-402"]
 )
 def test_aliases(alias):
-    assert fsrbayes.load_sensor(alias).name in {"a201", "fsr402"}
+    expected = {
+        "A201": "a201",
+        "FlexiForce A201-1": "a201",
+        "flexiforce": "a201",
+        "FSR 402": "fsr402",
+        "interlink": "fsr402",
+        "fsr-402": "fsr402",
+    }[alias]
+    sensor = fsrbayes.load_sensor(alias)
+    assert sensor.name == expected
+    assert sensor.params == fsrbayes.load_sensor(expected).params
 
 
 def test_bundled_files_are_found_in_the_installed_package_or_the_checkout():

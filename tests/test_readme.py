@@ -36,6 +36,7 @@ def test_the_data_commands_run(tmp_path):
             cwd=tmp_path,
             capture_output=True,
             text=True,
+            timeout=120,
         )
         if args[1] == "simulate":
             assert result.returncode == 0, result.stderr
@@ -44,6 +45,7 @@ def test_the_data_commands_run(tmp_path):
         cwd=tmp_path,
         capture_output=True,
         text=True,
+        timeout=120,
     )
     assert checked.returncode == 0, checked.stderr
     assert "36 creep tests of 4 specimens" in checked.stdout

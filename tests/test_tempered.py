@@ -11,6 +11,7 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.evidence.bridge import bridge_log_evidence
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
 from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
@@ -89,15 +90,30 @@ def specimen():
     )
 
 
-def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
+@pytest.fixture(scope="module")
+def tempered_fit(specimen):
+    """The tiny tempered fit of the specimen, and log Z by bridge sampling from its draws: an
+    estimator that shares the draws with the ladders but nothing of the stepping stones."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         result = fsrbayes.fit(specimen.data, rng=4, settings=TINY)
+    chain, log_prob = result.run.kept()
+    bridge = bridge_log_evidence(result.posterior, chain, log_prob, 0)
+    return result, bridge
+
+
+def test_fit_with_the_tempered_sampler_end_to_end(specimen, tempered_fit, tmp_path):
+    result, bridge = tempered_fit
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
         again = fsrbayes.fit(specimen.data, rng=4, sampler="tempered", settings=TINY)
     assert result.sampler == "tempered"
     assert result.run.chain.shape[:2] == (2, 100)
     assert np.array_equal(result.run.chain, again.run.chain)  # same seed, same draws
-    assert np.isfinite(result.evidence.log_z) and result.evidence.error > 0
+    # the stepping stones' log Z agrees with the bridge within 4 combined errors (~0.5 nats)
+    assert 0 < result.evidence.error < 1 and 0 < bridge.error < 0.2, (result.evidence, bridge)
+    combined = np.hypot(result.evidence.error, bridge.error)
+    assert abs(result.evidence.log_z - bridge.log_z) < 4 * combined, (result.evidence, bridge)
     assert (
         result.posterior(result.map_u) >= np.max(result.run.log_prob) - 1.0
     )  # the optimisers' best point
@@ -110,7 +126,7 @@ def test_fit_with_the_tempered_sampler_end_to_end(specimen, tmp_path):
     assert info["convergence"]["n_ensembles"] == 2
 
 
-def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypatch):
+def test_cli_fit_tempered_and_its_refusals(specimen, tempered_fit, tmp_path, capsys, monkeypatch):
     from fsrbayes.cli import main
     from fsrbayes.inference.evidence import tempered
 
@@ -164,7 +180,12 @@ def test_cli_fit_tempered_and_its_refusals(specimen, tmp_path, capsys, monkeypat
     summary = json.loads((tmp_path / "c" / "summary.json").read_text())
     assert summary["sampler"] == "tempered" and summary["convergence"]["n_kept"] == 120
     assert summary["convergence"]["n_ensembles"] == 2
-    assert np.isfinite(summary["log_evidence"]["log_z"])
+    # the command's log Z (its own seed and ladder length) against the bridge on the same data
+    _, bridge = tempered_fit
+    evidence = summary["log_evidence"]
+    assert 0 < evidence["error"] < 1, evidence
+    combined = np.hypot(evidence["error"], bridge.error)
+    assert abs(evidence["log_z"] - bridge.log_z) < 4 * combined, (evidence, bridge)
     assert not (tmp_path / "c" / "checkpoint.npz").exists()
 
 
