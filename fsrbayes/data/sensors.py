@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
-from ..physics.models import model_parameters
+from ..physics.models import model_families, model_parameters, parse_model
 from ..physics.parameters import PARAMETERS
 from .distributions import make_distribution
 from .prior import JointPrior
@@ -66,6 +66,10 @@ class Sensor:
         Default parameter values with the canonical names (read-only).
     priors : Mapping[str, Distribution]
         The prior of every parameter (read-only); ``fixed`` ones are not sampled.
+    family_priors : Mapping[str, Mapping[str, Distribution]]
+        Model family → the priors that replace entries of ``priors`` for models of that family
+        (the file's ``[family_priors.<family>]`` tables; read-only). E.g. the ``log-spectrum``
+        law bounds ``k1`` so that no prior draw closes the gap, while Burgers keeps its prior.
     aliases : tuple of str
         Other names accepted by :func:`load_sensor`.
     source : pathlib.Path
@@ -80,6 +84,16 @@ class Sensor:
     aliases: tuple = ()
     source: Path = field(default=None, compare=False)
     reference: str = ""
+    family_priors: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+
+    def prior_of(self, name, model="burgers"):
+        """Return the prior of parameter ``name`` in ``model``: its family's, else ``[priors]``'s.
+
+        An indexed name (``ramp_s[2]``) takes the prior of its base name.
+        """
+        base = _base(name)
+        own = self.family_priors.get(parse_model(model)[0], {})
+        return own[base] if base in own else self.priors[base]
 
     def free_parameters(self, model="burgers", noise=("sigma_rel",)):
         """Parameters a model samples: those it uses whose prior is not ``fixed``.
@@ -100,7 +114,7 @@ class Sensor:
         """
         names = model_parameters(model) + tuple(noise)
         return tuple(
-            n for n in names if _base(n) in self.priors and not self.priors[_base(n)].is_fixed
+            n for n in names if _base(n) in self.priors and not self.prior_of(n, model).is_fixed
         )
 
     def prior_for(self, model="burgers", noise=("sigma_rel",)):
@@ -113,7 +127,7 @@ class Sensor:
             unconstrained space.
         """
         names = self.free_parameters(model, noise)
-        return JointPrior.from_priors({n: self.priors[_base(n)] for n in names}, names)
+        return JointPrior.from_priors({n: self.prior_of(n, model) for n in names}, names)
 
     @property
     def prior(self):
@@ -182,12 +196,16 @@ def _parse(path, raw):
     }
     for name, spec in RIG_PRIORS.items():
         priors.setdefault(name, make_distribution(spec, f"fsrbayes rig prior {name}"))
-    for name, dist in priors.items():
+    family_priors = _family_priors(raw.get("family_priors", {}), priors, where)
+    checked = [("", name, dist) for name, dist in priors.items()]
+    for family, own in family_priors.items():
+        checked += [(f" in [family_priors.{family}]", name, dist) for name, dist in own.items()]
+    for table, name, dist in checked:
         lo, hi = dist.support
         if name in params and not (lo <= params[name] <= hi):
             raise ValueError(
                 f"{where}: params.{name} = {params[name]:g} lies outside its prior's support "
-                f"[{lo:g}, {hi:g}]"
+                f"[{lo:g}, {hi:g}]{table}"
             )
     return Sensor(
         name=str(sensor["name"]),
@@ -198,7 +216,36 @@ def _parse(path, raw):
         aliases=tuple(str(a) for a in sensor.get("aliases", ())),
         source=Path(path),
         reference=str(sensor.get("reference", "")),
+        family_priors=MappingProxyType(
+            {family: MappingProxyType(own) for family, own in family_priors.items()}
+        ),
     )
+
+
+def _family_priors(raw, priors, where):
+    """Parse ``[family_priors.<family>]``: per model family, priors replacing ``[priors]`` ones."""
+    if not isinstance(raw, dict):
+        raise ValueError(f"{where}: [family_priors] must hold one table per model family")
+    out = {}
+    for family, table in raw.items():
+        if family not in model_families():
+            raise ValueError(
+                f"{where}: [family_priors.{family}]: not a model family; known: "
+                f"{list(model_families())}"
+            )
+        if not isinstance(table, dict):
+            raise ValueError(f"{where}: [family_priors.{family}] must be a table of priors")
+        unknown = sorted(set(table) - set(priors))
+        if unknown:
+            raise ValueError(
+                f"{where}: [family_priors.{family}] names {unknown}, which have no prior in "
+                "[priors] to replace"
+            )
+        out[family] = {
+            name: make_distribution(spec, f"{where}: family_priors.{family}.{name}")
+            for name, spec in table.items()
+        }
+    return out
 
 
 def _normalise(name):

@@ -94,6 +94,10 @@ for _entry in (
     Parameter("inv_b1", "1/(Pa·s)", "physical", 0.3, "Burgers fluidity 1/b1; 0 is Zener (eq. 17)"),
     Parameter("psi", "1/(Pa·s^n)", "physical", 0.3, "Nutting coefficient (eq. 13)"),
     Parameter("n", "–", "physical", 0.1, "Nutting exponent (eq. 13)"),
+    # No specimen scatter for the log-spectrum law: a scatter entry would take random draws in
+    # every simulated specimen and change every existing simulation's random stream.
+    Parameter("kd", "Pa", "physical", None, "log-spectrum delayed modulus (compliance 1/kd)"),
+    Parameter("tau_max", "s", "physical", None, "log-spectrum longest retardation time"),
     Parameter("sigma_rel", "–", "nuisance", None, "relative noise of the current (sd of its log)"),
     Parameter("nu", "–", "nuisance", None, "Student-t degrees of freedom"),
     Parameter("noise_tau", "s", "nuisance", None, "correlation time of AR(1) measurement noise"),

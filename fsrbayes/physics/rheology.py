@@ -1,4 +1,4 @@
-"""Creep of the polymer matrix: Burgers, Zener and Nutting laws, any stress history.
+"""Creep of the polymer matrix: Burgers, Zener, Nutting and log-spectrum laws, any stress history.
 
 Every law is given by its creep compliance J(t) (strain per unit stress step) and its
 integral Ĵ(t) = ∫₀ᵗ J(u) du (strain per unit stress-rate of a ramp). The strain for an
@@ -14,7 +14,9 @@ Parameters (SI): springs ``k1``, ``k2`` in Pa, dashpots ``b1``, ``b2`` in Pa·s.
 flow of the Burgers dashpot b1 enters through its fluidity ``inv_b1 = 1/b1`` (1/(Pa·s)),
 so that Zener is the point ``inv_b1 = 0`` of the Burgers parameter space and
 ``b1 = inf`` gives exactly the same numbers. Nutting (eq. 13) has ``psi`` in
-1/(Pa·s^n) and the exponent ``n``.
+1/(Pa·s^n) and the exponent ``n``. The ``log-spectrum`` law (a box retardation spectrum, creep
+linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the delayed modulus
+``kd`` in Pa and the longest retardation time ``tau_max`` in s.
 
 References
 ----------
@@ -28,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .parameters import PARAMETERS
+from .spectrum import log_spectrum_compliance, log_spectrum_ramp_compliance
 
 __all__ = [
     "CREEP_LAWS",
@@ -38,6 +41,8 @@ __all__ = [
     "burgers_ramp_compliance",
     "nutting_compliance",
     "nutting_ramp_compliance",
+    "log_spectrum_compliance",
+    "log_spectrum_ramp_compliance",
     "creep_compliance",
     "ramp_compliance",
     "creep_strain",
@@ -187,6 +192,14 @@ def _nutting_ramp(t, params):
     return nutting_ramp_compliance(t, params["k1"], params["psi"], params["n"])
 
 
+def _log_spectrum(t, params):
+    return log_spectrum_compliance(t, params["k1"], params["kd"], params["tau_max"])
+
+
+def _log_spectrum_ramp(t, params):
+    return log_spectrum_ramp_compliance(t, params["k1"], params["kd"], params["tau_max"])
+
+
 CREEP_LAWS = {}
 """Name → :class:`CreepLaw`, every creep law known (built-in and registered)."""
 
@@ -248,6 +261,15 @@ NUTTING = register_creep_law(
         "Nutting power-law creep (eq. 13, Zhang et al.)",
     )
 )
+LOG_SPECTRUM = register_creep_law(
+    CreepLaw(
+        "log-spectrum",
+        ("k1", "kd", "tau_max"),
+        _log_spectrum,
+        _log_spectrum_ramp,
+        "log-spectrum: Kelvin chain with a box spectrum in ln tau, creep linear in ln t, bounded",
+    )
+)
 
 
 def creep_law(rheology):
@@ -261,7 +283,7 @@ def creep_law(rheology):
 
 
 def creep_compliance(t, params, rheology="burgers"):
-    """Creep compliance J(t) in 1/Pa of the named rheology ("burgers", "zener", "nutting", …)."""
+    """Creep compliance J(t) in 1/Pa of a named rheology ("burgers", "log-spectrum", …)."""
     return creep_law(rheology).compliance(t, params)
 
 

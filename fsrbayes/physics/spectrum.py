@@ -1,0 +1,168 @@
+"""Creep from a box retardation spectrum: the ``log-spectrum`` law, linear in ln t and bounded.
+
+A generalised Kelvin chain whose retardation times τ are spread uniformly in ln τ between
+τ_min = :data:`TAU_MIN` and τ_max, in series with the instantaneous spring k1 (eq. 7's modulus
+M). Its creep compliance is the spectrum's average of Kelvin elements,
+
+    J(t) = 1/k1 + (1/kd)·F(t),   F(t) = ∫ (1 − e^(−t/τ)) d ln τ / L,   L = ln(τ_max/τ_min),
+
+which in closed form is (u = t/τ; Ein(x) = ∫₀ˣ (1 − e^(−u))/u du = E1(x) + ln x + γ)
+
+    F(t) = [Ein(t/τ_min) − Ein(t/τ_max)] / L = 1 − [E1(t/τ_max) − E1(t/τ_min)] / L   (t > 0),
+
+with F = 0 for t ≤ 0. F rises by 1/L per e-fold of time between τ_min and τ_max — creep linear
+in ln t over ln(τ_max/τ_min)/ln 10 decades, as real FSRs creep — and is bounded: 0 ≤ F < 1,
+F → 1 for t ≫ τ_max. Its ramp compliance Ĵ(t) = ∫₀ᵗ J follows by parts, ∫₀ᵗ F = t·F(t) −
+∫₀ᵗ u·F'(u) du, where u·F'(u) = (e^(−u/τ_max) − e^(−u/τ_min))/L integrates to
+[τ_min·k(t/τ_min) − τ_max·k(t/τ_max)]/L with k(x) = x − (1 − e^(−x)):
+
+    Ĵ(t) = t/k1 + (1/kd)·{t·F(t) − [τ_min·k(t/τ_min) − τ_max·k(t/τ_max)] / L}.
+
+The gap never closes
+--------------------
+F is increasing and F < 1, so sup_t σ·J(t) = σ·(1/k1 + 1/kd), attained only as t → ∞. Under a
+prior whose support has k1 ≥ k1_lo and kd ≥ kd_lo, every draw has sup_t σ·J ≤
+σ·(1/k1_lo + 1/kd_lo), whatever τ_max; the sensor files choose the bounds so that this is < 1
+at σ = :data:`GAP_STRESS_CAP` (300 kPa), so the gap s = s0·(1 − ε) of eq. 7 stays open for every
+prior draw and every time. The same holds for any loading history with 0 ≤ σ(s) ≤ σ_max: by
+parts, ε(t) = σ(t)·J(0) + ∫₀ᵗ σ(s)·J'(t − s) ds ≤ σ_max·J(t), as J' ≥ 0. :func:`gap_bound`
+returns the supremum.
+
+Numerics. Ein is entire; below x = 1 its series Σ (−1)^(k+1) x^k/(k·k!) (no cancellation:
+E1(x) + ln x + γ would cancel as x → 0), above it E1(x) + ln x + γ; so F is exact to rounding at
+t ≪ τ_min (F ≈ t·(1/τ_min − 1/τ_max)/L), and 1 at t ≫ τ_max (E1 underflows). k(x) uses its
+series for x < 0.5. Everything broadcasts: parameters may be arrays (one per walker) against t.
+
+References
+----------
+Paredes-Madrid et al. 2017, eqs. (7), (15)–(17) (the Kelvin elements, superposition); Findley,
+Lai & Onaran (1976), ch. 5; Tschoegl, *The Phenomenological Theory of Linear Viscoelastic
+Behavior* (1989), ch. 3–4 (retardation spectra; the box spectrum); Abramowitz & Stegun 5.1.11
+(the series of E1).
+"""
+
+import math
+
+import numpy as np
+from scipy import special
+
+__all__ = [
+    "GAP_STRESS_CAP",
+    "TAU_MIN",
+    "ein",
+    "gap_bound",
+    "log_spectrum_compliance",
+    "log_spectrum_ramp_compliance",
+    "spectrum_fraction",
+    "spectrum_ramp_fraction",
+]
+
+TAU_MIN = 0.01
+"""Shortest retardation time τ_min in s (fixed). Creep is linear in ln t from a few τ_min on
+(real FSR 402 logs are from 0.3 s); a free τ_min would only shift the level of the creep by
+ln τ_min/L, which the data cannot tell from the elastic step 1/k1."""
+
+GAP_STRESS_CAP = 3.0e5
+"""Stress in Pa up to which every prior draw keeps the gap open: σ·(1/k1 + 1/kd) < 1."""
+
+_EULER = float(np.euler_gamma)
+_EIN_TERMS = 20  # x ≤ 1: the 20th term is < 1e-19
+_EIN_COEF = np.array([(-1.0) ** (k + 1) / (k * math.factorial(k)) for k in range(1, _EIN_TERMS)])
+_KR_TERMS = 18  # x < 0.5: the 18th term is < 1e-21
+_KR_COEF = np.array([(-1.0) ** k / math.factorial(k) for k in range(2, _KR_TERMS)])
+
+
+def _horner(x, coefficients):
+    """Σ c_j·x^(j+1) for the coefficients c_0, c_1, … (x times a polynomial)."""
+    out = np.zeros_like(x)
+    for c in coefficients[::-1]:
+        out = (out + c) * x
+    return out
+
+
+def ein(x):
+    """Return Ein(x) = ∫₀ˣ (1 − e^(−u))/u du = E1(x) + ln x + γ, for x ≥ 0 (0 at x = 0).
+
+    Series below x = 1 (exact to rounding as x → 0), E1 above (Abramowitz & Stegun 5.1.11).
+    """
+    x = np.asarray(x, dtype=float)
+    small = x <= 1.0
+    xs = np.where(small, x, 0.0)
+    xl = np.where(small, 1.0, x)
+    return np.where(small, _horner(xs, _EIN_COEF), special.exp1(xl) + np.log(xl) + _EULER)
+
+
+def _kelvin_ramp(x):
+    """k(x) = x − (1 − e^(−x)) = ∫₀ˣ (1 − e^(−u)) du, by its series below x = 0.5."""
+    small = x < 0.5
+    xs = np.where(small, x, 0.0)
+    return np.where(small, xs * _horner(xs, _KR_COEF), x + np.expm1(-x))
+
+
+def _span(tau_max):
+    """L = ln(τ_max/τ_min)."""
+    return np.log(np.asarray(tau_max, dtype=float) / TAU_MIN)
+
+
+def spectrum_fraction(t, tau_max):
+    """Return F(t) = [Ein(t/τ_min) − Ein(t/τ_max)]/ln(τ_max/τ_min), 0 for t ≤ 0.
+
+    The share of the delayed compliance 1/kd reached at t (module docstring): increasing from 0
+    to 1, linear in ln t between τ_min and τ_max with slope 1/ln(τ_max/τ_min) per e-fold.
+    """
+    t = np.asarray(t, dtype=float)
+    tp = np.maximum(t, 0.0)
+    tau_max = np.asarray(tau_max, dtype=float)
+    value = (ein(tp / TAU_MIN) - ein(tp / tau_max)) / _span(tau_max)
+    return np.where(t > 0, value, 0.0)
+
+
+def spectrum_ramp_fraction(t, tau_max):
+    """Return ∫₀ᵗ F(u) du = t·F(t) − [τ_min·k(t/τ_min) − τ_max·k(t/τ_max)]/L in s, 0 for t ≤ 0.
+
+    By parts: u·F'(u) = (e^(−u/τ_max) − e^(−u/τ_min))/L, whose integral is written with
+    k(x) = x − (1 − e^(−x)) so that the leading t of each term cancels exactly.
+    """
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)
+    tau_max = np.asarray(tau_max, dtype=float)
+    inner = TAU_MIN * _kelvin_ramp(tp / TAU_MIN) - tau_max * _kelvin_ramp(tp / tau_max)
+    return tp * spectrum_fraction(tp, tau_max) - inner / _span(tau_max)
+
+
+def log_spectrum_compliance(t, k1, kd, tau_max):
+    """Box-spectrum creep compliance J(t) = 1/k1 + F(t)/kd, 0 for t < 0.
+
+    Parameters
+    ----------
+    t : array_like
+        Time since the stress step in s.
+    k1 : array_like
+        Instantaneous modulus in Pa (eq. 7's M, the Burgers spring 1 of eq. 17).
+    kd : array_like
+        Delayed modulus in Pa: the chain's total delayed compliance is 1/kd.
+    tau_max : array_like
+        Longest retardation time in s (> :data:`TAU_MIN`).
+
+    Returns
+    -------
+    ndarray
+        Compliance in 1/Pa, increasing in t and below 1/k1 + 1/kd (:func:`gap_bound`).
+
+    References
+    ----------
+    Paper eqs. (7), (17) (one Kelvin element; here a log-uniform continuum of them).
+    """
+    t = np.asarray(t, dtype=float)
+    value = 1.0 / np.asarray(k1, dtype=float) + spectrum_fraction(t, tau_max) / kd
+    return np.where(t >= 0, value, 0.0)
+
+
+def log_spectrum_ramp_compliance(t, k1, kd, tau_max):
+    """Ĵ(t) = ∫₀ᵗ J = t/k1 + (1/kd)·∫₀ᵗ F in s/Pa, 0 for t ≤ 0 (:func:`spectrum_ramp_fraction`)."""
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)
+    return tp / np.asarray(k1, dtype=float) + spectrum_ramp_fraction(tp, tau_max) / kd
+
+
+def gap_bound(k1, kd, stress=GAP_STRESS_CAP):
+    """Return sup over t of σ·J(t) = σ·(1/k1 + 1/kd): the gap stays open where this is < 1."""
+    return np.asarray(stress, dtype=float) * (1.0 / np.asarray(k1, float) + 1.0 / np.asarray(kd))
