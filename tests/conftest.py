@@ -16,9 +16,12 @@ from fsrbayes import load_sensor
 # them, so that the two workers finish together instead of one of them running a long module
 # alone at the end. A module missing from the list only runs later; the order changes no result.
 LONG_MODULES = (
-    # the validation tier (pytest -m validation), one core each
+    # The validation tier (pytest -m validation), one core per worker. A worker takes the next
+    # module as soon as fewer than two of its tests are pending, so the one running the SBC
+    # takes the third module at once: a short one, and the other worker the rest.
     "test_sbc.py",  # ~600 s
     "test_diagnose_tier.py",  # ~300 s
+    "test_sampler_known_answer.py",  # ~10 s
     "test_specimen_coverage.py",  # ~200 s
     "test_evidence_nulls.py",  # ~150 s
     "test_predict_coverage.py",  # ~150 s
