@@ -1,6 +1,7 @@
 """The main job: ``fsrbayes demo --quick`` writes the HTML report with its figures embedded, the
-JSON results, the population and specimen netCDF files and the diagnose report. (The full plan
-runs in the slow suite, with the report opened in headless Chromium.)"""
+JSON results, the population and specimen netCDF files and the diagnose report, and tells the
+data's story (validation tier: ~50 s on both cores). (The full plan runs in the slow suite, with
+the report opened in headless Chromium.)"""
 
 import json
 import subprocess
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 
+@pytest.mark.validation
 def test_quick_demo_writes_the_report_and_results(tmp_path):
     out = tmp_path / "demo"
     result = subprocess.run(
