@@ -208,6 +208,7 @@ def test_the_band_follows_the_null_gap_of_more_tests_and_more_specimens():
         gap_band(9, 10)
 
 
+@pytest.mark.validation  # diagnose on a rig: the tier's (~20 s)
 def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path):
     """Area creep and a drifting readout gain hidden together: both are named (two greedy steps),
     the gain drift as the rig's artefact, and the report says so and shows the curves."""

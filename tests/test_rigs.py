@@ -234,6 +234,7 @@ def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
     assert not (tmp_path / "x.csv").exists()
 
 
+@pytest.mark.validation  # diagnose on a rig: the tier's (~20 s)
 def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_path):
     """A gain drift hidden in a one-supply divider log: the diagnosis names it or a
     stress-independent change of the sensor's area, and says that the other would do as well —
