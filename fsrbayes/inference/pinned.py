@@ -308,6 +308,8 @@ class _StepModel:
             or data.first_ramps() is not None
             or any(is_ramp(n) or is_landing(n) for n in posterior.names)
             or data.time_s.shape != (data.n_tests, 1)
+            or "n_junctions" in posterior.names  # compiled for one junction only
+            or posterior.fixed.get("n_junctions", 1.0) != 1.0
         ):
             return None
         model = cls(posterior)

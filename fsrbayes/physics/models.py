@@ -29,9 +29,9 @@ __all__ = [
     "register_peer_model",
 ]
 
-BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0")
+BASE_PARAMETERS = ("A0", "A1", "A2", "Va", "Vth", "s0", "Rpar", "alpha", "Rc0", "n_junctions")
 """Parameters of the tunneling and contact laws every paper-circuit model uses (Vth: paper law
-only)."""
+only; n_junctions: the paper's model has 1)."""
 
 
 @dataclass(frozen=True)

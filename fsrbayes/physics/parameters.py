@@ -87,6 +87,9 @@ for _entry in (
     Parameter("Rc0", "Ω·Pa^alpha", "physical", 0.3, "contact-resistance coefficient (eq. 5)"),
     Parameter("Rpar", "Ω", "physical", None, "particle resistance (eq. 5)"),
     Parameter("Vth", "V", "physical", None, "millivolt threshold between eqs. 9 and 10"),
+    Parameter(
+        "n_junctions", "–", "physical", None, "tunnelling junctions in series through the bulk"
+    ),
     Parameter("R0", "Ω", "physical", None, "bulk resistance at rest (Kalantari et al., eq. 14)"),
     Parameter("k1", "Pa", "physical", 0.15, "Burgers spring 1 = compressive modulus M (eq. 7)"),
     Parameter("k2", "Pa", "physical", 0.3, "Kelvin-Voigt spring (eq. 17)"),
@@ -98,6 +101,12 @@ for _entry in (
     # every simulated specimen and change every existing simulation's random stream.
     Parameter("kd", "Pa", "physical", None, "log-spectrum delayed modulus (compliance 1/kd)"),
     Parameter("tau_max", "s", "physical", None, "log-spectrum longest retardation time"),
+    Parameter(
+        "eps_sat", "–", "physical", None, "log-spectrum-sat delayed gap strain at saturation"
+    ),
+    Parameter(
+        "sigma_c", "Pa", "physical", None, "log-spectrum-sat stress at which creep half-saturates"
+    ),
     Parameter("sigma_rel", "–", "nuisance", None, "relative noise of the current (sd of its log)"),
     Parameter("nu", "–", "nuisance", None, "Student-t degrees of freedom"),
     Parameter("noise_tau", "s", "nuisance", None, "correlation time of AR(1) measurement noise"),

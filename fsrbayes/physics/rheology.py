@@ -10,18 +10,32 @@ linear constitutive eq. 15):
 over the jumps Δσ_k and the linear pieces of slope r_k of a piecewise-linear history
 (:mod:`fsrbayes.physics.loading`).
 
+A law may be nonlinear in the stress in Schapery's way: its delayed strain is driven by an
+input function g(σ) instead of σ (:attr:`CreepLaw.drive`), while the instantaneous strain stays
+σ·J(0):
+
+    ε(t) = σ(t)·J(0) + Σ_k Δg_k·[J(t − τ_k) − J(0)],   Δg_k = g(σ_k) − g(σ_(k−1)),
+
+σ_k the stress after the k-th change. Over a ramp g(σ) is taken as rising linearly between its
+values at the ramp's ends (exact at and after the ramp's end for a step-like ramp, and exact
+for every law that is linear in σ).
+
 Parameters (SI): springs ``k1``, ``k2`` in Pa, dashpots ``b1``, ``b2`` in Pa·s. The linear
 flow of the Burgers dashpot b1 enters through its fluidity ``inv_b1 = 1/b1`` (1/(Pa·s)),
 so that Zener is the point ``inv_b1 = 0`` of the Burgers parameter space and
 ``b1 = inf`` gives exactly the same numbers. Nutting (eq. 13) has ``psi`` in
 1/(Pa·s^n) and the exponent ``n``. The ``log-spectrum`` law (a box retardation spectrum, creep
 linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the delayed modulus
-``kd`` in Pa and the longest retardation time ``tau_max`` in s.
+``kd`` in Pa and the longest retardation time ``tau_max`` in s; ``log-spectrum-sat``, the same
+spectrum driven by g(σ) = σ/(σ + σ_c), has ``k1``, ``eps_sat`` (the delayed strain at
+saturation), ``sigma_c`` in Pa and ``tau_max``.
 
 References
 ----------
 Paredes-Madrid et al. 2017, eqs. (13), (15)–(17); Findley, Lai & Onaran, *Creep and
-Relaxation of Nonlinear Viscoelastic Materials* (1976), ch. 5 (Burgers model, superposition).
+Relaxation of Nonlinear Viscoelastic Materials* (1976), ch. 5 (Burgers model, superposition),
+ch. 7 (Schapery's nonlinear single-integral representation); Schapery, *Polym. Eng. Sci.* 9
+(1969) 295.
 """
 
 from collections.abc import Callable
@@ -30,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .parameters import PARAMETERS
-from .spectrum import log_spectrum_compliance, log_spectrum_ramp_compliance
+from .spectrum import log_spectrum_compliance, log_spectrum_ramp_compliance, saturating_drive
 
 __all__ = [
     "CREEP_LAWS",
@@ -151,6 +165,10 @@ class CreepLaw:
         ``ramp_compliance(t, params)`` → Ĵ(t) = ∫₀ᵗ J in s/Pa, 0 for t ≤ 0.
     summary : str
         One line for reports.
+    drive : callable or None
+        ``drive(stress, params)`` → Schapery's input g(σ) of the delayed strain, with
+        g(0) = 0, in the units that make g·[J(t) − J(0)] a strain; None (the default): the law
+        is linear, g(σ) = σ (module docstring).
     """
 
     name: str
@@ -158,10 +176,50 @@ class CreepLaw:
     compliance: Callable
     ramp_compliance: Callable
     summary: str = ""
+    drive: Callable | None = None
 
     def creep_strain(self, stress, t, params):
-        """Strain after a stress step of ``stress`` Pa at t = 0."""
-        return np.asarray(stress, dtype=float) * self.compliance(t, params)
+        """Strain after a stress step of ``stress`` Pa from rest at t = 0."""
+        stress = np.asarray(stress, dtype=float)
+        if self.drive is None:
+            return stress * self.compliance(t, params)
+        return self.step_response(stress, self.drive(np.maximum(stress, 0.0), params), t, params)
+
+    def drive_steps(self, step_size, params):
+        """Return the drive's change Δg_k at each of a sequence of load steps.
+
+        ``step_size`` (Pa, signed, last axis the steps in time order, padding steps 0) is
+        returned unchanged by a linear law; otherwise g of the running stress, differenced.
+        """
+        step_size = np.asarray(step_size, dtype=float)
+        if self.drive is None:
+            return step_size
+        level = np.maximum(np.cumsum(step_size, axis=-1), 0.0)
+        return np.diff(self.drive(level, params), axis=-1, prepend=0.0)
+
+    def step_response(self, size, drive_size, since, params):
+        """Strain of a stress change ``size`` (Pa) whose drive changes by ``drive_size``.
+
+        ``since`` is the time since the change (s; 0 before it). For a linear law this is
+        size·J(since) and ``drive_size`` is ignored.
+        """
+        if self.drive is None:
+            return np.asarray(size, dtype=float) * self.compliance(since, params)
+        since = np.asarray(since, dtype=float)
+        instant = self.compliance(0.0, params)
+        delayed = self.compliance(since, params) - instant
+        return np.where(since >= 0, size * instant + drive_size * delayed, 0.0)
+
+    def ramp_response(self, rate, drive_rate, since, params):
+        """Strain of a stress rising at ``rate`` (Pa/s) from since = 0, its drive at ``drive_rate``.
+
+        Subtract the same at since − width to end the ramp. Linear laws: rate·Ĵ(since).
+        """
+        if self.drive is None:
+            return np.asarray(rate, dtype=float) * self.ramp_compliance(since, params)
+        elapsed = np.maximum(np.asarray(since, dtype=float), 0.0)
+        instant = self.compliance(0.0, params) * elapsed
+        return rate * instant + drive_rate * (self.ramp_compliance(elapsed, params) - instant)
 
     def strain_history(self, history, t, params, *, chunk=2_000_000):
         """Strain under a piecewise-linear stress history (:func:`strain_history`)."""
@@ -198,6 +256,18 @@ def _log_spectrum(t, params):
 
 def _log_spectrum_ramp(t, params):
     return log_spectrum_ramp_compliance(t, params["k1"], params["kd"], params["tau_max"])
+
+
+def _log_spectrum_sat(t, params):
+    return log_spectrum_compliance(t, params["k1"], 1.0 / params["eps_sat"], params["tau_max"])
+
+
+def _log_spectrum_sat_ramp(t, params):
+    return log_spectrum_ramp_compliance(t, params["k1"], 1.0 / params["eps_sat"], params["tau_max"])
+
+
+def _saturating(stress, params):
+    return saturating_drive(stress, params["sigma_c"])
 
 
 CREEP_LAWS = {}
@@ -270,6 +340,17 @@ LOG_SPECTRUM = register_creep_law(
         "log-spectrum: Kelvin chain with a box spectrum in ln tau, creep linear in ln t, bounded",
     )
 )
+LOG_SPECTRUM_SAT = register_creep_law(
+    CreepLaw(
+        "log-spectrum-sat",
+        ("k1", "eps_sat", "sigma_c", "tau_max"),
+        _log_spectrum_sat,
+        _log_spectrum_sat_ramp,
+        "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "
+        "in stress (Schapery)",
+        drive=_saturating,
+    )
+)
 
 
 def creep_law(rheology):
@@ -328,16 +409,34 @@ def strain_history(history, t, params, rheology="burgers", *, chunk=2_000_000):
     """
     law = creep_law(rheology)
     t = np.asarray(t, dtype=float)
+    if law.drive is None:
+        return _superpose(history, t, law.compliance, law.ramp_compliance, params, chunk)
+    # Schapery: σ(t)·J(0) plus the delayed compliance superposed over the drive's history,
+    # g taken at the breakpoints (linear between them over a ramp).
+    instant = float(law.compliance(0.0, params))
+    drive = type(history)(history.times, law.drive(np.maximum(history.stress, 0.0), params))
+
+    def delayed(u, p):
+        return np.where(u >= 0, law.compliance(u, p) - instant, 0.0)
+
+    def delayed_ramp(u, p):
+        return law.ramp_compliance(u, p) - instant * np.maximum(u, 0.0)
+
+    return instant * history.at(t) + _superpose(drive, t, delayed, delayed_ramp, params, chunk)
+
+
+def _superpose(history, t, compliance, ramp_compliance, params, chunk):
+    """Σ jumps·J(t − τ) + Σ slopes·[Ĵ(t − start) − Ĵ(t − end)] over a history's pieces."""
     flat = t.ravel()
     jump_times, jump_sizes, ramp_starts, ramp_ends, ramp_slopes = history.pieces()
     out = np.empty(flat.shape)
     step = max(1, chunk // max(1, jump_times.size + 2 * ramp_starts.size))
     for start in range(0, flat.size, step):
         tt = flat[start : start + step, None]
-        part = (jump_sizes * law.compliance(tt - jump_times, params)).sum(axis=1)
+        part = (jump_sizes * compliance(tt - jump_times, params)).sum(axis=1)
         if ramp_slopes.size:
-            rise = law.ramp_compliance(tt - ramp_starts, params)
-            rise -= law.ramp_compliance(tt - ramp_ends, params)
+            rise = ramp_compliance(tt - ramp_starts, params)
+            rise -= ramp_compliance(tt - ramp_ends, params)
             part += (ramp_slopes * rise).sum(axis=1)
         out[start : start + step] = part
     return out.reshape(t.shape)

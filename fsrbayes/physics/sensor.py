@@ -103,6 +103,33 @@ def _current_factor(effects, params, voltage, time, kind):
     return factor
 
 
+def _solve_junctions(solve_bulk, params, voltage, series, gap_m, area, tunneling, threshold):
+    """Solve the circuit for N identical tunnelling junctions in series (``n_junctions``).
+
+    The bulk is N junctions in series, each with the gap, barrier and area of the paper's single
+    one (eqs. 9–11, 19), so each carries V_bulk/N: V = N·v + I(v)·R is the one-junction circuit
+    V/N = v + I(v)·(R/N), solved as such; ``v_bulk`` is returned as N·v. N = 1 (or absent) is
+    the paper's model. At a few volts across a real sensor, N ≫ 1 keeps each junction near its
+    ohmic regime, where the current falls with the gap as exp(−KAPPA·s·sqrt(Va))/s (eq. 9).
+    """
+    count = params.get("n_junctions")
+    if count is None or (np.ndim(count) == 0 and float(count) == 1.0):
+        return solve_bulk(
+            voltage, series, gap_m, params["Va"], area, law=tunneling, threshold=threshold
+        )
+    count = np.asarray(count, dtype=float)
+    solution = solve_bulk(
+        np.asarray(voltage, dtype=float) / count,
+        np.asarray(series, dtype=float) / count,
+        gap_m,
+        params["Va"],
+        area,
+        law=tunneling,
+        threshold=threshold,
+    )
+    return replace(solution, v_bulk=solution.v_bulk * count)
+
+
 def _solve(
     params,
     voltage,
@@ -131,8 +158,8 @@ def _solve(
         for effect in effects:
             area, series = effect.adjust_state(params, area, series, creep, time)
     threshold = params["Vth"] if tunneling == "paper" else None
-    solution = solve_bulk(
-        voltage, series + extra_series, s, params["Va"], area, law=tunneling, threshold=threshold
+    solution = _solve_junctions(
+        solve_bulk, params, voltage, series + extra_series, s, area, tunneling, threshold
     )
     if not effects:
         return solution
@@ -140,15 +167,10 @@ def _solve(
     v_fsr = voltage - solution.current * extra_series if in_series else voltage
     factor = _current_factor(effects, params, v_fsr, time, "physics")
     if factor is not None and in_series:
-        solution = solve_bulk(
-            voltage,
-            series + extra_series * factor,
-            s,
-            params["Va"],
-            area,
-            law=tunneling,
-            threshold=threshold,
-        )
+        solution = _solve_junctions(
+            solve_bulk, params, voltage, series + extra_series * factor, s, area, tunneling,
+            threshold,
+        )  # fmt: skip
     gain = _current_factor(effects, params, v_fsr, time, "readout")
     if gain is not None:
         factor = gain if factor is None else factor * gain

@@ -28,6 +28,22 @@ prior draw and every time. The same holds for any loading history with 0 ≤ σ(
 parts, ε(t) = σ(t)·J(0) + ∫₀ᵗ σ(s)·J'(t − s) ds ≤ σ_max·J(t), as J' ≥ 0. :func:`gap_bound`
 returns the supremum.
 
+Saturating creep: ``log-spectrum-sat``
+-------------------------------------
+Real FSRs creep by about the same share of their resistance per decade of time at 7 kPa as at
+50 kPa, where a delayed strain proportional to σ would creep 7× more. The ``log-spectrum-sat``
+law keeps the elastic step σ/k1 and drives the same box spectrum through Schapery's input
+function g(σ) = σ/(σ + σ_c) (:func:`saturating_drive`, dimensionless), with the delayed strain
+at saturation ε_sat (:mod:`fsrbayes.physics.rheology` superposes Δg over load changes):
+
+    ε(t) = σ/k1 + ε_sat·g(σ)·F(t)    after a step σ from rest.
+
+Below σ_c the delayed strain grows ∝ σ (the ``log-spectrum`` law with 1/kd = ε_sat/σ_c), above
+it it tends to ε_sat. As 0 ≤ g < 1 and g ≤ σ/σ_c, sup_t ε ≤ σ_max/k1 + ε_sat·g(σ_max) <
+σ_max/k1 + ε_sat for any history with 0 ≤ σ ≤ σ_max (the argument above, with g for σ in the
+delayed part); a prior with k1 ≥ k1_lo and ε_sat ≤ ε_hi keeps the gap open for every draw where
+σ_max/k1_lo + ε_hi < 1 (:func:`saturating_gap_bound`).
+
 Numerics. Ein is entire; below x = 1 its series Σ (−1)^(k+1) x^k/(k·k!) (no cancellation:
 E1(x) + ln x + γ would cancel as x → 0), above it E1(x) + ln x + γ; so F is exact to rounding at
 t ≪ τ_min (F ≈ t·(1/τ_min − 1/τ_max)/L), and 1 at t ≫ τ_max (E1 underflows). k(x) uses its
@@ -37,8 +53,8 @@ References
 ----------
 Paredes-Madrid et al. 2017, eqs. (7), (15)–(17) (the Kelvin elements, superposition); Findley,
 Lai & Onaran (1976), ch. 5; Tschoegl, *The Phenomenological Theory of Linear Viscoelastic
-Behavior* (1989), ch. 3–4 (retardation spectra; the box spectrum); Abramowitz & Stegun 5.1.11
-(the series of E1).
+Behavior* (1989), ch. 3–4 (retardation spectra; the box spectrum); Schapery, *Polym. Eng. Sci.*
+9 (1969) 295 (the input function g); Abramowitz & Stegun 5.1.11 (the series of E1).
 """
 
 import math
@@ -53,6 +69,8 @@ __all__ = [
     "gap_bound",
     "log_spectrum_compliance",
     "log_spectrum_ramp_compliance",
+    "saturating_drive",
+    "saturating_gap_bound",
     "spectrum_fraction",
     "spectrum_ramp_fraction",
 ]
@@ -166,3 +184,21 @@ def log_spectrum_ramp_compliance(t, k1, kd, tau_max):
 def gap_bound(k1, kd, stress=GAP_STRESS_CAP):
     """Return sup over t of σ·J(t) = σ·(1/k1 + 1/kd): the gap stays open where this is < 1."""
     return np.asarray(stress, dtype=float) * (1.0 / np.asarray(k1, float) + 1.0 / np.asarray(kd))
+
+
+def saturating_drive(stress, sigma_c):
+    """Return Schapery's input g(σ) = σ/(σ + σ_c) of the ``log-spectrum-sat`` law (0 at σ ≤ 0).
+
+    Dimensionless, increasing, below 1 and below σ/σ_c: the delayed strain ε_sat·g·F(t) grows
+    ∝ σ under σ_c and saturates at ε_sat above it (module docstring).
+    """
+    stress = np.maximum(np.asarray(stress, dtype=float), 0.0)
+    return stress / (stress + np.asarray(sigma_c, dtype=float))
+
+
+def saturating_gap_bound(k1, eps_sat, sigma_c, stress=GAP_STRESS_CAP):
+    """Return sup over t and histories up to σ of ε: σ/k1 + ε_sat·g(σ); the gap is open below 1."""
+    stress = np.asarray(stress, dtype=float)
+    return stress / np.asarray(k1, dtype=float) + np.asarray(eps_sat) * saturating_drive(
+        stress, sigma_c
+    )

@@ -23,7 +23,9 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
     """Strain under a load that changes in steps, by Boltzmann superposition (eq. 15).
 
     ε(t) = Σ_k Δσ_k·J(t − τ_k), plus each effect's extra creep strain for the same steps (every
-    catalogue strain effect is linear in the stress). J is 0 before its step. With
+    catalogue strain effect is linear in the stress). J is 0 before its step. A law with a
+    Schapery drive g (:attr:`~fsrbayes.physics.rheology.CreepLaw.drive`) superposes
+    Δg_k·[J(t − τ_k) − J(0)] for its delayed part instead. With
     ``first_ramp`` = r > 0 the first step rises linearly over r seconds instead — a hand-placed
     weight settling — and contributes exactly (Δσ_0/r)·[Ĵ(t − τ_0) − Ĵ(t − τ_0 − r)], Ĵ = ∫J
     the law's ramp compliance.
@@ -49,23 +51,30 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
     ndarray
     """
     strain = 0.0
+    drive_size = law.drive_steps(step_size, params)
     for k in range(step_time.shape[-1]):
         since = time - step_time[..., k : k + 1]
         size = step_size[..., k : k + 1]
         if k == 0 and first_ramp is not None:
             strain = strain + _ramp_strain(law, effects, params, size, since, first_ramp)
         else:
-            strain = strain + step_strain(law, effects, params, size, since)
+            drive = drive_size[..., k : k + 1]
+            strain = strain + step_strain(law, effects, params, size, since, drive)
     return strain
 
 
-def step_strain(law, effects, params, size, since):
+def step_strain(law, effects, params, size, since, drive_size=None):
     """Strain of a load step ``size`` at since = 0, the effects' extra creep included.
 
     ``law`` is a :class:`~fsrbayes.physics.rheology.CreepLaw`, ``effects`` catalogue effects
-    (their ``extra_strain``); everything broadcasts.
+    (their ``extra_strain``); everything broadcasts. ``drive_size`` is the change of a nonlinear
+    law's drive at the step (:meth:`~fsrbayes.physics.rheology.CreepLaw.drive_steps`); None: a
+    step from rest.
     """
-    strain = law.creep_strain(size, since, params)
+    if drive_size is None:
+        strain = law.creep_strain(size, since, params)
+    else:
+        strain = law.step_response(size, drive_size, since, params)
     for effect in effects:
         extra = effect.extra_strain(params, size, since)
         if extra is not None:
@@ -74,14 +83,23 @@ def step_strain(law, effects, params, size, since):
 
 
 def _ramp_strain(law, effects, params, size, since, ramp_s):
-    """Strain of a load ``size`` rising linearly over ``ramp_s`` from since = 0; a step where 0."""
+    """Strain of a load ``size`` rising linearly from rest over ``ramp_s``; a step where 0.
+
+    A nonlinear law's drive rises linearly from 0 to g(size) over the same time.
+    """
     ramp_s = np.asarray(ramp_s, dtype=float)
     rising = ramp_s > 0
     width = np.where(rising, ramp_s, 1.0)
     rate = size / width
-    strain = rate * (
-        law.ramp_compliance(since, params) - law.ramp_compliance(since - width, params)
-    )
+    if law.drive is None:
+        strain = rate * (
+            law.ramp_compliance(since, params) - law.ramp_compliance(since - width, params)
+        )
+    else:
+        drive_rate = law.drive(np.maximum(size, 0.0), params) / width
+        strain = law.ramp_response(rate, drive_rate, since, params) - law.ramp_response(
+            rate, drive_rate, since - width, params
+        )
     for effect in effects:
         extra = effect.extra_ramp_strain(params, rate, since)
         if extra is None:
