@@ -1,5 +1,6 @@
 """fsrbayes.fit and 'fsrbayes fit': outputs, summary keys, kill-and-resume, checkpoints."""
 
+import copy
 import json
 import os
 import signal
@@ -15,7 +16,7 @@ import xarray as xr
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference.output import save_fit
+from fsrbayes.inference.output import FORMAT_VERSION, save_fit
 from fsrbayes.inference.samplers import (
     CheckpointMismatch,
     ConvergenceWarning,
@@ -78,8 +79,38 @@ def test_output_groups_and_summary_keys(result, tmp_path):
     for name in result.posterior.names:
         assert set(saved["parameters"][name]) == {"median", "q05", "q95", "r_hat", "ess_bulk"}
     test = saved["tests"][0]
-    assert set(test) == {"specimen", "voltage_V", "stress_Pa", "drift_3600", "observed_drift_3600"}
+    assert set(test) == {
+        "specimen", "voltage_V", "stress_Pa", "drift_3600", "out_of_domain", "observed_drift_3600"
+    }  # fmt: skip
     assert test["drift_3600"]["q05"] <= test["drift_3600"]["median"] <= test["drift_3600"]["q95"]
+    assert test["out_of_domain"] == {"share": 0.0, "from_s": None}
+    assert saved["format_version"] == tree.attrs["fsrbayes_format_version"] == FORMAT_VERSION
+
+
+def test_draws_whose_gap_closes_are_reported_out_of_domain_never_as_minus_100(result, tmp_path):
+    """Half the draws get a Burgers flow that closes the gap within the hour at every test."""
+    posterior = result.posterior
+    data = posterior.data
+    draws = result.draws(400)
+    closing = draws.copy()
+    names = list(posterior.names)
+    p = {n: closing[..., names.index(n)] for n in ("k1", "k2")}
+    heaviest = data.stress_Pa.max()
+    elastic = heaviest / p["k1"] + heaviest / p["k2"]
+    closing[..., names.index("inv_b1")] = (1.0 - elastic) / (heaviest * 900.0)  # shut at ~900 s
+    half = np.arange(draws.shape[1]) % 2 == 0
+    mixed = np.where(half[None, :, None], closing, draws)
+    fake = copy.copy(result)
+    fake.draws = lambda max_draws=2000: mixed
+    info = save_fit(fake, tmp_path)
+    for test in info["tests"]:
+        where = test["out_of_domain"]
+        assert where["share"] == pytest.approx(0.5, abs=0.02)
+        assert 600.0 <= where["from_s"] <= 3600.0  # the lighter tests shut later
+        assert test["drift_3600"]["q05"] > -50.0  # the other draws' drift, no −100 % among them
+    tree = xr.open_datatree(tmp_path / "posterior.nc", engine="h5netcdf")
+    d3600 = tree.posterior_predictive["drift_3600"].values
+    assert np.isnan(d3600).mean() == pytest.approx(0.5, abs=0.02) and np.nanmin(d3600) > -50.0
 
 
 def test_several_specimens_need_a_choice():

@@ -184,3 +184,19 @@ def test_a_fitted_ramp_reaches_the_protocols_that_do_not_give_one(tmp_path):
         settling = (t > 0.2) & (t < 1.0)
         misses[ramp] = np.abs(np.log(np.asarray(test["observed"])[settling] / q50[settling]))
     assert misses["fitted"].mean() < 0.02 < 0.1 < misses["given"].mean()
+
+
+def test_a_fit_folder_of_another_format_is_refused_in_one_line(rig, tmp_path, capsys):
+    import xarray as xr
+
+    folder = tmp_path / "old"
+    folder.mkdir()
+    with xr.open_datatree(rig["fit"] / "posterior.nc", engine="h5netcdf") as tree:
+        old = tree.copy()
+    del old.attrs["fsrbayes_format_version"]
+    old.to_netcdf(folder / "posterior.nc", engine="h5netcdf")
+    out = tmp_path / "never.json"
+    assert main(["predict", str(folder), str(rig["vout_V"]), "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "fit-folder format none" in err and "reads format" in err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err and not out.exists()

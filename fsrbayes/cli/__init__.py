@@ -82,9 +82,10 @@ def build_parser():
     fit_.add_argument("--specimen", help="fit only this specimen")
     fit_.add_argument(
         "--model",
-        default="burgers",
-        help="burgers, zener or nutting, optionally +effect terms; or kalantari "
-        "(Kalantari et al.'s eq. 14)",
+        default=None,
+        help="creep law (burgers, zener, nutting, log-spectrum, log-spectrum-sat), optionally "
+        "+effect terms; or kalantari (Kalantari et al.'s eq. 14) (default: the sensor file's "
+        "default_model)",
     )
     fit_.add_argument("--tunneling", choices=("smooth", "paper"), default="smooth")
     fit_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")

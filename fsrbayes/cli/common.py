@@ -6,6 +6,7 @@ import signal
 import numpy as np
 
 __all__ = [
+    "calibration_notes",
     "UsageError",
     "FitFailed",
     "floats",
@@ -98,3 +99,18 @@ def stop_on_sigterm(signum, frame):
 def install_sigterm_handler():
     """Turn SIGTERM into KeyboardInterrupt: a killed fit stops cleanly at a checkpoint boundary."""
     signal.signal(signal.SIGTERM, stop_on_sigterm)
+
+
+def calibration_notes(data, model=None):
+    """Lines saying where ``data`` leave the conditions their sensors' priors were made for.
+
+    ``model`` None: each sensor's ``default_model``.
+    """
+    from ..data.sensor_ranges import outside_calibration
+    from ..data.sensors import load_sensor
+
+    notes = []
+    for name in data.sensors:
+        sensor = load_sensor(name)
+        notes += outside_calibration(data, sensor, model or sensor.default_model)
+    return notes

@@ -17,6 +17,7 @@ from ..utils import json_ready, write_json_atomic
 from .common import (
     FitFailed,
     UsageError,
+    calibration_notes,
     enough_space,
     fit_output_bytes,
     floats,
@@ -49,6 +50,9 @@ def cmd_fit(args):
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
     out = Path(args.out)
     writable(out)
+    args.model = args.model or _default_model(data)
+    for note in calibration_notes(data, args.model):
+        print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,
@@ -94,6 +98,7 @@ def cmd_fit(args):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
         checks = _checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
+        _warn_out_of_domain(specimen, summaries[specimen])
         if args.plots:
             _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"
@@ -110,6 +115,32 @@ def cmd_fit(args):
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
     return 0
+
+
+def _default_model(data):
+    """Return the sensor files' ``default_model`` of the data's sensors (they must agree)."""
+    from ..data.sensors import load_sensor
+
+    defaults = {sensor: load_sensor(sensor).default_model for sensor in data.sensors}
+    if len(set(defaults.values())) > 1:
+        raise UsageError(
+            f"the data's sensors default to different models ({defaults}); name one with --model"
+        )
+    return next(iter(defaults.values()))
+
+
+def _warn_out_of_domain(specimen, info):
+    """Say on stderr which tests' posterior draws leave the model's domain within the hour."""
+    for test in info["tests"]:
+        where = test["out_of_domain"]
+        if where["share"] > 0:
+            print(
+                f"fsrbayes fit: warning: {specimen}: at {test['voltage_V']:g} V, "
+                f"{test['stress_Pa'] / 1e3:.3g} kPa, {100 * where['share']:.0f} % of the posterior "
+                f"draws leave the model's domain (the gap closes) within the hour, median "
+                f"{where['from_s']:.0f} s after loading; drift_3600 is over the other draws",
+                file=sys.stderr,
+            )
 
 
 def _checked_fit(specimen, result, seed):
@@ -235,6 +266,7 @@ def _fit_hierarchical(args, data, settings, out):
                 (folder / specimen).mkdir(exist_ok=True)
                 checks = _checked_fit(specimen, result, args.seed)
                 summaries[specimen] = save_fit(result, folder / specimen, extra={"checks": checks})
+                _warn_out_of_domain(specimen, summaries[specimen])
                 print(
                     f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
                     f"{result.run.report.worst()}",
@@ -307,9 +339,8 @@ def _population_folders(fit_dir):
 
 def cmd_drift(args):
     """Write the population predictive drift(t) of a new specimen per (voltage, stress)."""
-    import xarray as xr
-
     from ..data.sensors import load_sensor
+    from ..inference.output import open_fit_tree
     from ..inference.population.model import Population
     from ..inference.population.predictive import (
         ForwardTemplate,
@@ -337,7 +368,7 @@ def cmd_drift(args):
     payload = {"time_s": args.time, "groups": [], "optimal_voltage": [], "zero_drift_voltage": []}
     figures = []
     for folder in _population_folders(args.fit_dir):
-        tree = xr.open_datatree(folder / "population.nc", engine="h5netcdf")
+        tree = open_fit_tree(folder / "population.nc")
         attrs = tree.attrs
         sensor = load_sensor(attrs["sensor"])
         noise = json.loads(attrs["noise"])
@@ -415,11 +446,10 @@ def cmd_drift(args):
 
 
 def _fit_plots(folder):
-    import xarray as xr
-
     from .. import plots
+    from ..inference.output import open_fit_tree
 
-    tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
+    tree = open_fit_tree(folder / "posterior.nc")
     plots.save_figure(plots.corner_plot(tree)[0], folder / "corner.png")
     plots.save_figure(plots.band_plot(tree, "drift")[0], folder / "drift_bands.png")
     plots.save_figure(plots.band_plot(tree, "current")[0], folder / "current_bands.png")

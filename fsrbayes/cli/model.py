@@ -14,7 +14,7 @@ from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
 from ..utils import write_json_atomic
-from .common import UsageError, floats, writable
+from .common import UsageError, calibration_notes, floats, writable
 
 
 def _drift_table(params, voltages, stresses, time_s, tunneling):
@@ -329,4 +329,6 @@ def cmd_check(args):
     """Read and validate a creep-test CSV; print what it holds."""
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     print(data.summary())
+    for note in calibration_notes(data):
+        print(f"  note: {note}")
     return 0

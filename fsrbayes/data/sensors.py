@@ -15,6 +15,7 @@ from ..physics.models import model_families, model_parameters, parse_model
 from ..physics.parameters import PARAMETERS
 from .distributions import make_distribution
 from .prior import JointPrior
+from .sensor_ranges import parse_calibration, parse_envelope
 
 __all__ = ["RIG_PRIORS", "Sensor", "load_sensor", "available_sensors", "models_directory"]
 
@@ -74,6 +75,14 @@ class Sensor:
         Other names accepted by :func:`load_sensor`.
     source : pathlib.Path
         The TOML file read.
+    default_model : str
+        The model ``fit`` uses for this sensor when none is named (``[sensor] default_model``;
+        ``"burgers"``, the paper's, when the file names none).
+    calibration : Mapping[str, CalibrationRange]
+        The conditions the priors were made for (``[calibration]``; key ``""``, and a family's
+        own under its name), empty if the file states none (:meth:`calibration_for`).
+    envelope : Envelope or None
+        Resistances the sensor is known to read under given forces (``[envelope]``).
     """
 
     name: str
@@ -85,6 +94,14 @@ class Sensor:
     source: Path = field(default=None, compare=False)
     reference: str = ""
     family_priors: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    default_model: str = "burgers"
+    calibration: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    envelope: object = None
+
+    def calibration_for(self, model):
+        """Return the :class:`~.sensor_ranges.CalibrationRange` of ``model``'s priors, or None."""
+        family = parse_model(model)[0]
+        return self.calibration.get(family, self.calibration.get(""))
 
     def prior_of(self, name, model="burgers"):
         """Return the prior of parameter ``name`` in ``model``: its family's, else ``[priors]``'s.
@@ -207,7 +224,15 @@ def _parse(path, raw):
                 f"{where}: params.{name} = {params[name]:g} lies outside its prior's support "
                 f"[{lo:g}, {hi:g}]{table}"
             )
+    default_model = str(sensor.get("default_model", "burgers"))
+    try:
+        parse_model(default_model)
+    except ValueError as exc:
+        raise ValueError(f"{where}: sensor.default_model: {exc}") from None
     return Sensor(
+        default_model=default_model,
+        calibration=parse_calibration(raw.get("calibration"), where, model_families()),
+        envelope=parse_envelope(raw.get("envelope"), where),
         name=str(sensor["name"]),
         description=str(sensor["description"]),
         area_m2=float(area),

@@ -256,7 +256,7 @@ def fit(
     data,
     specimen=None,
     *,
-    model="burgers",
+    model=None,
     tunneling="smooth",
     likelihood="gaussian",
     sensor=None,
@@ -276,9 +276,10 @@ def fit(
     data : CreepData or SpecimenData
     specimen : str, optional
         Which specimen (needed when the data hold several).
-    model : str
-        ``"burgers"``, ``"zener"``, ``"nutting"``, optionally ``+effect`` terms, or ``"kalantari"``
-        (eq. 14).
+    model : str, optional
+        A creep law (``"burgers"``, ``"zener"``, ``"nutting"``, ``"log-spectrum"``,
+        ``"log-spectrum-sat"``), optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
+        Default: the sensor file's ``default_model``.
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     sensor : Sensor or str, optional
@@ -321,6 +322,7 @@ def fit(
     coordinates = _coordinates(coordinates)
     packed = SpecimenData.select(data, specimen, ramp=ramp)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
+    model = sensor.default_model if model is None else model
     posterior = LogPosterior.for_sensor(
         packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood, ramp=ramp
     )

@@ -14,9 +14,13 @@ import numpy as np
 from ..data.creep import observed_drift
 from ..physics.constants import DRIFT_TIME_S
 from ..utils import atomic_path, json_ready, write_json_atomic
+from .posterior import drift_between
 from .samplers import even_index
 
 __all__ = [
+    "FORMAT_VERSION",
+    "open_fit_tree",
+    "out_of_domain",
     "segment_drifts",
     "to_datatree",
     "summary",
@@ -24,6 +28,33 @@ __all__ = [
     "population_datatree",
     "save_population",
 ]
+
+FORMAT_VERSION = 2
+"""Version of the fit folders' layout (``format_version`` in summary.json, the attribute
+``fsrbayes_format_version`` of posterior.nc and population.nc). 2: drift draws out of the model's
+domain are NaN with ``out_of_domain`` beside them (folders without a version wrote −100 %)."""
+
+
+def open_fit_tree(path):
+    """Open a fit's ``posterior.nc`` or ``population.nc``; refuse one of another format version.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file, its version and the one this fsrbayes reads.
+    """
+    import xarray as xr
+
+    tree = xr.open_datatree(path, engine="h5netcdf")
+    version = tree.attrs.get("fsrbayes_format_version")
+    if version is None or int(version) != FORMAT_VERSION:
+        tree.close()
+        found = "none (older than format versions)" if version is None else version
+        raise ValueError(
+            f"{path}: written in fit-folder format {found}, this fsrbayes reads format "
+            f"{FORMAT_VERSION}; fit the data again with this version ('fsrbayes fit')"
+        )
+    return tree
 
 
 def _predictive(result, draws, rng, n_grid=61):
@@ -40,7 +71,7 @@ def _predictive(result, draws, rng, n_grid=61):
     loaded = posterior.loading_end(flat)[:, None]  # drift counts from the weight being on
     log_on_grid = posterior.log_model_current(flat, loaded + times)
     start = posterior.log_model_current(flat, loaded)
-    drift = 100.0 * np.expm1(log_on_grid - start)
+    drift = drift_between(start, log_on_grid)  # NaN: out of the model's domain
     shape = draws.shape[:2]
     return (
         replicated.reshape(*shape, -1),
@@ -107,6 +138,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
     }
     coords = {"test": np.arange(data.n_tests), "obs": np.arange(data.n_obs), "drift_time": grid}
     attrs = {
+        "fsrbayes_format_version": FORMAT_VERSION,
         "fsrbayes_model": posterior.model,
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
@@ -131,6 +163,38 @@ def _q(values):
     return {"median": float(q50), "q05": float(q05), "q95": float(q95)}
 
 
+def _drift_q(values):
+    """Quantiles of the drift draws inside the model's domain (None if none is)."""
+    values = np.asarray(values, dtype=float).ravel()
+    inside = values[np.isfinite(values)]
+    return _q(inside) if inside.size else None
+
+
+def out_of_domain(drift, grid):
+    """Share of draws whose drift(t) leaves the model's domain within the grid, and when.
+
+    Parameters
+    ----------
+    drift : ndarray, shape (..., G)
+        Draws of one test's drift on ``grid`` (s since the loading's end), NaN out of domain.
+    grid : ndarray, shape (G,)
+
+    Returns
+    -------
+    dict
+        ``share`` (of the draws) and ``from_s`` (median over those draws of the first grid time
+        out of the domain; None when no draw leaves it).
+    """
+    flat = np.asarray(drift, dtype=float).reshape(-1, np.size(grid))
+    bad = ~np.isfinite(flat)
+    left = bad.any(axis=1)
+    first = np.asarray(grid, dtype=float)[np.argmax(bad[left], axis=1)]
+    return {
+        "share": float(left.mean()),
+        "from_s": float(np.median(first)) if left.any() else None,
+    }
+
+
 def _finite(value):
     return None if value is None or not np.isfinite(value) else float(value)
 
@@ -146,6 +210,8 @@ def summary(result, tree):
         parameters[name] = entry
     data = posterior.data
     drift = tree.posterior_predictive["drift_3600"].values
+    drift_t = tree.posterior_predictive["drift"].values
+    grid = tree.posterior_predictive["drift_time"].values
     observed = tree.constant_data["observed_drift_3600"].values
     segments = (
         [None] * data.n_tests
@@ -157,13 +223,18 @@ def summary(result, tree):
             "specimen": data.specimen,
             "voltage_V": float(data.voltage_V[i]),
             "stress_Pa": float(data.stress_Pa[i]),
-            "drift_3600": None if segments[i] else _q(drift[..., i].ravel()),
+            "drift_3600": None if segments[i] else _drift_q(drift[..., i]),
+            "out_of_domain": out_of_domain(
+                np.concatenate([drift_t[..., i, :], drift[..., i, None]], axis=-1),
+                np.append(grid, DRIFT_TIME_S),
+            ),
             "observed_drift_3600": None if segments[i] else _finite(observed[i]),
             **({"segments": segments[i]} if segments[i] else {}),
         }
         for i in range(data.n_tests)
     ]
     return {
+        "format_version": FORMAT_VERSION,
         "converged": bool(report.converged),
         "specimen": data.specimen,
         "sensor": data.sensor,
@@ -246,7 +317,10 @@ def segment_drifts(posterior, draws):
                     "start_s": float(start),
                     "end_s": float(end),
                     "load_Pa": float(load),
-                    "drift": _q(100.0 * np.expm1(log_i[:, i, 2 * j + 1] - log_i[:, i, 2 * j])),
+                    "drift": _drift_q(drift_between(log_i[:, i, 2 * j], log_i[:, i, 2 * j + 1])),
+                    "out_of_domain": float(
+                        np.mean(~np.isfinite(log_i[:, i, 2 * j : 2 * j + 2]).any(axis=-1))
+                    ),
                     "observed_drift": _finite(seen),
                 }
                 for j, (_, start, end, load, seen) in enumerate(found)
@@ -334,6 +408,7 @@ def population_datatree(result, template, observed, *, noise_rel=None, max_draws
     tree = from_dict(groups, dims=dims, coords=coords)
     tree.attrs.update(
         {
+            "fsrbayes_format_version": FORMAT_VERSION,
             "sensor": template.sensor,
             "fsrbayes_model": template.model,
             "tunneling": template.tunneling,
@@ -361,6 +436,7 @@ def save_population(result, template, observed, folder, *, noise_rel=None):
         name: {k: _finite(v) for k, v in entry.items()} for name, entry in result.summary().items()
     }
     info = {
+        "format_version": FORMAT_VERSION,
         "route": result.route,
         "converged": bool(result.converged),
         "hyper_parameters": hyper,

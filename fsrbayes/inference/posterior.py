@@ -25,7 +25,26 @@ __all__ = [
     "landing_names",
     "is_landing",
     "samples_landing",
+    "drift_between",
 ]
+
+OPTIONAL_PARAMETERS = ("n_junctions",)
+"""Parameters a model may go without: the circuit takes one junction (the paper's) without it,
+so a sensor file written before it existed fits as before."""
+
+
+def drift_between(log_start, log_end):
+    """Return the drift 100·(I_end − I_start)/I_start in % from two log-currents (eq. 22).
+
+    NaN where either log-current is not finite: the parameters left the model's domain there
+    (the gap closed, or the tunnelling law's), which is no drift at all — least of all −100 %.
+    """
+    log_start, log_end = np.asarray(log_start, float), np.asarray(log_end, float)
+    valid = np.isfinite(log_start) & np.isfinite(log_end)
+    with np.errstate(invalid="ignore"):
+        drift = 100.0 * np.expm1(np.where(valid, log_end - log_start, 0.0))
+    return np.where(valid, drift, np.nan)
+
 
 RAMPS = ("given", "fitted")
 """How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
@@ -186,6 +205,7 @@ class LogPosterior(PriorScaledTarget):
         self.fixed = {k: float(v) for k, v in dict(fixed).items()}
         self.beta = float(beta)
         needed = set(model_parameters(model)) | set(noise_parameters(likelihood))
+        needed -= set(OPTIONAL_PARAMETERS)
         missing = sorted(needed - set(prior.names) - set(self.fixed))
         if missing:
             raise ValueError(
@@ -396,13 +416,13 @@ class LogPosterior(PriorScaledTarget):
         """Return the model drift(t) of every test at ``time_s`` (eq. 22).
 
         Model drift(t) = 100·(I(t) − I(0))/I(0) (eq. 22) of every test at ``time_s``, shape (W, C),
-        with t = 0 at the end of the loading (:meth:`loading_end`; the load's onset for a step).
+        with t = 0 at the end of the loading (:meth:`loading_end`; the load's onset for a step);
+        NaN where a draw leaves the model's domain (:func:`drift_between`).
         """
         start = self.loading_end(x)
         times = np.column_stack([start, start + float(time_s)])
         log_current = self.log_model_current(x, times)
-        with np.errstate(invalid="ignore"):
-            return 100.0 * np.expm1(log_current[..., 1] - log_current[..., 0])
+        return drift_between(log_current[..., 0], log_current[..., 1])
 
     def log_likelihood_pointwise(self, x):
         """Log-likelihood per observed sample, shape (W, N)."""

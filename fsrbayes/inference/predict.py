@@ -37,6 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
+from .output import FORMAT_VERSION, open_fit_tree
 from .posterior import LogPosterior, is_landing, is_ramp, nuisance_parameters, samples_landing
 
 __all__ = [
@@ -81,14 +82,12 @@ def fit_folders(fit_dir):
     -------
     dict
     """
-    import xarray as xr
-
     root = Path(fit_dir)
     files = [root / "posterior.nc"] if (root / "posterior.nc").is_file() else []
     files += sorted(root.glob("*/posterior.nc")) + sorted(root.glob("*/*/posterior.nc"))
     out = {}
     for path in files:
-        with xr.open_datatree(path, engine="h5netcdf") as tree:
+        with open_fit_tree(path) as tree:
             out.setdefault(str(tree.attrs["specimen"]), path.parent)
     return out
 
@@ -108,9 +107,7 @@ def _posterior_of(folder, packed, rng):
     only to a sample interval under a ramp draws where in it the load began from its uniform
     prior (:func:`~.posterior.samples_landing`): the fit's landings are its own tests'.
     """
-    import xarray as xr
-
-    tree = xr.open_datatree(folder / "posterior.nc", engine="h5netcdf")
+    tree = open_fit_tree(folder / "posterior.nc")
     attrs = tree.attrs
     sensor = load_sensor(attrs["sensor"])
     likelihood = attrs["likelihood"]
@@ -458,6 +455,7 @@ def write_point_fit(
     tree = from_dict({"posterior": posterior})
     tree.attrs.update(
         {
+            "fsrbayes_format_version": FORMAT_VERSION,
             "fsrbayes_model": model,
             "tunneling": "smooth",
             "likelihood": likelihood,

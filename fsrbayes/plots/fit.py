@@ -5,6 +5,8 @@ Each function takes what the fit wrote (an ArviZ DataTree from
 object, and returns ``(fig, axes)``.
 """
 
+import warnings
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -51,6 +53,13 @@ def _test_label(tree, i):
     return f"{v:g} V, {s / 1e3:.3g} kPa"
 
 
+def _quantiles(draws, q):
+    """Percentiles over the draws inside the model's domain (NaN draws left out; NaN if all are)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN column gives NaN
+        return np.nanpercentile(draws, q, axis=0)
+
+
 def _drift_of_test(tree, i):
     """Test i's drift(t) (%): time grid, posterior draws (N, grid), sample times, measured drift."""
     grid = tree.posterior_predictive["drift_time"].values
@@ -83,10 +92,8 @@ def band_plot(tree, kind="drift", max_tests=12):
             draws = tree.posterior_predictive["current"].values[..., mask].reshape(-1, mask.sum())
             y = t
         for (lo, hi), alpha in (((5, 95), 0.25), ((25, 75), 0.45)):
-            ax.fill_between(
-                y, *np.percentile(draws, [lo, hi], axis=0), color="C0", alpha=alpha, lw=0
-            )
-        ax.plot(y, np.median(draws, axis=0), "C0", lw=1)
+            ax.fill_between(y, *_quantiles(draws, [lo, hi]), color="C0", alpha=alpha, lw=0)
+        ax.plot(y, _quantiles(draws, 50), "C0", lw=1)
         ax.plot(t, points, "k.", ms=3)
         ax.set(title=_test_label(tree, i), xlabel="time (s)", ylabel=label)
     fig.suptitle(f"{tree.attrs.get('specimen', '')}: 50 % and 90 % credible bands", fontsize=10)
@@ -115,10 +122,10 @@ def drift_time_plot(trees, titles, tests):
     for ax, tree, title in zip(axes[0], trees, titles, strict=True):
         for k, i in enumerate(tests):
             grid, draws, time, measured = _drift_of_test(tree, i)
-            low, high = np.percentile(draws, [5, 95], axis=0)
+            low, mid, high = _quantiles(draws, [5, 50, 95])
             ax.fill_between(grid, low, high, color=f"C{k}", alpha=0.25, lw=0)
             volts = float(tree.constant_data["voltage_V"].values[i])
-            ax.plot(grid, np.median(draws, axis=0), color=f"C{k}", lw=1.2, label=f"{volts:g} V")
+            ax.plot(grid, mid, color=f"C{k}", lw=1.2, label=f"{volts:g} V")
             ax.plot(time, measured, ".", color=f"C{k}", ms=4)
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set(title=title, xlabel="time (s)")
@@ -142,7 +149,7 @@ def drift_3600_plot(tree):
     observed = tree.constant_data["observed_drift_3600"].values
     x = np.arange(drift.shape[1])
     fig, ax = plt.subplots(figsize=(max(5, 0.6 * x.size + 2), 3.5))
-    q05, q25, q50, q75, q95 = np.percentile(drift, [5, 25, 50, 75, 95], axis=0)
+    q05, q25, q50, q75, q95 = _quantiles(drift, [5, 25, 50, 75, 95])
     ax.vlines(x, q05, q95, color="C0", lw=1, label="90 %")
     ax.vlines(x, q25, q75, color="C0", lw=4, label="50 %")
     ax.plot(x, q50, "o", color="C0", ms=4, label="median")
