@@ -74,3 +74,21 @@ def test_the_cli_writes_the_file_and_refuses_bad_input(tmp_path):
         result = fsrbayes_command(*command, *args, "--out", bad)
         assert result.returncode == 2 and message in result.stderr, result.stderr
         assert len(result.stderr.strip().splitlines()) == 1 and not bad.exists()
+
+
+def test_the_family_priors_move_with_the_sensor_and_the_calibration_is_the_templates(tmp_path):
+    path = tmp_path / "mine.toml"
+    path.write_text(new_sensor_toml("fsr406", 1521.0, 3000.0, 10.0))
+    sensor, base = load_sensor(path), load_sensor("fsr402")
+    assert set(sensor.family_priors) == set(base.family_priors)
+    k = base.params["Rpar"] / sensor.params["Rpar"]  # the conductance factor
+    family = "log-spectrum-sat"
+    for name, power in (("A0", 1), ("Rc0", -1), ("Rpar", -1)):
+        moved = sensor.prior_of(name, family).args["median"]
+        assert moved == pytest.approx(base.prior_of(name, family).args["median"] * k**power)
+    # the bound that keeps the gap open is unchanged
+    assert sensor.prior_of("k1", family).support == base.prior_of("k1", family).support
+    for model in ("burgers", family):
+        own, theirs = sensor.calibration_for(model), base.calibration_for(model)
+        assert (own.stress_Pa, own.voltage_V) == (theirs.stress_Pa, theirs.voltage_V)
+        assert own.source.startswith("the fsr402 template's priors, made for: ")

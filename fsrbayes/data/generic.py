@@ -12,7 +12,9 @@ contact resistances (Rc0, Rpar) and Kalantari's R0 by k multiplies the current a
 stress and time by k (the bulk's current density is unchanged at the same V_bulk, and so is the
 drop across the contacts), so k = R_template/R_typical. The priors are the template's, moved
 with the parameters, and made weakly informative: every log-normal prior at least a factor e per
-standard deviation wide — a new material's creep and contacts are not the template's.
+standard deviation wide — a new material's creep and contacts are not the template's. The
+template's ``[family_priors]`` move by the same factor, and its ``[calibration]`` tables are
+copied: the priors were made for the template's conditions.
 """
 
 import math
@@ -83,14 +85,12 @@ def new_sensor_toml(name, area_mm2, typical_ohm, typical_force_n=5.0, template="
     for key, power in SCALED.items():
         if key in params:
             params[key] = params[key] * k**power
-        prior = priors.get(key)
-        if prior and prior.get("dist") == "lognormal":
-            prior["median"] = prior["median"] * k**power
-        elif prior and prior.get("dist") == "fixed":
-            prior["value"] = prior["value"] * k**power
-    for prior in priors.values():
-        if prior.get("dist") == "lognormal":
-            prior["sigma"] = max(prior["sigma"], MIN_LOG_SIGMA)
+    family_priors = {
+        family: {key: dict(value) for key, value in table.items()}
+        for family, table in raw.get("family_priors", {}).items()
+    }
+    for table in (priors, *family_priors.values()):
+        _rescale_priors(table, k)
     lines = [
         f"# {name}: a generic sensor written by `fsrbayes sensor new` from the {base.name}",
         f"# template, rescaled to {typical_ohm:g} ohm at 1 V under {typical_force_n:g} N on "
@@ -109,7 +109,42 @@ def new_sensor_toml(name, area_mm2, typical_ohm, typical_force_n=5.0, template="
         "[priors]",
         *(f"{key} = {_inline(prior)}" for key, prior in priors.items()),
     ]
+    for family, table in family_priors.items():
+        lines += ["", f"[family_priors.{family}]"]
+        lines += [f"{key} = {_inline(prior)}" for key, prior in table.items()]
+    lines += _calibration_lines(raw.get("calibration", {}), base.name)
     return "\n".join(lines) + "\n"
+
+
+def _rescale_priors(priors, k):
+    """Move the priors of :data:`SCALED` with the parameters; widen every log-normal."""
+    for key, power in SCALED.items():
+        prior = priors.get(key)
+        if prior and prior.get("dist") == "lognormal":
+            prior["median"] = prior["median"] * k**power
+        elif prior and prior.get("dist") == "fixed":
+            prior["value"] = prior["value"] * k**power
+    for prior in priors.values():
+        if prior.get("dist") == "lognormal":
+            prior["sigma"] = max(prior["sigma"], MIN_LOG_SIGMA)
+
+
+def _calibration_lines(calibration, template):
+    """Return the template's ``[calibration]`` tables as TOML lines, sources marked as its."""
+    lines = []
+    for family, table in (("", calibration), *((f, t) for f, t in calibration.items()
+                                                if isinstance(t, dict))):  # fmt: skip
+        own = {k: v for k, v in table.items() if not isinstance(v, dict)}
+        if not own:
+            continue
+        lines += ["", f"[calibration{'.' + family if family else ''}]"]
+        for key, value in own.items():
+            if key == "source":
+                value = f"the {template} template's priors, made for: {value}"
+                lines.append(f'{key} = "{value}"')
+            else:
+                lines.append(f"{key} = [{_number(value[0])}, {_number(value[1])}]")
+    return lines
 
 
 def _number(value):
