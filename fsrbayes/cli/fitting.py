@@ -51,8 +51,6 @@ def cmd_fit(args):
     out = Path(args.out)
     writable(out)
     args.model = args.model or _default_model(data)
-    for note in calibration_notes(data, args.model):
-        print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,
@@ -72,6 +70,7 @@ def cmd_fit(args):
         return _fit_hierarchical(args, data, settings, out)
     install_sigterm_handler()
     summaries = {}
+    notes = calibration_notes(data, args.model)  # said once a fit has run: errors come alone
     for specimen in specimens:
         folder = out if len(specimens) == 1 else out / specimen
         folder.mkdir(parents=True, exist_ok=True)
@@ -96,6 +95,9 @@ def cmd_fit(args):
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
+        for note in notes:
+            print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
+        notes = []
         checks = _checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
         _warn_out_of_domain(specimen, summaries[specimen])
@@ -133,12 +135,21 @@ def _warn_out_of_domain(specimen, info):
     """Say on stderr which tests' posterior draws leave the model's domain within the hour."""
     for test in info["tests"]:
         where = test["out_of_domain"]
-        if where["share"] > 0:
+        segments = [s for s in test.get("segments") or () if s["out_of_domain"] > 0]
+        if where and where["share"] > 0:
             print(
                 f"fsrbayes fit: warning: {specimen}: at {test['voltage_V']:g} V, "
                 f"{test['stress_Pa'] / 1e3:.3g} kPa, {100 * where['share']:.0f} % of the posterior "
-                f"draws leave the model's domain (the gap closes) within the hour, median "
-                f"{where['from_s']:.0f} s after loading; drift_3600 is over the other draws",
+                "draws leave the model's domain (the gap closes, or the tunnelling law's range is "
+                f"left) within the hour, median {where['from_s']:.0f} s after loading; drift_3600 "
+                "is over the other draws",
+                file=sys.stderr,
+            )
+        for segment in segments:
+            print(
+                f"fsrbayes fit: warning: {specimen}: in the segment at {segment['load_Pa'] / 1e3:.3g}"
+                f" kPa from {segment['start_s']:g} s, {100 * segment['out_of_domain']:.0f} % of the "
+                "posterior draws leave the model's domain; its drift is over the other draws",
                 file=sys.stderr,
             )
 
@@ -261,6 +272,8 @@ def _fit_hierarchical(args, data, settings, out):
                     f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a "
                     f"population needs 2 ({why})"
                 )
+            for note in calibration_notes(part, args.model):
+                print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)

@@ -180,8 +180,13 @@ def outside_calibration(data, sensor, model):
         side = (
             "below" if got_high <= high else ("above" if got_low >= low else "beyond both ends of")
         )
+        got = (
+            f"{got_low * scale:.3g}"
+            if f"{got_low * scale:.3g}" == f"{got_high * scale:.3g}"
+            else f"{got_low * scale:.3g}–{got_high * scale:.3g}"
+        )
         lines.append(
-            f"{sensor.name} ({model}): {what} {got_low * scale:.3g}–{got_high * scale:.3g} {unit} "
+            f"{sensor.name} ({model}): {what} {got} {unit} "
             f"reaches {side} the {low * scale:.3g}–{high * scale:.3g} {unit} its priors were made "
             f"for ({bounds.source}); the fit extrapolates them"
         )

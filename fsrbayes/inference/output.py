@@ -224,7 +224,9 @@ def summary(result, tree):
             "voltage_V": float(data.voltage_V[i]),
             "stress_Pa": float(data.stress_Pa[i]),
             "drift_3600": None if segments[i] else _drift_q(drift[..., i]),
-            "out_of_domain": out_of_domain(
+            "out_of_domain": None
+            if segments[i]
+            else out_of_domain(
                 np.concatenate([drift_t[..., i, :], drift[..., i, None]], axis=-1),
                 np.append(grid, DRIFT_TIME_S),
             ),

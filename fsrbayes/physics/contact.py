@@ -31,7 +31,8 @@ def contact_resistance(stress, Rc0, alpha, Rpar=0.0, sigma0=0.0):
     ----------
     Paper eq. (5) and the paragraph after it (offset stress).
     """
-    return Rpar + Rc0 / (np.asarray(stress, dtype=float) + sigma0) ** alpha
+    with np.errstate(divide="ignore"):  # no load, no contact: Rc = inf, the current is 0
+        return Rpar + Rc0 / (np.asarray(stress, dtype=float) + sigma0) ** alpha
 
 
 def effective_area(stress, A0, A1, A2):
