@@ -200,3 +200,49 @@ def test_a_fit_folder_of_another_format_is_refused_in_one_line(rig, tmp_path, ca
     err = capsys.readouterr().err.strip()
     assert "fit-folder format none" in err and "reads format" in err
     assert len(err.splitlines()) == 1 and "Traceback" not in err and not out.exists()
+
+
+def _closing_fit(folder, truth, share, close_s=30.0):
+    """The point fit with ``share`` of its draws given a Burgers flow that shuts the gap of the
+    heaviest test at ``close_s``."""
+    import xarray as xr
+
+    params = {**truth["specimens"]["fsr402-01"]["params"], "sigma_rel": 0.002}
+    write_point_fit(folder, params, "fsr402-01", "fsr402")
+    stress = max(t["stress_Pa"] for t in truth["tests"]) if "tests" in truth else None
+    stress = stress or 255.0 * 9.80665e-3 / 183.85e-6
+    elastic = stress / params["k1"] + stress / params["k2"]
+    flow = (1.0 - elastic) / (stress * close_s)
+    with xr.open_datatree(folder / "posterior.nc", engine="h5netcdf") as tree:
+        tree = tree.copy()
+    values = tree.posterior["inv_b1"].values.copy()
+    flat = values.reshape(-1)
+    flat[: int(round(share * flat.size))] = flow
+    posterior = tree["posterior"].to_dataset()
+    tree["posterior"] = posterior.assign(inv_b1=(posterior["inv_b1"].dims, values))
+    (folder / "posterior.nc").unlink()
+    tree.to_netcdf(folder / "posterior.nc", engine="h5netcdf")
+    return folder
+
+
+def test_draws_whose_gap_closes_are_counted_and_named(rig, tmp_path, capsys):
+    fit = _closing_fit(tmp_path / "half", rig["truth"], 0.4)
+    assert main(["predict", str(fit), str(rig["vout_V"]), "--json", str(tmp_path / "p.json")]) == 0
+    out = capsys.readouterr().out
+    result = json.loads((tmp_path / "p.json").read_text())
+    heavy = max(result["tests"], key=lambda t: t["stress_Pa"])
+    invalid = heavy["invalid"]
+    assert invalid["share"] == pytest.approx(0.4, abs=0.05)
+    assert invalid["gap_closed"] == heavy["invalid_draws"] and invalid["tunnelling_law"] == 0
+    assert 25.0 < invalid["from_s"] < 35.0  # the flow shuts the gap at 30 s
+    assert "% of the posterior draws leave the model's domain from about" in out
+    assert "the gap closes" in out
+
+
+def test_a_test_where_most_draws_close_the_gap_is_refused_in_one_line(rig, tmp_path, capsys):
+    fit = _closing_fit(tmp_path / "most", rig["truth"], 0.8)
+    out = tmp_path / "never.json"
+    assert main(["predict", str(fit), str(rig["vout_V"]), "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "leave the model's domain" in err and "because the gap closes" in err
+    assert len(err.splitlines()) == 1 and not out.exists()

@@ -146,10 +146,11 @@ def _warn_out_of_domain(specimen, info):
                 file=sys.stderr,
             )
         for segment in segments:
+            load, share = segment["load_Pa"] / 1e3, 100 * segment["out_of_domain"]
             print(
-                f"fsrbayes fit: warning: {specimen}: in the segment at {segment['load_Pa'] / 1e3:.3g}"
-                f" kPa from {segment['start_s']:g} s, {100 * segment['out_of_domain']:.0f} % of the "
-                "posterior draws leave the model's domain; its drift is over the other draws",
+                f"fsrbayes fit: warning: {specimen}: in the segment at {load:.3g} kPa from "
+                f"{segment['start_s']:g} s, {share:.0f} % of the posterior draws leave the model's "
+                "domain; its drift is over the other draws",
                 file=sys.stderr,
             )
 
@@ -494,6 +495,14 @@ def cmd_predict(args):
             f"{test['q50'][-1]:.4g} (90 %: {test['q05'][-1]:.4g}..{test['q95'][-1]:.4g})"
             f"{covered}{'' if test['fit_converged'] else ' [fit NOT converged]'}"
         )
+        invalid = test["invalid"]
+        if invalid["share"] > 0:
+            print(
+                f"  {100 * invalid['share']:.0f} % of the posterior draws leave the model's "
+                f"domain from about {invalid['from_s']:.4g} s ({invalid['gap_closed']} the gap "
+                f"closes, {invalid['tunnelling_law']} the tunnelling law's range); the bands are "
+                "over the other draws"
+            )
     if result["coverage_90"] is not None:
         print(f"coverage_90 = {result['coverage_90']:.3f} over {result['n_readings']} readings")
     if args.json:

@@ -11,7 +11,7 @@ from ..data.prior import JointPrior
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import resolve_effects
 from ..physics.models import model_family, model_parameters, parse_model
-from ..physics.sensor import solve_current
+from ..physics.sensor import gap_strain, solve_current
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 
 __all__ = [
@@ -333,6 +333,38 @@ class LogPosterior(PriorScaledTarget):
         finally:
             self._near_first = False
 
+    def _model_inputs(self, x, time_s):
+        """Parameters (each (W, 1, 1)), times, load steps, first ramps and sampled ramps of x."""
+        params = {name: x[:, i, None, None] for i, name in enumerate(self.names)}
+        params.update(self.fixed)  # scalars broadcast against every walker
+        time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
+        steps, first_ramp, ramps = self.data.load_steps(), self.data.first_ramps(), None
+        if self._ramps:  # sampled ramps: each row's test's
+            ramps = x[:, self._ramps][:, self.data.ramp_rows()]
+            steps, first_ramp = self.data.ramped(ramps)
+        if self._landings:  # the first loading began its landing's share of a sample before 0
+            steps = self.data.landed(steps, self._lag(x))
+        return params, time, steps, first_ramp, ramps
+
+    def gap_strain(self, x, time_s=None):
+        """Return the gap's strain ε (W, C, T) at the times of :meth:`log_model_current`.
+
+        The gap s0·(1 − ε) is closed where ε ≥ 1 (eq. 7): that is why a draw's current is −inf
+        there; a draw invalid where ε < 1 left the tunnelling law's domain instead.
+        """
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        params, time, steps, first_ramp, _ = self._model_inputs(x, time_s)
+        strain = gap_strain(
+            params,
+            self.data.stress_Pa[:, None],
+            time,
+            rheology=self.family,
+            effects=self.effect_objects,
+            load_steps=steps,
+            first_ramp=first_ramp,
+        )
+        return np.broadcast_to(strain, (len(x), *np.shape(time)[-2:]))
+
     def log_model_current(self, x, time_s=None):
         """Return log I of the model, shape (W, C, T).
 
@@ -342,15 +374,7 @@ class LogPosterior(PriorScaledTarget):
         −inf where the parameters leave the model's validity domain.
         """
         x = np.atleast_2d(np.asarray(x, dtype=float))
-        params = {name: x[:, i, None, None] for i, name in enumerate(self.names)}
-        params.update(self.fixed)  # scalars broadcast against every walker
-        time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
-        steps, first_ramp = self.data.load_steps(), self.data.first_ramps()
-        if self._ramps:  # sampled ramps: each row's test's
-            ramps = x[:, self._ramps][:, self.data.ramp_rows()]
-            steps, first_ramp = self.data.ramped(ramps)
-        if self._landings:  # the first loading began its landing's share of a sample before 0
-            steps = self.data.landed(steps, self._lag(x))
+        params, time, steps, first_ramp, ramps = self._model_inputs(x, time_s)
         solution = solve_current(
             params,
             self.data.voltage_V[:, None],

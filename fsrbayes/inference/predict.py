@@ -256,17 +256,15 @@ def _predict_tests(folder, tests, n_draws, rng):
     resample = draws.shape[0] < n_draws
     draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))]
     log_model = posterior.log_model_current(draws)
+    closed = None
+    if not np.isfinite(log_model).all():  # why draws are invalid: the gap, or the tunnelling law
+        closed = posterior.gap_strain(draws) >= 1.0
     params = posterior.parameters(draws)
     out = []
     for i, test in enumerate(tests):
         log_i = _interpolate(test, times[i], log_model[:, i, : times[i].size])
         valid = np.all(np.isfinite(log_i), axis=1)
-        if not valid.any():
-            raise ValueError(
-                f"no posterior draw of specimen {test.specimen!r} gives a valid current for the "
-                f"protocol's test at {test.voltage_V:g} V, {test.stress_Pa:g} Pa (outside the "
-                "model's domain)"
-            )
+        invalid = _invalid_draws(test, log_i, valid, closed, i, times[i].size)
         kept = {k: v[valid] for k, v in params.items()}
         observed = _observed_reading(test)
         inside = np.zeros(test.time_s.size)
@@ -306,12 +304,44 @@ def _predict_tests(folder, tests, n_draws, rng):
                 "coverage_90": float(inside[present].mean()) if present.any() else None,
                 "draws": int(valid.sum()),
                 "invalid_draws": int((~valid).sum()),
+                "invalid": invalid,
                 "fit": str(folder),
                 "fit_converged": bool(int(attrs.get("converged", 0))),
                 "model": posterior.model,
             }
         )
     return out
+
+
+def _invalid_draws(test, log_i, valid, closed, row, n_times):
+    """Why draws give no current in a protocol test; refuse the test when most give none.
+
+    Returns ``{share, gap_closed, tunnelling_law, from_s}``: the share of draws out of the
+    model's domain somewhere in the test, how many because the gap closes (strain ≥ 1, eq. 7) and
+    how many because the tunnelling law's range is left, and the median time (s since the
+    onset) of their first invalid sample. Raises ValueError where more than half are invalid: the
+    bands of the rest would describe a biased remainder of the posterior.
+    """
+    bad = ~valid
+    share = float(bad.mean())
+    gap = int(np.any(closed[bad, row, :n_times], axis=1).sum()) if bad.any() else 0
+    first = test.time_s[np.argmax(~np.isfinite(log_i[bad]), axis=1)] if bad.any() else None
+    invalid = {
+        "share": share,
+        "gap_closed": gap,
+        "tunnelling_law": int(bad.sum()) - gap,
+        "from_s": float(np.median(first)) if bad.any() else None,
+    }
+    if share > 0.5:
+        raise ValueError(
+            f"{100 * share:.0f} % of the posterior draws of specimen {test.specimen!r} leave the "
+            f"model's domain in the protocol's test at {test.voltage_V:g} V, "
+            f"{test.stress_Pa:g} Pa from about {invalid['from_s']:.4g} s on ({gap} because the "
+            f"gap closes, {invalid['tunnelling_law']} the tunnelling law's range): too many to "
+            "predict from the rest; a creep law that keeps the gap open (docs/creep-laws.md) or "
+            "a shorter protocol"
+        )
+    return invalid
 
 
 def _share_inside(replicates, observed, level=0.9):

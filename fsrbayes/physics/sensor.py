@@ -28,6 +28,7 @@ from .tunneling import TUNNELING_LAWS
 __all__ = [
     "DomainError",
     "DomainWarning",
+    "gap_strain",
     "sensor_state",
     "solve_current",
     "current",
@@ -229,6 +230,26 @@ def _strain_step(params, stress, time, family, effects=()):
     return step_strain(_creep_law(family), effects, params, stress, time)
 
 
+def gap_strain(
+    params, stress, time, *, rheology="burgers", effects=(), load_steps=None, first_ramp=None
+):
+    """Strain ε of the inter-particle gap, s = s0·(1 − ε) (eq. 7): the gap is closed where ε ≥ 1.
+
+    The creep law's (and the effects') strain after a stress step at t = 0, or under the
+    ``load_steps`` and ``first_ramp`` of :func:`solve_current` (same arguments and shapes).
+    """
+    params = _parameters(params)
+    family = model_family(rheology)
+    effects = _check_effect_params(params, effects)
+    if load_steps is None:
+        return _strain_step(params, stress, time, family, effects)
+    step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
+    time = np.broadcast_to(np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1]))
+    return strain_of_steps(
+        params, step_time, step_size, time, _creep_law(family), effects, first_ramp=first_ramp
+    )
+
+
 def solve_current(
     params,
     voltage,
@@ -269,15 +290,14 @@ def solve_current(
     params = _parameters(params)
     family = model_family(rheology)
     effects = _check_effect_params(params, effects)
-    if load_steps is None:
-        strain = _strain_step(params, stress, time, family, effects)
-    else:
+    strain = gap_strain(
+        params, stress, time, rheology=family, effects=effects, load_steps=load_steps,
+        first_ramp=first_ramp,
+    )  # fmt: skip
+    if load_steps is not None:
         step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
         time = np.broadcast_to(
             np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1])
-        )
-        strain = strain_of_steps(
-            params, step_time, step_size, time, _creep_law(family), effects, first_ramp=first_ramp
         )
         if stress is None:
             stress = load_of_steps(step_time, step_size, time)
