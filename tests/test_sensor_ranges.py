@@ -106,6 +106,20 @@ def test_check_notes_what_the_priors_were_not_made_for(rig_a, capsys):
     assert "note: fsr402 (burgers): stress 7.09–13.6 kPa reaches below" in out
 
 
+def test_a_users_sensor_file_is_checked_against_its_templates_calibration(tmp_path, capsys):
+    from fsrbayes.data.generic import new_sensor_toml
+    from fsrbayes.data.rigsim import simulate_rig, write_rig
+
+    (tmp_path / "fsr406.toml").write_text(new_sensor_toml("fsr406", 1521.0, 3000.0, 10.0))
+    text, truth = simulate_rig(1, sensor="fsr402", weights_g=(500.0,), duration_s=20.0,
+                               rate_hz=5.0, seed=2)  # fmt: skip
+    path = write_rig(text.replace(",fsr402,", ",fsr406.toml,"), truth, tmp_path / "rig.csv")[0]
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "note: fsr406 (burgers): stress 3.22 kPa reaches below the 10.6–66 kPa" in out
+    assert "the fsr402 template's priors, made for" in out
+
+
 def test_paper_like_data_raise_no_note(capsys, tmp_path):
     sim = syn.simulate("a201", n_specimens=1, voltages=[0.5], forces=[4.9], samples=5, seed=1)
     path = tmp_path / "a201.csv"

@@ -112,5 +112,6 @@ def calibration_notes(data, model=None):
     notes = []
     for name in data.sensors:
         sensor = load_sensor(name)
-        notes += outside_calibration(data, sensor, model or sensor.default_model)
+        part = data.select(sensor=name)
+        notes += outside_calibration(part, sensor, model or sensor.default_model)
     return notes

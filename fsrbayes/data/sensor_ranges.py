@@ -150,7 +150,7 @@ def outside_calibration(data, sensor, model):
     Parameters
     ----------
     data : fsrbayes.data.CreepData
-        Tests of ``sensor`` (others are ignored).
+        Tests of ``sensor`` (e.g. ``data.select(sensor=name)``).
     sensor : fsrbayes.data.sensors.Sensor
     model : str
         The model to be fitted: its family's range applies where the file gives one.
@@ -163,7 +163,7 @@ def outside_calibration(data, sensor, model):
         or the file states no range.
     """
     bounds = sensor.calibration_for(model)
-    tests = [t for t in data if t.sensor == sensor.name]
+    tests = list(data)
     if bounds is None or not tests:
         return []
     seen = {
