@@ -92,3 +92,15 @@ def test_the_family_priors_move_with_the_sensor_and_the_calibration_is_the_templ
         own, theirs = sensor.calibration_for(model), base.calibration_for(model)
         assert (own.stress_Pa, own.voltage_V) == (theirs.stress_Pa, theirs.voltage_V)
         assert own.source.startswith("the fsr402 template's priors, made for: ")
+
+
+def test_the_bench_writes_a_users_sensor_so_that_it_reads_back(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fsr406.toml").write_text(new_sensor_toml("fsr406", 1521.0, 3000.0, 10.0))
+    text, truth = simulate_rig(1, sensor="fsr406.toml", weights_g=(500.0,), duration_s=10.0,
+                               rate_hz=5.0, seed=1)  # fmt: skip
+    (tmp_path / "out").mkdir()
+    data = read_csv(write_rig(text, truth, tmp_path / "out" / "rig.csv")[0])
+    assert data.sensors == [str((tmp_path / "fsr406.toml").resolve())]
+    assert load_sensor(data.sensors[0]).name == "fsr406"
+    assert load_sensor("fsr402").csv_name == "fsr402"

@@ -213,7 +213,7 @@ def simulate_rig(
                 mass = np.where(since < 0, grams[0], mass)
             force = mass * force_scale
             column = _reading(reading, vout, supply, rm, lsb, top, on)
-            prefix = f"{name},{sensor.name},{label}"
+            prefix = f"{name},{sensor.csv_name},{label}"
             extra = (
                 f",{setup['adc_bits']},{setup['adc_vref_V']!r}" if reading == "adc_counts" else ""
             ) + (f",{float(ramp)!r}" if written_ramp else "")

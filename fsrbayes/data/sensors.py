@@ -98,6 +98,15 @@ class Sensor:
     calibration: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     envelope: object = None
 
+    @property
+    def csv_name(self):
+        """The CSV ``sensor`` value that reads back as this sensor (its name, or its file's path).
+
+        A bundled sensor is named; a user's own file by its absolute path.
+        """
+        bundled = self.source is None or Path(self.source).resolve().parent == models_directory()
+        return self.name if bundled else str(Path(self.source).resolve())
+
     def calibration_for(self, model):
         """Return the :class:`~.sensor_ranges.CalibrationRange` of ``model``'s priors, or None."""
         family = parse_model(model)[0]

@@ -333,7 +333,13 @@ def simulate(
                     rf_map[key] = rf
                     tests.append(
                         CreepTest(
-                            specimen, sensor.name, float(v), float(sigma), "", times.copy(), reading
+                            specimen,
+                            sensor.csv_name,
+                            float(v),
+                            float(sigma),
+                            "",
+                            times.copy(),
+                            reading,
                         )
                     )
     truth = {
