@@ -329,3 +329,28 @@ def test_command_line(tmp_path):
     )
     assert run.returncode == 0, run.stderr
     assert "w4" in (tmp_path / "m.csv").read_text()
+
+
+@pytest.mark.parametrize("protocol, seed", [("hold", 101), ("hold", 202), ("staircase", 303),
+                                            ("cycles", 404)])  # fmt: skip
+def test_a_late_load_stamp_is_read_at_the_readings_rise(tmp_path, protocol, seed):
+    """Rig B stamps the load 9–11 s after the weight lands: the reader takes the onset where the
+    reading rose on the unloaded rows before the stamp — within the settling (≤ 0.3 s) and one
+    sample (0.1 s) of the bench's true landing, not at the stamp; the taps before it are not it."""
+    log = simulate_real_rig("B", protocol, seed=seed, **({} if protocol == "hold" else {}))
+    csv_path, truth_path = write_real_rig(log, tmp_path / "b.csv")
+    truth = json.loads(truth_path.read_text())
+    for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
+        landing = tt["landing_s"][0]
+        assert tt["stamps"][0]["offset_s"] >= 9.0  # the stamp is late
+        assert 0.0 <= test.onset_s - landing <= 0.45, (test.onset_s, landing)
+        assert test.onset_source == "reading"
+
+
+def test_a_stamp_on_time_stays_the_onset(tmp_path):
+    log = simulate_real_rig("A", "hold", seed=505, duration_s=20.0, rate_hz=10.0)
+    csv_path, truth_path = write_real_rig(log, tmp_path / "a.csv")
+    truth = json.loads(truth_path.read_text())
+    for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
+        assert test.onset_source == "load"
+        assert abs(test.onset_s - tt["landing_s"][0]) <= 0.1 + 1e-9

@@ -218,7 +218,8 @@ class CreepData:
             if detected:
                 lines.append(
                     f"    the load's onset found from the reading's jump in {len(detected)} "
-                    f"test(s) (the load column is nonzero from the first row), at "
+                    f"test(s) (the load column is nonzero from the first row, or stamped after "
+                    "the reading rose), at "
                     f"{', '.join(f'{t.onset_s:g}' for t in detected[:6])} s of the logger's clock"
                 )
             ramps = sorted({t.ramp_s for t in sub if t.ramp_s > 0})

@@ -193,7 +193,8 @@ def rig_tests(
                 int(lines[j]),
                 "time_s",
             )
-        loaded = stress[idx] > 0
+        level = stress[idx].copy()
+        loaded = level > 0
         onset_from = "onset_s" if onset is not None else "load"
         if onset is None and required and loaded[0]:
             # the load is written on every row: the weight landed where the reading jumps
@@ -201,6 +202,14 @@ def rig_tests(
             if landed > 0:
                 loaded = loaded.copy()
                 loaded[:landed] = False
+                onset_from = "reading"
+        elif onset is None and required and loaded.any():
+            # a load stamped late: the reading rose on the unloaded rows just before it
+            landed = _late_stamp(raw, idx, loaded, renamed_reading, readout, decimal_comma)
+            if landed is not None:
+                first_stamped = int(np.argmax(loaded))
+                level[landed:first_stamped] = level[first_stamped]
+                loaded = level > 0
                 onset_from = "reading"
         if not loaded.any():
             raise DataError(
@@ -210,8 +219,8 @@ def rig_tests(
                 int(lines[0]),
             )
         first = int(np.argmax(loaded))
-        load = stress[idx[first]]
-        changes = first + 1 + np.flatnonzero(np.diff(stress[idx[first:]]) != 0)
+        load = level[first]
+        changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
         if changes.size >= MAX_LOAD_STEPS:
             raise DataError(
                 f"{what} changes its load {changes.size} times; at most {MAX_LOAD_STEPS - 1} "
@@ -236,7 +245,7 @@ def rig_tests(
         steps = None
         if changes.size:
             step_rows = np.concatenate([[first], changes])
-            levels = stress[idx[step_rows]]
+            levels = level[step_rows]
             steps = (
                 np.concatenate([[0.0], t[changes] - t_on]),
                 np.diff(np.concatenate([[0.0], levels])),
@@ -323,6 +332,39 @@ def _landing(raw, idx, column, readout, decimal_comma):
         return 0
     both = high[:-1] & high[1:]
     return int(np.argmax(both)) if both.any() else 0
+
+
+STAMP_BAND = 2.0
+"""Rows before a late load stamp count as loaded when their current is within this factor of the
+first stamped rows'."""
+
+
+def _late_stamp(raw, idx, loaded, column, readout, decimal_comma):
+    """Return the row where a weight landed before its load was written, or None.
+
+    A logger whose operator types the weight after placing it stamps the load late: the rows just
+    before the first loaded one already read a loaded sensor. The landing is the start of the
+    unbroken run of such rows that ends at the stamp: at least two, each within a factor
+    :data:`STAMP_BAND` of the median current of the first loaded rows. Earlier taps and the
+    residual conduction after them leave the band (an open divider reads far below it) and end
+    the run; so do the first tenths of a second while the weight settles (reading 2–3× its
+    resistance), so the onset found may be that much late.
+    """
+    first = int(np.argmax(loaded))
+    if first < 2:
+        return None
+    stamped = idx[first:][loaded[first:]][:20]
+    _, after = _lenient_currents(raw, stamped, column, readout, decimal_comma)
+    level = np.nanmedian(np.where(after > 0, after, np.nan)) if np.any(after > 0) else 0.0
+    if not level > 0:
+        return None
+    _, before = _lenient_currents(raw, idx[:first], column, readout, decimal_comma)
+    before = np.nan_to_num(before, nan=0.0, posinf=0.0)
+    high = (before >= level / STAMP_BAND) & (before <= level * STAMP_BAND)
+    start = first
+    while start > 0 and high[start - 1]:
+        start -= 1
+    return start if first - start >= 2 else None
 
 
 def _settling(raw, rows, column, readout, decimal_comma):
