@@ -611,3 +611,16 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
     assert (
         "sampling: 100%" in result.stderr and "60/60" in result.stderr and "step" in result.stderr
     )
+
+
+def test_the_corner_plot_draws_a_parameter_stuck_at_one_value(result, tmp_path):
+    """Walkers pinned at a prior bound give a column with no spread: corner needs a range."""
+    from fsrbayes.inference.output import to_datatree
+    from fsrbayes.plots import corner_plot
+
+    tree = to_datatree(result, max_draws=200)
+    posterior = tree["posterior"].to_dataset()
+    stuck = np.full_like(posterior["k1"].values, float(posterior["k1"].values.ravel()[0]))
+    tree["posterior"] = posterior.assign(k1=(posterior["k1"].dims, stuck))
+    fig, axes = corner_plot(tree)
+    assert axes.shape[0] == axes.shape[1] >= 5

@@ -5,6 +5,7 @@ Each function takes what the fit wrote (an ArviZ DataTree from
 object, and returns ``(fig, axes)``.
 """
 
+import logging
 import warnings
 
 import matplotlib.pyplot as plt
@@ -37,14 +38,30 @@ def corner_plot(tree, names=None):
         else:
             columns.append(values)
             labels.append(name)
-    fig = corner.corner(
+    spans = []
+    for values in columns:  # a parameter stuck at one value (a bound) still gets a panel
+        low, high = float(np.min(values)), float(np.max(values))
+        pad = max(abs(low) * 1e-6, 1e-12) if high - low <= max(abs(low) * 1e-12, 1e-300) else 0.0
+        spans.append((low - pad, high + pad))
+    quiet = logging.getLogger()  # corner logs "too few points" for narrow panels at WARNING
+    level = quiet.level
+    quiet.setLevel(logging.ERROR)
+    try:
+        fig = _corner(corner, columns, spans, labels)
+    finally:
+        quiet.setLevel(level)
+    return fig, np.array(fig.axes).reshape(len(names), len(names))
+
+
+def _corner(corner, columns, spans, labels):
+    return corner.corner(
         np.column_stack(columns),
+        range=spans,
         labels=labels,
         quantiles=[0.05, 0.5, 0.95],
         show_titles=False,
         label_kwargs={"fontsize": 8},
     )
-    return fig, np.array(fig.axes).reshape(len(names), len(names))
 
 
 def _test_label(tree, i):
