@@ -347,6 +347,24 @@ def test_a_late_load_stamp_is_read_at_the_readings_rise(tmp_path, protocol, seed
         assert test.onset_source == "reading"
 
 
+@pytest.mark.parametrize("protocol, seed", [("staircase", 606), ("cycles", 707)])
+def test_later_weights_stamped_late_are_read_where_the_reading_moved(tmp_path, protocol, seed):
+    """A staircase's next weight and a cycle's reloading are stamped 9–11 s late too: each load
+    change to a nonzero load is read within 0.45 s of the bench's true change."""
+    log = simulate_real_rig("B", protocol, seed=seed)
+    csv_path, truth_path = write_real_rig(log, tmp_path / "b.csv")
+    truth = json.loads(truth_path.read_text())
+    for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
+        history = tt["force_history"]
+        events = np.array([t for t, kind in zip(history["t_s"], history["kind"], strict=True)
+                           if kind != "tap"])  # fmt: skip
+        times, sizes = test.load_steps
+        levels = np.cumsum(sizes)
+        for at, level in zip(times + test.onset_s, levels, strict=True):
+            if level > 0:
+                assert np.min(np.abs(events - at)) <= 0.45, (at, events)
+
+
 def test_a_stamp_on_time_stays_the_onset(tmp_path):
     log = simulate_real_rig("A", "hold", seed=505, duration_s=20.0, rate_hz=10.0)
     csv_path, truth_path = write_real_rig(log, tmp_path / "a.csv")

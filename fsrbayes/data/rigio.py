@@ -221,6 +221,11 @@ def rig_tests(
         first = int(np.argmax(loaded))
         load = level[first]
         changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
+        if onset is None and required and changes.size and changes.size < MAX_LOAD_STEPS:
+            # later weights stamped late too: the reading reached the new level before its row
+            level = _late_changes(raw, idx, level, first, changes, renamed_reading, readout,
+                                  decimal_comma)  # fmt: skip
+            changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
         if changes.size >= MAX_LOAD_STEPS:
             raise DataError(
                 f"{what} changes its load {changes.size} times; at most {MAX_LOAD_STEPS - 1} "
@@ -365,6 +370,41 @@ def _late_stamp(raw, idx, loaded, column, readout, decimal_comma):
     while start > 0 and high[start - 1]:
         start -= 1
     return start if first - start >= 2 else None
+
+
+def _late_changes(raw, idx, level, first, changes, column, readout, decimal_comma):
+    """Return the load per row with each later change moved back to where the reading moved.
+
+    For a change to a nonzero load: the unbroken run of rows just before its row whose
+    log-current is within :data:`STAMP_BAND` of the new segment's (median of its first rows) and,
+    from a nonzero load, nearer it than the old segment's (median of its first half), takes the
+    new load (at least two rows). An unloading is left at its row (the rows after it carry no
+    reading).
+    """
+    level = level.copy()
+    _, current = _lenient_currents(raw, idx, column, readout, decimal_comma)
+    log_i = np.log(np.where(current > 0, current, np.nan))
+    bounds = np.concatenate([[first], changes, [idx.size]])
+    for k, row in enumerate(changes):
+        start, end = bounds[k], bounds[k + 2]
+        if level[row] <= 0:
+            continue
+        new = np.nanmedian(log_i[row : min(end, row + 20)])
+        old = -np.inf  # from zero load: any reading in the band is the new weight's
+        if level[row - 1] > 0:
+            old = np.nanmedian(log_i[start : start + max(1, (row - start) // 2)])
+        if not (np.isfinite(new) and not np.isnan(old)):
+            continue
+        with np.errstate(invalid="ignore"):
+            near = (np.abs(log_i - new) < np.abs(log_i - old)) & (
+                np.abs(log_i - new) <= np.log(STAMP_BAND)
+            )
+        moved = row
+        while moved > start + 1 and near[moved - 1]:
+            moved -= 1
+        if row - moved >= 2:
+            level[moved:row] = level[row]
+    return level
 
 
 def _settling(raw, rows, column, readout, decimal_comma):
