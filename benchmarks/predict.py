@@ -2,7 +2,7 @@
 
 An FSR 402 in an Arduino divider read by a 10-bit ADC (:data:`fsrbayes.data.rigsim.RIG_DEFAULTS`,
 240,000 readings), predicted from a fit whose posterior is the simulated specimen's truth
-(:func:`fsrbayes.inference.predict.write_point_fit`) with 1000 replicate readings per sample —
+(:func:`fsrbayes.inference.point_fit.write_point_fit`) with 1000 replicate readings per sample —
 the cost of a prediction does not depend on where the draws came from. Reports the wall time
 and the coverage of the 90 % band (0.90 or a little above for whole counts).
 """
@@ -13,7 +13,8 @@ from pathlib import Path
 
 from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
-from fsrbayes.inference.predict import predict, write_point_fit
+from fsrbayes.inference.point_fit import write_point_fit
+from fsrbayes.inference.predict import predict
 
 
 def run(n_draws=1000, seed=2):

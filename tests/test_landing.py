@@ -16,9 +16,10 @@ from fsrbayes.data import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.point_fit import write_point_fit
 from fsrbayes.inference.population import Population
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.predict import predict, write_point_fit
+from fsrbayes.inference.predict import predict
 
 RIG = {"weights_g": (200.0, 150.0), "duration_s": 20.0, "rate_hz": 100.0, "seed": 6}
 

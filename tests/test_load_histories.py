@@ -9,9 +9,10 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.point_fit import write_point_fit
 from fsrbayes.inference.population import Population
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.predict import predict, write_point_fit
+from fsrbayes.inference.predict import predict
 from fsrbayes.physics.loading import StressHistory
 from fsrbayes.physics.sensor import current_history, solve_current
 

@@ -14,7 +14,8 @@ import pytest
 from fsrbayes.cli import main
 from fsrbayes.data import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
-from fsrbayes.inference.predict import fit_folders, predict, write_point_fit
+from fsrbayes.inference.point_fit import write_point_fit
+from fsrbayes.inference.predict import fit_folders, predict
 
 RIG = {"duration_s": 60.0, "rate_hz": 50.0, "weights_g": (150.0, 255.0)}
 

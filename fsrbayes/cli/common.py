@@ -2,11 +2,14 @@
 
 import shutil
 import signal
+import sys
 
 import numpy as np
 
 __all__ = [
     "calibration_notes",
+    "default_model",
+    "warn_out_of_domain",
     "UsageError",
     "FitFailed",
     "floats",
@@ -115,3 +118,39 @@ def calibration_notes(data, model=None):
         part = data.select(sensor=name)
         notes += outside_calibration(part, sensor, model or sensor.default_model)
     return notes
+
+
+def default_model(data):
+    """Return the sensor files' ``default_model`` of the data's sensors (they must agree)."""
+    from ..data.sensors import load_sensor
+
+    defaults = {sensor: load_sensor(sensor).default_model for sensor in data.sensors}
+    if len(set(defaults.values())) > 1:
+        raise UsageError(
+            f"the data's sensors default to different models ({defaults}); name one with --model"
+        )
+    return next(iter(defaults.values()))
+
+
+def warn_out_of_domain(specimen, info):
+    """Say on stderr which tests' posterior draws leave the model's domain within the hour."""
+    for test in info["tests"]:
+        where = test["out_of_domain"]
+        segments = [s for s in test.get("segments") or () if s["out_of_domain"] > 0]
+        if where and where["share"] > 0:
+            print(
+                f"fsrbayes fit: warning: {specimen}: at {test['voltage_V']:g} V, "
+                f"{test['stress_Pa'] / 1e3:.3g} kPa, {100 * where['share']:.0f} % of the posterior "
+                "draws leave the model's domain (the gap closes, or the tunnelling law's range is "
+                f"left) within the hour, median {where['from_s']:.0f} s after loading; drift_3600 "
+                "is over the other draws",
+                file=sys.stderr,
+            )
+        for segment in segments:
+            load, share = segment["load_Pa"] / 1e3, 100 * segment["out_of_domain"]
+            print(
+                f"fsrbayes fit: warning: {specimen}: in the segment at {load:.3g} kPa from "
+                f"{segment['start_s']:g} s, {share:.0f} % of the posterior draws leave the model's "
+                "domain; its drift is over the other draws",
+                file=sys.stderr,
+            )

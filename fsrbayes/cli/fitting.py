@@ -18,10 +18,12 @@ from .common import (
     FitFailed,
     UsageError,
     calibration_notes,
+    default_model,
     enough_space,
     fit_output_bytes,
     floats,
     install_sigterm_handler,
+    warn_out_of_domain,
     writable,
 )
 
@@ -50,7 +52,7 @@ def cmd_fit(args):
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
     out = Path(args.out)
     writable(out)
-    args.model = args.model or _default_model(data)
+    args.model = args.model or default_model(data)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,
@@ -100,7 +102,7 @@ def cmd_fit(args):
         notes = []
         checks = _checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
-        _warn_out_of_domain(specimen, summaries[specimen])
+        warn_out_of_domain(specimen, summaries[specimen])
         if args.plots:
             _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"
@@ -117,42 +119,6 @@ def cmd_fit(args):
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
     return 0
-
-
-def _default_model(data):
-    """Return the sensor files' ``default_model`` of the data's sensors (they must agree)."""
-    from ..data.sensors import load_sensor
-
-    defaults = {sensor: load_sensor(sensor).default_model for sensor in data.sensors}
-    if len(set(defaults.values())) > 1:
-        raise UsageError(
-            f"the data's sensors default to different models ({defaults}); name one with --model"
-        )
-    return next(iter(defaults.values()))
-
-
-def _warn_out_of_domain(specimen, info):
-    """Say on stderr which tests' posterior draws leave the model's domain within the hour."""
-    for test in info["tests"]:
-        where = test["out_of_domain"]
-        segments = [s for s in test.get("segments") or () if s["out_of_domain"] > 0]
-        if where and where["share"] > 0:
-            print(
-                f"fsrbayes fit: warning: {specimen}: at {test['voltage_V']:g} V, "
-                f"{test['stress_Pa'] / 1e3:.3g} kPa, {100 * where['share']:.0f} % of the posterior "
-                "draws leave the model's domain (the gap closes, or the tunnelling law's range is "
-                f"left) within the hour, median {where['from_s']:.0f} s after loading; drift_3600 "
-                "is over the other draws",
-                file=sys.stderr,
-            )
-        for segment in segments:
-            load, share = segment["load_Pa"] / 1e3, 100 * segment["out_of_domain"]
-            print(
-                f"fsrbayes fit: warning: {specimen}: in the segment at {load:.3g} kPa from "
-                f"{segment['start_s']:g} s, {share:.0f} % of the posterior draws leave the model's "
-                "domain; its drift is over the other draws",
-                file=sys.stderr,
-            )
 
 
 def _checked_fit(specimen, result, seed):
@@ -280,7 +246,7 @@ def _fit_hierarchical(args, data, settings, out):
                 (folder / specimen).mkdir(exist_ok=True)
                 checks = _checked_fit(specimen, result, args.seed)
                 summaries[specimen] = save_fit(result, folder / specimen, extra={"checks": checks})
-                _warn_out_of_domain(specimen, summaries[specimen])
+                warn_out_of_domain(specimen, summaries[specimen])
                 print(
                     f"  {specimen}: {'converged' if result.converged else 'NOT converged'}; "
                     f"{result.run.report.worst()}",

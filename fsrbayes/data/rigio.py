@@ -16,6 +16,7 @@ import numpy as np
 
 from ..utils import codes_of
 from .creep import CreepTest, DataError
+from .onsets import landing_row, late_changes, late_stamp_row, settling_rows
 from .readouts import Readout, current_of
 
 __all__ = ["RIG_READINGS", "is_rig_file", "rig_tests"]
@@ -198,14 +199,14 @@ def rig_tests(
         onset_from = "onset_s" if onset is not None else "load"
         if onset is None and required and loaded[0]:
             # the load is written on every row: the weight landed where the reading jumps
-            landed = _landing(raw, idx, renamed_reading, readout, decimal_comma)
+            landed = landing_row(raw, idx, renamed_reading, readout, decimal_comma)
             if landed > 0:
                 loaded = loaded.copy()
                 loaded[:landed] = False
                 onset_from = "reading"
         elif onset is None and required and loaded.any():
             # a load stamped late: the reading rose on the unloaded rows just before it
-            landed = _late_stamp(raw, idx, loaded, renamed_reading, readout, decimal_comma)
+            landed = late_stamp_row(raw, idx, loaded, renamed_reading, readout, decimal_comma)
             if landed is not None:
                 first_stamped = int(np.argmax(loaded))
                 level[landed:first_stamped] = level[first_stamped]
@@ -223,7 +224,7 @@ def rig_tests(
         changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
         if onset is None and required and changes.size and changes.size < MAX_LOAD_STEPS:
             # later weights stamped late too: the reading reached the new level before its row
-            level = _late_changes(raw, idx, level, first, changes, renamed_reading, readout,
+            level = late_changes(raw, idx, level, first, changes, renamed_reading, readout,
                                   decimal_comma)  # fmt: skip
             changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
         if changes.size >= MAX_LOAD_STEPS:
@@ -275,7 +276,7 @@ def rig_tests(
         # a weight still settling: its first rows may read an open circuit (in a protocol too;
         # its empty readings are not one)
         before = keep if not changes.size else keep[keep < idx[changes[0]]]
-        keep = keep[_settling(raw, before, renamed_reading, readout, decimal_comma) :]
+        keep = keep[settling_rows(raw, before, renamed_reading, readout, decimal_comma) :]
         if keep.size < 3:
             raise DataError(
                 f"{what} has {keep.size} loaded sample(s); a creep test needs at least 3",
@@ -307,135 +308,6 @@ def rig_tests(
             )
         )
     return tuple(tests)
-
-
-def _number_or_nan(field):
-    try:
-        return float(field)
-    except ValueError:
-        return np.nan
-
-
-LANDING_FRACTION = 0.1
-"""A weight has landed where the current first reaches this fraction of the test's late level."""
-
-
-def _landing(raw, idx, column, readout, decimal_comma):
-    """Return the index of a test's first row after the weight landed, from the reading's jump.
-
-    Before the weight lands an open divider reads a few counts (a resistance reads ``inf``): the
-    current is near 0. The landing is the first row from which two successive currents reach
-    :data:`LANDING_FRACTION` of the median current of the test's second half; 0 when the first
-    row already reaches it (the logger started after the landing). Unparsable fields count as no
-    current here; the loaded rows are checked afterwards as always.
-    """
-    _, current = _lenient_currents(raw, idx, column, readout, decimal_comma)
-    current = np.nan_to_num(current, nan=0.0, posinf=0.0)
-    level = np.median(current[current.size // 2 :])
-    high = current >= LANDING_FRACTION * level
-    if high[0]:  # loaded from the first row: nothing to find
-        return 0
-    both = high[:-1] & high[1:]
-    return int(np.argmax(both)) if both.any() else 0
-
-
-STAMP_BAND = 2.0
-"""Rows before a late load stamp count as loaded when their current is within this factor of the
-first stamped rows'."""
-
-
-def _late_stamp(raw, idx, loaded, column, readout, decimal_comma):
-    """Return the row where a weight landed before its load was written, or None.
-
-    A logger whose operator types the weight after placing it stamps the load late: the rows just
-    before the first loaded one already read a loaded sensor. The landing is the start of the
-    unbroken run of such rows that ends at the stamp: at least two, each within a factor
-    :data:`STAMP_BAND` of the median current of the first loaded rows. Earlier taps and the
-    residual conduction after them leave the band (an open divider reads far below it) and end
-    the run; so do the first tenths of a second while the weight settles (reading 2–3× its
-    resistance), so the onset found may be that much late.
-    """
-    first = int(np.argmax(loaded))
-    if first < 2:
-        return None
-    stamped = idx[first:][loaded[first:]][:20]
-    _, after = _lenient_currents(raw, stamped, column, readout, decimal_comma)
-    level = np.nanmedian(np.where(after > 0, after, np.nan)) if np.any(after > 0) else 0.0
-    if not level > 0:
-        return None
-    _, before = _lenient_currents(raw, idx[:first], column, readout, decimal_comma)
-    before = np.nan_to_num(before, nan=0.0, posinf=0.0)
-    high = (before >= level / STAMP_BAND) & (before <= level * STAMP_BAND)
-    start = first
-    while start > 0 and high[start - 1]:
-        start -= 1
-    return start if first - start >= 2 else None
-
-
-def _late_changes(raw, idx, level, first, changes, column, readout, decimal_comma):
-    """Return the load per row with each later change moved back to where the reading moved.
-
-    For a change to a nonzero load: the unbroken run of rows just before its row whose
-    log-current is within :data:`STAMP_BAND` of the new segment's (median of its first rows) and,
-    from a nonzero load, nearer it than the old segment's (median of its first half), takes the
-    new load (at least two rows). An unloading is left at its row (the rows after it carry no
-    reading).
-    """
-    level = level.copy()
-    _, current = _lenient_currents(raw, idx, column, readout, decimal_comma)
-    log_i = np.log(np.where(current > 0, current, np.nan))
-    bounds = np.concatenate([[first], changes, [idx.size]])
-    for k, row in enumerate(changes):
-        start, end = bounds[k], bounds[k + 2]
-        if level[row] <= 0:
-            continue
-        new = np.nanmedian(log_i[row : min(end, row + 20)])
-        old = -np.inf  # from zero load: any reading in the band is the new weight's
-        if level[row - 1] > 0:
-            old = np.nanmedian(log_i[start : start + max(1, (row - start) // 2)])
-        if not (np.isfinite(new) and not np.isnan(old)):
-            continue
-        with np.errstate(invalid="ignore"):
-            near = (np.abs(log_i - new) < np.abs(log_i - old)) & (
-                np.abs(log_i - new) <= np.log(STAMP_BAND)
-            )
-        moved = row
-        while moved > start + 1 and near[moved - 1]:
-            moved -= 1
-        if row - moved >= 2:
-            level[moved:row] = level[row]
-    return level
-
-
-def _settling(raw, rows, column, readout, decimal_comma):
-    """Return how many of a loading's first rows read an open circuit (no current at all).
-
-    A hand-placed weight settles over a fraction of a second: a 10-bit divider reads 0 counts (a
-    resistance ``inf``) on the first rows the load column already marks as loaded. Those rows
-    say only that the current was below one step; they are left out of the test (its time still
-    counts from the onset) rather than refused. A zero reading later in the test is still an
-    error.
-    """
-    values, current = _lenient_currents(raw, rows, column, readout, decimal_comma)
-    open_circuit = ~(current > 0) & ~np.isnan(values)
-    return int(np.argmin(open_circuit)) if not open_circuit.all() else open_circuit.size
-
-
-def _lenient_currents(raw, rows, column, readout, decimal_comma):
-    """Return the reading on ``rows`` in SI units and its current, unparsable fields as NaN.
-
-    For finding where a loading starts before the loaded rows are checked as always.
-    """
-    _, factor = column
-    fields = [raw[i].strip() for i in rows]
-    if decimal_comma:
-        fields = [f.replace(",", ".") for f in fields]
-    try:
-        values = np.array(fields, dtype=float) * factor
-    except ValueError:
-        values = np.array([_number_or_nan(f) for f in fields]) * factor
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return values, current_of(readout, values)
 
 
 def _check_rm(rm, line_no, path):

@@ -37,7 +37,7 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .output import FORMAT_VERSION, open_fit_tree
+from .output import open_fit_tree
 from .posterior import LogPosterior, is_landing, is_ramp, nuisance_parameters, samples_landing
 
 __all__ = [
@@ -48,7 +48,6 @@ __all__ = [
     "predict",
     "reading_name",
     "relative_noise",
-    "write_point_fit",
 ]
 
 PREDICT_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
@@ -426,78 +425,3 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
         "coverage_90": sum(k for k, _ in counts) / total if total else None,
         "n_readings": total,
     }
-
-
-def write_point_fit(
-    folder,
-    params,
-    specimen,
-    sensor,
-    *,
-    model="burgers",
-    likelihood="gaussian",
-    n_draws=100,
-    ramp="given",
-):
-    """Write a fit folder whose posterior is a point mass at ``params`` (for :func:`predict`).
-
-    What a specimen with known parameters — a simulated truth, or a sensor file's defaults —
-    reads under a protocol: :func:`predict` on this folder gives the sampling distribution of
-    the readings alone, with no parameter uncertainty.
-
-    Parameters
-    ----------
-    folder : str or Path
-        Created if needed; ``posterior.nc`` is written there.
-    params : mapping
-        Every parameter of ``model`` and of the likelihood's noise (``sigma_rel``, …).
-    specimen : str
-    sensor : str
-        A catalogue sensor or a sensor file's path.
-    model, likelihood : str
-    n_draws : int
-    ramp : {"given", "fitted"}
-        ``"fitted"``: ``params`` holds a loading ramp ``ramp_s``, as a fit with fitted ramps
-        whose every test settled over it (the protocol's tests then do too).
-
-    Returns
-    -------
-    Path
-        ``folder``.
-    """
-    from arviz_base import from_dict
-
-    from ..utils import atomic_path
-
-    one = np.ones((1, 3))
-    dummy = SpecimenData(specimen, sensor, np.ones(1), np.ones(1), one, 0 * one, one > 0)
-    names = LogPosterior.for_sensor(
-        dummy, load_sensor(sensor), model=model, likelihood=likelihood, ramp=ramp
-    ).names
-    params = dict(params)
-    if ramp == "fitted" and "ramp_s" in params:
-        params["ramp_s[0]"] = params.pop("ramp_s")
-    missing = [n for n in names if n not in params]
-    if missing:
-        raise ValueError(f"write_point_fit: params lack {missing} of model {model!r}")
-    fixed = {k: float(v) for k, v in params.items() if k not in names}
-    posterior = {n: np.full((2, max(1, n_draws // 2)), float(params[n])) for n in names}
-    tree = from_dict({"posterior": posterior})
-    tree.attrs.update(
-        {
-            "fsrbayes_format_version": FORMAT_VERSION,
-            "fsrbayes_model": model,
-            "tunneling": "smooth",
-            "likelihood": likelihood,
-            "specimen": specimen,
-            "sensor": sensor,
-            "converged": 1,
-            "fixed_parameters": json.dumps(fixed),
-            "sampler": "point mass",
-        }
-    )
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    with atomic_path(folder / "posterior.nc") as tmp:
-        tree.to_netcdf(tmp, engine="h5netcdf")
-    return folder
