@@ -205,7 +205,7 @@ def rig_tests(
                 loaded[:landed] = False
                 onset_from = "reading"
         elif onset is None and required and loaded.any():
-            # a load stamped late: the reading rose on the unloaded rows just before it
+            # the weight may have landed before its load was written: the reading says where
             landed = late_stamp_row(raw, idx, loaded, renamed_reading, readout, decimal_comma)
             if landed is not None:
                 first_stamped = int(np.argmax(loaded))
@@ -223,7 +223,7 @@ def rig_tests(
         load = level[first]
         changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
         if onset is None and required and changes.size and changes.size < MAX_LOAD_STEPS:
-            # later weights stamped late too: the reading reached the new level before its row
+            # each later weight, too, lands where the reading reaches its level
             level = late_changes(raw, idx, level, first, changes, renamed_reading, readout,
                                   decimal_comma)  # fmt: skip
             changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)

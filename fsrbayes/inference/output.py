@@ -31,8 +31,8 @@ __all__ = [
 
 FORMAT_VERSION = 2
 """Version of the fit folders' layout (``format_version`` in summary.json, the attribute
-``fsrbayes_format_version`` of posterior.nc and population.nc). 2: drift draws out of the model's
-domain are NaN with ``out_of_domain`` beside them (folders without a version wrote −100 %)."""
+``fsrbayes_format_version`` of posterior.nc and population.nc). In format 2 drift draws out of
+the model's domain are NaN, with ``out_of_domain`` beside them."""
 
 
 def open_fit_tree(path):
@@ -313,16 +313,17 @@ def segment_drifts(posterior, draws):
         if found is None:
             out.append(None)
             continue
+        drift = [
+            drift_between(log_i[:, i, 2 * j], log_i[:, i, 2 * j + 1]) for j in range(len(found))
+        ]
         out.append(
             [
                 {
                     "start_s": float(start),
                     "end_s": float(end),
                     "load_Pa": float(load),
-                    "drift": _drift_q(drift_between(log_i[:, i, 2 * j], log_i[:, i, 2 * j + 1])),
-                    "out_of_domain": float(
-                        np.mean(~np.isfinite(log_i[:, i, 2 * j : 2 * j + 2]).any(axis=-1))
-                    ),
+                    "drift": _drift_q(drift[j]),
+                    "out_of_domain": float(np.isnan(drift[j]).mean()),
                     "observed_drift": _finite(seen),
                 }
                 for j, (_, start, end, load, seen) in enumerate(found)

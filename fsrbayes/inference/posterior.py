@@ -29,8 +29,8 @@ __all__ = [
 ]
 
 OPTIONAL_PARAMETERS = ("n_junctions",)
-"""Parameters a model may go without: the circuit takes one junction (the paper's) without it,
-so a sensor file written before it existed fits as before."""
+"""Parameters a model may go without: without ``n_junctions`` the circuit has one junction (the
+paper's), so a sensor file that does not name it fits the paper's model."""
 
 
 def drift_between(log_start, log_end):

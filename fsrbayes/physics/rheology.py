@@ -200,8 +200,8 @@ class CreepLaw:
     def step_response(self, size, drive_size, since, params):
         """Strain of a stress change ``size`` (Pa) whose drive changes by ``drive_size``.
 
-        ``since`` is the time since the change (s; 0 before it). For a linear law this is
-        size·J(since) and ``drive_size`` is ignored.
+        ``since`` is the time since the change in s; the strain is 0 where it is negative. For a
+        linear law this is size·J(since) and ``drive_size`` is ignored.
         """
         if self.drive is None:
             return np.asarray(size, dtype=float) * self.compliance(since, params)
@@ -210,16 +210,27 @@ class CreepLaw:
         delayed = self.compliance(since, params) - instant
         return np.where(since >= 0, size * instant + drive_size * delayed, 0.0)
 
-    def ramp_response(self, rate, drive_rate, since, params):
-        """Strain of a stress rising at ``rate`` (Pa/s) from since = 0, its drive at ``drive_rate``.
+    def ramp_strain(self, size, since, width, params):
+        """Strain of a stress rising linearly from rest to ``size`` (Pa) over ``width`` s.
 
-        Subtract the same at since − width to end the ramp. Linear laws: rate·Ĵ(since).
+        ``since`` is the time since the rise began. A linear law gives
+        (size/width)·[Ĵ(since) − Ĵ(since − width)]; a nonlinear one takes its drive as rising
+        linearly from 0 to g(size) over the same time (module docstring).
         """
+        rate = size / width
         if self.drive is None:
-            return np.asarray(rate, dtype=float) * self.ramp_compliance(since, params)
-        elapsed = np.maximum(np.asarray(since, dtype=float), 0.0)
-        instant = self.compliance(0.0, params) * elapsed
-        return rate * instant + drive_rate * (self.ramp_compliance(elapsed, params) - instant)
+            return rate * (
+                self.ramp_compliance(since, params) - self.ramp_compliance(since - width, params)
+            )
+        drive_rate = self.drive(np.maximum(size, 0.0), params) / width
+        instant = self.compliance(0.0, params)
+
+        def rising(u):
+            elapsed = np.maximum(np.asarray(u, dtype=float), 0.0)
+            elastic = instant * elapsed
+            return rate * elastic + drive_rate * (self.ramp_compliance(elapsed, params) - elastic)
+
+        return rising(since) - rising(since - width)
 
     def strain_history(self, history, t, params, *, chunk=2_000_000):
         """Strain under a piecewise-linear stress history (:func:`strain_history`)."""

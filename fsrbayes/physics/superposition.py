@@ -91,15 +91,7 @@ def _ramp_strain(law, effects, params, size, since, ramp_s):
     rising = ramp_s > 0
     width = np.where(rising, ramp_s, 1.0)
     rate = size / width
-    if law.drive is None:
-        strain = rate * (
-            law.ramp_compliance(since, params) - law.ramp_compliance(since - width, params)
-        )
-    else:
-        drive_rate = law.drive(np.maximum(size, 0.0), params) / width
-        strain = law.ramp_response(rate, drive_rate, since, params) - law.ramp_response(
-            rate, drive_rate, since - width, params
-        )
+    strain = law.ramp_strain(size, since, width, params)
     for effect in effects:
         extra = effect.extra_ramp_strain(params, rate, since)
         if extra is None:
