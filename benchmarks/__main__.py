@@ -1,5 +1,5 @@
-"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [csv] [rig-read]
-[predict] [likelihood] [engine] [map-search] [long-run] [fit] [rig-fit] [evidence]
+"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [scattered] [csv]
+[rig-read] [predict] [likelihood] [engine] [map-search] [long-run] [fit] [rig-fit] [evidence]
 [evidence-seeds] [dynesty] [hierarchical] [population-sizes] [diagnose] [demo]``.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
@@ -35,12 +35,14 @@ from benchmarks import (  # noqa: E402
     predict,
     rig_fit,
     rig_read,
+    scattered,
     solver,
 )  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 
 BENCHMARKS = {
     "solver": lambda: solver.report(solver.run(dict(load_sensor("a201").params))),
+    "scattered": lambda: scattered.report(scattered.run()),
     "csv": lambda: csv_read.report(csv_read.run()),
     "rig-read": lambda: rig_read.report(rig_read.run()),
     "predict": lambda: predict.report(predict.run()),

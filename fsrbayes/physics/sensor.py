@@ -20,6 +20,7 @@ import numpy as np
 from .contact import contact_resistance, effective_area, gap
 from .effects import resolve_effects
 from .models import PeerModel, model_family
+from .scattered import solve_scattered
 from .solver import solve_bulk as solve_exactly
 from .superposition import load_of_steps, ramped_load, step_strain, strain_of_steps
 from .tangent import solve_bulk_near_first
@@ -290,6 +291,26 @@ def solve_current(
     params = _parameters(params)
     family = model_family(rheology)
     effects = _check_effect_params(params, effects)
+    if load_steps is None and not near_first:  # scattered points: solved in a better order
+        scattered = solve_scattered(
+            lambda p, v, s, t, r: _solve_current(
+                p, v, s, t, family, tunneling, effects, r, None, None, False
+            ),
+            params, voltage, stress, time, extra_series,
+        )  # fmt: skip
+        if scattered is not None:
+            return scattered
+    return _solve_current(
+        params, voltage, stress, time, family, tunneling, effects, extra_series, load_steps,
+        first_ramp, near_first,
+    )  # fmt: skip
+
+
+def _solve_current(
+    params, voltage, stress, time, family, tunneling, effects, extra_series, load_steps,
+    first_ramp, near_first,
+):  # fmt: skip
+    """:func:`solve_current` on the points in the order given (checked arguments)."""
     strain = gap_strain(
         params, stress, time, rheology=family, effects=effects, load_steps=load_steps,
         first_ramp=first_ramp,

@@ -1,0 +1,97 @@
+"""Points at scattered conditions and times: grouped by condition for the solve, returned in order.
+
+The grouping only changes where Newton starts, so every value must equal the points solved as
+they come (``MIN_SCATTERED_POINTS`` raised past the point count) to rounding, with the same
+invalid points, shapes and error messages; ordered layouts are never regrouped.
+"""
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.physics import DomainError, scattered, solve_current
+from fsrbayes.physics.compiled_order import condition_order, row_breaks
+
+VOLTAGES = (0.2, 0.5, 1.0, 2.0, 8.0)  # 8 V: past the paper law's eq.-11 peak
+STRESSES = (42100.0, 105400.0, 210800.0)
+
+
+def _points(rng, n):
+    return (
+        rng.choice(VOLTAGES, n),
+        rng.choice(STRESSES, n),
+        rng.uniform(0.0, 3600.0, n),
+    )
+
+
+def _as_given(monkeypatch, fn):
+    """fn() with the points solved in the order they come."""
+    with monkeypatch.context() as patch:
+        patch.setattr(scattered, "MIN_SCATTERED_POINTS", 10**12)
+        return fn()
+
+
+@pytest.mark.parametrize("law", ["paper", "smooth"])
+def test_scattered_points_give_the_values_of_the_points_solved_as_they_come(
+    a201, law, rng, monkeypatch
+):
+    v, s, t = _points(rng, 20_000)
+    shape = (100, 200)  # a 2-D set of points comes back in its shape
+    args = [x.reshape(shape) for x in (v, s, t)]
+    orders = []
+    with monkeypatch.context() as patch:
+        patch.setattr(
+            scattered, "condition_order", lambda bits: orders.append(1) or condition_order(bits)
+        )
+        grouped = solve_current(a201, *args, tunneling=law)
+    assert orders, "these points should have been grouped"
+    given = _as_given(monkeypatch, lambda: solve_current(a201, *args, tunneling=law))
+    for name in ("valid", "at_jump", "regime"):
+        np.testing.assert_array_equal(getattr(grouped, name), getattr(given, name))
+    assert grouped.current.shape == shape
+    ok = given.valid
+    assert (0.6 < ok.mean() < 0.9) if law == "paper" else ok.all()  # 8 V: past eq. 11's peak
+    np.testing.assert_allclose(grouped.current[ok], given.current[ok], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(grouped.v_bulk[ok], given.v_bulk[ok], rtol=1e-12, atol=0)
+    assert np.isnan(grouped.current[~ok]).all()
+
+
+def test_array_parameters_are_part_of_a_points_condition(a201, rng, monkeypatch):
+    """A parameter that varies over the points (here Rc0, two values) splits the conditions."""
+    v, s, t = _points(rng, 12_000)
+    params = dict(a201)
+    params["Rc0"] = params["Rc0"] * rng.choice([0.5, 2.0], v.size)
+    current = fsrbayes.current(params, v, s, t, on_invalid="nan")
+    given = _as_given(monkeypatch, lambda: fsrbayes.current(params, v, s, t, on_invalid="nan"))
+    np.testing.assert_allclose(current, given, rtol=1e-12, atol=0, equal_nan=True)
+
+
+def test_an_invalid_point_is_named_as_the_caller_placed_it(a201, rng, monkeypatch):
+    v, s, t = _points(rng, 10_000)
+    with pytest.raises(DomainError) as grouped:
+        fsrbayes.current(a201, v, s, t, tunneling="paper")
+    with pytest.raises(DomainError) as given:
+        _as_given(monkeypatch, lambda: fsrbayes.current(a201, v, s, t, tunneling="paper"))
+    assert str(grouped.value) == str(given.value)
+
+
+def test_points_that_come_in_rows_are_not_regrouped(a201):
+    """The likelihood's layout (walkers × tests × times) and an ordered grid: solved as given."""
+    walkers = np.geomspace(0.8, 1.2, 16)[:, None, None]
+    params = {**a201, "k1": a201["k1"] * walkers}
+    v = np.repeat(VOLTAGES[:4], 3)[None, :, None]
+    s = np.tile(STRESSES, 4)[None, :, None]
+    t = np.geomspace(1.0, 3600.0, 200)
+    assert scattered.solve_scattered(lambda *a: 1 / 0, params, v, s, t, 0.0) is None
+
+
+def test_condition_order_groups_every_condition_and_keeps_each_ones_order(rng):
+    conditions = np.stack([rng.choice([0.2, np.nan, 1.0], 5000), rng.choice([1.0, 2.0], 5000)])
+    bits = conditions.view(np.int64)
+    order = condition_order(bits)
+    np.testing.assert_array_equal(np.sort(order), np.arange(5000))
+    keys = [tuple(col) for col in bits[:, order].T]
+    assert row_breaks(bits[:, order]) == len(set(keys)) == 6  # each condition one run
+    for key in set(keys):
+        members = order[[k == key for k in keys]]
+        assert np.all(np.diff(members) > 0)  # a condition's points in their given order
