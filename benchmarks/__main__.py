@@ -1,10 +1,11 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [scattered] [csv]
 [rig-read] [predict] [likelihood] [engine] [map-search] [long-run] [fit] [rig-fit] [evidence]
-[evidence-seeds] [dynesty] [hierarchical] [population-sizes] [diagnose] [demo]``.
+[evidence-seeds] [compare] [dynesty] [hierarchical] [population-sizes] [diagnose] [demo]``.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
 so numbers from different days can be read against their machine. Without names all run but
-``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip install dynesty``); ``fit``
+``dynesty`` (an optional cross-check, 30–40 min on 2 cores; needs ``pip install dynesty``),
+``evidence-seeds`` and ``compare`` (the default compare path against the ladder, ~15 min); ``fit``
 (converged Burgers fits of one specimen, five seeds, in both coordinates), ``rig-fit`` (the divider
 rig in both coordinates), ``evidence``, ``hierarchical``, ``population-sizes`` (3, 6, 16 specimens'
 hyper-posteriors in both coordinates), ``map-search`` (the MAP search before and after its
@@ -19,6 +20,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 
 from benchmarks import (  # noqa: E402
+    compare_default,
     csv_read,
     demo,
     diagnose,
@@ -57,6 +59,7 @@ BENCHMARKS = {
     "fit": lambda: fit.report_seeds(fit.run_seeds()),
     "rig-fit": lambda: rig_fit.report(rig_fit.run()),
     "evidence": lambda: evidence.report(evidence.run()),
+    "compare": lambda: compare_default.report(compare_default.run()),
     "evidence-seeds": lambda: evidence.report_seeds(evidence.run_seeds()),
     "dynesty": lambda: dynesty_check.report(dynesty_check.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
@@ -72,7 +75,9 @@ def main(names):
         print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
         return 2
     print(machine.report(machine.run()), flush=True)
-    for name in names or [n for n in BENCHMARKS if n not in ("dynesty", "evidence-seeds")]:
+    for name in names or [
+        n for n in BENCHMARKS if n not in ("dynesty", "evidence-seeds", "compare")
+    ]:
         print(BENCHMARKS[name](), flush=True)
     return 0
 

@@ -33,6 +33,7 @@ def test_compare_sums_specimens_and_states_a_preference(small):
         ["zener", "burgers", "kalantari"],
         settings=TINY,
         seed=1,
+        path="reference",
         pilot=TINY_PILOT,
         search=FEW_STARTS,
     )
@@ -124,6 +125,8 @@ def test_cli_compare_writes_the_contract_keys(small, tmp_path):
         "--starts",
         "3",
         "--no-loo",
+        "--path",
+        "reference",
         "--pilot-steps",
         "100",
     )
@@ -166,6 +169,7 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
             ["kalantari", "zener"],
             settings=TINY,
             seed=1,
+            path="reference",
             pilot=TINY_PILOT,
             search=FEW_STARTS,
             with_loo=False,
@@ -213,7 +217,7 @@ def test_the_bridge_path_fits_each_model_and_agrees_with_savage_dickey():
     one = syn.simulate(
         "a201", n_specimens=1, voltages=[0.2, 1.0, 3.0], forces=[1.96, 4.9, 9.8], samples=21, seed=5
     )
-    out = fsrbayes.compare(one.data, ["zener", "burgers"], seed=2, path="bridge", with_loo=False)
+    out = fsrbayes.compare(one.data, ["zener", "burgers"], seed=2, with_loo=False)  # bridge path
     specimen = one.data.specimens[0]
     for entry in out["models"].values():
         per = entry["per_specimen"][specimen]
@@ -244,3 +248,41 @@ def test_the_bridge_path_falls_back_on_the_ladder_when_the_fit_does_not_converge
         assert per["method"] == "referenced stepping-stone (fallback)"
         assert per["fallback"].startswith("fit did not converge (after 100 steps")
         assert np.isfinite(per["log_evidence"]) and per["log_evidence_err"] > 0
+
+
+def test_the_bridge_path_is_the_default_and_falls_back_when_its_halves_disagree(small, monkeypatch):
+    """The default path fits and bridges; where the bridge's two halves (reference fitted to one
+    half of the draws, the other in the bridge) lie more than 3 combined sd apart, the ladder
+    runs from the fit's draws instead and says why. Fit, bridge and ladder are stand-ins here:
+    this checks the choice, the tests above the estimators."""
+    from types import SimpleNamespace
+
+    from fsrbayes.inference import compare as comparing
+    from fsrbayes.inference import fit as fitting
+    from fsrbayes.inference.evidence import EvidenceEstimate
+
+    halves = {"zener": (10.0, 10.1), "burgers": (20.0, 20.5)}  # 0.1 and 0.5 apart
+    monkeypatch.setattr(
+        fitting, "fit", lambda data, model, **_: SimpleNamespace(converged=True, model=model)
+    )
+
+    def bridge(result, seed):
+        z = halves[result.model]
+        splits = [{"log_z": v, "relative_error": 0.1 / np.sqrt(2)} for v in z]
+        details = {"splits": splits, "split_z": abs(z[0] - z[1]) / 0.1}
+        return EvidenceEstimate(float(np.mean(z)), 0.05, "bridge (fit draws)", details)
+
+    monkeypatch.setattr(comparing, "bridge_from_fit", bridge)
+    monkeypatch.setattr(
+        comparing,
+        "referenced_from_fit",
+        lambda result, ladder, seed: EvidenceEstimate(19.9, 0.2, "referenced stepping-stone"),
+    )
+    out = fsrbayes.compare(small.data, ["zener", "burgers"], [small.data.specimens[0]])
+    assert out["settings"]["path"] == "bridge"
+    (zener,) = out["models"]["zener"]["per_specimen"].values()
+    (burgers,) = out["models"]["burgers"]["per_specimen"].values()
+    assert zener["method"] == "bridge (fit draws)" and zener["log_evidence"] == 10.05
+    assert burgers["method"] == "referenced stepping-stone (fallback)"
+    assert burgers["log_evidence"] == 19.9
+    assert burgers["fallback"].startswith("bridge halves disagree (20.000 vs 20.500: 5.0 combined")

@@ -82,6 +82,11 @@ def test_bridge_from_emcee_ensembles_agrees_with_the_exact_log_z(problem):
     assert estimate.method == "bridge (fit draws)"
     assert estimate.details["likelihood_evaluations"] == 2 * 8000
     assert estimate.posterior_draws.shape[0] == 2
+    halves = estimate.details["splits"]
+    combined = np.hypot(*(h["relative_error"] for h in halves))
+    split_z = abs(halves[0]["log_z"] - halves[1]["log_z"]) / combined
+    assert estimate.details["split_z"] == pytest.approx(split_z)
+    assert split_z < 3  # compare's fallback threshold: converged halves agree
 
 
 @pytest.mark.parametrize("problem", ["linear-gaussian", "bent-ridge"])

@@ -28,7 +28,9 @@ def test_zener_data_prefer_zener_and_savage_dickey_agrees():
         rheology="zener",
         seed=11,
     )
-    out = fsrbayes.compare(sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False)
+    out = fsrbayes.compare(
+        sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False, path="reference"
+    )
     print(
         out["models"]["zener"]["per_specimen"],
         out["models"]["burgers"]["per_specimen"],
@@ -58,7 +60,9 @@ def test_data_with_the_papers_burgers_parameters_prefer_burgers_decisively():
         rheology="burgers",
         seed=11,
     )
-    out = fsrbayes.compare(sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False)
+    out = fsrbayes.compare(
+        sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False, path="reference"
+    )
     print(
         out["models"]["zener"]["per_specimen"],
         out["models"]["burgers"]["per_specimen"],

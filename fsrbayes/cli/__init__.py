@@ -196,11 +196,13 @@ def build_parser():
     cmp_.add_argument("--likelihood", choices=("gaussian", "student", "ar1"), default="gaussian")
     cmp_.add_argument(
         "--path",
-        choices=("reference", "prior", "bridge"),
-        default="reference",
-        help="where the beta ladder starts: a reference density fitted to a pilot run (default) "
-        "or the prior (needs a far denser ladder on creep data); 'bridge': no ladder, a converged "
-        "fit per model and specimen and bridge sampling from its draws (minutes faster)",
+        choices=("bridge", "reference", "prior"),
+        default="bridge",
+        help="how log Z is estimated: 'bridge' (default) fits each model and specimen and bridge-"
+        "samples its draws, falling back on the reference ladder below when a fit does not "
+        "converge or the bridge's halves disagree; 'reference': a beta ladder from a reference "
+        "density fitted to a pilot run; 'prior': a ladder from the prior (needs a far denser "
+        "ladder on creep data)",
     )
     cmp_.add_argument(
         "--temps",

@@ -29,7 +29,7 @@ from .likelihood import SpecimenData
 from .posterior import LogPosterior
 from .samplers import ConvergenceWarning
 
-__all__ = ["KASS_RAFTERY", "compare", "strength"]
+__all__ = ["BRIDGE_SPLIT_TOLERANCE", "KASS_RAFTERY", "PATHS", "compare", "strength"]
 
 KASS_RAFTERY = (
     (2.0, "not worth more than a bare mention"),
@@ -76,9 +76,17 @@ def _loo(posterior, draws_u):
     }
 
 
-PATHS = ("reference", "prior", "bridge")
-"""Where the ladder starts: a reference density fitted to a pilot run (default; few nats to
-cross) or the prior (thousands of nats on creep data; kept for the closed-form validation)."""
+PATHS = ("bridge", "reference", "prior")
+"""How each log Z is estimated: bridge sampling from a converged fit's draws (default; seconds
+beyond the fit), or a stepping-stone ladder from a reference density fitted to a pilot run (few
+nats to cross) or from the prior (thousands of nats on creep data; kept for the closed-form
+validation)."""
+
+BRIDGE_SPLIT_TOLERANCE = 3.0
+"""The bridge path's two halves (the reference fitted to one half of the draws, the other half
+in the bridge, then swapped) must agree within this many combined standard errors
+√(σ₁² + σ₂²); a larger split means the reference or the draws miss part of the posterior, and
+the ladder runs instead."""
 
 
 def compare(
@@ -92,7 +100,7 @@ def compare(
     settings=None,
     seed=0,
     with_loo=True,
-    path="reference",
+    path="bridge",
     pilot=None,
     search=None,
     estimator=None,
@@ -109,17 +117,20 @@ def compare(
     specimens : sequence of str, optional
         Default: all specimens in the data.
     settings : LadderSettings, optional
-        Default: :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER` on the reference
-        path, ``LadderSettings()`` on the prior path.
+        The ladder of the reference path and of the bridge path's fallback (default
+        :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER`), or of the prior path
+        (default ``LadderSettings()``).
     seed : int
-    path : {"reference", "prior", "bridge"}
-        The ladder's β = 0 end: a Student-t reference in transport-map coordinates fitted to a
-        pilot run (:mod:`~fsrbayes.inference.evidence.referenced`), or the prior. ``"bridge"``
-        runs no ladder: a converged :func:`~fsrbayes.inference.fit.fit` of each model and
-        specimen, then bridge sampling from its draws
-        (:mod:`~fsrbayes.inference.evidence.bridge`); a fit that does not converge within its
-        budget falls back on the referenced ladder (``settings``) with the fit's draws as the
-        reference, and ``method`` says so.
+    path : {"bridge", "reference", "prior"}
+        ``"bridge"`` (default): a converged :func:`~fsrbayes.inference.fit.fit` of each model
+        and specimen, then bridge sampling from its draws
+        (:mod:`~fsrbayes.inference.evidence.bridge`). Where the fit does not converge within its
+        budget, or the bridge's two halves disagree by more than
+        :data:`BRIDGE_SPLIT_TOLERANCE` combined errors, the referenced ladder (``settings``)
+        runs from the fit's draws instead, and ``method`` says so (``fallback`` says why).
+        ``"reference"``: a stepping-stone ladder from a Student-t reference in transport-map
+        coordinates fitted to a pilot run (:mod:`~fsrbayes.inference.evidence.referenced`);
+        ``"prior"``: a ladder from the prior.
     pilot : SamplerSettings, optional
         The reference path's pilot run (default
         :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
@@ -225,13 +236,17 @@ def compare(
 
 
 def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
-    """Converged fit + bridge sampling; the referenced ladder from the fit's draws otherwise."""
-    from .fit import fit
+    """Converged fit + bridge sampling; the referenced ladder from the fit's draws otherwise.
+
+    The ladder runs when the fit does not converge, or when the bridge's two halves disagree
+    by more than :data:`BRIDGE_SPLIT_TOLERANCE` combined standard errors.
+    """
+    from . import fit as fitting
 
     tunneling, likelihood = laws
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fit(
+        result = fitting.fit(
             packed,
             model=model,
             tunneling=tunneling,
@@ -241,9 +256,18 @@ def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
             settings=fit_settings,
         )
     if result.converged:
-        return bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
+        estimate = bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
+        split_z = estimate.details["split_z"]
+        if np.isfinite(estimate.log_z) and split_z <= BRIDGE_SPLIT_TOLERANCE:
+            return estimate
+        halves = [f"{s['log_z']:.3f}" for s in estimate.details["splits"]]
+        note = (
+            f"bridge halves disagree ({' vs '.join(halves)}: {split_z:.1f} combined sd apart, "
+            f"> {BRIDGE_SPLIT_TOLERANCE:g}): ladder from the fit's draws"
+        )
+    else:
+        note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
     estimate = referenced_from_fit(result, ladder, seed=seed)
-    note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
     return replace(
         estimate,
         method=f"{estimate.method} (fallback)",

@@ -165,8 +165,9 @@ def bridge_log_evidence(
     -------
     EvidenceEstimate
         Method ``"bridge (fit draws)"``; ``details`` hold each split's estimate, relative error,
-        τ of f₂, the importance-sampling estimate from the g-draws alone, the error budget and the
-        wall time.
+        τ of f₂, the importance-sampling estimate from the g-draws alone, the error budget,
+        ``split_z`` (the halves' difference in units of their combined error, √(σ₁² + σ₂²)) and
+        the wall time.
     """
     start = time.perf_counter()
     chain = np.asarray(chain, dtype=float)
@@ -191,10 +192,12 @@ def bridge_log_evidence(
     sigma_mc = float(np.sqrt(np.sum([s["relative_error"] ** 2 for s in splits])) / 2.0)
     sigma_split = float(abs(estimates[0] - estimates[1]) / 2.0)
     error = float(np.hypot(sigma_mc, sigma_split))
+    combined = float(np.hypot(*(s["relative_error"] for s in splits)))
     details = {
         "splits": splits,
         "sigma_mc": sigma_mc,
         "sigma_split": sigma_split,
+        "split_z": float(abs(estimates[0] - estimates[1]) / combined) if combined > 0 else np.inf,
         "reference_dof": float(dof),
         "likelihood_evaluations": int(2 * n_proposals),
         "seconds": time.perf_counter() - start,
