@@ -99,6 +99,16 @@ def build_parser():
             "hand-placed weights whose settling nobody measured)"
         ),
     )
+    fit_.add_argument(
+        "--settle-s",
+        type=float,
+        default=0.0,
+        help=(
+            "leave each test's readings in the first SETTLE_S seconds after every load change out "
+            "of the fit (default 0): hand-placed weights settle, and presses before the weight, "
+            "logged as no load, leave creep that fades over seconds"
+        ),
+    )
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")

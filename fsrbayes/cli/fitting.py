@@ -50,6 +50,12 @@ def cmd_fit(args):
         raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
     if args.check_every is not None and args.check_every < 1:
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
+    if not args.settle_s >= 0:
+        raise UsageError(f"--settle-s must be a number of seconds >= 0, got {args.settle_s:g}")
+    try:
+        data.settled(args.settle_s)
+    except ValueError as exc:
+        raise UsageError(f"--settle-s: {exc}") from None
     out = Path(args.out)
     writable(out)
     args.model = args.model or default_model(data)
@@ -87,6 +93,7 @@ def cmd_fit(args):
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
                 ramp=args.ramp,
+                settle_s=args.settle_s,
                 rng=args.seed,
                 settings=settings,
                 checkpoint=checkpoint,
@@ -227,6 +234,7 @@ def _fit_hierarchical(args, data, settings, out):
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
                 ramp=args.ramp,
+                settle_s=args.settle_s,
                 rng=args.seed,
                 coordinates=args.coordinates,
             )

@@ -5,7 +5,7 @@ held, the current sampled from then on. :class:`CreepData` holds many and select
 :mod:`.csvio` reads and writes them as CSV (docs/data-format.md).
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -110,6 +110,32 @@ class CreepTest:
         """Measured drift in % (eq. 22) at ``time_s`` by linear interpolation; NaN past the data."""
         return observed_drift(self.time_s, self.current_A, time_s)
 
+    def load_changes(self):
+        """Return the times (s since the onset) of the load's changes: 0, then the later steps'."""
+        if self.load_steps is None:
+            return np.zeros(1)
+        times, sizes = self.load_steps
+        return np.asarray(times, dtype=float)[np.asarray(sizes) != 0]
+
+    def settled(self, settle_s):
+        """Return the test without its samples in the first ``settle_s`` s after each load change.
+
+        The load history is unchanged (the model still sees every step); only what the readings
+        say while a weight settles — and while the creep of presses the log does not record
+        fades — is left out. Raises ValueError when no sample is left.
+        """
+        if settle_s <= 0:
+            return self
+        since = self.time_s[:, None] - self.load_changes()[None, :]
+        keep = ~np.any((since >= 0) & (since < settle_s), axis=1)
+        if not keep.any():
+            raise ValueError(
+                f"settle_s = {settle_s:g} s leaves no sample of test {self.key} (its samples end "
+                f"{self.time_s[-1]:g} s after the onset)"
+            )
+        lines = None if self.lines is None else self.lines[keep]
+        return replace(self, time_s=self.time_s[keep], current_A=self.current_A[keep], lines=lines)
+
 
 def _describe(readout):
     """One line describing a rig's readout."""
@@ -175,6 +201,15 @@ class CreepData:
             and (sensor is None or t.sensor == sensor)
         )
         return CreepData(tests, self.source)
+
+    def settled(self, settle_s):
+        """Return the data with each test's first ``settle_s`` s after each load change left out.
+
+        See :meth:`CreepTest.settled`.
+        """
+        if settle_s <= 0:
+            return self
+        return CreepData(tuple(t.settled(settle_s) for t in self.tests), self.source)
 
     def columns(self):
         """Return the data as flat columns (dict of arrays), one entry per sample, test by test."""

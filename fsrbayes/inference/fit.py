@@ -268,6 +268,7 @@ def fit(
     sampler=None,
     coordinates=None,
     ramp="given",
+    settle_s=0.0,
 ):
     """Fit one specimen's creep tests.
 
@@ -314,13 +315,19 @@ def fit(
         sensor's ``ramp_s`` prior (``"fitted"``; for hand-placed weights whose settling nobody
         measured — each placement settles in its own time; refused when the data give
         ``ramp_s``).
+    settle_s : float
+        Leave each test's readings in the first ``settle_s`` seconds after each load change out
+        of the likelihood (the load history keeps every change). For hand-placed weights: the
+        first fraction of a second holds the weight settling, and an operator's presses before
+        the weight — logged as no load — leave creep that fades over the next seconds, which
+        no load history in the log describes. Default 0: every reading counts.
 
     Returns
     -------
     FitResult
     """
     coordinates = _coordinates(coordinates)
-    packed = SpecimenData.select(data, specimen, ramp=ramp)
+    packed = SpecimenData.select(data, specimen, ramp=ramp, settle_s=settle_s)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     model = sensor.default_model if model is None else model
     posterior = LogPosterior.for_sensor(

@@ -27,7 +27,7 @@ LOO.
 """
 
 import hashlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import special
@@ -108,6 +108,9 @@ class SpecimenData:
     onset_in_ramp : ndarray of bool, shape (C,), optional
         Whether each test's onset was found from the reading's jump, which comes while a weight
         settles: it may lag the load by the test's ramp as well as by ``onset_window``.
+    settle_s : float
+        Seconds after each load change whose readings were left out
+        (:meth:`fsrbayes.data.creep.CreepTest.settled`); 0: every reading is in.
     counts : CountHistograms, optional
         The whole-count readings of quantised tests, per observed point (their likelihood is
         the count's probability). None: every reading is continuous.
@@ -132,6 +135,7 @@ class SpecimenData:
     counts: CountHistograms = None
     onset_window: np.ndarray = None
     onset_in_ramp: np.ndarray = None
+    settle_s: float = 0.0
 
     @classmethod
     def from_tests(
@@ -179,7 +183,7 @@ class SpecimenData:
         )
 
     @classmethod
-    def select(cls, data, specimen=None, ramp="given"):
+    def select(cls, data, specimen=None, ramp="given", settle_s=0.0):
         """One specimen's tests of ``data`` packed; ``data`` may already be a SpecimenData.
 
         Parameters
@@ -189,12 +193,22 @@ class SpecimenData:
             Needed when the data hold several specimens.
         ramp : {"given", "fitted"}
             The fit's ramp option (:meth:`from_tests`).
+        settle_s : float
+            Leave out each test's readings in the first ``settle_s`` s after each load change
+            (:meth:`~fsrbayes.data.creep.CreepData.settled`).
 
         Returns
         -------
         SpecimenData
         """
+        if not np.isfinite(settle_s) or settle_s < 0:
+            raise ValueError(f"settle_s must be a number of seconds >= 0, got {settle_s!r}")
         if isinstance(data, SpecimenData):
+            if settle_s != data.settle_s:
+                raise ValueError(
+                    f"settle_s = {settle_s:g} s needs the tests themselves (CreepData); these "
+                    f"are packed already, with settle_s = {data.settle_s:g} s"
+                )
             return data
         if not isinstance(data, CreepData):
             raise TypeError(
@@ -208,7 +222,8 @@ class SpecimenData:
                     f"(e.g. {data.specimens[0]!r})"
                 )
             specimen = data.specimens[0]
-        return cls.from_tests(data.select(specimen=specimen).tests, ramp=ramp)
+        tests = data.select(specimen=specimen).settled(settle_s).tests
+        return replace(cls.from_tests(tests, ramp=ramp), settle_s=float(settle_s))
 
     @property
     def n_tests(self):

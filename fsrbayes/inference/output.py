@@ -142,6 +142,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
         "fsrbayes_model": posterior.model,
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
+        "settle_s": data.settle_s,
         "specimen": data.specimen,
         "sensor": data.sensor,
         "converged": int(report.converged) if report else 0,
@@ -243,6 +244,7 @@ def summary(result, tree):
         "model": posterior.model,
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
+        "settle_s": data.settle_s,
         "parameters": parameters,
         "tests": tests,
         "convergence": {

@@ -1,0 +1,70 @@
+"""settle_s: the first seconds after each load change left out of a fit, the load history kept."""
+
+import json
+
+import numpy as np
+import pytest
+
+import fsrbayes
+from fsrbayes.data import read_csv
+from fsrbayes.data.rigsim import simulate_rig, write_rig
+from fsrbayes.inference.likelihood import SpecimenData
+from tests.commandline import fsrbayes_command
+
+
+@pytest.fixture(scope="module")
+def staircase(tmp_path_factory):
+    """One specimen: three weights put on one after another, 20 s each, read at 10 Hz."""
+    text, truth = simulate_rig(
+        1, protocol="staircase", weights_g=(100.0, 200.0, 400.0), duration_s=20.0,
+        rate_hz=10.0, seed=2,
+    )  # fmt: skip
+    path, _ = write_rig(text, truth, tmp_path_factory.mktemp("settle") / "stairs.csv")
+    return path
+
+
+def test_settled_leaves_out_the_seconds_after_each_change_and_keeps_the_load_history(staircase):
+    (test,) = read_csv(staircase).tests
+    changes = test.load_changes()
+    assert changes.size == 3 and changes[0] == 0.0
+    settled = test.settled(2.5)
+    since = settled.time_s[:, None] - changes[None, :]
+    assert not np.any((since >= 0) & (since < 2.5))  # nothing within 2.5 s after a change
+    dropped = test.time_s[~np.isin(test.time_s, settled.time_s)]
+    assert 3 * 25 <= dropped.size <= 3 * 26  # 25 or 26 samples at 10 Hz after each change
+    assert np.array_equal(settled.lines, test.lines[np.isin(test.time_s, settled.time_s)])
+    assert settled.load_steps is test.load_steps and settled.onset_s == test.onset_s
+    assert test.settled(0.0) is test
+    with pytest.raises(ValueError, match="leaves no sample"):
+        test.settled(1e6)
+
+
+def test_a_packed_specimen_records_its_settle_s_and_refuses_another(staircase):
+    data = read_csv(staircase)
+    packed = SpecimenData.select(data, settle_s=2.5)
+    assert packed.settle_s == 2.5
+    assert SpecimenData.select(packed, settle_s=2.5) is packed
+    with pytest.raises(ValueError, match="needs the tests themselves"):
+        SpecimenData.select(packed, settle_s=1.0)
+    for bad in (-1.0, np.nan):
+        with pytest.raises(ValueError, match="settle_s must be"):
+            SpecimenData.select(data, settle_s=bad)
+    whole = SpecimenData.select(data)
+    assert packed.n_obs < whole.n_obs and whole.settle_s == 0.0
+
+
+def test_cli_fit_settle_s_is_checked_and_recorded(staircase, tmp_path):
+    for bad, message in (("-1", "--settle-s must be"), ("1e6", "leaves no sample")):
+        r = fsrbayes_command("fit", str(staircase), "--out", str(tmp_path / "x"), "--settle-s", bad)
+        assert r.returncode == 2 and message in r.stderr, r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "x").exists()
+    out = tmp_path / "fit"
+    r = fsrbayes_command(
+        "fit", str(staircase), "--out", str(out), "--settle-s", "1.5", "--max-steps", "300",
+        "--chunk", "100", "--map-starts", "2", "--no-plots",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["settle_s"] == 1.5
+    tree = fsrbayes.inference.output.open_fit_tree(out / "posterior.nc")
+    assert tree.attrs["settle_s"] == 1.5
