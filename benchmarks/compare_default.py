@@ -10,17 +10,24 @@ default log Z is compared with the ladder's in combined standard errors, and the
 scatter with their reported errors: Σ (log Z_i − mean)²/σ_i² against χ²(4).
 """
 
+import os
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic
+from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER
 from fsrbayes.inference.fit import DesignWarning
 
 MODELS = ("zener", "burgers")
+LADDER = replace(
+    REFERENCED_LADDER, processes=min(REFERENCED_LADDER.replicates, os.cpu_count() or 1)
+)
+"""The ladder as ``fsrbayes compare --path reference`` runs it: its replicates side by side."""
 
 
 def specimen():
@@ -54,7 +61,7 @@ def _compare(data, **kwargs):
 def run(seeds=(1, 2, 3, 4, 5)):
     """The ladder once (seed 0), then the default path for each seed."""
     data = specimen()
-    ladder = _compare(data, path="reference", seed=0)
+    ladder = _compare(data, path="reference", seed=0, settings=LADDER)
     rows = [{"seed": seed, **_compare(data, seed=seed)} for seed in seeds]
     return {"ladder": ladder, "rows": rows}
 

@@ -238,7 +238,11 @@ def build_parser():
     cmp_.add_argument(
         "--starts", type=int, default=12, help="optimiser starts of each region search (default 12)"
     )
-    cmp_.add_argument("--processes", type=int, help="ladders side by side (default: one per core)")
+    cmp_.add_argument(
+        "--processes",
+        type=int,
+        help="a fit's ensembles, or the ladders, side by side (default: one per core)",
+    )
     cmp_.add_argument("--seed", type=int, default=0)
     cmp_.add_argument("--no-loo", action="store_true", help="skip PSIS-LOO")
     cmp_.add_argument("--sep", default=",", help="CSV field separator")

@@ -16,6 +16,7 @@ def cmd_compare(args):
     from ..inference.compare import compare
     from ..inference.evidence.ladder import LadderSettings
     from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
+    from ..inference.fit import FIT_SETTINGS
     from ..inference.samplers import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
@@ -61,6 +62,7 @@ def cmd_compare(args):
         path=args.path,
         pilot=pilot,
         search=replace(MODE_SEARCH, n_starts=args.starts),
+        fit_settings=replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
     )
     for name, entry in result["models"].items():
         print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")

@@ -10,11 +10,13 @@ from the β = 1 rung is a second opinion on predictive accuracy.
 
 import warnings
 from dataclasses import asdict, replace
+from os import cpu_count as _cpus
 
 import numpy as np
 
 from ..data.sensors import load_sensor
 from ..utils import json_ready
+from . import fit as fitting
 from .evidence.bridge import bridge_from_fit
 from .evidence.ladder import LadderSettings, log_evidence
 from .evidence.referenced import (
@@ -142,7 +144,8 @@ def compare(
         any evidence estimator; replaces the ladder chosen by ``path``/``settings``. LOO and the
         Savage–Dickey check need the estimate's ``posterior_draws`` and are left out without them.
     fit_settings : SamplerSettings, optional
-        The fits of the ``"bridge"`` path (default :data:`~fsrbayes.inference.fit.FIT_SETTINGS`).
+        The fits of the ``"bridge"`` path (default :data:`~fsrbayes.inference.fit.FIT_SETTINGS`
+        with its ensembles side by side, one process per core).
 
     Returns
     -------
@@ -158,6 +161,10 @@ def compare(
     if path not in PATHS:
         raise ValueError(f"path must be one of {PATHS}, got {path!r}")
     settings = settings or (LadderSettings() if path == "prior" else REFERENCED_LADDER)
+    if fit_settings is None:
+        fit_settings = replace(
+            fitting.FIT_SETTINGS, processes=min(fitting.FIT_SETTINGS.n_ensembles, _cpus() or 1)
+        )
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     out = {
         "models": {},
@@ -241,8 +248,6 @@ def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
     The ladder runs when the fit does not converge, or when the bridge's two halves disagree
     by more than :data:`BRIDGE_SPLIT_TOLERANCE` combined standard errors.
     """
-    from . import fit as fitting
-
     tunneling, likelihood = laws
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
