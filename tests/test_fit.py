@@ -16,7 +16,7 @@ import xarray as xr
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference.output import FORMAT_VERSION, save_fit
+from fsrbayes.inference.output import FORMAT_VERSION, open_fit_tree, save_fit
 from fsrbayes.inference.samplers import (
     CheckpointMismatch,
     ConvergenceWarning,
@@ -606,11 +606,17 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
         "2",
         "--no-plots",
         "--progress",
+        "--settle-s",
+        "0.5",
     )
     assert result.returncode == 0, result.stderr
     assert (
         "sampling: 100%" in result.stderr and "60/60" in result.stderr and "step" in result.stderr
     )
+    summary = json.loads((tmp_path / "p" / "summary.json").read_text())
+    assert summary["settle_s"] == 0.5  # the readings of the first 0.5 s are left out
+    tree = open_fit_tree(tmp_path / "p" / "posterior.nc")
+    assert tree.attrs["settle_s"] == 0.5 and np.min(tree["constant_data"]["time_s"]) >= 0.5
 
 
 def test_the_corner_plot_draws_a_parameter_stuck_at_one_value(result, tmp_path):
