@@ -225,8 +225,8 @@ def build_parser():
         "--pilot-steps",
         type=int,
         default=1250,
-        help="steps of the pilot run the reference is fitted to (default 1250; 3 transport rounds "
-        "take the first 60 %%)",
+        help="--path reference: steps of the pilot run the reference is fitted to (default "
+        "1250; 3 transport rounds take the first 60 %%)",
     )
     cmp_.add_argument(
         "--replicates",
@@ -236,7 +236,10 @@ def build_parser():
         "pilot and reference (default 4)",
     )
     cmp_.add_argument(
-        "--starts", type=int, default=12, help="optimiser starts of each region search (default 12)"
+        "--starts",
+        type=int,
+        default=12,
+        help="--path reference: optimiser starts of each region search (default 12)",
     )
     cmp_.add_argument(
         "--processes",

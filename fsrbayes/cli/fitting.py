@@ -53,7 +53,8 @@ def cmd_fit(args):
     if not args.settle_s >= 0:
         raise UsageError(f"--settle-s must be a number of seconds >= 0, got {args.settle_s:g}")
     try:
-        data.settled(args.settle_s)
+        for specimen in [args.specimen] if args.specimen else data.specimens:
+            data.select(specimen=specimen).settled(args.settle_s)
     except ValueError as exc:
         raise UsageError(f"--settle-s: {exc}") from None
     out = Path(args.out)

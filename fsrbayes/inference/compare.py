@@ -260,23 +260,28 @@ def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
             rng=np.random.default_rng(seed),
             settings=fit_settings,
         )
+    bridge = {}
     if result.converged:
         estimate = bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
         split_z = estimate.details["split_z"]
         if np.isfinite(estimate.log_z) and split_z <= BRIDGE_SPLIT_TOLERANCE:
             return estimate
         halves = [f"{s['log_z']:.3f}" for s in estimate.details["splits"]]
-        note = (
-            f"bridge halves disagree ({' vs '.join(halves)}: {split_z:.1f} combined sd apart, "
-            f"> {BRIDGE_SPLIT_TOLERANCE:g}): ladder from the fit's draws"
+        why = (
+            f"halves disagree ({' vs '.join(halves)}: {split_z:.1f} combined sd apart, > "
+            f"{BRIDGE_SPLIT_TOLERANCE:g})"
+            if np.isfinite(estimate.log_z)
+            else "estimate not finite"
         )
+        note = f"bridge {why}: ladder from the fit's draws"
+        bridge = {"bridge": {"log_z": estimate.log_z, "error": estimate.error, **estimate.details}}
     else:
         note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
     estimate = referenced_from_fit(result, ladder, seed=seed)
     return replace(
         estimate,
         method=f"{estimate.method} (fallback)",
-        details={**estimate.details, "fallback": note},
+        details={**estimate.details, **bridge, "fallback": note},
     )
 
 

@@ -268,7 +268,7 @@ def fit(
     sampler=None,
     coordinates=None,
     ramp="given",
-    settle_s=0.0,
+    settle_s=None,
 ):
     """Fit one specimen's creep tests.
 
@@ -315,12 +315,13 @@ def fit(
         sensor's ``ramp_s`` prior (``"fitted"``; for hand-placed weights whose settling nobody
         measured — each placement settles in its own time; refused when the data give
         ``ramp_s``).
-    settle_s : float
+    settle_s : float, optional
         Leave each test's readings in the first ``settle_s`` seconds after each load change out
         of the likelihood (the load history keeps every change). For hand-placed weights: the
         first fraction of a second holds the weight settling, and an operator's presses before
         the weight — logged as no load — leave creep that fades over the next seconds, which
-        no load history in the log describes. Default 0: every reading counts.
+        no load history in the log describes. Default: every reading counts (0), or as packed
+        when ``data`` is a SpecimenData already.
 
     Returns
     -------

@@ -183,7 +183,7 @@ class SpecimenData:
         )
 
     @classmethod
-    def select(cls, data, specimen=None, ramp="given", settle_s=0.0):
+    def select(cls, data, specimen=None, ramp="given", settle_s=None):
         """One specimen's tests of ``data`` packed; ``data`` may already be a SpecimenData.
 
         Parameters
@@ -193,18 +193,19 @@ class SpecimenData:
             Needed when the data hold several specimens.
         ramp : {"given", "fitted"}
             The fit's ramp option (:meth:`from_tests`).
-        settle_s : float
+        settle_s : float, optional
             Leave out each test's readings in the first ``settle_s`` s after each load change
-            (:meth:`~fsrbayes.data.creep.CreepData.settled`).
+            (:meth:`~fsrbayes.data.creep.CreepData.settled`). Default: as packed (a
+            SpecimenData), 0 (CreepData).
 
         Returns
         -------
         SpecimenData
         """
-        if not np.isfinite(settle_s) or settle_s < 0:
+        if settle_s is not None and not (np.isfinite(settle_s) and settle_s >= 0):
             raise ValueError(f"settle_s must be a number of seconds >= 0, got {settle_s!r}")
         if isinstance(data, SpecimenData):
-            if settle_s != data.settle_s:
+            if settle_s is not None and settle_s != data.settle_s:
                 raise ValueError(
                     f"settle_s = {settle_s:g} s needs the tests themselves (CreepData); these "
                     f"are packed already, with settle_s = {data.settle_s:g} s"
@@ -222,8 +223,9 @@ class SpecimenData:
                     f"(e.g. {data.specimens[0]!r})"
                 )
             specimen = data.specimens[0]
+        settle_s = 0.0 if settle_s is None else float(settle_s)
         tests = data.select(specimen=specimen).settled(settle_s).tests
-        return replace(cls.from_tests(tests, ramp=ramp), settle_s=float(settle_s))
+        return replace(cls.from_tests(tests, ramp=ramp), settle_s=settle_s)
 
     @property
     def n_tests(self):

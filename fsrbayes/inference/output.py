@@ -82,7 +82,13 @@ def _predictive(result, draws, rng, n_grid=61):
 
 
 def _observed_drift(data, loaded):
-    """Each test's measured drift(3600 s) counted from ``loaded`` (C,), its loading's end."""
+    """Each test's measured drift(3600 s) counted from ``loaded`` (C,), its loading's end.
+
+    NaN where the fit left the first seconds after each load change out (``settle_s``): the
+    readings at the loading's end are not in its data.
+    """
+    if data.settle_s > 0:
+        return np.full(data.n_tests, np.nan)
     return np.array(
         [
             observed_drift(
@@ -281,7 +287,8 @@ def segment_drifts(posterior, draws):
     loaded segment — from its load step (the first from its loading ramp's end) to its last
     sample — the model's drift 100·(I(end) −
     I(start))/I(start) (eq. 22 within the segment; median and 5–95 % over ``draws``) and the
-    observed one from the segment's first and last points.
+    observed one from the segment's first and last points (None where the fit left the seconds
+    after each load change out, ``settle_s``: the segment's first reading is not at its start).
 
     Returns
     -------
@@ -305,7 +312,8 @@ def segment_drifts(posterior, draws):
             inside = (t >= begin) & (t < ends[k])
             if inside.sum() >= 2:
                 first, last = np.flatnonzero(inside)[[0, -1]]
-                found.append((k, begin, t[last], loads[k], 100.0 * np.expm1(y[last] - y[first])))
+                seen = np.nan if data.settle_s > 0 else 100.0 * np.expm1(y[last] - y[first])
+                found.append((k, begin, t[last], loads[k], seen))
         rows.append(found if (size != 0).sum() > 1 else None)
         for j, (_, start, end, _, _) in enumerate(found):
             times[i, 2 * j : 2 * j + 2] = (start, end)

@@ -28,30 +28,44 @@ SAMPLE_POINTS = 8192
 def solve_scattered(solve, params, voltage, stress, time, extra_series):
     """Return ``solve(params, voltage, stress, time, extra_series)`` grouped by condition, or None.
 
-    None where the points need no grouping.
     Every input that varies over the points (V, σ, the series resistance, array parameters) is
-    part of a point's condition; the points are grouped when runs of one condition are shorter
-    than :data:`~.compiled_order.SHORT_ROWS` on average among the first :data:`SAMPLE_POINTS`.
-    The :class:`~.solver.BulkSolution` comes back with the broadcast shape of the inputs, in
-    their order.
+    part of a point's condition. The points are grouped where, among the first
+    :data:`SAMPLE_POINTS`, grouping shortens the runs of one condition by a factor of
+    :data:`~.compiled_order.SHORT_ROWS` or more; otherwise (the likelihood's layouts, a few times
+    per condition, few points) this returns None and the caller solves them as they come, as it
+    does when a parameter array would widen the points' shape (its values are the caller's
+    business). The :class:`~.solver.BulkSolution` comes back with the broadcast shape of the
+    inputs, in their order.
     """
-    varying = {
-        "voltage": voltage,
-        "stress": stress,
-        "extra_series": extra_series,
-        **{name: value for name, value in params.items() if np.ndim(value)},
-    }
-    shape = np.broadcast_shapes(np.shape(time), *(np.shape(v) for v in varying.values()))
+    try:
+        shape = np.broadcast_shapes(*(np.shape(x) for x in (time, voltage, stress, extra_series)))
+    except ValueError:
+        return None  # the caller's solve says what does not broadcast
     n = int(np.prod(shape))
-    if n < MIN_SCATTERED_POINTS:
+    varying = {"voltage": voltage, "stress": stress, "extra_series": extra_series}
+    varying.update((name, value) for name, value in params.items() if np.ndim(value))
+    varying = {name: value for name, value in varying.items() if np.ndim(value)}
+    if n < MIN_SCATTERED_POINTS or _in_rows(time, varying.values(), shape):
         return None
-    names = [name for name, value in varying.items() if np.ndim(value)]
+    for value in varying.values():
+        try:
+            if np.broadcast_shapes(shape, np.shape(value)) != shape:
+                return None
+        except ValueError:
+            return None
+    sample = np.stack(
+        [
+            np.broadcast_to(np.asarray(v, dtype=float), shape).flat[:SAMPLE_POINTS]
+            for v in varying.values()
+        ]
+    ).view(np.int64)
+    if row_breaks(sample) < SHORT_ROWS * row_breaks(sample[:, condition_order(sample)]):
+        return None
+    names = list(varying)
     conditions = np.empty((len(names), n))
     for row, name in zip(conditions, names, strict=True):
         row.reshape(shape)[...] = varying[name]
     bits = conditions.view(np.int64)
-    if row_breaks(bits[:, :SAMPLE_POINTS]) * SHORT_ROWS <= min(n, SAMPLE_POINTS):
-        return None
     order = condition_order(bits)
     moments = np.broadcast_to(np.asarray(time, dtype=float), shape).ravel()
     columns, moments = gather(conditions, moments, order)
@@ -67,3 +81,17 @@ def solve_scattered(solve, params, voltage, stress, time, extra_series):
     restored = restore(order, *arrays)
     restored = {name: a.reshape(shape) for name, a in zip(_SOLUTION_ARRAYS, restored, strict=True)}
     return replace(solution, **restored)
+
+
+def _in_rows(time, conditions, shape):
+    """Whether the points come in runs of one condition along time's last axis, at a glance.
+
+    True where time varies along the last axis, which is at least :data:`SHORT_ROWS` long, and
+    no condition does (the likelihood's walker × test × time arrays).
+    """
+    last = shape[-1] if shape else 1
+    return (
+        last >= SHORT_ROWS
+        and np.shape(time)[-1:] == (last,)
+        and all(np.shape(c)[-1:] in ((), (1,)) for c in conditions)
+    )
