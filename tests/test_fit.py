@@ -615,6 +615,8 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
     )
     summary = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert summary["settle_s"] == 0.5  # the readings of the first 0.5 s are left out
+    # without the readings at the loading's end, no observed drift is claimed
+    assert all(t["observed_drift_3600"] is None for t in summary["tests"])
     tree = open_fit_tree(tmp_path / "p" / "posterior.nc")
     assert tree.attrs["settle_s"] == 0.5 and np.min(tree["constant_data"]["time_s"]) >= 0.5
 

@@ -95,3 +95,30 @@ def test_condition_order_groups_every_condition_and_keeps_each_ones_order(rng):
     for key in set(keys):
         members = order[[k == key for k in keys]]
         assert np.all(np.diff(members) > 0)  # a condition's points in their given order
+
+
+def test_a_few_times_per_condition_already_together_are_not_regrouped(a201):
+    """A population's drift layout: draws × conditions × (start, end) — runs of two, grouped."""
+    draws = {"k1": a201["k1"] * np.geomspace(0.8, 1.2, 800)[:, None, None]}
+    v = np.repeat(VOLTAGES[:3], 3)[None, :, None]
+    s = np.tile(STRESSES, 3)[None, :, None]
+    assert (
+        scattered.solve_scattered(lambda *a: 1 / 0, {**a201, **draws}, v, s, [0.0, 3600.0], 0.0)
+        is None
+    )
+
+
+def test_a_parameter_array_the_model_does_not_read_changes_nothing(a201, rng, monkeypatch):
+    """An unused array (another law's parameter) of any shape: the points are solved as given."""
+    v, s, t = _points(rng, 10_000)
+    for unused in (np.ones(7), np.ones((2, 1))):
+        params = {**a201, "psi": unused}
+        got = fsrbayes.current(params, v, s, t, on_invalid="nan")
+        assert got.shape == v.shape
+        given = _as_given(
+            monkeypatch, lambda params=params: fsrbayes.current(params, v, s, t, on_invalid="nan")
+        )
+        np.testing.assert_array_equal(got, given)
+    assert fsrbayes.current(
+        {**a201, "psi": np.ones(7)}, 0.5, 42100.0, np.linspace(0, 10, 3)
+    ).shape == (3,)
