@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from ..inference.likelihood import ar1_innovations, ou_coefficients
+from ..inference.ar1 import ar1_innovations, ou_coefficients
 from ..physics.constants import DRIFT_TIME_S
 from .ranks import rank_scores, replicate_rank_scores
 from .replicates import replicate_rounded_readings

@@ -35,6 +35,7 @@ from scipy import special
 from ..data.creep import CreepData
 from ..physics.superposition import load_of_steps, ramped_load
 from ..utils import HALF_LOG_2PI
+from .ar1 import ar1_innovations
 from .counts import CountHistograms, count_log_likelihood, count_log_likelihood_near_first
 from .packing import (
     BINS_PER_DECADE,
@@ -50,12 +51,10 @@ __all__ = [
     "LIKELIHOODS",
     "MAX_RAW_SAMPLES",
     "SpecimenData",
-    "ar1_innovations",
     "bin_log_time",
     "is_rig_design",
     "load_step_arrays",
     "log_likelihood_pointwise",
-    "ou_coefficients",
 ]
 
 LIKELIHOODS = ("gaussian", "student", "ar1")
@@ -402,33 +401,6 @@ class SpecimenData:
             digest.update(np.ascontiguousarray(array).tobytes())
         digest.update(repr(self.test_keys).encode())
         return digest.hexdigest()
-
-
-def ou_coefficients(time_s, tau):
-    """Return (ρ, √(1 − ρ²)) between successive samples of an Ornstein–Uhlenbeck process.
-
-    ``time_s`` (C, T), ``tau`` (W,); both results (W, C, T − 1), ρ = exp(−Δt/τ). Padding repeats
-    the last time (Δt = 0), where the conditional scale is floored instead of 0.
-    """
-    dt = np.diff(time_s, axis=-1)[None]
-    rho = np.exp(-dt / tau[:, None, None])
-    scale = np.sqrt(np.maximum(-np.expm1(-2.0 * dt / tau[:, None, None]), 1e-300))
-    return rho, scale
-
-
-def ar1_innovations(resid_full, time_s, tau):
-    """Standardised innovations and log-scales of an Ornstein–Uhlenbeck residual series.
-
-    ``resid_full`` (W, C, T) is e/σ on the padded grid; returns (z, log of the conditional sd in
-    units of σ), each (W, C, T): the first sample of a test has z = e/σ and scale 1.
-    """
-    rho, scale = ou_coefficients(time_s, tau)
-    z = np.empty_like(resid_full)
-    z[..., 0] = resid_full[..., 0]
-    z[..., 1:] = (resid_full[..., 1:] - rho * resid_full[..., :-1]) / scale
-    log_scale = np.zeros_like(resid_full)
-    log_scale[..., 1:] = np.log(scale)
-    return z, log_scale
 
 
 def log_likelihood_pointwise(

@@ -293,9 +293,7 @@ def solve_current(
     effects = _check_effect_params(params, effects)
     if load_steps is None and not near_first:  # scattered points: solved in a better order
         scattered = solve_scattered(
-            lambda p, v, s, t, r: _solve_current(
-                p, v, s, t, family, tunneling, effects, r, None, None, False
-            ),
+            lambda *a: _solve_current(*a[:4], family, tunneling, effects, a[4], None, None, False),
             params, voltage, stress, time, extra_series,
         )  # fmt: skip
         if scattered is not None:
