@@ -13,7 +13,7 @@ from fsrbayes.inference.evidence.referenced import ModeSearch
 from fsrbayes.inference.samplers import SamplerSettings
 from tests.commandline import fsrbayes_command
 
-TINY = LadderSettings(n_temps=4, burn=20, steps=250, replicates=2, n_walkers=32)
+TINY = LadderSettings(n_temps=4, burn=20, steps=120, replicates=2, n_walkers=32, n_batches=10)
 FALLBACK_LADDER = LadderSettings(
     n_temps=3, burn=10, steps=100, replicates=2, n_walkers=32, n_batches=10
 )
