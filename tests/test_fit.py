@@ -608,6 +608,7 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
         "--progress",
         "--settle-s",
         "0.5",
+        "--placement",
     )
     assert result.returncode == 0, result.stderr
     assert (
@@ -615,6 +616,7 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
     )
     summary = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert summary["settle_s"] == 0.5  # the readings of the first 0.5 s are left out
+    assert {f"placement[{k}]" for k in range(len(summary["tests"]))} <= set(summary["parameters"])
     # without the readings at the loading's end, no observed drift is claimed
     assert all(t["observed_drift_3600"] is None for t in summary["tests"])
     tree = open_fit_tree(tmp_path / "p" / "posterior.nc")

@@ -42,13 +42,8 @@ from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
-from fsrbayes.inference.posterior import (
-    LogPosterior,
-    is_landing,
-    is_ramp,
-    landing_names,
-    ramp_names,
-)
+from fsrbayes.inference.nuisance import is_landing, is_ramp, landing_names, ramp_names
+from fsrbayes.inference.posterior import LogPosterior
 
 from .rig_coverage import simulate_truth
 

@@ -10,8 +10,8 @@ from .._version import __version__
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
 from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS
+from ..inference.nuisance import RAMPS
 from ..inference.parallel import JobError
-from ..inference.posterior import RAMPS
 from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .bench import add_bench_commands
@@ -107,6 +107,14 @@ def build_parser():
             "leave each test's readings in the first SETTLE_S seconds after every load change out "
             "of the fit (default 0): hand-placed weights settle, and presses before the weight, "
             "logged as no load, leave creep that fades over seconds"
+        ),
+    )
+    fit_.add_argument(
+        "--placement",
+        action="store_true",
+        help=(
+            "sample each test's own level (placement[k]): a dead weight put on again reads a few "
+            "percent off, whatever the creep does"
         ),
     )
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")

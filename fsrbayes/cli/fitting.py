@@ -95,6 +95,7 @@ def cmd_fit(args):
                 likelihood=args.likelihood,
                 ramp=args.ramp,
                 settle_s=args.settle_s,
+                placement=args.placement,
                 rng=args.seed,
                 settings=settings,
                 checkpoint=checkpoint,
@@ -236,6 +237,7 @@ def _fit_hierarchical(args, data, settings, out):
                 likelihood=args.likelihood,
                 ramp=args.ramp,
                 settle_s=args.settle_s,
+                placement=args.placement,
                 rng=args.seed,
                 coordinates=args.coordinates,
             )

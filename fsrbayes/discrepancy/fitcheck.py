@@ -27,7 +27,7 @@ fails and records them as ``checks`` in ``summary.json``.
 
 import numpy as np
 
-from ..inference.posterior import is_ramp
+from ..inference.nuisance import is_ramp
 from .checks import predictive_checks
 from .gaps import failed_checks
 

@@ -149,6 +149,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
         "settle_s": data.settle_s,
+        "test_keys": json.dumps([list(key) for key in data.test_keys]),
         "specimen": data.specimen,
         "sensor": data.sensor,
         "converged": int(report.converged) if report else 0,

@@ -45,8 +45,9 @@ from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
 from ..physics.rheology import BURGERS, ZENER
 from ..physics.solver import FINISH
 from .broyden import accept_steps, propose_steps
+from .nuisance import is_per_test, noise_parameters
 from .optimize import ensemble_start, polish
-from .posterior import LogPosterior, is_landing, is_ramp, noise_parameters
+from .posterior import LogPosterior
 from .samplers.coordinates import SampledLogProb
 
 __all__ = [
@@ -306,7 +307,7 @@ class _StepModel:
             or posterior.effect_objects
             or data.step_time is not None
             or data.first_ramps() is not None
-            or any(is_ramp(n) or is_landing(n) for n in posterior.names)
+            or any(is_per_test(n) for n in posterior.names)
             or data.time_s.shape != (data.n_tests, 1)
             or "n_junctions" in posterior.names  # compiled for one junction only
             or posterior.fixed.get("n_junctions", 1.0) != 1.0

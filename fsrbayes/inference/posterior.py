@@ -12,21 +12,20 @@ from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import resolve_effects
 from ..physics.models import model_family, model_parameters, parse_model
 from ..physics.sensor import gap_strain, solve_current
-from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
+from .likelihood import SpecimenData, log_likelihood_pointwise
+from .nuisance import (
+    is_landing,
+    is_placement,
+    is_ramp,
+    landing_names,
+    noise_parameters,
+    nuisance_parameters,
+    placement_names,
+    ramp_names,
+    samples_landing,
+)
 
-__all__ = [
-    "LogPosterior",
-    "PriorScaledTarget",
-    "RAMPS",
-    "noise_parameters",
-    "nuisance_parameters",
-    "ramp_names",
-    "is_ramp",
-    "landing_names",
-    "is_landing",
-    "samples_landing",
-    "drift_between",
-]
+__all__ = ["LogPosterior", "PriorScaledTarget", "drift_between"]
 
 OPTIONAL_PARAMETERS = ("n_junctions",)
 """Parameters a model may go without: without ``n_junctions`` the circuit has one junction (the
@@ -44,72 +43,6 @@ def drift_between(log_start, log_end):
     with np.errstate(invalid="ignore"):
         drift = 100.0 * np.expm1(np.where(valid, log_end - log_start, 0.0))
     return np.where(valid, drift, np.nan)
-
-
-RAMPS = ("given", "fitted")
-"""How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
-of the data's ``ramp_s`` column; ``"fitted"`` — a linear ramp per test, whose length
-``ramp_s[k]`` (k: the test's row in the specimen's data) is sampled with the sensor's ``ramp_s``
-prior: every hand-placed weight settles in its own time."""
-
-
-def ramp_names(n_tests):
-    """Names of the sampled loading ramps of ``n_tests`` tests: ``ramp_s[0]`` … in test order."""
-    return tuple(f"ramp_s[{k}]" for k in range(n_tests))
-
-
-def is_ramp(name):
-    """Return whether a parameter is a sampled loading ramp: ``ramp_s[k]``, or ``ramp_s``."""
-    return name.split("[", 1)[0] == "ramp_s"
-
-
-def landing_names(n_tests):
-    """Names of the sampled landings of ``n_tests`` tests: ``landing[0]`` … in test order.
-
-    ``landing[k]`` ∈ (0, 1) is where in the sample interval before test k's first loaded sample
-    its load began: the onset lies ``landing[k]`` of the interval (``onset_window``) before t = 0.
-    """
-    return tuple(f"landing[{k}]" for k in range(n_tests))
-
-
-def is_landing(name):
-    """Return whether a parameter is a sampled landing (:func:`landing_names`)."""
-    return name.split("[", 1)[0] == "landing"
-
-
-def samples_landing(data, ramp="given"):
-    """Whether a fit of ``data`` samples each test's landing (:func:`landing_names`).
-
-    When a test's first loading rises over a ramp (given, or ``ramp="fitted"``) and its onset is
-    known only to the sample interval before its first loaded row: under a ramp of a few tenths
-    of a second a lag of up to one sample shifts the load of the first samples by a few percent,
-    which a 100 Hz log resolves; on a step it only delays the creep by a few milliseconds.
-    """
-    unknown = data.onset_window is not None and bool(np.any(data.onset_window > 0))
-    return unknown and (ramp == "fitted" or data.first_ramps() is not None)
-
-
-def noise_parameters(likelihood):
-    """Likelihood parameters: sigma_rel, plus nu for Student-t or noise_tau for AR(1)."""
-    if likelihood not in LIKELIHOODS:
-        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
-    extra = {"student": ("nu",), "ar1": ("noise_tau",)}.get(likelihood, ())
-    return ("sigma_rel", *extra)
-
-
-def nuisance_parameters(likelihood, ramp="given", n_tests=1, landing=False):
-    """Return the likelihood's parameters (:func:`noise_parameters`), then the loadings' ones.
-
-    With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`), with
-    ``landing`` one landing per test (:func:`landing_names`, :func:`samples_landing`).
-    """
-    if ramp not in RAMPS:
-        raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
-    return (
-        noise_parameters(likelihood)
-        + (ramp_names(n_tests) if ramp == "fitted" else ())
-        + (landing_names(n_tests) if landing else ())
-    )
 
 
 class PriorScaledTarget:
@@ -237,6 +170,13 @@ class LogPosterior(PriorScaledTarget):
                     f"the sampled landings {list(names)} are not one per test of the data's "
                     f"{data.n_tests} (landing[0] … in test order)"
                 )
+        self._placements = [i for i, n in enumerate(prior.names) if is_placement(n)]
+        names = tuple(prior.names[i] for i in self._placements)
+        if names and (names != placement_names(len(names)) or data.ramp_rows().max() >= len(names)):
+            raise ValueError(
+                f"the sampled placement levels {list(names)} are not one per test of the data's "
+                f"{data.n_tests} (placement[0] … in test order)"
+            )
         self._ramps = [i for i, n in enumerate(prior.names) if is_ramp(n)]
         self._ramp_limit = None
         if self._ramps:
@@ -268,16 +208,22 @@ class LogPosterior(PriorScaledTarget):
         likelihood="gaussian",
         beta=1.0,
         ramp="given",
+        placement=False,
     ):
         """Build the posterior of a specimen from a sensor file's priors.
 
         Posterior with the sensor file's priors for what ``model`` samples; the rest fixed at
         defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`), and each
         test's landing where a ramp makes an onset known to one sample matter
-        (:func:`samples_landing`).
+        (:func:`samples_landing`); ``placement`` each test's placement level
+        (:func:`placement_names`).
         """
         nuisance = nuisance_parameters(
-            likelihood, ramp, data.n_tests, landing=samples_landing(data, ramp)
+            likelihood,
+            ramp,
+            data.n_tests,
+            landing=samples_landing(data, ramp),
+            placement=placement,
         )
         prior = sensor.prior_for(model, nuisance)
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
@@ -394,6 +340,8 @@ class LogPosterior(PriorScaledTarget):
         valid = solution.valid & (solution.current > 0)
         if self._ramps:  # a ramp ends before its test's load changes again
             valid &= (ramps < self._ramp_limit)[..., None]
+        if self._placements:  # each test's readings stand its own factor above the model
+            log_current = log_current + x[:, self._placements][:, self.data.ramp_rows(), None]
         return np.where(valid, log_current, -np.inf)
 
     def landing_window(self, x):

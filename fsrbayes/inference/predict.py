@@ -37,8 +37,9 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
+from .nuisance import is_per_test, is_placement, is_ramp, nuisance_parameters, samples_landing
 from .output import open_fit_tree
-from .posterior import LogPosterior, is_landing, is_ramp, nuisance_parameters, samples_landing
+from .posterior import LogPosterior
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -111,10 +112,13 @@ def _posterior_of(folder, packed, rng):
     sensor = load_sensor(attrs["sensor"])
     likelihood = attrs["likelihood"]
     fitted = [n for n in tree.posterior.data_vars if is_ramp(str(n))]
+    levels = [str(n) for n in tree.posterior.data_vars if is_placement(str(n))]
     given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
     ramp = "fitted" if fitted and not given else "given"
     landing = samples_landing(packed, ramp)
-    noise = nuisance_parameters(likelihood, ramp, packed.n_tests, landing=landing)
+    noise = nuisance_parameters(
+        likelihood, ramp, packed.n_tests, landing=landing, placement=bool(levels)
+    )
     prior = sensor.prior_for(attrs["fsrbayes_model"], noise)
     posterior = LogPosterior(
         packed,
@@ -124,8 +128,8 @@ def _posterior_of(folder, packed, rng):
         tunneling=attrs["tunneling"],
         likelihood=likelihood,
     )
-    # the ramps, then the landings, come last
-    columns = [n for n in posterior.names if not (is_ramp(n) or is_landing(n))]
+    # the ramps, the landings, then the placement levels come last
+    columns = [n for n in posterior.names if not is_per_test(n)]
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
     if ramp == "fitted":
         seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
@@ -133,7 +137,32 @@ def _posterior_of(folder, packed, rng):
         draws = np.concatenate([draws, np.take_along_axis(seen, picks, axis=1)], axis=1)
     if landing:
         draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
+    if levels:
+        seen = np.stack([tree.posterior[n].values.ravel() for n in levels], axis=-1)
+        draws = np.concatenate([draws, _placements(seen, packed, attrs, rng)], axis=1)
     return posterior, draws, attrs
+
+
+def _placements(seen, packed, attrs, rng):
+    """Each protocol test's placement level, draw by draw, from the fit's (S, K) ``seen``.
+
+    A protocol test that is one of the fitted tests (same specimen, voltage, stress and test
+    label: a hold fitted on its first minutes, predicted to its end) keeps its own level; any
+    other is a new placement and, draw by draw, lends the level of a fitted test picked at
+    random, as a fresh placement lands like the ones seen.
+    """
+    keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
+    picks = rng.integers(seen.shape[1], size=(len(seen), packed.n_tests))
+    for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
+        for j, key in enumerate(keys):
+            if (
+                key[0] == specimen
+                and key[3] == label
+                and np.isclose(key[1], voltage)
+                and (np.isclose(key[2], stress))
+            ):
+                picks[:, i] = j
+    return np.take_along_axis(seen, picks, axis=1)
 
 
 def _segments(test):

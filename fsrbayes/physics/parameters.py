@@ -120,6 +120,13 @@ for _entry in (
         None,
         "where in the interval before the first loaded sample the load began (share of it)",
     ),
+    Parameter(
+        "placement",
+        "–",
+        "nuisance",
+        None,
+        "a placement's own level: the log of the factor its readings stand above the model",
+    ),
 ):
     register_parameter(_entry)
 

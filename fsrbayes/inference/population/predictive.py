@@ -22,7 +22,7 @@ from ...physics.constants import DRIFT_TIME_S
 from ...physics.models import parse_model
 from ...physics.sensor import solve_current
 from ...utils import first_sign_change
-from ..posterior import noise_parameters
+from ..nuisance import noise_parameters
 from ..samplers import even_index
 
 __all__ = [

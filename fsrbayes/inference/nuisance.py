@@ -1,0 +1,113 @@
+"""The nuisance parameters of a specimen's fit: the noise model's, and each test's own.
+
+Each test of a rig log may carry parameters of its own, named with the test's row in the
+specimen's data: a loading ramp ``ramp_s[k]`` (a hand-placed weight settling), a landing
+``landing[k]`` (where in the sample interval the load began) and a placement level
+``placement[k]`` (a weight put on again reads a few percent off). None of them is pooled across
+specimens (:mod:`~.population.model`).
+"""
+
+import numpy as np
+
+from .likelihood import LIKELIHOODS
+
+__all__ = [
+    "RAMPS",
+    "is_landing",
+    "is_per_test",
+    "is_placement",
+    "is_ramp",
+    "landing_names",
+    "noise_parameters",
+    "nuisance_parameters",
+    "placement_names",
+    "ramp_names",
+    "samples_landing",
+]
+
+
+RAMPS = ("given", "fitted")
+"""How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
+of the data's ``ramp_s`` column; ``"fitted"`` — a linear ramp per test, whose length
+``ramp_s[k]`` (k: the test's row in the specimen's data) is sampled with the sensor's ``ramp_s``
+prior: every hand-placed weight settles in its own time."""
+
+
+def ramp_names(n_tests):
+    """Names of the sampled loading ramps of ``n_tests`` tests: ``ramp_s[0]`` … in test order."""
+    return tuple(f"ramp_s[{k}]" for k in range(n_tests))
+
+
+def is_ramp(name):
+    """Return whether a parameter is a sampled loading ramp: ``ramp_s[k]``, or ``ramp_s``."""
+    return name.split("[", 1)[0] == "ramp_s"
+
+
+def landing_names(n_tests):
+    """Names of the sampled landings of ``n_tests`` tests: ``landing[0]`` … in test order.
+
+    ``landing[k]`` ∈ (0, 1) is where in the sample interval before test k's first loaded sample
+    its load began: the onset lies ``landing[k]`` of the interval (``onset_window``) before t = 0.
+    """
+    return tuple(f"landing[{k}]" for k in range(n_tests))
+
+
+def is_landing(name):
+    """Return whether a parameter is a sampled landing (:func:`landing_names`)."""
+    return name.split("[", 1)[0] == "landing"
+
+
+def samples_landing(data, ramp="given"):
+    """Whether a fit of ``data`` samples each test's landing (:func:`landing_names`).
+
+    When a test's first loading rises over a ramp (given, or ``ramp="fitted"``) and its onset is
+    known only to the sample interval before its first loaded row: under a ramp of a few tenths
+    of a second a lag of up to one sample shifts the load of the first samples by a few percent,
+    which a 100 Hz log resolves; on a step it only delays the creep by a few milliseconds.
+    """
+    unknown = data.onset_window is not None and bool(np.any(data.onset_window > 0))
+    return unknown and (ramp == "fitted" or data.first_ramps() is not None)
+
+
+def noise_parameters(likelihood):
+    """Likelihood parameters: sigma_rel, plus nu for Student-t or noise_tau for AR(1)."""
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood must be one of {LIKELIHOODS}, got {likelihood!r}")
+    extra = {"student": ("nu",), "ar1": ("noise_tau",)}.get(likelihood, ())
+    return ("sigma_rel", *extra)
+
+
+def placement_names(n_tests):
+    """Names of the sampled placement levels of ``n_tests`` tests: ``placement[0]`` … in order.
+
+    ``placement[k]`` is the log of the factor by which test k's readings stand above the model:
+    a weight put on again reads a few percent off, whatever the creep does afterwards.
+    """
+    return tuple(f"placement[{k}]" for k in range(n_tests))
+
+
+def is_placement(name):
+    """Return whether a parameter is a sampled placement level (:func:`placement_names`)."""
+    return name.split("[", 1)[0] == "placement"
+
+
+def is_per_test(name):
+    """Return whether a parameter is one test's nuisance: a ramp, a landing or a placement."""
+    return is_ramp(name) or is_landing(name) or is_placement(name)
+
+
+def nuisance_parameters(likelihood, ramp="given", n_tests=1, landing=False, placement=False):
+    """Return the likelihood's parameters (:func:`noise_parameters`), then the tests' own ones.
+
+    With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`), with
+    ``landing`` one landing per test (:func:`landing_names`, :func:`samples_landing`), with
+    ``placement`` one placement level per test (:func:`placement_names`).
+    """
+    if ramp not in RAMPS:
+        raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
+    return (
+        noise_parameters(likelihood)
+        + (ramp_names(n_tests) if ramp == "fitted" else ())
+        + (landing_names(n_tests) if landing else ())
+        + (placement_names(n_tests) if placement else ())
+    )
