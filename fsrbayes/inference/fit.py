@@ -317,18 +317,13 @@ def fit(
         measured — each placement settles in its own time; refused when the data give
         ``ramp_s``).
     settle_s : float, optional
-        Leave each test's readings in the first ``settle_s`` seconds after each load change out
-        of the likelihood (the load history keeps every change). For hand-placed weights: the
-        first fraction of a second holds the weight settling, and an operator's presses before
-        the weight — logged as no load — leave creep that fades over the next seconds, which
-        no load history in the log describes. Default: every reading counts (0), or as packed
-        when ``data`` is a SpecimenData already.
+        Leave each test's readings in the first ``settle_s`` s after each load change out of the
+        likelihood, the load history kept (a hand-placed weight settling, presses before it
+        logged as no load). Default: 0, or as packed when ``data`` is a SpecimenData.
     placement : bool
-        Sample each test's placement level ``placement[k]`` (the sensor's ``placement`` prior;
-        normal, sd 3 % by default): the log of the factor by which the test's readings stand
-        above the model. A dead weight put on again lands a little differently and reads a few
-        percent off, which no stress law explains; with it, the creep is fitted to each
-        placement's own course. Off by default: one level for every test.
+        Sample each test's own level ``placement[k]`` (log of the factor its readings stand
+        above the model; the sensor's ``placement`` prior): a weight put on again reads a few
+        percent off. Default off.
 
     Returns
     -------
@@ -339,14 +334,9 @@ def fit(
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     model = sensor.default_model if model is None else model
     posterior = LogPosterior.for_sensor(
-        packed,
-        sensor,
-        model=model,
-        tunneling=tunneling,
-        likelihood=likelihood,
-        ramp=ramp,
+        packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood, ramp=ramp,
         placement=placement,
-    )
+    )  # fmt: skip
     sampler, settings = _sampler_and_settings(sampler, settings)
     for note in design_warnings(posterior):
         warnings.warn(DesignWarning(note), stacklevel=2)
