@@ -42,10 +42,16 @@ def solve_scattered(solve, params, voltage, stress, time, extra_series):
     except ValueError:
         return None  # the caller's solve says what does not broadcast
     n = int(np.prod(shape))
+    if n < MIN_SCATTERED_POINTS:  # before looking at the parameters: the likelihood's calls
+        return None
     varying = {"voltage": voltage, "stress": stress, "extra_series": extra_series}
-    varying.update((name, value) for name, value in params.items() if np.ndim(value))
+    varying.update(
+        (name, value)
+        for name, value in params.items()
+        if not isinstance(value, float | int) and np.ndim(value)  # np.ndim: µs a parameter
+    )
     varying = {name: value for name, value in varying.items() if np.ndim(value)}
-    if n < MIN_SCATTERED_POINTS or _in_rows(time, varying.values(), shape):
+    if _in_rows(time, varying.values(), shape):
         return None
     for value in varying.values():
         try:
