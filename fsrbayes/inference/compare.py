@@ -8,9 +8,9 @@ and called "inconclusive" when |ln B| is within two of its own error bars. PSIS-
 from the β = 1 rung is a second opinion on predictive accuracy.
 """
 
+import os
 import warnings
 from dataclasses import asdict, replace
-from os import cpu_count as _cpus
 
 import numpy as np
 
@@ -163,7 +163,8 @@ def compare(
     settings = settings or (LadderSettings() if path == "prior" else REFERENCED_LADDER)
     if fit_settings is None:
         fit_settings = replace(
-            fitting.FIT_SETTINGS, processes=min(fitting.FIT_SETTINGS.n_ensembles, _cpus() or 1)
+            fitting.FIT_SETTINGS,
+            processes=min(fitting.FIT_SETTINGS.n_ensembles, os.cpu_count() or 1),
         )
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     out = {

@@ -45,6 +45,18 @@ def drift_between(log_start, log_end):
     return np.where(valid, drift, np.nan)
 
 
+def _per_test(prior, data, is_kind, names_of, what):
+    """Return the indices of one per-test kind of sampled parameter, checked one per test."""
+    indices = [i for i, n in enumerate(prior.names) if is_kind(n)]
+    names = tuple(prior.names[i] for i in indices)
+    if names and (names != names_of(len(names)) or data.ramp_rows().max() >= len(names)):
+        raise ValueError(
+            f"the sampled {what} {list(names)} are not one per test of the data's "
+            f"{data.n_tests} ({names_of(1)[0]} … in test order)"
+        )
+    return indices
+
+
 class PriorScaledTarget:
     """A target sampled in prior-scaled u-space.
 
@@ -157,40 +169,21 @@ class LogPosterior(PriorScaledTarget):
                 "landing cannot be a fixed parameter: give a known onset in the data's onset_s "
                 "column"
             )
-        self._landings = [i for i, n in enumerate(prior.names) if is_landing(n)]
-        if self._landings:
-            names = tuple(prior.names[i] for i in self._landings)
-            if data.onset_window is None:
-                raise ValueError(
-                    "the data give every test's onset (onset_s column, or no sample before the "
-                    f"load): nothing to sample for {list(names)}"
-                )
-            if names != landing_names(len(names)) or data.ramp_rows().max() >= len(names):
-                raise ValueError(
-                    f"the sampled landings {list(names)} are not one per test of the data's "
-                    f"{data.n_tests} (landing[0] … in test order)"
-                )
-        self._placements = [i for i, n in enumerate(prior.names) if is_placement(n)]
-        names = tuple(prior.names[i] for i in self._placements)
-        if names and (names != placement_names(len(names)) or data.ramp_rows().max() >= len(names)):
+        if data.onset_window is None and any(is_landing(n) for n in prior.names):
             raise ValueError(
-                f"the sampled placement levels {list(names)} are not one per test of the data's "
-                f"{data.n_tests} (placement[0] … in test order)"
+                "the data give every test's onset (onset_s column, or no sample before the "
+                f"load): nothing to sample for {[n for n in prior.names if is_landing(n)]}"
             )
-        self._ramps = [i for i, n in enumerate(prior.names) if is_ramp(n)]
+        self._landings = _per_test(prior, data, is_landing, landing_names, "landings")
+        self._placements = _per_test(prior, data, is_placement, placement_names, "placement levels")
+        if data.ramp_s is not None and np.any(data.ramp_s > 0) and any(map(is_ramp, prior.names)):
+            raise ValueError(
+                "the data give the loading ramp (ramp_s column); a fitted ramp (--ramp "
+                "fitted, ramp='fitted') is for data that do not: use the column, or drop it"
+            )
+        self._ramps = _per_test(prior, data, is_ramp, ramp_names, "ramps")
         self._ramp_limit = None
         if self._ramps:
-            if data.ramp_s is not None and np.any(data.ramp_s > 0):
-                raise ValueError(
-                    "the data give the loading ramp (ramp_s column); a fitted ramp (--ramp "
-                    "fitted, ramp='fitted') is for data that do not: use the column, or drop it"
-                )
-            names = tuple(prior.names[i] for i in self._ramps)
-            if names != ramp_names(len(names)) or data.ramp_rows().max() >= len(names):
-                raise ValueError(
-                    f"the sampled ramps {list(names)} are not one per test of the data's "
-                    f"{data.n_tests} (ramp_s[0] … in test order)"
-                )
             # each test's ramp ends before its load changes again
             self._ramp_limit = np.full(data.n_tests, np.inf)
             if data.step_time is not None:

@@ -133,8 +133,7 @@ def _posterior_of(folder, packed, rng):
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
     if ramp == "fitted":
         seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
-        picks = rng.integers(len(fitted), size=(len(seen), packed.n_tests))
-        draws = np.concatenate([draws, np.take_along_axis(seen, picks, axis=1)], axis=1)
+        draws = np.concatenate([draws, _lent(seen, packed.n_tests, rng)], axis=1)
     if landing:
         draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
     if levels:
@@ -152,16 +151,23 @@ def _placements(seen, packed, attrs, rng):
     random, as a fresh placement lands like the ones seen.
     """
     keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
-    picks = rng.integers(seen.shape[1], size=(len(seen), packed.n_tests))
+    own = {}
     for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
         for j, key in enumerate(keys):
-            if (
-                key[0] == specimen
-                and key[3] == label
-                and np.isclose(key[1], voltage)
-                and (np.isclose(key[2], stress))
-            ):
-                picks[:, i] = j
+            if key[0] == specimen and key[3] == label and np.allclose(key[1:3], (voltage, stress)):
+                own[i] = j
+    return _lent(seen, packed.n_tests, rng, own)
+
+
+def _lent(seen, n_tests, rng, own=None):
+    """Per protocol test, draw by draw, the value of a fitted test: ``seen`` (S, K) → (S, n).
+
+    A test in ``own`` (protocol test → fitted test) keeps that one's; the others take, draw by
+    draw, a fitted test's picked at random.
+    """
+    picks = rng.integers(seen.shape[1], size=(len(seen), n_tests))
+    for i, j in (own or {}).items():
+        picks[:, i] = j
     return np.take_along_axis(seen, picks, axis=1)
 
 
