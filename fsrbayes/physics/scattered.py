@@ -38,11 +38,11 @@ def solve_scattered(solve, params, voltage, stress, time, extra_series):
     inputs, in their order.
     """
     try:
-        shape = np.broadcast_shapes(*(np.shape(x) for x in (time, voltage, stress, extra_series)))
+        points = np.broadcast(time, voltage, stress, extra_series)
     except ValueError:
         return None  # the caller's solve says what does not broadcast
-    n = int(np.prod(shape))
-    if n < MIN_SCATTERED_POINTS:  # before looking at the parameters: the likelihood's calls
+    shape, n = points.shape, points.size
+    if n < MIN_SCATTERED_POINTS:  # the likelihood's calls, before any other work
         return None
     varying = {"voltage": voltage, "stress": stress, "extra_series": extra_series}
     varying.update(
