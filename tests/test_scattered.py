@@ -10,7 +10,7 @@ import pytest
 
 import fsrbayes
 from fsrbayes.physics import DomainError, scattered, solve_current
-from fsrbayes.physics.compiled_order import condition_order, row_breaks
+from fsrbayes.physics.compiled_order import group, row_breaks
 
 VOLTAGES = (0.2, 0.5, 1.0, 2.0, 8.0)  # 8 V: past the paper law's eq.-11 peak
 STRESSES = (42100.0, 105400.0, 210800.0)
@@ -38,13 +38,12 @@ def test_scattered_points_give_the_values_of_the_points_solved_as_they_come(
     v, s, t = _points(rng, 20_000)
     shape = (100, 200)  # a 2-D set of points comes back in its shape
     args = [x.reshape(shape) for x in (v, s, t)]
-    orders = []
+    groupings = []
     with monkeypatch.context() as patch:
-        patch.setattr(
-            scattered, "condition_order", lambda bits: orders.append(1) or condition_order(bits)
-        )
+        patch.setattr(scattered, "group", lambda *a: groupings.append(a[2].size) or group(*a))
+        patch.setattr(scattered, "BLOCK_POINTS", 6000)  # blocks that split conditions
         grouped = solve_current(a201, *args, tunneling=law)
-    assert orders, "these points should have been grouped"
+    assert v.size in groupings, "these points should have been grouped"
     given = _as_given(monkeypatch, lambda: solve_current(a201, *args, tunneling=law))
     for name in ("valid", "at_jump", "regime"):
         np.testing.assert_array_equal(getattr(grouped, name), getattr(given, name))
@@ -85,16 +84,22 @@ def test_points_that_come_in_rows_are_not_regrouped(a201):
     assert scattered.solve_scattered(lambda *a: 1 / 0, params, v, s, t, 0.0) is None
 
 
-def test_condition_order_groups_every_condition_and_keeps_each_ones_order(rng):
-    conditions = np.stack([rng.choice([0.2, np.nan, 1.0], 5000), rng.choice([1.0, 2.0], 5000)])
-    bits = conditions.view(np.int64)
-    order = condition_order(bits)
-    np.testing.assert_array_equal(np.sort(order), np.arange(5000))
-    keys = [tuple(col) for col in bits[:, order].T]
-    assert row_breaks(bits[:, order]) == len(set(keys)) == 6  # each condition one run
+def test_grouping_puts_every_condition_in_one_run_and_keeps_each_ones_order(rng):
+    columns = (rng.choice([0.2, np.nan, 1.0], 5000), rng.choice([1.0, 2.0], 5000))
+    time = np.arange(5000.0)
+    conditions, times, places = group(columns, tuple(c.view(np.int64) for c in columns), time)
+    np.testing.assert_array_equal(np.sort(places), np.arange(5000))
+    np.testing.assert_array_equal(times[places], time)  # each point at its place
+    for column, grouped in zip(columns, conditions, strict=True):
+        np.testing.assert_array_equal(grouped[places], column)
+    keys = [tuple(col) for col in conditions.view(np.int64).T]
+    runs = 1 + sum(a != b for a, b in zip(keys[:-1], keys[1:], strict=True))
+    assert runs == len(set(keys)) == 6  # each condition one run
     for key in set(keys):
-        members = order[[k == key for k in keys]]
+        members = times[[k == key for k in keys]]
         assert np.all(np.diff(members) > 0)  # a condition's points in their given order
+    # rows as the solver sees them: the four finite conditions, and each NaN point on its own
+    assert row_breaks(tuple(conditions)) == 4 + np.isnan(columns[0]).sum()
 
 
 def test_a_few_times_per_condition_already_together_are_not_regrouped(a201):
