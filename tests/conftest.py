@@ -26,28 +26,31 @@ LONG_MODULES = (
     "test_evidence_nulls.py",  # ~150 s
     "test_predict_coverage.py",  # ~150 s
     # the default suite
-    "test_hierarchical.py",  # 53 s
-    "test_demo.py",  # 42
-    "test_diagnose.py",  # 41
-    "test_rigs.py",  # 39
-    "test_fit.py",  # 36
-    "test_pinned.py",  # 32
-    "test_reference.py",  # 29
-    "test_score_check.py",  # 26
+    "test_fit.py",  # 56 s
+    "test_pinned.py",  # 45
+    "test_hierarchical.py",  # 40
+    "test_score_check.py",  # 38
+    "test_fit_checks.py",  # 30
+    "test_diagnose.py",  # 26
     "test_compare.py",  # 24
-    "test_fit_checks.py",  # 22
-    "test_evidence_bridge.py",  # 22
-    "test_transport.py",  # 20
-    "test_sampling.py",  # 19
-    "test_extension.py",  # 15
-    "test_evidence.py",  # 15
+    "test_extension.py",  # 21
+    "test_rigs.py",  # 17
+    "test_calibration.py",  # 15
+    "test_load_histories.py",  # 15
+    "test_population_cli.py",  # 15
+    "test_same_numbers.py",  # 15
+    "test_convergence.py",  # 14
     "test_tempered.py",  # 14
-    "test_load_histories.py",  # 13
-    "test_calibration.py",  # 13
-    "test_same_numbers.py",  # 12
-    "test_gibbs_proposals.py",  # 11
-    "test_population_cli.py",  # 10
-    "test_ar1.py",  # 9
+    "test_sampling.py",  # 12
+    "test_gibbs_proposals.py",  # 12
+    "test_evidence.py",  # 12
+    "test_evidence_bridge.py",  # 11
+    "test_sdist.py",  # 11
+    "test_ar1.py",  # 10
+    "test_placement.py",  # 9
+    "test_transport.py",  # 9
+    "test_diagnose_cli.py",  # 9
+    "test_reference.py",  # 9
 )
 
 

@@ -18,7 +18,8 @@ QUICK = LadderSettings(n_temps=16, burn=150, steps=500, replicates=4, n_walkers=
 against the 0.3 they are held to; the calibration studies (slow) keep CHEAP."""
 
 
-@pytest.mark.parametrize("ndim", [2, 10])
+# 10 dimensions run in the tier (~8 s); 2 keep the ladder's known answer in the default suite
+@pytest.mark.parametrize("ndim", [2, pytest.param(10, marks=pytest.mark.validation)])
 def test_linear_gaussian_log_z_within_three_of_its_error_bars(ndim):
     target = LinearGaussian(ndim)
     result = log_evidence(target, QUICK, seed=ndim)
@@ -29,6 +30,7 @@ def test_linear_gaussian_log_z_within_three_of_its_error_bars(ndim):
     assert result.ti < truth  # the trapezoid is biased low on a wide prior (diagnostic only)
 
 
+@pytest.mark.validation  # a 16-rung ladder on two modes: the tier's (~7 s)
 def test_bimodal_likelihood_in_a_box_with_swaps():
     target = TwoModes()
     result = log_evidence(target, QUICK, seed=3)

@@ -89,6 +89,7 @@ def test_bridge_from_emcee_ensembles_agrees_with_the_exact_log_z(problem):
     assert split_z < 3  # compare's fallback threshold: converged halves agree
 
 
+@pytest.mark.validation  # a fit, then a referenced ladder from its draws: the tier's (~15 s)
 @pytest.mark.parametrize("problem", ["linear-gaussian", "bent-ridge"])
 def test_stepping_stone_from_a_fits_draws_agrees_with_the_exact_log_z(problem):
     """The demo's cross-check ladder (5 rungs, 4 ladders) from a reference fitted to each

@@ -203,6 +203,7 @@ def test_non_centred_coordinates_are_an_exact_bijection_with_its_jacobian():
         assert np.linalg.slogdet(jacobian)[1] == pytest.approx(expected, abs=1e-6)
 
 
+@pytest.mark.validation  # a converged funnel run: the tier's (~9 s)
 def test_two_stage_with_three_specimens_converges_and_matches_the_analytic_hyper_posterior():
     # The non-centred coordinates are what make this converge inside 2,500 steps: the
     # hyper-prior's own coordinates were not converged there (R-hat 1.0025, τ 68) and needed
@@ -262,6 +263,7 @@ def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
 
 
+@pytest.mark.validation  # known answers from two Gibbs runs: the tier's (~15 s)
 @pytest.mark.parametrize("collapsed", [True, False])
 def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
     """All 8 specimens (the ensemble route above needs a minute for 5): blocked Gibbs sweeps with
@@ -284,6 +286,7 @@ def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
     assert_matches(result, analytic_moments())
 
 
+@pytest.mark.validation  # a two-stage run, then a joint one: the tier's (~11 s)
 def test_gibbs_joint_started_from_two_stage_discards_only_its_tau_warmup_and_matches():
     """Started at the two-stage posterior's draws, the joint route discards
     ``JOINT_WARMUP_TAU`` autocorrelation times, not half the chain, and still matches the

@@ -19,7 +19,8 @@ from validation.closed_form import LinearGaussian, TwoModes
 LADDER = LadderSettings(n_temps=8, exponent=1.0, burn=100, steps=600, replicates=4, n_walkers=40)
 
 
-@pytest.mark.parametrize("ndim", [2, 10])
+# 10 dimensions run in the tier (~6 s); 2 keep the referenced ladder's known answer here
+@pytest.mark.parametrize("ndim", [2, pytest.param(10, marks=pytest.mark.validation)])
 def test_referenced_log_z_of_the_linear_gaussian(ndim):
     target = LinearGaussian(ndim)
     mean, cov = target.posterior_moments()
@@ -41,6 +42,7 @@ def test_referenced_log_z_of_the_linear_gaussian(ndim):
     assert np.all(np.abs(deviation) < 4 * error), deviation / error
 
 
+@pytest.mark.validation  # a known answer from a poor reference: the tier's (~6 s)
 def test_a_poor_reference_costs_precision_not_correctness():
     # g fitted to draws shifted by 3 sd and twice too wide: the identity still holds.
     target = LinearGaussian(4, seed=3)
@@ -53,6 +55,7 @@ def test_a_poor_reference_costs_precision_not_correctness():
     assert result.error < 0.3
 
 
+@pytest.mark.validation  # a pilot, a region search and a 12-rung ladder: the tier's (~14 s)
 def test_two_modes_from_a_reference_fitted_to_both():
     target = TwoModes()
     rng = np.random.default_rng(4)

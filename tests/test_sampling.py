@@ -270,6 +270,7 @@ def bent_ridge_run():
     return target, run_ensembles(target, start, seed=1, settings=settings)
 
 
+@pytest.mark.validation  # a converged run on a bent ridge: the tier's (~10 s)
 def test_affine_maps_reach_the_far_ends_of_a_bent_ridge(bent_ridge_run):
     """The kinked ridge of BentRidge (x ~ N(0, 1) exactly), within 4 standard errors from the
     run's ESS. With the quadratic map instead, sd(x) came out 0.966-0.985 and P(|x| > 2.5)

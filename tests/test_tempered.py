@@ -37,6 +37,7 @@ def bent():
     return target, run, evidence
 
 
+@pytest.mark.validation  # a tempered run on a bent ridge, known draws and log Z: the tier's (~7 s)
 def test_tempered_draws_follow_the_bent_ridge(bent):
     """Moments and the arms' far ends against the closed form, within 4 standard errors from the
     run's own (ensemble-mean) ESS. With quadratic charts P(|x| > 2.5) came out 0.0066 (exact
@@ -67,6 +68,7 @@ def test_tempered_draws_follow_the_bent_ridge(bent):
     )
 
 
+@pytest.mark.validation  # the same run's log Z against its exact value (0)
 def test_tempered_evidence_comes_with_the_draws(bent):
     _, _, evidence = bent
     assert abs(evidence.log_z - 0.0) < 3 * evidence.error + 0.01, str(evidence)

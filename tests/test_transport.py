@@ -206,6 +206,7 @@ def mapped_banana():
     return _banana_run(3, independence_fraction=0.0)
 
 
+@pytest.mark.validation  # converged banana runs, with and without the map: the tier's (~9 s)
 def test_sampling_through_the_map_is_exact_and_faster_on_a_banana(mapped_banana):
     plain, mapped = _banana_run(0, independence_fraction=0.0), mapped_banana
     assert mapped.report.tau.max() < 0.5 * plain.report.tau.max(), (
@@ -217,6 +218,7 @@ def test_sampling_through_the_map_is_exact_and_faster_on_a_banana(mapped_banana)
     assert mapped.chain.shape[1] - mapped.report.n_kept == 1500  # three warm-up chunks
 
 
+@pytest.mark.validation  # a converged banana run with independence moves: the tier's (~5 s)
 def test_independence_moves_keep_the_banana_exact_and_cut_tau(mapped_banana):
     mixed = _banana_run(3, independence_fraction=0.3)
     assert mixed.report.converged, mixed.report.worst()
