@@ -1,8 +1,10 @@
-"""Each test's placement level: a dead weight put on again reads a few percent off.
+"""Each test's placement: a dead weight put on again reads a few percent off, and creeps its own.
 
 ``placement[k]`` multiplies test k's model current by exp(placement[k]); drifts (ratios within
-a test) do not see it, the population does not pool it, and ``predict`` keeps a fitted test's
-own level and lends a new placement one of the levels seen.
+a test) do not see it. ``placement_creep[k]`` multiplies test k's delayed strain by
+exp(placement_creep[k]), its elastic strain and the creep's time course unchanged. The population
+pools neither, and ``predict`` keeps a fitted test's own and lends a new placement the level and
+creep of one placement seen.
 """
 
 import json
@@ -18,7 +20,12 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
-from fsrbayes.inference.nuisance import placement_names
+from fsrbayes.inference.nuisance import (
+    nuisance_parameters,
+    placement_creep_names,
+    placement_names,
+    samples_landing,
+)
 from fsrbayes.inference.population.model import NOISE_PARAMETERS
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import _placements
@@ -47,25 +54,52 @@ def test_a_placement_level_scales_its_tests_current_and_no_drift(placed):
     packed = SpecimenData.select(data)
     plain = LogPosterior.for_sensor(packed, sensor)
     levelled = LogPosterior.for_sensor(packed, sensor, placement=True)
-    assert (
-        levelled.names[-3:]
-        == placement_names(3)
-        == ("placement[0]", "placement[1]", "placement[2]")
-    )
+    assert levelled.names[-6:] == placement_names(3) + placement_creep_names(3)
+    assert placement_names(2) == ("placement[0]", "placement[1]")
     x = levelled.prior.sample(np.random.default_rng(1), 4)
+    x[:, -3:] = 0.0  # every test creeps by the law's own amount: the levels alone
     base = plain.log_model_current(x[:, : plain.ndim])
     np.testing.assert_allclose(
-        levelled.log_model_current(x), base + x[:, -3:, None], rtol=0, atol=1e-12
+        levelled.log_model_current(x), base + x[:, -6:-3, None], rtol=0, atol=1e-12
     )
     np.testing.assert_allclose(levelled.drift_percent(x), plain.drift_percent(x[:, : plain.ndim]))
-    assert "placement" in NOISE_PARAMETERS  # a nuisance: never pooled across specimens
+    # nuisances: never pooled across specimens
+    assert {"placement", "placement_creep"} <= set(NOISE_PARAMETERS)
+    peer = LogPosterior.for_sensor(packed, sensor, model="kalantari", placement=True)
+    assert peer.names[-3:] == placement_names(3)  # its circuit names no creep amplitude
+
+
+@pytest.mark.parametrize(
+    "model", ["burgers", "zener", "nutting", "log-spectrum", "log-spectrum-sat+contact-creep"]
+)
+def test_a_placement_creep_scales_its_tests_delayed_strain_alone(placed, model):
+    """ε_k(t) − σ_k/k1 = exp(placement_creep[k])·(the law's), once the weight is on."""
+    data, truth = placed
+    packed = SpecimenData.select(data)
+    posterior = LogPosterior.for_sensor(packed, load_sensor("fsr402"), model=model, placement=True)
+    x = posterior.prior.sample(np.random.default_rng(5), 3)
+    x[:, -3:] = [[0.4, -0.3, 0.0], [-0.5, 0.2, 0.1], [0.0, 0.0, 0.0]]
+    unscaled = x.copy()
+    unscaled[:, -3:] = 0.0
+    times = np.array([5.0, 12.0, 29.0])  # past every test's landing
+    elastic = packed.stress_Pa[None, :, None] / x[:, posterior.names.index("k1"), None, None]
+    delayed = posterior.gap_strain(x, times) - elastic
+    law = posterior.gap_strain(unscaled, times) - elastic
+    assert np.all(law > 0)
+    factor = np.exp(x[:, -3:])[:, packed.ramp_rows(), None]
+    np.testing.assert_allclose(delayed, factor * law, rtol=1e-9, atol=0)
 
 
 def test_the_map_finds_each_placements_level(placed):
+    """The levels alone (every test creeping by the law's amount), as the data were made."""
     data, truth = placed
-    posterior = LogPosterior.for_sensor(
-        SpecimenData.select(data), load_sensor("fsr402"), placement=True
+    packed, sensor = SpecimenData.select(data), load_sensor("fsr402")
+    nuisance = nuisance_parameters(
+        "gaussian", "given", packed.n_tests, landing=samples_landing(packed), placement=True
     )
+    prior = sensor.prior_for("burgers", nuisance)
+    fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
+    posterior = LogPosterior(packed, prior, fixed)
     fit = laplace_fit(posterior, np.random.default_rng(2))
     x, _ = posterior.prior.from_unconstrained(fit.u_map[None])
     levels = x[0, -3:]
@@ -84,3 +118,8 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     got = _placements(seen, packed, attrs, np.random.default_rng(0))
     assert np.all(got[:, 0] == 0.2)  # its own
     assert set(np.unique(got[:, 1])) == {0.1, 0.2, 0.3}  # one of those seen, draw by draw
+    levels, creeps = _placements(
+        [seen, seen * 10.0], packed, attrs, np.random.default_rng(1)
+    )  # a placement's level and creep are lent together, from one placement seen
+    np.testing.assert_array_equal(creeps, levels * 10.0)
+    assert np.all(levels[:, 0] == 0.2)

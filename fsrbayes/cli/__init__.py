@@ -113,8 +113,8 @@ def build_parser():
         "--placement",
         action="store_true",
         help=(
-            "sample each test's own level (placement[k]): a dead weight put on again reads a few "
-            "percent off, whatever the creep does"
+            "sample each test's own level (placement[k]) and creep factor (placement_creep[k]): "
+            "a dead weight put on again reads a few percent off and creeps by its own amount"
         ),
     )
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")

@@ -26,13 +26,16 @@ RIG_PRIORS = {
     "ramp_s": {"dist": "lognormal", "median": 0.2, "sigma": 1.5},
     "landing": {"dist": "uniform", "lower": 0.0, "upper": 1.0},
     "placement": {"dist": "normal", "mu": 0.0, "sigma": 0.03},
+    "placement_creep": {"dist": "normal", "mu": 0.0, "sigma": 0.3},
 }
 """Priors of the rig's nuisance parameters, for sensor files that give none: the loading ramp of
 a hand-placed dead weight (median 0.2 s, 90 % between 0.017 and 2.4 s), sampled only when a fit
 asks for it (``fit(..., ramp="fitted")``); where in the sample interval before the first loaded
 row the load began (uniform: the logger's clock knows nothing of the weight), sampled when a
 ramp makes it matter; a placement's own level (normal, sd 3 %: a weight put on again reads a few
-percent off), sampled when a fit asks for it (``fit(..., placement=True)``)."""
+percent off) and its own creep (normal in the log of its factor, sd 0.3: placements of one
+sensor crept by up to 1.8× one another's per decade at 5–22 kPa), sampled when a fit asks for
+them (``fit(..., placement=True)``)."""
 
 
 def models_directory():

@@ -323,7 +323,9 @@ def fit(
     placement : bool
         Sample each test's own level ``placement[k]`` (log of the factor its readings stand
         above the model; the sensor's ``placement`` prior): a weight put on again reads a few
-        percent off. Default off.
+        percent off; and, where the creep law names its amplitude, each test's own creep
+        ``placement_creep[k]`` (log of the factor its delayed strain stands above the law's;
+        the ``placement_creep`` prior): placements creep by their own amounts. Default off.
 
     Returns
     -------

@@ -2,9 +2,10 @@
 
 Each test of a rig log may carry parameters of its own, named with the test's row in the
 specimen's data: a loading ramp ``ramp_s[k]`` (a hand-placed weight settling), a landing
-``landing[k]`` (where in the sample interval the load began) and a placement level
-``placement[k]`` (a weight put on again reads a few percent off). None of them is pooled across
-specimens (:mod:`~.population.model`).
+``landing[k]`` (where in the sample interval the load began), a placement level
+``placement[k]`` (a weight put on again reads a few percent off) and a placement's creep
+``placement_creep[k]`` (it creeps by its own factor). None of them is pooled across specimens
+(:mod:`~.population.model`).
 """
 
 import numpy as np
@@ -16,10 +17,12 @@ __all__ = [
     "is_landing",
     "is_per_test",
     "is_placement",
+    "is_placement_creep",
     "is_ramp",
     "landing_names",
     "noise_parameters",
     "nuisance_parameters",
+    "placement_creep_names",
     "placement_names",
     "ramp_names",
     "samples_landing",
@@ -91,17 +94,35 @@ def is_placement(name):
     return name.split("[", 1)[0] == "placement"
 
 
+def placement_creep_names(n_tests):
+    """Names of the sampled placement creeps of ``n_tests`` tests: ``placement_creep[0]`` ….
+
+    ``placement_creep[k]`` is the log of the factor by which test k's delayed strain stands
+    above the creep law's (:meth:`~fsrbayes.physics.rheology.CreepLaw.scale_creep`): placements
+    of one sensor creep by their own amounts, more than a smooth law of the stress follows.
+    """
+    return tuple(f"placement_creep[{k}]" for k in range(n_tests))
+
+
+def is_placement_creep(name):
+    """Return whether a parameter is a sampled placement creep (:func:`placement_creep_names`)."""
+    return name.split("[", 1)[0] == "placement_creep"
+
+
 def is_per_test(name):
-    """Return whether a parameter is one test's nuisance: a ramp, a landing or a placement."""
-    return is_ramp(name) or is_landing(name) or is_placement(name)
+    """Return whether a parameter is one test's nuisance: a ramp, a landing or a placement's."""
+    return is_ramp(name) or is_landing(name) or is_placement(name) or is_placement_creep(name)
 
 
-def nuisance_parameters(likelihood, ramp="given", n_tests=1, landing=False, placement=False):
+def nuisance_parameters(
+    likelihood, ramp="given", n_tests=1, landing=False, placement=False, placement_creep=False
+):
     """Return the likelihood's parameters (:func:`noise_parameters`), then the tests' own ones.
 
     With ``ramp="fitted"`` one loading ramp per test follows (:func:`ramp_names`), with
     ``landing`` one landing per test (:func:`landing_names`, :func:`samples_landing`), with
-    ``placement`` one placement level per test (:func:`placement_names`).
+    ``placement`` one placement level per test (:func:`placement_names`), with
+    ``placement_creep`` one creep factor per test (:func:`placement_creep_names`).
     """
     if ramp not in RAMPS:
         raise ValueError(f"ramp must be one of {RAMPS}, got {ramp!r}")
@@ -110,4 +131,5 @@ def nuisance_parameters(likelihood, ramp="given", n_tests=1, landing=False, plac
         + (ramp_names(n_tests) if ramp == "fitted" else ())
         + (landing_names(n_tests) if landing else ())
         + (placement_names(n_tests) if placement else ())
+        + (placement_creep_names(n_tests) if placement_creep else ())
     )

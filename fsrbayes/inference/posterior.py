@@ -10,16 +10,18 @@ import numpy as np
 from ..data.prior import JointPrior
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import resolve_effects
-from ..physics.models import model_family, model_parameters, parse_model
+from ..physics.models import creep_amplitude, model_family, model_parameters, parse_model
 from ..physics.sensor import gap_strain, solve_current
 from .likelihood import SpecimenData, log_likelihood_pointwise
 from .nuisance import (
     is_landing,
     is_placement,
+    is_placement_creep,
     is_ramp,
     landing_names,
     noise_parameters,
     nuisance_parameters,
+    placement_creep_names,
     placement_names,
     ramp_names,
     samples_landing,
@@ -176,6 +178,14 @@ class LogPosterior(PriorScaledTarget):
             )
         self._landings = _per_test(prior, data, is_landing, landing_names, "landings")
         self._placements = _per_test(prior, data, is_placement, placement_names, "placement levels")
+        self._creeps = _per_test(
+            prior, data, is_placement_creep, placement_creep_names, "placement creeps"
+        )
+        if self._creeps and not getattr(self.family, "amplitude", ()):
+            raise ValueError(
+                f"model {model!r} names no creep amplitude: its placements cannot creep by their "
+                "own factors (placement_creep[k]); sample the placement levels alone"
+            )
         if data.ramp_s is not None and np.any(data.ramp_s > 0) and any(map(is_ramp, prior.names)):
             raise ValueError(
                 "the data give the loading ramp (ramp_s column); a fitted ramp (--ramp "
@@ -209,7 +219,8 @@ class LogPosterior(PriorScaledTarget):
         defaults. ``ramp="fitted"`` samples the loading ramp too (:data:`RAMPS`), and each
         test's landing where a ramp makes an onset known to one sample matter
         (:func:`samples_landing`); ``placement`` each test's placement level
-        (:func:`placement_names`).
+        (:func:`placement_names`) and, where the creep law names its amplitude, each test's
+        creep factor (:func:`placement_creep_names`).
         """
         nuisance = nuisance_parameters(
             likelihood,
@@ -217,6 +228,7 @@ class LogPosterior(PriorScaledTarget):
             data.n_tests,
             landing=samples_landing(data, ramp),
             placement=placement,
+            placement_creep=placement and bool(creep_amplitude(model)),
         )
         prior = sensor.prior_for(model, nuisance)
         fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
@@ -273,7 +285,11 @@ class LogPosterior(PriorScaledTarget):
             self._near_first = False
 
     def _model_inputs(self, x, time_s):
-        """Parameters (each (W, 1, 1)), times, load steps, first ramps and sampled ramps of x."""
+        """Parameters, times, load steps, first ramps and sampled ramps of x.
+
+        Each parameter is (W, 1, 1), one per walker; a law's amplitude parameters are (W, C, 1)
+        where each test creeps by its own factor (``placement_creep[k]``).
+        """
         params = {name: x[:, i, None, None] for i, name in enumerate(self.names)}
         params.update(self.fixed)  # scalars broadcast against every walker
         time = self.data.time_s if time_s is None else np.asarray(time_s, dtype=float)
@@ -283,6 +299,9 @@ class LogPosterior(PriorScaledTarget):
             steps, first_ramp = self.data.ramped(ramps)
         if self._landings:  # the first loading began its landing's share of a sample before 0
             steps = self.data.landed(steps, self._lag(x))
+        if self._creeps:  # each test's delayed strain by its own factor: parameters (W, C, 1)
+            factor = np.exp(x[:, self._creeps][:, self.data.ramp_rows(), None])
+            params = self.family.scale_creep(params, factor)
         return params, time, steps, first_ramp, ramps
 
     def gap_strain(self, x, time_s=None):
@@ -302,7 +321,7 @@ class LogPosterior(PriorScaledTarget):
             load_steps=steps,
             first_ramp=first_ramp,
         )
-        return np.broadcast_to(strain, (len(x), *np.shape(time)[-2:]))
+        return np.broadcast_to(strain, (len(x), len(self.data.stress_Pa), np.shape(time)[-1]))
 
     def log_model_current(self, x, time_s=None):
         """Return log I of the model, shape (W, C, T).

@@ -37,7 +37,14 @@ import numpy as np
 from ..data.readouts import reading_of
 from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .nuisance import is_per_test, is_placement, is_ramp, nuisance_parameters, samples_landing
+from .nuisance import (
+    is_per_test,
+    is_placement,
+    is_placement_creep,
+    is_ramp,
+    nuisance_parameters,
+    samples_landing,
+)
 from .output import open_fit_tree
 from .posterior import LogPosterior
 
@@ -113,11 +120,17 @@ def _posterior_of(folder, packed, rng):
     likelihood = attrs["likelihood"]
     fitted = [n for n in tree.posterior.data_vars if is_ramp(str(n))]
     levels = [str(n) for n in tree.posterior.data_vars if is_placement(str(n))]
+    creeps = [str(n) for n in tree.posterior.data_vars if is_placement_creep(str(n))]
     given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
     ramp = "fitted" if fitted and not given else "given"
     landing = samples_landing(packed, ramp)
     noise = nuisance_parameters(
-        likelihood, ramp, packed.n_tests, landing=landing, placement=bool(levels)
+        likelihood,
+        ramp,
+        packed.n_tests,
+        landing=landing,
+        placement=bool(levels),
+        placement_creep=bool(creeps),
     )
     prior = sensor.prior_for(attrs["fsrbayes_model"], noise)
     posterior = LogPosterior(
@@ -128,7 +141,7 @@ def _posterior_of(folder, packed, rng):
         tunneling=attrs["tunneling"],
         likelihood=likelihood,
     )
-    # the ramps, the landings, then the placement levels come last
+    # the ramps, the landings, then the placement levels and creeps come last
     columns = [n for n in posterior.names if not is_per_test(n)]
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
     if ramp == "fitted":
@@ -137,18 +150,23 @@ def _posterior_of(folder, packed, rng):
     if landing:
         draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
     if levels:
-        seen = np.stack([tree.posterior[n].values.ravel() for n in levels], axis=-1)
-        draws = np.concatenate([draws, _placements(seen, packed, attrs, rng)], axis=1)
+        seen = [
+            np.stack([tree.posterior[n].values.ravel() for n in names], axis=-1)
+            for names in (levels, creeps)
+            if names
+        ]
+        draws = np.concatenate([draws, *_placements(seen, packed, attrs, rng)], axis=1)
     return posterior, draws, attrs
 
 
 def _placements(seen, packed, attrs, rng):
-    """Each protocol test's placement level, draw by draw, from the fit's (S, K) ``seen``.
+    """Each protocol test's placement level (and creep), draw by draw, from the fit's ``seen``.
 
-    A protocol test that is one of the fitted tests (same specimen, voltage, stress and test
-    label: a hold fitted on its first minutes, predicted to its end) keeps its own level; any
-    other is a new placement and, draw by draw, lends the level of a fitted test picked at
-    random, as a fresh placement lands like the ones seen.
+    ``seen``: the fit's placement levels, and its placement creeps where it sampled them, each
+    (S, K). A protocol test that is one of the fitted tests (same specimen, voltage, stress and
+    test label: a hold fitted on its first minutes, predicted to its end) keeps its own; any
+    other is a new placement and, draw by draw, lends the level and creep of one fitted test
+    picked at random, as a fresh placement lands and creeps like the ones seen.
     """
     keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
     own = {}
@@ -160,15 +178,18 @@ def _placements(seen, packed, attrs, rng):
 
 
 def _lent(seen, n_tests, rng, own=None):
-    """Per protocol test, draw by draw, the value of a fitted test: ``seen`` (S, K) → (S, n).
+    """Per protocol test, draw by draw, the values of a fitted test: each (S, K) → (S, n).
 
-    A test in ``own`` (protocol test → fitted test) keeps that one's; the others take, draw by
-    draw, a fitted test's picked at random.
+    ``seen``: one (S, K) array, or a list of them lent together (the same fitted test for each
+    draw and protocol test), returned alike. A test in ``own`` (protocol test → fitted test)
+    keeps that one's; the others take, draw by draw, a fitted test's picked at random.
     """
-    picks = rng.integers(seen.shape[1], size=(len(seen), n_tests))
+    arrays = seen if isinstance(seen, list) else [seen]
+    picks = rng.integers(arrays[0].shape[1], size=(len(arrays[0]), n_tests))
     for i, j in (own or {}).items():
         picks[:, i] = j
-    return np.take_along_axis(seen, picks, axis=1)
+    lent = [np.take_along_axis(a, picks, axis=1) for a in arrays]
+    return lent if isinstance(seen, list) else lent[0]
 
 
 def _segments(test):

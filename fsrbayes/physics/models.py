@@ -20,6 +20,7 @@ __all__ = [
     "BASE_PARAMETERS",
     "PEER_MODELS",
     "PeerModel",
+    "creep_amplitude",
     "model_components",
     "model_families",
     "model_family",
@@ -135,6 +136,15 @@ def parse_model(model):
             f"catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
         )
     return family, tuple(e.name for e in resolve_effects(effects))
+
+
+def creep_amplitude(model="burgers"):
+    """Return how ``model``'s creep law scales its delayed strain (:attr:`CreepLaw.amplitude`).
+
+    Empty for a law that names none and for a peer model (its circuit is its own).
+    """
+    family = model_family(parse_model(model)[0])
+    return getattr(family, "amplitude", ())
 
 
 def model_parameters(model="burgers"):

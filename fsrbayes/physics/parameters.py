@@ -127,6 +127,13 @@ for _entry in (
         None,
         "a placement's own level: the log of the factor its readings stand above the model",
     ),
+    Parameter(
+        "placement_creep",
+        "–",
+        "nuisance",
+        None,
+        "a placement's own creep: the log of the factor its delayed strain stands above the law's",
+    ),
 ):
     register_parameter(_entry)
 

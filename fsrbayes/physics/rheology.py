@@ -169,6 +169,12 @@ class CreepLaw:
         ``drive(stress, params)`` → Schapery's input g(σ) of the delayed strain, with
         g(0) = 0, in the units that make g·[J(t) − J(0)] a strain; None (the default): the law
         is linear, g(σ) = σ (module docstring).
+    amplitude : tuple of (str, float)
+        How to scale the law's delayed strain g·[J(t) − J(0)] by a factor f, leaving its time
+        course and the elastic strain alone: each (parameter, power) is multiplied by f**power
+        (Burgers: ``(("k2", -1), ("b2", -1), ("inv_b1", 1))``). Empty (the default): the law
+        names no amplitude, and a fit cannot give each placement its own creep
+        (:meth:`scale_creep`).
     """
 
     name: str
@@ -177,6 +183,24 @@ class CreepLaw:
     ramp_compliance: Callable
     summary: str = ""
     drive: Callable | None = None
+    amplitude: tuple = ()
+
+    def scale_creep(self, params, factor):
+        """Return ``params`` with the delayed strain scaled by ``factor`` (:attr:`amplitude`).
+
+        ``factor`` broadcasts against the parameters (e.g. (W, C, 1): a factor per walker and
+        test); the elastic strain σ·J(0) and the delayed strain's time course are unchanged.
+        """
+        if not self.amplitude:
+            raise ValueError(
+                f"creep law {self.name!r} names no creep amplitude: its placements cannot creep "
+                "by their own factors"
+            )
+        factor = np.asarray(factor, dtype=float)
+        scaled = dict(params)
+        for name, power in self.amplitude:
+            scaled[name] = np.asarray(params[name], dtype=float) * factor**power
+        return scaled
 
     def creep_strain(self, stress, t, params):
         """Strain after a stress step of ``stress`` Pa from rest at t = 0."""
@@ -322,6 +346,7 @@ BURGERS = register_creep_law(
         _burgers,
         _burgers_ramp,
         "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)",
+        amplitude=(("k2", -1.0), ("b2", -1.0), ("inv_b1", 1.0)),
     )
 )
 ZENER = register_creep_law(
@@ -331,6 +356,7 @@ ZENER = register_creep_law(
         _zener,
         _zener_ramp,
         "Zener: Burgers without linear flow, its b1 -> inf limit",
+        amplitude=(("k2", -1.0), ("b2", -1.0)),
     )
 )
 NUTTING = register_creep_law(
@@ -340,6 +366,7 @@ NUTTING = register_creep_law(
         _nutting,
         _nutting_ramp,
         "Nutting power-law creep (eq. 13, Zhang et al.)",
+        amplitude=(("psi", 1.0),),
     )
 )
 LOG_SPECTRUM = register_creep_law(
@@ -349,6 +376,7 @@ LOG_SPECTRUM = register_creep_law(
         _log_spectrum,
         _log_spectrum_ramp,
         "log-spectrum: Kelvin chain with a box spectrum in ln tau, creep linear in ln t, bounded",
+        amplitude=(("kd", -1.0),),
     )
 )
 LOG_SPECTRUM_SAT = register_creep_law(
@@ -360,6 +388,7 @@ LOG_SPECTRUM_SAT = register_creep_law(
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "
         "in stress (Schapery)",
         drive=_saturating,
+        amplitude=(("eps_sat", 1.0),),
     )
 )
 
