@@ -616,11 +616,20 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
     )
     summary = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert summary["settle_s"] == 0.5  # the readings of the first 0.5 s are left out
-    assert {f"placement[{k}]" for k in range(len(summary["tests"]))} <= set(summary["parameters"])
+    for kind in ("placement", "placement_creep"):  # each test's level and creep factor
+        assert {f"{kind}[{k}]" for k in range(len(summary["tests"]))} <= set(summary["parameters"])
     # without the readings at the loading's end, no observed drift is claimed
     assert all(t["observed_drift_3600"] is None for t in summary["tests"])
     tree = open_fit_tree(tmp_path / "p" / "posterior.nc")
     assert tree.attrs["settle_s"] == 0.5 and np.min(tree["constant_data"]["time_s"]) >= 0.5
+    # predict takes a fit with placement levels and creeps: each fitted test keeps its own
+    predicted = cli(
+        "predict", str(tmp_path / "p"), str(csv_file), "--draws", "50", "--json",
+        str(tmp_path / "bands.json"),
+    )  # fmt: skip
+    assert predicted.returncode == 0, predicted.stderr
+    bands = json.loads((tmp_path / "bands.json").read_text())
+    assert len(bands["tests"]) == len(summary["tests"])
 
 
 def test_the_corner_plot_draws_a_parameter_stuck_at_one_value(result, tmp_path):

@@ -18,6 +18,7 @@ from fsrbayes.data import read_csv
 from fsrbayes.data.creep import CreepData
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
+from fsrbayes.discrepancy.fitcheck import placement_creep_trend
 from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.nuisance import (
@@ -123,3 +124,29 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     )  # a placement's level and creep are lent together, from one placement seen
     np.testing.assert_array_equal(creeps, levels * 10.0)
     assert np.all(levels[:, 0] == 0.2)
+
+
+def _fitted(stresses, creeps):
+    """A stand-in posterior and its draws: a sampled creep factor per test at these stresses."""
+    n = len(stresses)
+    data = SimpleNamespace(stress_Pa=np.asarray(stresses), ramp_rows=lambda: np.arange(n))
+    names = ("eps_sat", *placement_names(n), *placement_creep_names(n))
+    posterior = SimpleNamespace(names=names, data=data, model="log-spectrum-sat")
+    draws = np.column_stack([np.full(len(creeps), 0.05), np.zeros((len(creeps), n)), creeps])
+    return posterior, draws
+
+
+def test_creep_factors_that_fall_with_stress_are_noted_and_flat_ones_are_not():
+    rng = np.random.default_rng(4)
+    stresses = [5.8e3, 11.1e3, 16.4e3, 21.8e3]
+    falling = np.array([0.4, 0.0, -0.4, -0.5]) + 0.1 * rng.standard_normal((400, 4))
+    trend = placement_creep_trend(*_fitted(stresses, falling))
+    # -0.9 over log10(21.8/5.8) = 0.575 decades: about -1.6 per decade of stress
+    assert -2.0 < trend["per_decade"]["median"] < -1.2 and trend["per_decade"]["q975"] < 0
+    assert "falls with stress" in trend["note"] and "placement_creep" in trend["note"]
+    flat = 0.1 * rng.standard_normal((400, 4))
+    assert placement_creep_trend(*_fitted(stresses, flat))["note"] is None
+    assert placement_creep_trend(*_fitted([1e4, 1e4], flat[:, :2])) is None  # one stress
+    posterior, draws = _fitted(stresses, flat)
+    posterior.names = ("eps_sat", *placement_names(4), "a", "b", "c", "d")
+    assert placement_creep_trend(posterior, draws) is None  # no creep factors sampled

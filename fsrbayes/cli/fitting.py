@@ -146,6 +146,9 @@ def _checked_fit(specimen, result, seed):
             "and 'fsrbayes diagnose' for where and what is missing",
             file=sys.stderr,
         )
+    trend = checks["placement_creep_trend"]
+    if trend and trend["note"]:
+        print(f"fsrbayes fit: note: {specimen}: {trend['note']}", file=sys.stderr)
     return checks
 
 
