@@ -116,7 +116,7 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     packed = SimpleNamespace(
         n_tests=2, test_keys=(("s1", 4.9, 9000.0, "w2"), ("s1", 4.9, 20000.0, "w9"))
     )
-    got = _placements(seen, packed, attrs, np.random.default_rng(0))
+    (got,) = _placements([seen], packed, attrs, np.random.default_rng(0))
     assert np.all(got[:, 0] == 0.2)  # its own
     assert set(np.unique(got[:, 1])) == {0.1, 0.2, 0.3}  # one of those seen, draw by draw
     levels, creeps = _placements(

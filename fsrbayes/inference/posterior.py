@@ -181,7 +181,7 @@ class LogPosterior(PriorScaledTarget):
         self._creeps = _per_test(
             prior, data, is_placement_creep, placement_creep_names, "placement creeps"
         )
-        if self._creeps and not getattr(self.family, "amplitude", ()):
+        if self._creeps and not creep_amplitude(model):
             raise ValueError(
                 f"model {model!r} names no creep amplitude: its placements cannot creep by their "
                 "own factors (placement_creep[k]); sample the placement levels alone"

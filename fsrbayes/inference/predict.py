@@ -146,7 +146,7 @@ def _posterior_of(folder, packed, rng):
     draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
     if ramp == "fitted":
         seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
-        draws = np.concatenate([draws, _lent(seen, packed.n_tests, rng)], axis=1)
+        draws = np.concatenate([draws, *_lent([seen], packed.n_tests, rng)], axis=1)
     if landing:
         draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
     if levels:
@@ -162,7 +162,7 @@ def _posterior_of(folder, packed, rng):
 def _placements(seen, packed, attrs, rng):
     """Each protocol test's placement level (and creep), draw by draw, from the fit's ``seen``.
 
-    ``seen``: the fit's placement levels, and its placement creeps where it sampled them, each
+    ``seen``: a list of the fit's placement levels and, where it sampled them, its creeps, each
     (S, K). A protocol test that is one of the fitted tests (same specimen, voltage, stress and
     test label: a hold fitted on its first minutes, predicted to its end) keeps its own; any
     other is a new placement and, draw by draw, lends the level and creep of one fitted test
@@ -180,16 +180,14 @@ def _placements(seen, packed, attrs, rng):
 def _lent(seen, n_tests, rng, own=None):
     """Per protocol test, draw by draw, the values of a fitted test: each (S, K) → (S, n).
 
-    ``seen``: one (S, K) array, or a list of them lent together (the same fitted test for each
-    draw and protocol test), returned alike. A test in ``own`` (protocol test → fitted test)
-    keeps that one's; the others take, draw by draw, a fitted test's picked at random.
+    ``seen``: a list of (S, K) arrays lent together (the same fitted test for each draw and
+    protocol test); returns the list of lent arrays. A test in ``own`` (protocol test → fitted
+    test) keeps that one's; the others take, draw by draw, a fitted test's picked at random.
     """
-    arrays = seen if isinstance(seen, list) else [seen]
-    picks = rng.integers(arrays[0].shape[1], size=(len(arrays[0]), n_tests))
+    picks = rng.integers(seen[0].shape[1], size=(len(seen[0]), n_tests))
     for i, j in (own or {}).items():
         picks[:, i] = j
-    lent = [np.take_along_axis(a, picks, axis=1) for a in arrays]
-    return lent if isinstance(seen, list) else lent[0]
+    return [np.take_along_axis(a, picks, axis=1) for a in seen]
 
 
 def _segments(test):

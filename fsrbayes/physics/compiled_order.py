@@ -8,9 +8,9 @@ with V, S, T in any order) are not: nearly every point starts a new row, Newton 
 the solve takes about twice as long. :func:`group` moves each point to its place in an order that
 groups the points by condition, in O(n) (a counting sort on a hash of the conditions);
 :func:`~.scattered.solve_scattered` solves them there and reads each result back from its place
-(:func:`restore`). Both passes go over the caller's points in
-order and over each group's run front to back: streams the processor prefetches, where a
-gather through a permutation would jump.
+(:func:`restore`). Both passes go over the caller's points in order and over each group's run
+front to back: streams the processor prefetches, where a gather through a permutation would
+jump.
 
 Within a condition the points keep their order, times unsorted: the root's logit is a smooth
 function of the gap over a whole creep test, so the parabola through any three earlier roots of

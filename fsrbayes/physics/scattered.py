@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from .compiled_order import SHORT_ROWS, group, restore, row_breaks
-from .solver import INVALID, JUMP
+from .solver import INVALID, JUMP, flat_points
 
 __all__ = ["MIN_SCATTERED_POINTS", "solve_scattered"]
 
@@ -71,12 +71,12 @@ def solve_scattered(solve, params, voltage, stress, time, extra_series):
             return None
     if not varying:
         return None  # only time varies, and not along the last axis: one condition
-    columns = tuple(_flat(value, shape) for value in varying.values())
+    columns = tuple(flat_points(value, shape) for value in varying.values())
     sample = tuple(np.ascontiguousarray(column[:SAMPLE_POINTS]) for column in columns)
     sample_grouped, _, _ = group(sample, _bits(sample), sample[0])
     if row_breaks(sample) < SHORT_ROWS * row_breaks(tuple(sample_grouped)):
         return None
-    conditions, moments, places = group(columns, _bits(columns), _flat(time, shape))
+    conditions, moments, places = group(columns, _bits(columns), flat_points(time, shape))
     current, v_bulk = np.empty(n), np.empty(n)
     regime = np.empty(n, dtype=np.int8)
     iterations = 0
@@ -102,14 +102,6 @@ def solve_scattered(solve, params, voltage, stress, time, extra_series):
 def _bits(columns):
     """Return the float64 columns' bits viewed as int64 (no copy)."""
     return tuple(column.view(np.int64) for column in columns)
-
-
-def _flat(value, shape):
-    """``value`` as a flat float64 array over the points (a view where it already is one)."""
-    value = np.asarray(value, dtype=float)
-    if value.shape == shape:
-        return np.ascontiguousarray(value).ravel()
-    return np.broadcast_to(value, shape).ravel()
 
 
 def _in_rows(time, conditions, shape):

@@ -30,7 +30,7 @@ import numpy as np
 from . import compiled
 from . import tunneling as tl
 
-__all__ = ["BulkSolution", "solve_bulk", "REGIMES"]
+__all__ = ["BulkSolution", "flat_points", "solve_bulk", "REGIMES"]
 
 REGIMES = {
     0: "invalid",
@@ -250,7 +250,7 @@ def solve_bulk(
         arrays.append(threshold)
     arrays = [np.asarray(x, dtype=float) for x in arrays]
     shape = np.broadcast(*arrays).shape
-    flat = [_flat(x, shape) for x in arrays]
+    flat = [flat_points(x, shape) for x in arrays]
     if law != "paper":
         flat.append(None)
     if engine == "compiled":
@@ -268,8 +268,9 @@ def solve_bulk(
     )
 
 
-def _flat(x, shape):
-    """Return x broadcast to ``shape`` as a flat contiguous array (a view where x has the shape)."""
+def flat_points(x, shape):
+    """Return x broadcast to ``shape`` as a flat contiguous float64 array (a view where it is)."""
+    x = np.asarray(x, dtype=float)
     if x.shape == shape:
         return np.ascontiguousarray(x).ravel()
     out = np.empty(shape)
