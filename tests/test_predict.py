@@ -247,3 +247,31 @@ def test_a_test_where_most_draws_close_the_gap_is_refused_in_one_line(rig, tmp_p
     err = capsys.readouterr().err.strip()
     assert "leave the model's domain" in err and "because the gap closes" in err
     assert len(err.splitlines()) == 1 and not out.exists()
+
+
+def test_band_width_is_the_noise_for_a_point_mass_and_the_prior_predictive_is_wider(
+    rig, tmp_path, capsys
+):
+    # sharpness: a point-mass posterior's 90 % band is the measurement noise alone, 2·1.645·sd
+    # of the relative noise on V_out; the fit's prior predictive spreads over its priors
+    protocol = read_csv(rig["vout_V"], readings="optional")
+    posterior = predict(rig["fit"], protocol, n_draws=400, seed=2)
+    noise = rig["truth"]["rig"]["noise_rel"]
+    assert posterior["draws_from"] == "posterior"
+    assert posterior["width_90_rel"] == pytest.approx(2 * 1.6449 * noise, rel=0.15)
+    for test in posterior["tests"]:
+        q05, q50, q95 = (np.asarray(test[k]) for k in ("q05", "q50", "q95"))
+        assert test["width_90_rel"] == pytest.approx(np.median((q95 - q05) / q50))
+    prior = predict(rig["fit"], protocol, n_draws=400, seed=2, draws_from="prior")
+    assert prior["draws_from"] == "prior"
+    assert prior["width_90_rel"] > 10 * posterior["width_90_rel"]
+    assert prior["coverage_90"] > posterior["coverage_90"] - 0.05
+    out = tmp_path / "prior.json"
+    assert (
+        main(["predict", str(rig["fit"]), str(rig["vout_V"]), "--prior", "--json", str(out)]) == 0
+    )
+    printed = capsys.readouterr().out
+    assert "width_90_rel = " in printed and "prior predictive" in printed
+    assert json.loads(out.read_text())["draws_from"] == "prior"
+    with pytest.raises(ValueError, match="draws_from must be"):
+        predict(rig["fit"], protocol, draws_from="likelihood")

@@ -410,6 +410,12 @@ def build_parser():
         "--sep", default=",", help="field separator (default ','; ';' also reads decimal commas)"
     )
     prd.add_argument("--shift-time", action="store_true", help="shift each test to start at t = 0")
+    prd.add_argument(
+        "--prior",
+        action="store_true",
+        help="draw the parameters from the fit's prior instead of its posterior (the prior "
+        "predictive: compare its band widths with the posterior's)",
+    )
     prd.add_argument("--seed", type=int, default=0)
     prd.set_defaults(func=cmd_predict)
 

@@ -462,7 +462,8 @@ def cmd_predict(args):
     for path in (args.json, args.plot):
         if path:
             writable(Path(path).parent)
-    result = predict(args.fit_dir, protocol, n_draws=args.draws, seed=args.seed)
+    source = "prior" if args.prior else "posterior"
+    result = predict(args.fit_dir, protocol, n_draws=args.draws, seed=args.seed, draws_from=source)
     for test in result["tests"]:
         label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
         covered = (
@@ -478,13 +479,18 @@ def cmd_predict(args):
         invalid = test["invalid"]
         if invalid["share"] > 0:
             print(
-                f"  {100 * invalid['share']:.0f} % of the posterior draws leave the model's "
+                f"  {100 * invalid['share']:.0f} % of the {source} draws leave the model's "
                 f"domain from about {invalid['from_s']:.4g} s ({invalid['gap_closed']} the gap "
                 f"closes, {invalid['tunnelling_law']} the tunnelling law's range); the bands are "
                 "over the other draws"
             )
     if result["coverage_90"] is not None:
         print(f"coverage_90 = {result['coverage_90']:.3f} over {result['n_readings']} readings")
+    if result["width_90_rel"] is not None:
+        print(
+            f"width_90_rel = {result['width_90_rel']:.3g} (the {source} predictive 90 % band's "
+            "median width over its median reading)"
+        )
     if args.json:
         write_json_atomic(Path(args.json), json_ready(result))
     if args.plot:

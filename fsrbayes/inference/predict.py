@@ -293,7 +293,7 @@ def evaluation_packing(tests, time_s=None):
     )
 
 
-def _predict_tests(folder, tests, n_draws, rng):
+def _predict_tests(folder, tests, n_draws, rng, draws_from):
     """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
     times = [_model_times(t) for t in tests]
     width = max(t.size for t in times)
@@ -305,9 +305,11 @@ def _predict_tests(folder, tests, n_draws, rng):
             f"specimen {tests[0].specimen!r} was fitted as a {attrs['sensor']} sensor, the "
             f"protocol says {tests[0].sensor}"
         )
-    # n_draws replicate readings per sample: the stored draws, subsampled or resampled
-    resample = draws.shape[0] < n_draws
-    draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))]
+    if draws_from == "prior":  # the fit's prior for every parameter, placements included
+        draws = posterior.prior.sample(rng, n_draws)
+    else:  # n_draws replicate readings per sample: the stored draws, subsampled or resampled
+        resample = draws.shape[0] < n_draws
+        draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))]
     log_model = posterior.log_model_current(draws)
     closed = None
     if not np.isfinite(log_model).all():  # why draws are invalid: the gap, or the tunnelling law
@@ -317,7 +319,9 @@ def _predict_tests(folder, tests, n_draws, rng):
     for i, test in enumerate(tests):
         log_i = _interpolate(test, times[i], log_model[:, i, : times[i].size])
         valid = np.all(np.isfinite(log_i), axis=1)
-        invalid = _invalid_draws(test, log_i, valid, closed, i, times[i].size)
+        invalid = _invalid_draws(
+            test, log_i, valid, closed, i, times[i].size, refuse=draws_from == "posterior"
+        )
         kept = {k: v[valid] for k, v in params.items()}
         observed = _observed_reading(test)
         inside = np.zeros(test.time_s.size)
@@ -355,6 +359,7 @@ def _predict_tests(folder, tests, n_draws, rng):
                 "n_readings": int(present.sum()),
                 "n_inside_90": float(inside[present].sum()),
                 "coverage_90": float(inside[present].mean()) if present.any() else None,
+                "width_90_rel": _median_or_none(_relative_widths(bands)),
                 "draws": int(valid.sum()),
                 "invalid_draws": int((~valid).sum()),
                 "invalid": invalid,
@@ -366,14 +371,31 @@ def _predict_tests(folder, tests, n_draws, rng):
     return out
 
 
-def _invalid_draws(test, log_i, valid, closed, row, n_times):
+def _relative_widths(bands):
+    """Return the 90 % band's width relative to its median reading at every sample, (n,).
+
+    Samples whose median reading is 0 (an ADC at its floor) have none and are left out.
+    """
+    lo, mid, hi = bands[0], bands[len(PREDICT_QUANTILES) // 2], bands[-1]
+    keep = np.isfinite(lo) & np.isfinite(hi) & (mid != 0)
+    return (hi[keep] - lo[keep]) / np.abs(mid[keep])
+
+
+def _median_or_none(values):
+    values = np.asarray(values, dtype=float)
+    return float(np.median(values)) if values.size else None
+
+
+def _invalid_draws(test, log_i, valid, closed, row, n_times, refuse=True):
     """Why draws give no current in a protocol test; refuse the test when most give none.
 
     Returns ``{share, gap_closed, tunnelling_law, from_s}``: the share of draws out of the
     model's domain somewhere in the test, how many because the gap closes (strain ≥ 1, eq. 7) and
     how many because the tunnelling law's range is left, and the median time (s since the
-    onset) of their first invalid sample. Raises ValueError where more than half are invalid: the
-    bands of the rest would describe a biased remainder of the posterior.
+    onset) of their first invalid sample. Raises ValueError where more than half are invalid
+    (``refuse``, posterior draws): the bands of the rest would describe a biased remainder of the
+    posterior. Prior draws are never refused: the prior kept to the model's domain is the prior
+    a fit samples.
     """
     bad = ~valid
     share = float(bad.mean())
@@ -385,7 +407,7 @@ def _invalid_draws(test, log_i, valid, closed, row, n_times):
         "tunnelling_law": int(bad.sum()) - gap,
         "from_s": float(np.median(first)) if bad.any() else None,
     }
-    if share > 0.5:
+    if refuse and share > 0.5:
         raise ValueError(
             f"{100 * share:.0f} % of the posterior draws of specimen {test.specimen!r} leave the "
             f"model's domain in the protocol's test at {test.voltage_V:g} V, "
@@ -422,8 +444,8 @@ def _observed_reading(test):
         return reading_of(test.readout, test.current_A)
 
 
-def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
-    """Posterior predictive readings of every test of a protocol.
+def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
+    """Posterior (or prior) predictive readings of every test of a protocol.
 
     Parameters
     ----------
@@ -435,6 +457,10 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
         Replicate readings per sample, each from its own posterior draw (the fit's stored draws,
         subsampled, or resampled when it stored fewer).
     seed : int
+    draws_from : {"posterior", "prior"}
+        Where the parameters come from: the fit's posterior draws, or its prior (the same model,
+        sensor priors and fixed parameters) — the prior predictive, whose band widths show how
+        much the fit's data narrowed the prediction (sharpness).
 
     Returns
     -------
@@ -442,7 +468,9 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
         ``reading_unit``, ``reading``, ``tests`` (per test: ``specimen``, ``test``, ``time_s``,
         ``q05``…``q95``, ``observed`` or None, ``coverage_90`` or None, …) and the overall
         ``coverage_90`` (share of all present readings inside their 90 % band; None without
-        readings).
+        readings); ``width_90_rel``, per test and overall, the median over samples of the 90 %
+        band's width over its median reading (sharpness: a band can cover by being wide);
+        ``draws_from``.
 
     Raises
     ------
@@ -464,18 +492,24 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0):
         raise ValueError(
             f"the protocol mixes reading columns {readings}; predict one kind at a time"
         )
+    if draws_from not in ("posterior", "prior"):
+        raise ValueError(f"draws_from must be 'posterior' or 'prior', got {draws_from!r}")
     rng = np.random.default_rng(seed)
     tests = []
     for specimen in protocol.specimens:
         part = protocol.select(specimen=specimen).tests
-        tests += _predict_tests(folders[specimen], part, int(n_draws), rng)
+        tests += _predict_tests(folders[specimen], part, int(n_draws), rng, draws_from)
     counts = [(t["n_inside_90"], t["n_readings"]) for t in tests]
     total = sum(n for _, n in counts)
+    names = [f"q{round(100 * q):02d}" for q in PREDICT_QUANTILES]
+    widths = [_relative_widths([t[name] for name in names]) for t in tests]
     return {
+        "draws_from": draws_from,
         "reading": readings[0],
         "reading_unit": READING_UNITS[readings[0]],
         "quantiles": list(PREDICT_QUANTILES),
         "tests": tests,
         "coverage_90": sum(k for k, _ in counts) / total if total else None,
         "n_readings": total,
+        "width_90_rel": _median_or_none(np.concatenate(widths)),
     }
