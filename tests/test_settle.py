@@ -1,5 +1,7 @@
 """settle_s: the first seconds after each load change left out of a fit, the load history kept."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -55,3 +57,44 @@ def test_cli_fit_refuses_a_settle_s_that_is_negative_or_leaves_nothing(staircase
         r = fsrbayes_command("fit", str(staircase), "--out", str(tmp_path / "x"), "--settle-s", bad)
         assert r.returncode == 2 and message in r.stderr, r.stderr
         assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "x").exists()
+
+
+def test_loads_landing_while_the_log_records_are_treated_as_hand_placed(staircase, tmp_path):
+    from fsrbayes.data import synthetic as syn
+    from fsrbayes.inference.nuisance import HAND_PLACED_SETTLE_S, loading_treatment
+
+    # one test whose weights land while the rig logs: settle, but no placement to tell apart
+    (test,) = read_csv(staircase).tests
+    assert test.onset_window_s > 0
+    assert loading_treatment(read_csv(staircase)) == (HAND_PLACED_SETTLE_S, False)
+    # two weights put on from rest, one test each: each placement its own level and creep
+    text, truth = simulate_rig(1, weights_g=(100.0, 300.0), duration_s=5.0, rate_hz=10.0, seed=3)
+    two = read_csv(write_rig(text, truth, tmp_path / "two.csv")[0])
+    assert loading_treatment(two, two.specimens[0]) == (HAND_PLACED_SETTLE_S, True)
+    assert loading_treatment(two, settle_s=0.0, placement=False) == (0.0, False)
+    assert loading_treatment(two, settle_s=3.0) == (3.0, True)
+    # tests logged from the load's onset (the paper's) keep every reading and pool placements
+    sim = syn.simulate("fsr402", n_specimens=1, voltages=[1.0], forces=[4.9, 9.8], samples=5)
+    assert loading_treatment(sim.data) == (0.0, False)
+    # packed data keep what they were packed with
+    packed = SpecimenData.select(two, settle_s=2.0)
+    assert loading_treatment(packed) == (None, False)
+    assert loading_treatment(packed, placement=True) == (None, True)
+
+
+def test_cli_fit_says_when_it_treats_the_loads_as_hand_placed(staircase, tmp_path):
+    r = fsrbayes_command(
+        "fit", str(staircase), "--out", str(tmp_path / "x"), "--model", "zener",
+        "--max-steps", "1", "--chunk", "1", "--map-starts", "2", "--no-plots",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "land while the log records (put on by hand)" in r.stderr
+    assert "leaves out the first 1 s" in r.stderr and "own level" not in r.stderr
+    assert json.loads((tmp_path / "x" / "summary.json").read_text())["settle_s"] == 1.0
+    r = fsrbayes_command(
+        "fit", str(staircase), "--out", str(tmp_path / "y"), "--model", "zener", "--settle-s",
+        "0", "--no-placement", "--max-steps", "1", "--chunk", "1", "--map-starts", "2",
+        "--no-plots",
+    )  # fmt: skip
+    assert r.returncode == 0 and "put on by hand" not in r.stderr
+    assert json.loads((tmp_path / "y" / "summary.json").read_text())["settle_s"] == 0.0

@@ -102,19 +102,23 @@ def build_parser():
     fit_.add_argument(
         "--settle-s",
         type=float,
-        default=0.0,
+        default=None,
         help=(
             "leave each test's readings in the first SETTLE_S seconds after every load change out "
-            "of the fit (default 0): hand-placed weights settle, and presses before the weight, "
-            "logged as no load, leave creep that fades over seconds"
+            "of the fit: hand-placed weights settle, and presses before the weight, logged as no "
+            "load, leave creep that fades over seconds (default: 1 where the loads land while "
+            "the log records, as when put on by hand; else 0)"
         ),
     )
     fit_.add_argument(
         "--placement",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help=(
             "sample each test's own level (placement[k]) and creep factor (placement_creep[k]): "
-            "a dead weight put on again reads a few percent off and creeps by its own amount"
+            "a dead weight put on again reads a few percent off and creeps by its own amount "
+            "(default: on where the loads land while the log records and a specimen has two "
+            "tests or more)"
         ),
     )
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")

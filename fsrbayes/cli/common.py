@@ -9,6 +9,7 @@ import numpy as np
 __all__ = [
     "calibration_notes",
     "default_model",
+    "loading_notes",
     "warn_out_of_domain",
     "UsageError",
     "FitFailed",
@@ -118,6 +119,38 @@ def calibration_notes(data, model=None):
         part = data.select(sensor=name)
         notes += outside_calibration(part, sensor, model or sensor.default_model)
     return notes
+
+
+def loading_notes(data, specimens, settle_s, placement):
+    """Check ``--settle-s`` on every specimen; return the line saying which logs are hand-placed.
+
+    A specimen whose loads land while the log records is fitted without the first second after
+    each load change and with its placements' own levels and creeps unless the user said
+    otherwise (:func:`fsrbayes.inference.nuisance.loading_treatment`); the returned list holds the
+    "note: …" line that says so, or nothing. UsageError when the settling leaves a test empty.
+    """
+    from ..inference.nuisance import loading_treatment
+
+    chosen = {}
+    for specimen in specimens:
+        settle, placed = loading_treatment(data, specimen, settle_s, placement)
+        try:
+            data.select(specimen=specimen).settled(settle)
+        except ValueError as exc:
+            raise UsageError(f"--settle-s: {exc}") from None
+        if (settle_s is None and settle) or (placement is None and placed):
+            chosen[specimen] = (settle if settle_s is None else None, placed and placement is None)
+    if not chosen:
+        return []
+    settles = {s for s, _ in chosen.values() if s}
+    what = [f"leaves out the first {max(settles):g} s after each load change"] if settles else []
+    if any(p for _, p in chosen.values()):
+        what.append("gives each test its own level and creep (two tests or more)")
+    names = ", ".join(list(chosen)[:4]) + (" …" if len(chosen) > 4 else "")
+    return [
+        f"note: the loads of {names} land while the log records (put on by hand): the fit "
+        f"{' and '.join(what)}; --settle-s 0 and --no-placement keep and pool them"
+    ]
 
 
 def default_model(data):

@@ -23,6 +23,7 @@ from .common import (
     fit_output_bytes,
     floats,
     install_sigterm_handler,
+    loading_notes,
     warn_out_of_domain,
     writable,
 )
@@ -31,10 +32,7 @@ CHECKPOINT = "checkpoint.npz"
 
 
 def cmd_fit(args):
-    """Fit each specimen (or the one named) with emcee.
-
-    Fit each specimen (or the one named) with emcee; posterior netCDF + summary.json per specimen.
-    """
+    """Fit each specimen (or the one named) with emcee: posterior.nc + summary.json for each."""
     from ..inference.fit import CHECK_EVERY, DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
@@ -50,13 +48,10 @@ def cmd_fit(args):
         raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
     if args.check_every is not None and args.check_every < 1:
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
-    if not args.settle_s >= 0:
+    if args.settle_s is not None and not args.settle_s >= 0:
         raise UsageError(f"--settle-s must be a number of seconds >= 0, got {args.settle_s:g}")
-    try:
-        for specimen in [args.specimen] if args.specimen else data.specimens:
-            data.select(specimen=specimen).settled(args.settle_s)
-    except ValueError as exc:
-        raise UsageError(f"--settle-s: {exc}") from None
+    specimens = [args.specimen] if args.specimen else data.specimens
+    said = loading_notes(data, specimens, args.settle_s, args.placement)  # after a fit has run
     out = Path(args.out)
     writable(out)
     args.model = args.model or default_model(data)
@@ -73,13 +68,12 @@ def cmd_fit(args):
     )
     if args.sampler == "tempered":
         settings = _tempered_settings(args)
-    specimens = [args.specimen] if args.specimen else data.specimens
     _check_space(args, data, specimens, settings, out)
+    notes = [f"warning: {n}" for n in calibration_notes(data, args.model)] + said
     if args.hierarchical:
-        return _fit_hierarchical(args, data, settings, out)
+        return _fit_hierarchical(args, data, settings, out, notes)
     install_sigterm_handler()
     summaries = {}
-    notes = calibration_notes(data, args.model)  # said once a fit has run: errors come alone
     for specimen in specimens:
         folder = out if len(specimens) == 1 else out / specimen
         folder.mkdir(parents=True, exist_ok=True)
@@ -106,8 +100,8 @@ def cmd_fit(args):
         for w in caught:
             if issubclass(w.category, (ConvergenceWarning, DesignWarning)):
                 print(f"fsrbayes fit: warning: {specimen}: {w.message}", file=sys.stderr)
-        for note in notes:
-            print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
+        for note in notes:  # said once a fit has run: errors come alone
+            print(f"fsrbayes fit: {note}", file=sys.stderr)
         notes = []
         checks = _checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
@@ -202,8 +196,11 @@ def _check_space(args, data, specimens, settings, out):
     )
 
 
-def _fit_hierarchical(args, data, settings, out):
-    """Fit specimens in parallel, then the population posterior (two-stage, optionally joint)."""
+def _fit_hierarchical(args, data, settings, out, notes):
+    """Fit specimens in parallel, then the population posterior (two-stage, optionally joint).
+
+    ``notes``: lines ("warning: …", "note: …") said once the first sensor's fits have run.
+    """
     from dataclasses import replace
 
     from ..inference.output import save_fit, save_population
@@ -253,8 +250,9 @@ def _fit_hierarchical(args, data, settings, out):
                     f"{sensor}: {len(fits)} of {len(part.specimens)} specimen fits succeeded, a "
                     f"population needs 2 ({why})"
                 )
-            for note in calibration_notes(part, args.model):
-                print(f"fsrbayes fit: warning: {note}", file=sys.stderr)
+            for note in notes:
+                print(f"fsrbayes fit: {note}", file=sys.stderr)
+            notes = []
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)

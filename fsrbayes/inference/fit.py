@@ -29,6 +29,7 @@ import numpy as np
 from ..data.sensors import load_sensor
 from .evidence.tempered import TemperedSettings, reference_optima, tempered_run
 from .likelihood import SpecimenData
+from .nuisance import loading_treatment
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
 from .pinned import PinnedCoordinates, pinned_start, polish_along_pins
 from .posterior import LogPosterior
@@ -269,7 +270,7 @@ def fit(
     coordinates=None,
     ramp="given",
     settle_s=None,
-    placement=False,
+    placement=None,
 ):
     """Fit one specimen's creep tests.
 
@@ -318,20 +319,20 @@ def fit(
         ``ramp_s``).
     settle_s : float, optional
         Leave each test's readings in the first ``settle_s`` s after each load change out of the
-        likelihood, the load history kept (a hand-placed weight settling, presses before it
-        logged as no load). Default: 0, or as packed when ``data`` is a SpecimenData.
-    placement : bool
-        Sample each test's own level ``placement[k]`` (log of the factor its readings stand
-        above the model; the sensor's ``placement`` prior): a weight put on again reads a few
-        percent off; and, where the creep law names its amplitude, each test's own creep
-        ``placement_creep[k]`` (log of the factor its delayed strain stands above the law's;
-        the ``placement_creep`` prior): placements creep by their own amounts. Default off.
+        likelihood, the load history kept (a hand-placed weight settling, presses before it).
+    placement : bool, optional
+        Sample each test's own level ``placement[k]`` and, where the creep law names its
+        amplitude, its own creep factor ``placement_creep[k]`` (the sensor's ``placement`` and
+        ``placement_creep`` priors): a weight put on again reads a few percent off and creeps by
+        its own amount. ``settle_s`` and ``placement`` default to what the log says of its
+        loading (:func:`~.nuisance.loading_treatment`): 1 s and on for hand-placed weights.
 
     Returns
     -------
     FitResult
     """
     coordinates = _coordinates(coordinates)
+    settle_s, placement = loading_treatment(data, specimen, settle_s, placement)
     packed = SpecimenData.select(data, specimen, ramp=ramp, settle_s=settle_s)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
     model = sensor.default_model if model is None else model

@@ -10,9 +10,10 @@ specimen's data: a loading ramp ``ramp_s[k]`` (a hand-placed weight settling), a
 
 import numpy as np
 
-from .likelihood import LIKELIHOODS
+from .likelihood import LIKELIHOODS, SpecimenData
 
 __all__ = [
+    "HAND_PLACED_SETTLE_S",
     "RAMPS",
     "is_landing",
     "is_per_test",
@@ -20,6 +21,7 @@ __all__ = [
     "is_placement_creep",
     "is_ramp",
     "landing_names",
+    "loading_treatment",
     "noise_parameters",
     "nuisance_parameters",
     "placement_creep_names",
@@ -133,3 +135,45 @@ def nuisance_parameters(
         + (placement_names(n_tests) if placement else ())
         + (placement_creep_names(n_tests) if placement_creep else ())
     )
+
+
+HAND_PLACED_SETTLE_S = 1.0
+"""Seconds left out after each load change of a log whose loads land while it records: a weight
+put on by hand settles for a few tenths of a second and reads low meanwhile."""
+
+
+def loading_treatment(data, specimen=None, settle_s=None, placement=None):
+    """Return the ``(settle_s, placement)`` a fit of ``specimen`` uses: as given, else from the log.
+
+    A log whose loads land while it records — each onset known only to the interval between
+    the last unloaded and the first loaded reading (``onset_window_s > 0``), as when a weight is
+    put on by hand — is fitted without the first :data:`HAND_PLACED_SETTLE_S` s after each load
+    change, and, where the specimen has two tests or more, with each placement's own level and
+    creep (``placement``). Data that start at the load's onset (a load applied as the logging
+    starts, as in the paper's tests) keep every reading and pool their placements. Packed data
+    (:class:`~.likelihood.SpecimenData`, as ``compare`` and ``diagnose`` build them) keep the
+    ``settle_s`` they were packed with and pool their placements unless told.
+
+    Parameters
+    ----------
+    data : CreepData or SpecimenData
+    specimen : str, optional
+    settle_s : float, optional
+    placement : bool, optional
+        None: chosen from the log as above.
+
+    Returns
+    -------
+    settle_s : float or None
+        None only for packed data (as packed).
+    placement : bool
+    """
+    if isinstance(data, SpecimenData):
+        return settle_s, bool(placement)
+    tests = data.select(specimen=specimen).tests if specimen is not None else data.tests
+    placed = any(t.onset_window_s > 0 for t in tests)
+    if settle_s is None:
+        settle_s = HAND_PLACED_SETTLE_S if placed else 0.0
+    if placement is None:
+        placement = placed and len(tests) >= 2
+    return settle_s, bool(placement)

@@ -47,6 +47,7 @@ from .nuisance import (
 )
 from .output import open_fit_tree
 from .posterior import LogPosterior
+from .replicates import median_or_none, relative_noise, relative_widths, share_inside
 
 __all__ = [
     "PREDICT_QUANTILES",
@@ -55,7 +56,6 @@ __all__ = [
     "fit_folders",
     "predict",
     "reading_name",
-    "relative_noise",
 ]
 
 PREDICT_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
@@ -239,31 +239,6 @@ def _interpolate(test, model_t, log_i):
     return out
 
 
-def relative_noise(rng, likelihood, params, time_s, before=None):
-    """Relative noise of the log-current in units of σ, (S, T): the likelihood's noise model.
-
-    For AR(1) noise ``before`` is (the last time, the last value) of the block before, so that
-    blocks of a long test continue one Ornstein–Uhlenbeck path.
-    """
-    n = (params["sigma_rel"].shape[0], time_s.size)
-    if likelihood == "student":
-        return rng.standard_t(params["nu"][:, None], size=n)
-    out = rng.standard_normal(n)
-    if likelihood == "ar1":
-        tau = params["noise_tau"][:, None]
-        if before is None:
-            times, previous = time_s, None
-        else:
-            times, previous = np.concatenate([[before[0]], time_s]), before[1]
-        dt = np.diff(times)[None, :]
-        rho, scale = np.exp(-dt / tau), np.sqrt(-np.expm1(-2.0 * dt / tau))
-        offset = 0 if previous is None else 1
-        for k in range(1 - offset, n[1]):
-            last = out[:, k - 1] if k > 0 else previous
-            out[:, k] = rho[:, k - 1 + offset] * last + scale[:, k - 1 + offset] * out[:, k]
-    return out
-
-
 def evaluation_packing(tests, time_s=None):
     """Return the tests packed as for a fit (circuit, load steps, ramps), to evaluate the model.
 
@@ -337,7 +312,7 @@ def _predict_tests(folder, tests, n_draws, rng, draws_from):
             replicates = reading_of(test.readout, current)
             bands[:, part] = np.quantile(replicates, PREDICT_QUANTILES, axis=0, method=method)
             if discrete:
-                inside[part] = _share_inside(replicates, observed[part])
+                inside[part] = share_inside(replicates, observed[part])
             else:
                 inside[part] = (observed[part] >= bands[0, part]) & (
                     observed[part] <= bands[-1, part]
@@ -359,7 +334,7 @@ def _predict_tests(folder, tests, n_draws, rng, draws_from):
                 "n_readings": int(present.sum()),
                 "n_inside_90": float(inside[present].sum()),
                 "coverage_90": float(inside[present].mean()) if present.any() else None,
-                "width_90_rel": _median_or_none(_relative_widths(bands)),
+                "width_90_rel": median_or_none(relative_widths(bands[0], bands[2], bands[-1])),
                 "draws": int(valid.sum()),
                 "invalid_draws": int((~valid).sum()),
                 "invalid": invalid,
@@ -369,21 +344,6 @@ def _predict_tests(folder, tests, n_draws, rng, draws_from):
             }
         )
     return out
-
-
-def _relative_widths(bands):
-    """Return the 90 % band's width relative to its median reading at every sample, (n,).
-
-    Samples whose median reading is 0 (an ADC at its floor) have none and are left out.
-    """
-    lo, mid, hi = bands[0], bands[len(PREDICT_QUANTILES) // 2], bands[-1]
-    keep = np.isfinite(lo) & np.isfinite(hi) & (mid != 0)
-    return (hi[keep] - lo[keep]) / np.abs(mid[keep])
-
-
-def _median_or_none(values):
-    values = np.asarray(values, dtype=float)
-    return float(np.median(values)) if values.size else None
 
 
 def _invalid_draws(test, log_i, valid, closed, row, n_times, refuse=True):
@@ -417,25 +377,6 @@ def _invalid_draws(test, log_i, valid, closed, row, n_times, refuse=True):
             "a shorter protocol"
         )
     return invalid
-
-
-def _share_inside(replicates, observed, level=0.9):
-    """Return how much of each whole-count reading lies inside the central ``level`` band.
-
-    A count y occupies [F(y − 1), F(y)] of the predictive distribution's probability scale (F
-    from the replicates); the share of that interval inside [(1 − level)/2, (1 + level)/2] is
-    the randomised probability integral transform's chance of landing in the band, whose
-    expectation is exactly ``level`` for a right model — where counting a count on the band's
-    edge as inside would give more. NaN readings give 0.
-    """
-    lo = np.mean(replicates < observed, axis=0)
-    hi = np.mean(replicates <= observed, axis=0)
-    a, b = (1.0 - level) / 2.0, (1.0 + level) / 2.0
-    overlap = np.clip(np.minimum(hi, b) - np.maximum(lo, a), 0.0, None)
-    width = hi - lo
-    with np.errstate(invalid="ignore", divide="ignore"):
-        share = np.where(width > 0, overlap / width, (lo >= a) & (lo <= b))
-    return np.where(np.isfinite(observed), share, 0.0)
 
 
 def _observed_reading(test):
@@ -501,8 +442,7 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
         tests += _predict_tests(folders[specimen], part, int(n_draws), rng, draws_from)
     counts = [(t["n_inside_90"], t["n_readings"]) for t in tests]
     total = sum(n for _, n in counts)
-    names = [f"q{round(100 * q):02d}" for q in PREDICT_QUANTILES]
-    widths = [_relative_widths([t[name] for name in names]) for t in tests]
+    widths = [relative_widths(t["q05"], t["q50"], t["q95"]) for t in tests]
     return {
         "draws_from": draws_from,
         "reading": readings[0],
@@ -511,5 +451,5 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
         "tests": tests,
         "coverage_90": sum(k for k, _ in counts) / total if total else None,
         "n_readings": total,
-        "width_90_rel": _median_or_none(np.concatenate(widths)),
+        "width_90_rel": median_or_none(np.concatenate(widths)),
     }
