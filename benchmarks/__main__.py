@@ -1,6 +1,7 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [solver] [scattered] [csv]
-[rig-read] [predict] [likelihood] [engine] [map-search] [long-run] [fit] [rig-fit] [evidence]
-[evidence-seeds] [compare] [dynesty] [hierarchical] [population-sizes] [diagnose] [demo]``.
+[rig-read] [predict] [likelihood] [creep-laws] [engine] [map-search] [long-run] [fit] [rig-fit]
+[evidence] [evidence-seeds] [compare] [dynesty] [hierarchical] [population-sizes] [diagnose]
+[demo]``.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
 so numbers from different days can be read against their machine. Without names all run but
@@ -21,6 +22,7 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from benchmarks import (  # noqa: E402
     compare_default,
+    creep_laws,
     csv_read,
     demo,
     diagnose,
@@ -51,6 +53,7 @@ BENCHMARKS = {
     "likelihood": lambda: "\n".join(
         [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
     ),
+    "creep-laws": lambda: creep_laws.report(creep_laws.run()),
     "engine": lambda: engine.report(engine.run()),
     "map-search": lambda: map_search.report(map_search.run()),
     "long-run": lambda: "\n".join(

@@ -102,9 +102,15 @@ def test_monotone_bounded_and_exact_at_the_ends():
 def test_ein_matches_e1_where_both_are_accurate():
     from scipy.special import exp1
 
-    x = np.geomspace(0.2, 50.0, 30)
+    # the compiled continued fraction of E1 above x = 1, the series below, against scipy's E1
+    x = np.geomspace(0.2, 800.0, 400)
     np.testing.assert_allclose(sp.ein(x), exp1(x) + np.log(x) + np.euler_gamma, rtol=1e-14)
     assert sp.ein(0.0) == 0.0
+    # F broadcasts walkers against times as numpy would, NaN times give 0 and NaN τ_max NaN
+    t, tau = np.geomspace(1e-3, 1e6, 7), np.array([[1e3], [np.nan]])
+    f = sp.spectrum_fraction(t, tau)
+    assert f.shape == (2, 7) and np.isnan(f[1]).all()
+    assert sp.spectrum_fraction(np.array([np.nan, -1.0, 0.0]), 1e3).tolist() == [0.0, 0.0, 0.0]
 
 
 def test_vectorised_over_walkers():
