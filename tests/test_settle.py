@@ -90,6 +90,7 @@ def test_cli_fit_says_when_it_treats_the_loads_as_hand_placed(staircase, tmp_pat
     assert r.returncode == 0, r.stderr
     assert "land while the log records (put on by hand)" in r.stderr
     assert "leaves out the first 1 s" in r.stderr and "own level" not in r.stderr
+    assert "kPa: drift " in r.stdout  # each load segment's drift, printed
     assert json.loads((tmp_path / "x" / "summary.json").read_text())["settle_s"] == 1.0
     r = fsrbayes_command(
         "fit", str(staircase), "--out", str(tmp_path / "y"), "--model", "zener", "--settle-s",

@@ -3,13 +3,16 @@
 import shutil
 import signal
 import sys
+from pathlib import Path
 
 import numpy as np
 
 __all__ = [
     "calibration_notes",
     "default_model",
+    "drift_lines",
     "loading_notes",
+    "population_folders",
     "warn_out_of_domain",
     "UsageError",
     "FitFailed",
@@ -151,6 +154,56 @@ def loading_notes(data, specimens, settle_s, placement):
         f"note: the loads of {names} land while the log records (put on by hand): the fit "
         f"{' and '.join(what)}; --settle-s 0 and --no-placement keep and pool them"
     ]
+
+
+def drift_lines(summary):
+    """Lines giving each fitted test's drift with its 90 % interval, read from ``summary``.
+
+    Drift is 100·(I(t)/I(t0) − 1) in % of the current at the end of the loading (eq. 22):
+    positive where the current grows as the sensor creeps. A test held from rest gives its drift
+    at 3600 s, said to be extrapolated where the test's readings end sooner; a test whose load
+    changes gives each constant-load segment's drift from its start to its end.
+    """
+    lines = []
+    for k, test in enumerate(summary["tests"]):
+        label = f"test {k} ({test['stress_Pa'] / 1e3:.3g} kPa)"
+        if test.get("segments"):
+            for segment in test["segments"]:
+                d = segment["drift"]
+                if d is None or d.get("median") is None:
+                    continue
+                lines.append(
+                    f"  {label} {segment['start_s']:g}–{segment['end_s']:g} s at "
+                    f"{segment['load_Pa'] / 1e3:.3g} kPa: drift {d['median']:+.2f} % (90 %: "
+                    f"{d['q05']:+.2f}..{d['q95']:+.2f})"
+                )
+            continue
+        d = test["drift_3600"]
+        if d is None or d.get("median") is None:
+            lines.append(f"  {label}: no drift at 3600 s (every draw leaves the model's domain)")
+            continue
+        end = test.get("last_reading_s")
+        short = end is not None and end < 3600
+        beyond = f"; extrapolated: the readings end at {end:.4g} s" if short else ""
+        lines.append(
+            f"  {label}: drift at 3600 s {d['median']:+.2f} % (90 %: {d['q05']:+.2f}.."
+            f"{d['q95']:+.2f}){beyond}"
+        )
+    return lines
+
+
+def population_folders(fit_dir):
+    """Return the folders under ``fit_dir`` holding a population.nc (UsageError if none)."""
+    folder = Path(fit_dir)
+    if (folder / "population.nc").is_file():
+        return [folder]
+    found = sorted(p.parent for p in folder.glob("*/population.nc"))
+    if not found:
+        raise UsageError(
+            f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out "
+            f"{fit_dir}' first"
+        )
+    return found
 
 
 def default_model(data):

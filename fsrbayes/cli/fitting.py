@@ -19,11 +19,13 @@ from .common import (
     UsageError,
     calibration_notes,
     default_model,
+    drift_lines,
     enough_space,
     fit_output_bytes,
     floats,
     install_sigterm_handler,
     loading_notes,
+    population_folders,
     warn_out_of_domain,
     writable,
 )
@@ -110,6 +112,7 @@ def cmd_fit(args):
             _fit_plots(folder)
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
+        print("\n".join(drift_lines(summaries[specimen])))
         if not result.converged and checkpoint is not None:
             print(
                 f"fsrbayes fit: {specimen}: its chains are kept in {checkpoint}; to go on from "
@@ -316,19 +319,6 @@ def _fit_hierarchical(args, data, settings, out, notes):
     return 0
 
 
-def _population_folders(fit_dir):
-    folder = Path(fit_dir)
-    if (folder / "population.nc").is_file():
-        return [folder]
-    found = sorted(p.parent for p in folder.glob("*/population.nc"))
-    if not found:
-        raise UsageError(
-            f"{fit_dir} holds no population.nc; run 'fsrbayes fit DATA --hierarchical --out "
-            f"{fit_dir}' first"
-        )
-    return found
-
-
 def cmd_drift(args):
     """Write the population predictive drift(t) of a new specimen per (voltage, stress)."""
     from ..data.sensors import load_sensor
@@ -359,7 +349,7 @@ def cmd_drift(args):
             writable(Path(path).parent)
     payload = {"time_s": args.time, "groups": [], "optimal_voltage": [], "zero_drift_voltage": []}
     figures = []
-    for folder in _population_folders(args.fit_dir):
+    for folder in population_folders(args.fit_dir):
         tree = open_fit_tree(folder / "population.nc")
         attrs = tree.attrs
         sensor = load_sensor(attrs["sensor"])
@@ -442,10 +432,15 @@ def _fit_plots(folder):
     from ..inference.output import open_fit_tree
 
     tree = open_fit_tree(folder / "posterior.nc")
-    plots.save_figure(plots.corner_plot(tree)[0], folder / "corner.png")
-    plots.save_figure(plots.band_plot(tree, "drift")[0], folder / "drift_bands.png")
-    plots.save_figure(plots.band_plot(tree, "current")[0], folder / "current_bands.png")
-    plots.save_figure(plots.drift_3600_plot(tree)[0], folder / "drift_3600.png")
+    figures = {
+        "corner.png": plots.corner_plot(tree)[0],
+        "drift_bands.png": plots.band_plot(tree, "drift")[0],
+        "current_bands.png": plots.band_plot(tree, "current")[0],
+        "drift_3600.png": plots.drift_3600_plot(tree)[0],
+    }
+    for name, figure in figures.items():
+        plots.save_figure(figure, folder / name)
+    print(f"figures in {folder}: {', '.join(figures)}")
 
 
 def cmd_predict(args):

@@ -239,6 +239,7 @@ def summary(result, tree):
                 np.append(grid, DRIFT_TIME_S),
             ),
             "observed_drift_3600": None if segments[i] else _finite(observed[i]),
+            "last_reading_s": float(data.time_s[i][data.mask[i]].max()),
             **({"segments": segments[i]} if segments[i] else {}),
         }
         for i in range(data.n_tests)
