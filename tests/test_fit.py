@@ -80,7 +80,8 @@ def test_output_groups_and_summary_keys(result, tmp_path):
         assert set(saved["parameters"][name]) == {"median", "q05", "q95", "r_hat", "ess_bulk"}
     test = saved["tests"][0]
     assert set(test) == {
-        "specimen", "voltage_V", "stress_Pa", "drift_3600", "out_of_domain", "observed_drift_3600"
+        "specimen", "voltage_V", "stress_Pa", "drift_3600", "out_of_domain", "observed_drift_3600",
+        "last_reading_s",
     }  # fmt: skip
     assert test["drift_3600"]["q05"] <= test["drift_3600"]["median"] <= test["drift_3600"]["q95"]
     assert test["out_of_domain"] == {"share": 0.0, "from_s": None}
