@@ -4,7 +4,7 @@
 a test) do not see it. ``placement_creep[k]`` multiplies test k's delayed strain by
 exp(placement_creep[k]), its elastic strain and the creep's time course unchanged. The population
 pools neither, and ``predict`` keeps a fitted test's own and lends a new placement the level and
-creep of one placement seen at the nearest load.
+creep of one placement seen.
 """
 
 import json
@@ -109,29 +109,16 @@ def test_the_map_finds_each_placements_level(placed):
     assert levels[2] - levels[0] == pytest.approx(LEVELS[2] - LEVELS[0], abs=0.004)
 
 
-def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_at_its_load():
-    seen = np.array([[0.1, 0.2, 0.3, 0.4]] * 500)
-    keys = [
-        ["s1", 4.9, 7000.0, "w1"],
-        ["s1", 4.9, 9000.0, "w2"],
-        ["s1", 4.9, 11000.0, "w3"],
-        ["s1", 4.9, 11000.0, "w3-again"],
-    ]
+def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen():
+    seen = np.array([[0.1, 0.2, 0.3]] * 500)
+    keys = [["s1", 4.9, 7000.0, "w1"], ["s1", 4.9, 9000.0, "w2"], ["s1", 4.9, 11000.0, "w3"]]
     attrs = {"test_keys": json.dumps(keys)}
     packed = SimpleNamespace(
-        n_tests=3,
-        test_keys=(
-            ("s1", 4.9, 9000.0, "w2"),
-            ("s1", 4.9, 20000.0, "w9"),
-            ("s1", 4.9, 7300.0, "stairs"),
-        ),
+        n_tests=2, test_keys=(("s1", 4.9, 9000.0, "w2"), ("s1", 4.9, 20000.0, "w9"))
     )
     (got,) = _placements([seen], packed, attrs, np.random.default_rng(0))
     assert np.all(got[:, 0] == 0.2)  # its own
-    # a new placement lends from the fitted ones at the nearest load, draw by draw: the two
-    # placements at 11 kPa for a weight of 20 kPa, the 7 kPa one for a staircase from 7.3 kPa
-    assert set(np.unique(got[:, 1])) == {0.3, 0.4}
-    assert np.all(got[:, 2] == 0.1)
+    assert set(np.unique(got[:, 1])) == {0.1, 0.2, 0.3}  # one of those seen, draw by draw
     levels, creeps = _placements(
         [seen, seen * 10.0], packed, attrs, np.random.default_rng(1)
     )  # a placement's level and creep are lent together, from one placement seen

@@ -165,41 +165,28 @@ def _placements(seen, packed, attrs, rng):
     ``seen``: a list of the fit's placement levels and, where it sampled them, its creeps, each
     (S, K). A protocol test that is one of the fitted tests (same specimen, voltage, stress and
     test label: a hold fitted on its first minutes, predicted to its end) keeps its own; any
-    other is a new placement and, draw by draw, lends the level and creep of a fitted test at the
-    nearest load (its first, for a staircase; in log stress; one of them at random where several
-    were placed at it): a fresh placement lands and creeps like the ones seen under that weight.
-    The creep of real placements changes with the load more than the creep laws say
-    (``placement_creep_trend`` in a fit's checks), so a placement lent from another load would
-    carry that load's creep.
+    other is a new placement and, draw by draw, lends the level and creep of one fitted test
+    picked at random, as a fresh placement lands and creeps like the ones seen.
     """
     keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
-    log_stress = np.log([max(float(k[2]), 1e-300) for k in keys])
-    choices = {}
+    own = {}
     for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
-        same = [
-            j
-            for j, key in enumerate(keys)
-            if key[0] == specimen and key[3] == label and np.allclose(key[1:3], (voltage, stress))
-        ]
-        if same:
-            choices[i] = np.array(same[:1])
-        else:
-            gap = np.abs(log_stress - np.log(max(float(stress), 1e-300)))
-            choices[i] = np.flatnonzero(gap <= gap.min() + 1e-9)
-    return _lent(seen, packed.n_tests, rng, choices)
+        for j, key in enumerate(keys):
+            if key[0] == specimen and key[3] == label and np.allclose(key[1:3], (voltage, stress)):
+                own[i] = j
+    return _lent(seen, packed.n_tests, rng, own)
 
 
-def _lent(seen, n_tests, rng, choices=None):
+def _lent(seen, n_tests, rng, own=None):
     """Per protocol test, draw by draw, the values of a fitted test: each (S, K) → (S, n).
 
     ``seen``: a list of (S, K) arrays lent together (the same fitted test for each draw and
-    protocol test); returns the list of lent arrays. A test in ``choices`` (protocol test → the
-    fitted tests it may take) takes, draw by draw, one of those picked at random; the others one
-    of all the fitted tests.
+    protocol test); returns the list of lent arrays. A test in ``own`` (protocol test → fitted
+    test) keeps that one's; the others take, draw by draw, a fitted test's picked at random.
     """
     picks = rng.integers(seen[0].shape[1], size=(len(seen[0]), n_tests))
-    for i, allowed in (choices or {}).items():
-        picks[:, i] = allowed[rng.integers(len(allowed), size=len(seen[0]))]
+    for i, j in (own or {}).items():
+        picks[:, i] = j
     return [np.take_along_axis(a, picks, axis=1) for a in seen]
 
 
