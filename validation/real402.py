@@ -1,0 +1,213 @@
+"""The real-402 acceptance: `fsrbayes fit` and `predict` as a user runs them, on the frozen logs.
+
+The logs are the real-402 bench's frozen acceptance set ``model`` (``fsrbayes simulate-rig
+--preset real-402 --acceptance-set model``): FSR 402 behaviour written apart from the model —
+creep linear in log t over four decades, settling weights, taps, late load stamps, residual
+conduction, hysteresis — on two Arduino divider rigs. Two questions, each answered through the
+command line with its defaults:
+
+* **fit**: ``fsrbayes fit LOG`` per log — converged within the budget, how long it took, how
+  many of its checks failed, and which posterior medians lie outside the prior's central 99 %;
+* **forecast**: ``fsrbayes fit`` on each test's first ``FIRST_S`` seconds after its load
+  landed, then ``fsrbayes predict`` of the whole log — the share of the later readings inside
+  their 90 % band (target 0.80–0.98) and the band's median width relative to the reading, beside
+  the prior predictive's (``predict --prior``): a band that covers by being wide shows there.
+  ``--protocol LOG`` predicts another log of the same specimens instead (the bench draws a
+  specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
+  the specimen of a frozen log of seed S under a new protocol).
+
+Run ``python -m validation.real402 OUT fit A-spread B-hold-12min`` or ``python -m
+validation.real402 OUT forecast A-hold-60min``; each fit takes minutes on 2 cores, and a fit
+already in OUT is reused (its seconds are then not known).
+"""
+
+import csv
+import json
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+FIRST_S = 600.0
+"""Seconds after each test's landing that a forecast's fit sees."""
+
+
+def frozen_set(folder):
+    """Write the frozen acceptance set ``model`` into ``folder`` (once); return the folder."""
+    folder = Path(folder)
+    if not (folder / "A-spread.csv").is_file():
+        folder.mkdir(parents=True, exist_ok=True)
+        _run("simulate-rig", "--preset", "real-402", "--acceptance-set", "model", "-o", folder)
+    return folder
+
+
+def _run(*args):
+    started = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-m", "fsrbayes", *map(str, args)], capture_output=True, text=True
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"fsrbayes {' '.join(map(str, args))}: {done.stderr.strip()[-600:]}")
+    return done, time.perf_counter() - started
+
+
+def _fit_once(data, folder):
+    """Run ``fsrbayes fit`` with its defaults unless ``folder`` holds its result; its seconds."""
+    if any(Path(folder).glob("**/summary.json")):
+        return None  # reused: the study goes on where it stopped
+    return round(_run("fit", data, "--out", folder, "--no-plots")[1])
+
+
+def _summaries(folder):
+    paths = sorted(Path(folder).glob("*/summary.json")) or [Path(folder) / "summary.json"]
+    return [json.loads(p.read_text()) for p in paths]
+
+
+def _outside_prior(fit_folder, data_path):
+    """{specimen: [parameters whose posterior median is outside the prior's central 99 %]}."""
+    from fsrbayes.data import read_csv
+    from fsrbayes.data.sensors import load_sensor
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.posterior import LogPosterior
+    from fsrbayes.inference.predict import fit_folders
+
+    data = read_csv(data_path)
+    out = {}
+    for specimen, folder in sorted(fit_folders(fit_folder).items()):
+        summary = json.loads((folder / "summary.json").read_text())
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            posterior = LogPosterior.for_sensor(
+                SpecimenData.select(data, specimen, settle_s=summary["settle_s"]),
+                load_sensor(summary["sensor"]),
+                model=summary["model"],
+                likelihood=summary["likelihood"],
+                placement=any(n.startswith("placement[") for n in summary["parameters"]),
+            )
+        medians = np.array([[summary["parameters"][n]["median"] for n in posterior.names]])
+        cdf = posterior.prior.marginal_cdf(medians)[0]
+        names = zip(posterior.names, cdf, strict=True)
+        out[specimen] = [n for n, c in names if not 0.005 <= c <= 0.995]
+    return out
+
+
+def fit_log(frozen, name, out):
+    """Default ``fsrbayes fit`` of one frozen log; one row per specimen."""
+    data = Path(frozen) / f"{name}.csv"
+    folder = Path(out) / f"fit-{name}"
+    seconds = _fit_once(data, folder)
+    outside = _outside_prior(folder, data)
+    return [
+        {
+            "log": name,
+            "specimen": s["specimen"],
+            "model": s["model"],
+            "settle_s": s["settle_s"],
+            "placement": any(n.startswith("placement[") for n in s["parameters"]),
+            "converged": s["converged"],
+            "steps": s["convergence"]["n_steps"],
+            "seconds": seconds,
+            "checks_failed": sorted({f["check"] for f in s["checks"]["failed"]}),
+            "outside_prior_99": outside[s["specimen"]],
+        }
+        for s in _summaries(folder)
+    ]
+
+
+def _first_minutes(source, target, first_s=FIRST_S):
+    """Write the rows of ``source`` up to ``first_s`` after each test's first loaded row."""
+    with open(source, newline="") as handle:
+        rows = list(csv.reader(handle))
+    head, body = rows[0], rows[1:]
+    time_col = next(i for i, h in enumerate(head) if h.startswith("time_"))
+    scale = {"time_s": 1.0, "time_min": 60.0, "time_ms": 1e-3}[head[time_col]]
+    load_col = next(i for i, h in enumerate(head) if h.startswith("force_"))
+    start, keep = {}, []
+    for row in body:
+        key, t = (row[0], row[2]), float(row[time_col]) * scale
+        if key not in start and float(row[load_col] or 0.0) > 0.0:
+            start[key] = t
+        if key not in start or t <= start[key] + first_s:
+            keep.append(row)
+    with open(target, "w", newline="") as handle:
+        csv.writer(handle).writerows([head, *keep])
+
+
+def forecast(frozen, name, out, protocol=None, first_s=FIRST_S):
+    """Fit each test's first ``first_s`` s of a frozen log, predict a protocol; rows per test."""
+    from fsrbayes.data import read_csv
+    from fsrbayes.inference.predict import predict
+
+    source = Path(frozen) / f"{name}.csv"
+    folder = Path(out) / f"forecast-{name}"
+    folder.mkdir(parents=True, exist_ok=True)
+    _first_minutes(source, folder / "first.csv", first_s)
+    seconds = _fit_once(folder / "first.csv", folder / "fit")
+    protocol = read_csv(protocol or source, readings="optional")
+    fitted = {s["specimen"]: s for s in _summaries(folder / "fit")}
+    rows = []
+    results = {
+        side: predict(folder / "fit", protocol, n_draws=400, seed=1, draws_from=side)
+        for side in ("posterior", "prior")
+    }
+    for after, prior in zip(results["posterior"]["tests"], results["prior"]["tests"], strict=True):
+        t = np.asarray(after["time_s"])
+        observed = np.asarray(after["observed"], dtype=float)
+        late = (t > first_s) & np.isfinite(observed)
+        q = {k: np.asarray(after[k], dtype=float)[late] for k in ("q05", "q50", "q95")}
+        inside = (observed[late] >= q["q05"]) & (observed[late] <= q["q95"])
+        prior_width = (np.asarray(prior["q95"]) - np.asarray(prior["q05"])) / np.abs(prior["q50"])
+        rows.append(
+            {
+                "log": name,
+                "protocol": Path(protocol.source).name,
+                "specimen": after["specimen"],
+                "test": after["test"],
+                "fit_seconds": seconds,
+                "converged": fitted[after["specimen"]]["converged"],
+                "coverage_after": float(inside.mean()) if late.any() else None,
+                "width_90_rel": float(np.median((q["q95"] - q["q05"]) / np.abs(q["q50"]))),
+                "prior_width_90_rel": float(np.median(prior_width[late])),
+            }
+        )
+    return rows
+
+
+def format_rows(rows):
+    """Markdown table of the rows (keys of the first row as columns)."""
+    keys = list(rows[0])
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    for row in rows:
+        cells = [f"{v:.3g}" if isinstance(v, float) else str(v) for v in row.values()]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv):
+    if len(argv) < 3 or argv[1] not in ("fit", "forecast"):
+        print(__doc__)
+        return 2
+    out = Path(argv[0])
+    frozen = frozen_set(out / "frozen")
+    rows = []
+    protocol = None
+    names = list(argv[2:])
+    if "--protocol" in names:
+        at = names.index("--protocol")
+        protocol, names = names[at + 1], names[:at] + names[at + 2 :]
+    for name in names:
+        rows += (
+            fit_log(frozen, name, out)
+            if argv[1] == "fit"
+            else forecast(frozen, name, out, protocol)
+        )
+        print(format_rows(rows), flush=True)
+    (out / f"{argv[1]}.json").write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
