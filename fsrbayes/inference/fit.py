@@ -319,7 +319,7 @@ def fit(
         ``ramp_s``).
     settle_s : float, optional
         Leave each test's readings in the first ``settle_s`` s after each load change out of the
-        likelihood, the load history kept (a hand-placed weight settling, presses before it).
+        likelihood; the model still sees every load change (a hand-placed weight settles then).
     placement : bool, optional
         Sample each test's own level ``placement[k]`` and, where the creep law names its
         amplitude, its own creep factor ``placement_creep[k]`` (the sensor's ``placement`` and
