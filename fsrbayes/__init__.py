@@ -15,6 +15,8 @@ __all__ = [
     "fit",
     "compare",
     "diagnose",
+    "predict",
+    "calibrate",
     "load_sensor",
     "available_sensors",
     "Sensor",
@@ -33,6 +35,14 @@ def __getattr__(name):
         from .inference.compare import compare
 
         return compare
+    if name == "predict":
+        from .inference.predict import predict
+
+        return predict
+    if name == "calibrate":
+        from .inference.predictive_draws import calibrate
+
+        return calibrate
     if name == "diagnose":
         from .discrepancy import diagnose
 

@@ -29,7 +29,7 @@ from fsrbayes.inference.nuisance import (
 )
 from fsrbayes.inference.population.model import NOISE_PARAMETERS
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.predict import _placements
+from fsrbayes.inference.predictive_draws import placement_draws
 
 LEVELS = np.array([0.03, -0.02, 0.01])
 
@@ -116,10 +116,10 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     packed = SimpleNamespace(
         n_tests=2, test_keys=(("s1", 4.9, 9000.0, "w2"), ("s1", 4.9, 20000.0, "w9"))
     )
-    (got,) = _placements([seen], packed, attrs, np.random.default_rng(0))
+    (got,) = placement_draws([seen], packed, attrs, np.random.default_rng(0))
     assert np.all(got[:, 0] == 0.2)  # its own
     assert set(np.unique(got[:, 1])) == {0.1, 0.2, 0.3}  # one of those seen, draw by draw
-    levels, creeps = _placements(
+    levels, creeps = placement_draws(
         [seen, seen * 10.0], packed, attrs, np.random.default_rng(1)
     )  # a placement's level and creep are lent together, from one placement seen
     np.testing.assert_array_equal(creeps, levels * 10.0)

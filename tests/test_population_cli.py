@@ -1,7 +1,10 @@
 """`fsrbayes fit --hierarchical` and `fsrbayes drift` end to end on a tiny virtual bench."""
 
 import json
+import warnings
+from dataclasses import replace
 
+import jsonschema
 import numpy as np
 import pytest
 import xarray as xr
@@ -10,7 +13,11 @@ from scipy import stats
 from fsrbayes import drift as fsrbayes_drift
 from fsrbayes import load_sensor
 from fsrbayes.data import synthetic
+from fsrbayes.data.creep import CreepData
 from fsrbayes.data.csvwrite import write_csv
+from fsrbayes.inference.predict import predict, predict_schema
+from fsrbayes.inference.predictive_draws import calibrate
+from fsrbayes.inference.samplers import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 
@@ -228,3 +235,97 @@ def test_hierarchical_fit_refuses_a_single_specimen(tmp_path):
     write_csv(sim.data, tmp_path / "one.csv")
     run = fsrbayes("fit", str(tmp_path / "one.csv"), "--hierarchical", "--out", str(tmp_path / "o"))
     assert run.returncode == 2 and "at least 2 specimens" in run.stderr
+
+
+def new_sensor(seed=12):
+    """A fourth A201 of the population the module's bench draws from (another seed), renamed."""
+    sim = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[0.2, 3.0], forces=[1.96, 9.8], samples=11, seed=seed
+    )
+    return CreepData(tuple(replace(t, specimen="a201-new") for t in sim.data))
+
+
+def _widths(result):
+    """Each test's median relative 90 % band width, by (voltage, stress)."""
+    return {(t["voltage_V"], t["stress_Pa"]): t["width_90_rel"] for t in result["tests"]}
+
+
+def test_predict_reads_a_new_specimen_from_the_population(hierarchical_fit, tmp_path):
+    # a specimen the hierarchical fit never saw is drawn from its population: bands that hold
+    # its readings, wider than those of a fitted specimen (which know its own parameters)
+    out, _ = hierarchical_fit
+    write_csv(new_sensor(), tmp_path / "new.csv")
+    run = fsrbayes(
+        "predict", str(out), str(tmp_path / "new.csv"), "--json", str(tmp_path / "p.json"),
+        "--draws", "400",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.count("[a new specimen of the population]") == 4, run.stdout
+    result = json.loads((tmp_path / "p.json").read_text())
+    jsonschema.validate(result, predict_schema())
+    assert {t["specimen_source"] for t in result["tests"]} == {"population"}
+    assert result["coverage_90"] >= 0.75, result["coverage_90"]
+    fitted = predict(out, bench().data.select(specimen="a201-01"), n_draws=400)
+    assert {t["specimen_source"] for t in fitted["tests"]} == {"fitted"}
+    own, new = _widths(fitted), _widths(result)
+    assert all(new[k] > 2 * own[k] for k in own), (own, new)
+
+
+def test_a_calibration_narrows_a_new_specimens_bands(hierarchical_fit, tmp_path):
+    # one test of the new sensor, fitted and weighed by the population, narrows the bands of its
+    # other tests and still holds their readings
+    out, _ = hierarchical_fit
+    data = new_sensor()
+    one = CreepData(data.tests[:1])
+    rest = CreepData(data.tests[1:])
+    settings = SamplerSettings(n_ensembles=2, chunk=50, min_steps=100, max_steps=200, map_starts=2)
+    with warnings.catch_warnings():  # a short run on one stress: convergence and design warn
+        warnings.simplefilter("ignore")
+        calibrate(out, one, tmp_path / "cal", seed=1, settings=settings)
+    assert (tmp_path / "cal" / "a201-new" / "posterior.nc").is_file()
+    population = predict(out, rest, n_draws=400, seed=2)
+    calibrated = predict(out, rest, n_draws=400, seed=2, calibration=tmp_path / "cal")
+    assert {t["specimen_source"] for t in calibrated["tests"]} == {"calibrated"}
+    # the calibration fit's prior is the population predictive: the spread of s0 across
+    # specimens (~0.05 in log) and its centre, where the sensor's prior is ~2x as wide
+    with xr.open_datatree(tmp_path / "cal" / "a201-new" / "posterior.nc") as tree:
+        priors = json.loads(tree.attrs["priors"])
+    assert priors["s0"]["dist"] == "lognormal" and priors["s0"]["sigma"] < 0.08, priors["s0"]
+    before, after = _widths(population), _widths(calibrated)
+    assert all(after[k] < 0.9 * before[k] for k in before), (before, after)
+    assert calibrated["coverage_90"] >= 0.75, calibrated["coverage_90"]
+    with pytest.raises(ValueError, match="was fitted in"):
+        calibrate(out, bench().data.select(specimen="a201-02"), tmp_path / "c2")
+    with pytest.raises(ValueError, match="no population of a201"):
+        calibrate(tmp_path / "cal", one, tmp_path / "c3")
+
+
+def test_predict_without_fit_or_population_names_both(hierarchical_fit, tmp_path):
+    out, _ = hierarchical_fit
+    other = synthetic.simulate("fsr402", n_specimens=1, voltages=[0.2], forces=[4.9], samples=5)
+    write_csv(other.data, tmp_path / "other.csv")
+    run = fsrbayes("predict", str(out), str(tmp_path / "other.csv"))
+    assert run.returncode == 2 and "no population of their sensor" in run.stderr, run.stderr
+    assert run.stderr.count("\n") == 1
+
+
+def test_predict_command_calibrates_a_new_sensor(hierarchical_fit, tmp_path):
+    # `predict --calibrate`: the calibration fitted (its fit kept where asked, its warnings said
+    # in fsrbayes' own words), then the other tests predicted as calibrated
+    out, _ = hierarchical_fit
+    data = new_sensor(seed=13)
+    write_csv(CreepData(data.tests[:1]), tmp_path / "one.csv")
+    write_csv(CreepData(data.tests[1:]), tmp_path / "rest.csv")
+    run = fsrbayes(
+        "predict", str(out), str(tmp_path / "rest.csv"), "--calibrate", str(tmp_path / "one.csv"),
+        "--calibration-out", str(tmp_path / "cal"), "--json", str(tmp_path / "p.json"),
+        "--draws", "300",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "a201-new: calibration fit" in run.stdout
+    assert run.stdout.count("[a new specimen of the population, calibrated]") == 3, run.stdout
+    assert "Traceback" not in run.stderr and "result = fit(" not in run.stderr, run.stderr
+    assert (tmp_path / "cal" / "a201-new" / "posterior.nc").is_file()
+    result = json.loads((tmp_path / "p.json").read_text())
+    jsonschema.validate(result, predict_schema())
+    assert {t["specimen_source"] for t in result["tests"]} == {"calibrated"}

@@ -8,6 +8,7 @@ the divider's output, its ADC), written by independent code (:mod:`fsrbayes.data
 
 import json
 
+import jsonschema
 import numpy as np
 import pytest
 
@@ -15,7 +16,8 @@ from fsrbayes.cli import main
 from fsrbayes.data import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.inference.point_fit import write_point_fit
-from fsrbayes.inference.predict import fit_folders, predict
+from fsrbayes.inference.predict import predict, predict_schema
+from fsrbayes.inference.predictive_draws import fit_folders
 
 RIG = {"duration_s": 60.0, "rate_hz": 50.0, "weights_g": (150.0, 255.0)}
 
@@ -90,6 +92,7 @@ def test_a_protocol_without_readings_is_predicted_and_written(rig, tmp_path):
         == 0
     )
     result = json.loads(out.read_text())
+    jsonschema.validate(result, predict_schema())  # the shipped schema, as a user validates it
     assert result["coverage_90"] is None and result["reading"] == "vout_V"
     assert set(result) >= {"reading_unit", "tests", "coverage_90"}
     for test in result["tests"]:
@@ -231,6 +234,7 @@ def test_draws_whose_gap_closes_are_counted_and_named(rig, tmp_path, capsys):
     assert main(["predict", str(fit), str(rig["vout_V"]), "--json", str(tmp_path / "p.json")]) == 0
     out = capsys.readouterr().out
     result = json.loads((tmp_path / "p.json").read_text())
+    jsonschema.validate(result, predict_schema())
     heavy = max(result["tests"], key=lambda t: t["stress_Pa"])
     invalid = heavy["invalid"]
     assert invalid["share"] == pytest.approx(0.4, abs=0.05)

@@ -72,7 +72,7 @@ def _outside_prior(fit_folder, data_path):
     from fsrbayes.data.sensors import load_sensor
     from fsrbayes.inference.likelihood import SpecimenData
     from fsrbayes.inference.posterior import LogPosterior
-    from fsrbayes.inference.predict import fit_folders
+    from fsrbayes.inference.predictive_draws import fit_folders
 
     data = read_csv(data_path)
     out = {}

@@ -16,8 +16,9 @@ from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .bench import add_bench_commands
 from .common import FitFailed, UsageError
-from .fitting import cmd_drift, cmd_fit, cmd_predict
+from .fitting import cmd_drift, cmd_fit
 from .model import cmd_check, cmd_demo, cmd_forward
+from .predicting import cmd_predict
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -397,10 +398,15 @@ def build_parser():
 
     prd = sub.add_parser(
         "predict",
-        help="what a fitted specimen will read under a protocol: posterior predictive bands of "
-        "the reading (noise and ADC steps included); coverage of any readings logged",
+        help="what a sensor will read under a protocol: predictive bands of the reading (noise "
+        "and ADC steps included) for a fitted specimen, or a new one of a fitted population; "
+        "coverage of any readings logged",
     )
-    prd.add_argument("fit_dir", help="output folder of 'fsrbayes fit' (one or several specimens)")
+    prd.add_argument(
+        "fit_dir",
+        help="output folder of 'fsrbayes fit': specimens it fitted are predicted from their "
+        "posterior, others from the population of a --hierarchical fit",
+    )
     prd.add_argument(
         "protocol",
         help="CSV of the tests to predict (docs/data-format.md); the reading column is optional",
@@ -420,7 +426,18 @@ def build_parser():
         help="draw the parameters from the fit's prior instead of its posterior (the prior "
         "predictive: compare its band widths with the posterior's)",
     )
-    prd.add_argument("--seed", type=int, default=0)
+    prd.add_argument(
+        "--calibrate",
+        metavar="CSV",
+        help="calibration tests of new specimens (say one weight each): each is fitted, and "
+        "its prediction conditioned on them as well as on the population",
+    )
+    prd.add_argument(
+        "--calibration-out",
+        metavar="DIR",
+        help="keep the calibration fits in this folder (default: a temporary one)",
+    )
+    prd.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     prd.set_defaults(func=cmd_predict)
 
     chk = sub.add_parser("check", help="read and validate a creep-test CSV and summarise it")

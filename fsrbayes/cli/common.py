@@ -9,6 +9,7 @@ import numpy as np
 
 __all__ = [
     "calibration_notes",
+    "checked_fit",
     "default_model",
     "drift_lines",
     "loading_notes",
@@ -240,3 +241,25 @@ def warn_out_of_domain(specimen, info):
                 "domain; its drift is over the other draws",
                 file=sys.stderr,
             )
+
+
+def checked_fit(specimen, result, seed):
+    """Run the posterior predictive checks of one specimen's fit; warn on stderr when any fails.
+
+    Returns the checks' dict, stored as ``checks`` in the specimen's summary.json.
+    """
+    from ..discrepancy import fit_checks
+
+    checks = fit_checks(result, seed)
+    if not checks["passed"]:
+        worst = "; ".join(f["message"] for f in checks["failed"][:3])
+        print(
+            f"fsrbayes fit: warning: {specimen}: the model does not fit these data "
+            f"({len(checks['failed'])} check(s) fail: {worst}); see 'checks' in summary.json, "
+            "and 'fsrbayes diagnose' for where and what is missing",
+            file=sys.stderr,
+        )
+    trend = checks["placement_creep_trend"]
+    if trend and trend["note"]:
+        print(f"fsrbayes fit: note: {specimen}: {trend['note']}", file=sys.stderr)
+    return checks

@@ -1,7 +1,7 @@
-"""Commands that sample posteriors and use them: fit, drift and predict.
+"""Commands that sample posteriors and use them: fit and drift.
 
-Commands that sample posteriors — fit (per specimen or hierarchical) — and use them: drift (the
-population's predictive drift) and predict (what a fitted specimen reads under a protocol).
+fit samples posteriors (per specimen or hierarchical); drift gives the population's predictive
+drift of a new specimen. predict lives in :mod:`.predicting`.
 """
 
 import json
@@ -13,11 +13,12 @@ from pathlib import Path
 import numpy as np
 
 from ..data import csvio
-from ..utils import json_ready, write_json_atomic
+from ..utils import write_json_atomic
 from .common import (
     FitFailed,
     UsageError,
     calibration_notes,
+    checked_fit,
     default_model,
     drift_lines,
     enough_space,
@@ -105,7 +106,7 @@ def cmd_fit(args):
         for note in notes:  # said once a fit has run: errors come alone
             print(f"fsrbayes fit: {note}", file=sys.stderr)
         notes = []
-        checks = _checked_fit(specimen, result, args.seed)
+        checks = checked_fit(specimen, result, args.seed)
         summaries[specimen] = save_fit(result, folder, extra={"checks": checks})
         warn_out_of_domain(specimen, summaries[specimen])
         if args.plots:
@@ -125,28 +126,6 @@ def cmd_fit(args):
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
     return 0
-
-
-def _checked_fit(specimen, result, seed):
-    """Run the posterior predictive checks of one specimen's fit; warn on stderr when any fails.
-
-    Returns the checks' dict, stored as ``checks`` in the specimen's summary.json.
-    """
-    from ..discrepancy import fit_checks
-
-    checks = fit_checks(result, seed)
-    if not checks["passed"]:
-        worst = "; ".join(f["message"] for f in checks["failed"][:3])
-        print(
-            f"fsrbayes fit: warning: {specimen}: the model does not fit these data "
-            f"({len(checks['failed'])} check(s) fail: {worst}); see 'checks' in summary.json, "
-            "and 'fsrbayes diagnose' for where and what is missing",
-            file=sys.stderr,
-        )
-    trend = checks["placement_creep_trend"]
-    if trend and trend["note"]:
-        print(f"fsrbayes fit: note: {specimen}: {trend['note']}", file=sys.stderr)
-    return checks
 
 
 def _tempered_settings(args):
@@ -259,7 +238,7 @@ def _fit_hierarchical(args, data, settings, out, notes):
             summaries = {}
             for specimen, result in fits.items():
                 (folder / specimen).mkdir(exist_ok=True)
-                checks = _checked_fit(specimen, result, args.seed)
+                checks = checked_fit(specimen, result, args.seed)
                 summaries[specimen] = save_fit(result, folder / specimen, extra={"checks": checks})
                 warn_out_of_domain(specimen, summaries[specimen])
                 print(
@@ -441,53 +420,3 @@ def _fit_plots(folder):
     for name, figure in figures.items():
         plots.save_figure(figure, folder / name)
     print(f"figures in {folder}: {', '.join(figures)}")
-
-
-def cmd_predict(args):
-    """Write the posterior predictive reading of every test of a protocol CSV (JSON, figure)."""
-    from ..inference.predict import predict
-
-    if args.draws < 10:
-        raise UsageError(f"--draws must be >= 10, got {args.draws}")
-    protocol = csvio.read_csv(
-        args.protocol, sep=args.sep, shift_time=args.shift_time, readings="optional"
-    )
-    for path in (args.json, args.plot):
-        if path:
-            writable(Path(path).parent)
-    source = "prior" if args.prior else "posterior"
-    result = predict(args.fit_dir, protocol, n_draws=args.draws, seed=args.seed, draws_from=source)
-    for test in result["tests"]:
-        label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
-        covered = (
-            f"; {test['n_inside_90']}/{test['n_readings']} readings inside the 90 % band"
-            if test["n_readings"]
-            else ""
-        )
-        print(
-            f"{test['specimen']} {label}: {result['reading']} at {test['time_s'][-1]:g} s "
-            f"{test['q50'][-1]:.4g} (90 %: {test['q05'][-1]:.4g}..{test['q95'][-1]:.4g})"
-            f"{covered}{'' if test['fit_converged'] else ' [fit NOT converged]'}"
-        )
-        invalid = test["invalid"]
-        if invalid["share"] > 0:
-            print(
-                f"  {100 * invalid['share']:.0f} % of the {source} draws leave the model's "
-                f"domain from about {invalid['from_s']:.4g} s ({invalid['gap_closed']} the gap "
-                f"closes, {invalid['tunnelling_law']} the tunnelling law's range); the bands are "
-                "over the other draws"
-            )
-    if result["coverage_90"] is not None:
-        print(f"coverage_90 = {result['coverage_90']:.3f} over {result['n_readings']} readings")
-    if result["width_90_rel"] is not None:
-        print(
-            f"width_90_rel = {result['width_90_rel']:.3g} (the {source} predictive 90 % band's "
-            "median width over its median reading)"
-        )
-    if args.json:
-        write_json_atomic(Path(args.json), json_ready(result))
-    if args.plot:
-        from .. import plots
-
-        plots.save_figure(plots.predict_plot(result)[0], Path(args.plot))
-    return 0

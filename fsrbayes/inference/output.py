@@ -158,6 +158,12 @@ def to_datatree(result, *, max_draws=2000, seed=0):
             report.as_dict() if report else {"method": result.method}, allow_nan=True
         ),
         "fixed_parameters": json.dumps(posterior.fixed),
+        "priors": json.dumps(
+            {
+                name: {"dist": dist.kind, **dist.args}
+                for name, dist in zip(posterior.prior.names, posterior.prior.dists, strict=True)
+            }
+        ),
         "sampler": getattr(result, "sampler", "ensemble"),
         "coordinates": json.dumps(_coordinates(result)),
     }

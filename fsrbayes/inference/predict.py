@@ -30,31 +30,21 @@ the noise and the reading are drawn at every sample.
 
 import json
 from dataclasses import replace
-from pathlib import Path
+from importlib import resources
 
 import numpy as np
 
 from ..data.readouts import reading_of
-from ..data.sensors import load_sensor
 from .likelihood import SpecimenData
-from .nuisance import (
-    is_per_test,
-    is_placement,
-    is_placement_creep,
-    is_ramp,
-    nuisance_parameters,
-    samples_landing,
-)
-from .output import open_fit_tree
-from .posterior import LogPosterior
+from .predictive_draws import fit_folders, population_draws, population_folders, specimen_draws
 from .replicates import median_or_none, relative_noise, relative_widths, share_inside
 
 __all__ = [
     "PREDICT_QUANTILES",
     "READING_UNITS",
     "evaluation_packing",
-    "fit_folders",
     "predict",
+    "predict_schema",
     "reading_name",
 ]
 
@@ -77,117 +67,9 @@ CHUNK = 4000
 """Samples per block when drawing the noise and the reading (bounds memory at draws × CHUNK)."""
 
 
-def fit_folders(fit_dir):
-    """Map specimen → folder of its ``posterior.nc`` under a fit's output folder.
-
-    Parameters
-    ----------
-    fit_dir : str or Path
-        A folder written by ``fsrbayes fit`` (one specimen, several, or ``--hierarchical``).
-
-    Returns
-    -------
-    dict
-    """
-    root = Path(fit_dir)
-    files = [root / "posterior.nc"] if (root / "posterior.nc").is_file() else []
-    files += sorted(root.glob("*/posterior.nc")) + sorted(root.glob("*/*/posterior.nc"))
-    out = {}
-    for path in files:
-        with open_fit_tree(path) as tree:
-            out.setdefault(str(tree.attrs["specimen"]), path.parent)
-    return out
-
-
 def reading_name(test):
     """Return the reading column a test is logged in (``current_A``: a current at a set voltage)."""
     return "current_A" if test.readout is None else test.readout.reading
-
-
-def _posterior_of(folder, packed, rng):
-    """Return the fit's LogPosterior rebuilt on ``packed`` and its stored draws, shape (S, ndim).
-
-    A fit with fitted loading ramps (one per test it saw) lends each protocol test, draw by
-    draw, the ramp of one of its tests picked at random (``rng``): a new placement of a weight
-    settles as the placements seen did (a fit with one ``ramp_s`` for all its tests lends that
-    one). A protocol with a ``ramp_s`` column uses its own. A protocol test whose onset is known
-    only to a sample interval under a ramp draws where in it the load began from its uniform
-    prior (:func:`~.posterior.samples_landing`): the fit's landings are its own tests'.
-    """
-    tree = open_fit_tree(folder / "posterior.nc")
-    attrs = tree.attrs
-    sensor = load_sensor(attrs["sensor"])
-    likelihood = attrs["likelihood"]
-    fitted = [n for n in tree.posterior.data_vars if is_ramp(str(n))]
-    levels = [str(n) for n in tree.posterior.data_vars if is_placement(str(n))]
-    creeps = [str(n) for n in tree.posterior.data_vars if is_placement_creep(str(n))]
-    given = packed.ramp_s is not None and np.any(packed.ramp_s > 0)
-    ramp = "fitted" if fitted and not given else "given"
-    landing = samples_landing(packed, ramp)
-    noise = nuisance_parameters(
-        likelihood,
-        ramp,
-        packed.n_tests,
-        landing=landing,
-        placement=bool(levels),
-        placement_creep=bool(creeps),
-    )
-    prior = sensor.prior_for(attrs["fsrbayes_model"], noise)
-    posterior = LogPosterior(
-        packed,
-        prior,
-        json.loads(attrs["fixed_parameters"]),
-        model=attrs["fsrbayes_model"],
-        tunneling=attrs["tunneling"],
-        likelihood=likelihood,
-    )
-    # the ramps, the landings, then the placement levels and creeps come last
-    columns = [n for n in posterior.names if not is_per_test(n)]
-    draws = np.stack([tree.posterior[n].values.ravel() for n in columns], axis=-1)
-    if ramp == "fitted":
-        seen = np.stack([tree.posterior[n].values.ravel() for n in fitted], axis=-1)
-        draws = np.concatenate([draws, *_lent([seen], packed.n_tests, rng)], axis=1)
-    if landing:
-        draws = np.concatenate([draws, rng.uniform(size=(len(draws), packed.n_tests))], axis=1)
-    if levels:
-        seen = [
-            np.stack([tree.posterior[n].values.ravel() for n in names], axis=-1)
-            for names in (levels, creeps)
-            if names
-        ]
-        draws = np.concatenate([draws, *_placements(seen, packed, attrs, rng)], axis=1)
-    return posterior, draws, attrs
-
-
-def _placements(seen, packed, attrs, rng):
-    """Each protocol test's placement level (and creep), draw by draw, from the fit's ``seen``.
-
-    ``seen``: a list of the fit's placement levels and, where it sampled them, its creeps, each
-    (S, K). A protocol test that is one of the fitted tests (same specimen, voltage, stress and
-    test label: a hold fitted on its first minutes, predicted to its end) keeps its own; any
-    other is a new placement and, draw by draw, lends the level and creep of one fitted test
-    picked at random, as a fresh placement lands and creeps like the ones seen.
-    """
-    keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
-    own = {}
-    for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
-        for j, key in enumerate(keys):
-            if key[0] == specimen and key[3] == label and np.allclose(key[1:3], (voltage, stress)):
-                own[i] = j
-    return _lent(seen, packed.n_tests, rng, own)
-
-
-def _lent(seen, n_tests, rng, own=None):
-    """Per protocol test, draw by draw, the values of a fitted test: each (S, K) → (S, n).
-
-    ``seen``: a list of (S, K) arrays lent together (the same fitted test for each draw and
-    protocol test); returns the list of lent arrays. A test in ``own`` (protocol test → fitted
-    test) keeps that one's; the others take, draw by draw, a fitted test's picked at random.
-    """
-    picks = rng.integers(seen[0].shape[1], size=(len(seen[0]), n_tests))
-    for i, j in (own or {}).items():
-        picks[:, i] = j
-    return [np.take_along_axis(a, picks, axis=1) for a in seen]
 
 
 def _segments(test):
@@ -268,13 +150,23 @@ def evaluation_packing(tests, time_s=None):
     )
 
 
-def _predict_tests(folder, tests, n_draws, rng, draws_from):
-    """Predictive bands of one specimen's protocol tests from the fit in ``folder``."""
+def _predict_tests(source, tests, n_draws, rng, draws_from):
+    """Predictive bands of one specimen's protocol tests.
+
+    ``source``: ``("fitted", folder)`` — the specimen's fit; ``("population", folder,
+    calibration)`` — a new specimen of the population in ``folder``, conditioned on the fit of
+    its calibration tests when ``calibration`` is a folder (:mod:`.predictive_draws`).
+    """
     times = [_model_times(t) for t in tests]
     width = max(t.size for t in times)
     grid = np.array([np.pad(t, (0, width - t.size), mode="edge") for t in times])
     packed = evaluation_packing(tests, grid)
-    posterior, draws, attrs = _posterior_of(folder, packed, rng)
+    kind, folder = source[:2]
+    if kind == "fitted":
+        posterior, draws, attrs = specimen_draws(folder, packed, rng)
+    else:
+        posterior, draws, attrs = population_draws(folder, packed, n_draws, rng, source[2])
+        kind = "population" if source[2] is None else "calibrated"
     if attrs["sensor"] != tests[0].sensor:
         raise ValueError(
             f"specimen {tests[0].specimen!r} was fitted as a {attrs['sensor']} sensor, the "
@@ -339,6 +231,7 @@ def _predict_tests(folder, tests, n_draws, rng, draws_from):
                 "invalid_draws": int((~valid).sum()),
                 "invalid": invalid,
                 "fit": str(folder),
+                "specimen_source": kind,
                 "fit_converged": bool(int(attrs.get("converged", 0))),
                 "model": posterior.model,
             }
@@ -385,13 +278,16 @@ def _observed_reading(test):
         return reading_of(test.readout, test.current_A)
 
 
-def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
+def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", calibration=None):
     """Posterior (or prior) predictive readings of every test of a protocol.
 
     Parameters
     ----------
     fit_dir : str or Path
-        Output folder of ``fsrbayes fit`` holding the specimens the protocol names.
+        Output folder of ``fsrbayes fit``. A specimen of the protocol that was fitted there is
+        predicted from its own posterior (``specimen_source`` "fitted"); one never fitted, of a
+        sensor type fitted with ``--hierarchical``, as a new specimen of that population
+        ("population"; :mod:`.predictive_draws`).
     protocol : CreepData
         The tests to predict (``read_csv(path, readings="optional")``: readings may be absent).
     n_draws : int
@@ -402,6 +298,10 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
         Where the parameters come from: the fit's posterior draws, or its prior (the same model,
         sensor priors and fixed parameters) — the prior predictive, whose band widths show how
         much the fit's data narrowed the prediction (sharpness).
+    calibration : str or Path, optional
+        Fits of new specimens' calibration tests (:func:`~.predictive_draws.calibrate`): each
+        specimen there is predicted as a new specimen of the population conditioned on its
+        calibration ("calibrated").
 
     Returns
     -------
@@ -416,18 +316,10 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
     Raises
     ------
     ValueError
-        A specimen of the protocol has no fit in ``fit_dir``, was fitted as another sensor, or
-        the protocol mixes reading columns.
+        A specimen of the protocol has neither a fit nor a population in ``fit_dir``, was fitted
+        as another sensor, or the protocol mixes reading columns.
     """
-    folders = fit_folders(fit_dir)
-    if not folders:
-        raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
-    missing = [s for s in protocol.specimens if s not in folders]
-    if missing:
-        raise ValueError(
-            f"specimen(s) {missing} of the protocol have no fit in {fit_dir}; it holds "
-            f"{sorted(folders)[:8]}"
-        )
+    sources = _sources(fit_dir, protocol, calibration)
     readings = sorted({reading_name(t) for t in protocol})
     if len(readings) != 1:
         raise ValueError(
@@ -439,7 +331,7 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
     tests = []
     for specimen in protocol.specimens:
         part = protocol.select(specimen=specimen).tests
-        tests += _predict_tests(folders[specimen], part, int(n_draws), rng, draws_from)
+        tests += _predict_tests(sources[specimen], part, int(n_draws), rng, draws_from)
     counts = [(t["n_inside_90"], t["n_readings"]) for t in tests]
     total = sum(n for _, n in counts)
     widths = [relative_widths(t["q05"], t["q50"], t["q95"]) for t in tests]
@@ -453,3 +345,39 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior"):
         "n_readings": total,
         "width_90_rel": median_or_none(np.concatenate(widths)),
     }
+
+
+def _sources(fit_dir, protocol, calibration):
+    """Specimen → where its draws come from (:func:`_predict_tests`'s ``source``)."""
+    folders = fit_folders(fit_dir)
+    populations = population_folders(fit_dir)
+    if not folders:
+        raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
+    calibrated = fit_folders(calibration) if calibration is not None else {}
+    sources, missing = {}, []
+    for specimen in protocol.specimens:
+        sensor = protocol.select(specimen=specimen).tests[0].sensor
+        population = populations.get(sensor)
+        if specimen in calibrated and specimen in folders:
+            raise ValueError(
+                f"specimen {specimen!r} was fitted in {fit_dir}: a calibration is for a new "
+                "specimen of a population"
+            )
+        if specimen in folders:
+            sources[specimen] = ("fitted", folders[specimen])
+        elif population is not None:
+            sources[specimen] = ("population", population, calibrated.get(specimen))
+        else:
+            missing.append(specimen)
+    if missing:
+        raise ValueError(
+            f"specimen(s) {missing} of the protocol have no fit in {fit_dir} and no population of "
+            f"their sensor ('fsrbayes fit --hierarchical'); it holds {sorted(folders)[:8]}"
+        )
+    return sources
+
+
+def predict_schema():
+    """Return the JSON Schema of a prediction (``fsrbayes/schemas/predict.schema.json``)."""
+    text = resources.files("fsrbayes").joinpath("schemas/predict.schema.json").read_text()
+    return json.loads(text)
