@@ -84,6 +84,10 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
     assert best["log_bf"] >= result.threshold and best["margin_over_next"] > 10
     assert best["parameters"]["area_creep"]["q05"] < -30 < best["parameters"]["area_creep"]["q95"]
     assert result.effects == ["area-creep"] and not result.findings_after["failed"]
+    # the residuals ran in long stretches under Burgers alone (lag-1 0.8); once the effect is
+    # named they are white, so the diagnosis stays under white noise
+    assert result.noise_model["likelihood"] == "gaussian"
+    assert result.noise_model["residual_lag1"]["a201-01"] < 0.5
     assert result.gap_after <= result.band or (
         result.gap_after - result.band <= 0.5 * (result.gap_before - result.band)
     )
@@ -242,3 +246,20 @@ def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path
     html = write_diagnosis_report(result, tmp_path / "report").read_text()
     assert "area-creep + gain-drift" in html and "measurement artefact" in html
     assert html.count("data:image/png;base64,") == 4
+
+
+def test_correlated_noise_is_diagnosed_under_ar1_noise_and_named_as_nothing():
+    # Burgers physics under AR(1) noise (rho 0.9 from sample to sample, sd 1 %), written outside
+    # the package: with white noise, effects that follow part of it gain evidence; the residuals
+    # stay correlated whatever is named, so the diagnosis is made again under AR(1) noise
+    from validation.outside_menu import data_set
+
+    result = diagnose(
+        data_set("ar1-noise", seed=7040), effects=("area-growth", "voltage-degradation"),
+        n_draws=200, processes=2,
+    )  # fmt: skip
+    noise = result.noise_model
+    assert noise["likelihood"] == "ar1" and noise["asked"] == "gaussian", noise
+    assert noise["residual_lag1"]["a201-01"] > 0.5 and "AR(1)" in noise["reason"]
+    assert not result.effects, (result.verdict, result.effects)
+    _validate(result.as_dict())

@@ -120,6 +120,8 @@ def cmd_diagnose(args):
         null_sets=args.null_sets,
         processes=args.processes,
     )
+    if result.noise_model["likelihood"] != result.noise_model["asked"]:
+        print(f"noise model: {result.noise_model['likelihood']} — {result.noise_model['reason']}")
     print(f"gap before ({args.base}): {result.gap_before:.2f} (adequate below {result.band:.2f})")
     for c in result.candidates:
         print(

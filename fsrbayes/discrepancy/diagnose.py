@@ -21,7 +21,16 @@
    (default 10: e^10 ≈ 22,000 to 1, well beyond the few nats a Laplace evidence can be off by);
    otherwise effects are added greedily (at most two) and named only when they close the gap
    and pass their checks, else the diagnosis refuses (``partially-explained``, ``unexplained``);
-6. ``gap_after`` is the gap of the base model plus the named effects.
+6. ``gap_after`` is the gap of the base model plus the named effects;
+7. **noise before physics**: where the standardised residuals of that final model are still
+   correlated in time (lag-1 autocorrelation above :data:`~.fitcheck.AUTOCORRELATION_LIMIT` in
+   a specimen) under white noise, no effect explained the correlation, and steps 1–6 are run
+   again with the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); ``noise_model`` says which
+   noise model the result is under, and why. Correlated measurement noise read with a
+   white-noise likelihood passes for a mechanism (an effect that follows part of it gains
+   evidence); a missing mechanism, once named, leaves white residuals, so a hidden effect
+   under white noise keeps its diagnosis — which is why the residuals are read after the
+   effects, not before them.
 
 Every extension nests the base model (the effect is off at its null value), so a ln B well
 below zero is the Occam penalty of parameters the data do not need.
@@ -40,7 +49,9 @@ from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects
 from ..physics.models import PEER_MODELS, model_components, parse_model, register_components
 from ..utils import json_ready
+from .candidates import rank_candidates, step_of
 from .checks import predictive_checks
+from .fitcheck import AUTOCORRELATION_LIMIT, residual_statistics
 from .gaps import drift_gap, failed_checks, gap, gap_band
 from .locate import locate, misfit_by
 from .nullband import NULL_SETS, formula_band_applies, null_quarter_distances, simulated_band
@@ -125,31 +136,6 @@ def _diagnose_one(job):
     return out
 
 
-def _effect_parameters(per_specimen, effect):
-    """Summarise each effect parameter over specimens.
-
-    Per effect parameter: median of the per-specimen posterior medians, and the 5–95 % range of the
-    pooled posterior draws.
-    """
-    out = {}
-    draws = {}
-    for diag in per_specimen:
-        checks = diag.candidates[effect][1]
-        for name in EFFECTS[effect].parameters:
-            if name in checks.names:
-                draws.setdefault(name, []).append(checks.draws[:, checks.names.index(name)])
-    for name, columns in draws.items():
-        medians = [float(np.median(c)) for c in columns]
-        pooled = np.concatenate(columns)
-        out[name] = {
-            "median": float(np.median(medians)),
-            "q05": float(np.quantile(pooled, 0.05)),
-            "q95": float(np.quantile(pooled, 0.95)),
-            "per_specimen_median": medians,
-        }
-    return out
-
-
 @dataclass
 class Diagnosis:
     """The outcome of :func:`diagnose`.
@@ -194,6 +180,10 @@ class Diagnosis:
     band_method: str = None
     """How ``band`` was found: the formula (:data:`BAND_METHOD`) or by simulation
     (:data:`BAND_SIMULATED`)."""
+    noise_model: dict = None
+    """The likelihood of the result and why: ``likelihood``, ``asked`` (the caller's),
+    ``residual_lag1`` (per specimen, of the final model under the asked likelihood) and
+    ``reason`` (module docstring, step 7)."""
 
     @property
     def effect(self):
@@ -260,6 +250,7 @@ class Diagnosis:
                 "drift_gap_after": drift_gap(after),
                 "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
                 "base": self.base,
+                "noise_model": self.noise_model,
                 "model_after": "+".join([self.base, *self.effects]),
                 "threshold_log_bf": self.threshold,
                 "evidence_method": EVIDENCE_METHOD,
@@ -292,44 +283,6 @@ BAND_SIMULATED = (
     "logged from the base model at its fitted optimum, refitted and checked "
     "(fsrbayes.discrepancy.nullband)"
 )
-
-
-def _candidates(step, model, effects, per_specimen, gap_ref):
-    """Return the candidate entries of one greedy step, best ln B first."""
-    out = []
-    for effect in effects:
-        per = {d.specimen: float(d.log_bf(effect)) for d in per_specimen}
-        after = [d.candidates[effect][1] for d in per_specimen]
-        gap_effect = gap(after)
-        out.append(
-            {
-                "step": step,
-                "effect": effect,
-                "model": f"{model}+{effect}",
-                "summary": EFFECTS[effect].summary,
-                "kind": EFFECTS[effect].kind,
-                "log_bf": float(sum(per.values())),
-                "evidence_method": "laplace",
-                "log_bf_per_specimen": per,
-                "specimens_favouring": int(sum(v > 0 for v in per.values())),
-                "gap_after": gap_effect,
-                "drift_gap_after": drift_gap(after),
-                "gap_closed": float(1.0 - gap_effect / gap_ref) if gap_ref > 0 else 0.0,
-                "checks_fail": bool(failed_checks(after)["failed"]),
-                "parameters": _effect_parameters(per_specimen, effect),
-            }
-        )
-    out.sort(key=lambda c: -c["log_bf"])
-    for rank, c in enumerate(out, start=1):
-        c["rank"] = rank
-    if len(out) > 1:
-        out[0]["margin_over_next"] = out[0]["log_bf"] - out[1]["log_bf"]
-    return out
-
-
-def _step_of(candidate):
-    """Return what :func:`~.verdict.verdict_of` reads of a greedy step's best candidate."""
-    return {k: candidate[k] for k in ("effect", "log_bf", "gap_after", "checks_fail")}
 
 
 def diagnose(
@@ -406,85 +359,114 @@ def diagnose(
     simulate_band = null_sets > 0 and not formula_band_applies(
         [t for t in data.tests if t.specimen in specimens]
     )
-    options = {
-        "sensor": sensor,
-        "tunneling": tunneling,
-        "likelihood": likelihood,
-        "n_draws": int(n_draws),
-        "n_starts": int(n_starts),
+
+    def search(likelihood):
+        options = {
+            "sensor": sensor,
+            "tunneling": tunneling,
+            "likelihood": likelihood,
+            "n_draws": int(n_draws),
+            "n_starts": int(n_starts),
+        }
+
+        def run_step(model, candidates, step, start=None):
+            step_options = dict(
+                options,
+                base=model,
+                effects=candidates,
+                start=start or {},
+                null_sets=int(null_sets) if simulate_band and step == 0 else 0,
+                components={
+                    name: model_components(name if name == model else f"{model}+{name}")
+                    for name in (model, *candidates)
+                },
+            )
+            jobs = [
+                (data.select(specimen=s), s, dict(step_options, seed=[seed, step, k]))
+                for k, s in enumerate(specimens)
+            ]
+            return map_jobs(
+                _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
+            )
+
+        rounds = [run_step(base, effects, 0)]
+        base_checks = [d.base_checks for d in rounds[0]]
+        gap_before = gap(base_checks)
+        findings = failed_checks(base_checks)
+        if simulate_band:
+            band = simulated_band([d.null_distances for d in rounds[0]])
+            band_method = BAND_SIMULATED.format(n=int(null_sets))
+        else:
+            band = gap_band(int(sum(len(c.test_keys) for c in base_checks)), len(base_checks))
+            band_method = BAND_METHOD
+        candidates = rank_candidates(1, base, effects, rounds[0], gap_before)
+        steps, model, remaining = [], base, list(effects)
+        in_band = not findings["failed"] and gap_before <= band
+        step_candidates = candidates
+        if in_band and candidates:
+            # The gap cannot see everything the evidence sees: the best candidate is still weighed.
+            steps.append(step_of(candidates[0]))
+        while not in_band and step_candidates and len(steps) < MAX_EFFECTS:
+            best = step_candidates[0]
+            steps.append(step_of(best))
+            verdict, _, _ = verdict_of(gap_before, True, band, steps, threshold)
+            remaining.remove(best["effect"])
+            if verdict != "partially-explained" or not remaining or len(steps) == MAX_EFFECTS:
+                break
+            # The best effect helps but does not close the gap: try a second one on top of it.
+            model = f"{model}+{best['effect']}"
+            start = {d.specimen: d.candidates[best["effect"]] for d in rounds[-1]}
+            rounds.append(run_step(model, tuple(remaining), len(steps), start))
+            step_candidates = rank_candidates(
+                len(steps) + 1, model, remaining, rounds[-1], best["gap_after"]
+            )
+            candidates += step_candidates
+        verdict, named, gap_after = verdict_of(
+            gap_before, bool(findings["failed"]), band, steps, threshold
+        )
+        diagnosis = Diagnosis(
+            verdict,
+            named,
+            gap_before,
+            gap_after,
+            band,
+            candidates,
+            base,
+            rounds[: max(1, len(named))],
+            float(threshold),
+            findings,
+            None,
+            locate(base_checks),
+            0.0,
+            band_method,
+        )
+        diagnosis.findings_after = failed_checks(diagnosis.checks_after())
+        return diagnosis
+
+    diagnosis = search(likelihood)
+    lag1 = {
+        d.specimen: residual_statistics(c.innovation_observed)[1]
+        for d, c in zip(diagnosis.specimens, diagnosis.checks_after(), strict=True)
     }
-
-    def run_step(model, candidates, step, start=None):
-        step_options = dict(
-            options,
-            base=model,
-            effects=candidates,
-            start=start or {},
-            null_sets=int(null_sets) if simulate_band and step == 0 else 0,
-            components={
-                name: model_components(name if name == model else f"{model}+{name}")
-                for name in (model, *candidates)
-            },
-        )
-        jobs = [
-            (data.select(specimen=s), s, dict(step_options, seed=[seed, step, k]))
-            for k, s in enumerate(specimens)
-        ]
-        return map_jobs(
-            _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
-        )
-
-    rounds = [run_step(base, effects, 0)]
-    base_checks = [d.base_checks for d in rounds[0]]
-    gap_before = gap(base_checks)
-    findings = failed_checks(base_checks)
-    if simulate_band:
-        band = simulated_band([d.null_distances for d in rounds[0]])
-        band_method = BAND_SIMULATED.format(n=int(null_sets))
-    else:
-        band = gap_band(int(sum(len(c.test_keys) for c in base_checks)), len(base_checks))
-        band_method = BAND_METHOD
-    candidates = _candidates(1, base, effects, rounds[0], gap_before)
-    steps, model, remaining = [], base, list(effects)
-    in_band = not findings["failed"] and gap_before <= band
-    step_candidates = candidates
-    if in_band and candidates:
-        # The gap cannot see everything the evidence sees: the best candidate is still weighed.
-        steps.append(_step_of(candidates[0]))
-    while not in_band and step_candidates and len(steps) < MAX_EFFECTS:
-        best = step_candidates[0]
-        steps.append(_step_of(best))
-        verdict, _, _ = verdict_of(gap_before, True, band, steps, threshold)
-        remaining.remove(best["effect"])
-        if verdict != "partially-explained" or not remaining or len(steps) == MAX_EFFECTS:
-            break
-        # The best effect helps but does not close the gap: try a second one on top of it.
-        model = f"{model}+{best['effect']}"
-        start = {d.specimen: d.candidates[best["effect"]] for d in rounds[-1]}
-        rounds.append(run_step(model, tuple(remaining), len(steps), start))
-        step_candidates = _candidates(
-            len(steps) + 1, model, remaining, rounds[-1], best["gap_after"]
-        )
-        candidates += step_candidates
-    verdict, named, gap_after = verdict_of(
-        gap_before, bool(findings["failed"]), band, steps, threshold
-    )
-    diagnosis = Diagnosis(
-        verdict,
-        named,
-        gap_before,
-        gap_after,
-        band,
-        candidates,
-        base,
-        rounds[: max(1, len(named))],
-        float(threshold),
-        findings,
-        None,
-        locate(base_checks),
-        0.0,
-        band_method,
-    )
-    diagnosis.findings_after = failed_checks(diagnosis.checks_after())
+    diagnosis.noise_model = {
+        "likelihood": likelihood,
+        "asked": likelihood,
+        "residual_lag1": lag1,
+        "reason": "as asked",
+    }
+    correlated = {s: v for s, v in lag1.items() if v > AUTOCORRELATION_LIMIT}
+    if likelihood != "ar1" and correlated:
+        worst = max(correlated, key=correlated.get)
+        model_after = "+".join([base, *diagnosis.effects])
+        diagnosis = search("ar1")
+        diagnosis.noise_model = {
+            "likelihood": "ar1",
+            "asked": likelihood,
+            "residual_lag1": lag1,
+            "reason": f"under {likelihood} noise the residuals of {model_after} stay correlated "
+            f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above "
+            f"{AUTOCORRELATION_LIMIT:g}): no effect explains them, so base model and "
+            "candidates were refitted with AR(1) measurement noise",
+        }
     diagnosis.seconds = time.perf_counter() - started
     return diagnosis

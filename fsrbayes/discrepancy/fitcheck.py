@@ -43,6 +43,7 @@ __all__ = [
     "NOISE_RATIO_LIMIT",
     "fit_checks",
     "placement_creep_trend",
+    "residual_statistics",
 ]
 
 NOISE_RATIO_LIMIT = 2.0
@@ -75,7 +76,7 @@ def _loading_ratio(residual, time_s, start_s):
     return float(np.mean(residual[early] ** 2) / late_square) if late_square > 0 else np.inf
 
 
-def _residual_statistics(residual):
+def residual_statistics(residual):
     """Return (noise over scatter, lag-1 autocorrelation) of residuals (C, T), NaN-padded."""
     steps = np.diff(residual, axis=1)
     mean_square_step = np.nanmean(steps**2)
@@ -118,7 +119,7 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
     failed = [
         dict(entry, check=entry["statistic"], message=_message(entry)) for entry in found["failed"]
     ]
-    ratio, lag1 = _residual_statistics(checks.innovation_observed)
+    ratio, lag1 = residual_statistics(checks.innovation_observed)
     if ratio > NOISE_RATIO_LIMIT:
         failed.append(
             {
