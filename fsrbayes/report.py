@@ -45,13 +45,20 @@ def _parameter_text(parameters):
     )
 
 
+def _named(result):
+    """Return what a diagnosis named, in its candidates' words: ``law:<law>``, effects."""
+    law = result.get("law")
+    return ([f"law:{law}"] if law else []) + list(result["effects"])
+
+
 def _verdict_text(result, n_spec):
     """Return the verdict in words, with the numbers that decided it."""
     band, before, after = result["band"], result["gap_before"], result["gap_after"]
     n_failed_before = len(result["findings_before"]["failed"])
     n_failed_after = len(result["checks_after"]["failed"])
-    added = " + ".join(f"**{e}**" for e in result["effects"])
-    steps = [c for c in result["candidates"] if c["rank"] == 1 and c["effect"] in result["effects"]]
+    named_all = _named(result)
+    added = " + ".join(f"**{e}**" for e in named_all)
+    steps = [c for c in result["candidates"] if c["rank"] == 1 and c["effect"] in named_all]
     evidence = "; ".join(
         f"{c['effect']} ln B = {c['log_bf']:.1f} ({c['specimens_favouring']} of {n_spec} "
         f"specimens favour it; {_parameter_text(c['parameters'])})"
@@ -164,7 +171,7 @@ def diagnosis_narrative(result):
     n_spec = len(result["specimens"])
     lines = [
         f"# fsrbayes diagnose: {result['verdict']}"
-        + (f" — {' + '.join(result['effects'])}" if result["effects"] else ""),
+        + (f" — {' + '.join(_named(result))}" if _named(result) else ""),
         "",
     ]
     voltage = _where_worst(result["misfit_by_voltage_before"], "voltage_V", "V")

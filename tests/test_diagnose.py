@@ -263,3 +263,23 @@ def test_correlated_noise_is_diagnosed_under_ar1_noise_and_named_as_nothing():
     assert noise["residual_lag1"]["a201-01"] > 0.5 and "AR(1)" in noise["reason"]
     assert not result.effects, (result.verdict, result.effects)
     _validate(result.as_dict())
+
+
+def test_a_creep_law_burgers_cannot_follow_is_named_as_a_law():
+    # creep linear in ln t (a box spectrum of retardation times) diagnosed with Burgers: no
+    # catalogue effect is offered, two laws are; the log-time law is named in Burgers' place
+    sim = simulate(
+        "a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, rheology="log-spectrum", seed=5
+    )
+    result = diagnose(
+        sim.data, effects=(), laws=("zener", "log-spectrum"), n_draws=200, processes=2
+    )
+    assert result.law == "log-spectrum" and result.effects == [], (result.verdict, result.named)
+    assert result.verdict == "missing-effect" and result.model_after == "log-spectrum"
+    # on this seed Burgers' gap is already in band (its curves bend close enough over one
+    # hour), but the evidence for the log-time law is decisive and its model stays in band
+    assert result.gap_after <= result.band and result.candidates[0]["log_bf"] >= 10
+    payload = result.as_dict()
+    assert payload["law"] == "log-spectrum"
+    assert {c["kind"] for c in payload["candidates"]} == {"law"}
+    _validate(payload)

@@ -38,11 +38,14 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
         str(report),
         "--effects",
         "area-creep,offset-stress",
+        "--laws",
+        "zener,log-spectrum",
         "--processes",
         "2",
     )
     assert result.returncode == 0, result.stderr
     assert "verdict: missing-effect: area-creep" in result.stdout
+    assert result.stdout.count("(creep law)") == 2  # each law tried in place of Burgers
     payload = json.loads(out.read_text())
     import jsonschema
 
@@ -50,7 +53,12 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
     assert payload["verdict"] == "missing-effect" and payload["effect"] == "area-creep"
     assert payload["gap_after"] < payload["gap_before"] and "quarter" in payload["gap_metric"]
     assert payload["drift_gap_after"] < payload["drift_gap_before"]
-    assert [c["effect"] for c in payload["candidates"]] == ["area-creep", "offset-stress"]
+    effects = [c["effect"] for c in payload["candidates"]]
+    assert effects[0] == "area-creep" and payload["law"] is None
+    assert set(effects) == {"area-creep", "offset-stress", "law:zener", "law:log-spectrum"}
+    laws = {c["law"]: c for c in payload["candidates"] if c["kind"] == "law"}
+    assert laws["zener"]["model"] == "zener"
+    assert laws["log-spectrum"]["log_bf"] < payload["candidates"][0]["log_bf"] - 10
     html = (report / "report.html").read_text()
     assert html.count("data:image/png;base64,") == 4 and "area-creep" in html
     assert "Where the base model misses" in html

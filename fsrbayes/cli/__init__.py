@@ -279,6 +279,11 @@ def build_parser():
     dia.add_argument(
         "--effects", help=f"candidate effects, comma-separated (default all: {','.join(EFFECTS)})"
     )
+    dia.add_argument(
+        "--laws",
+        help="creep laws tried in place of the base's, comma-separated; 'none' for none "
+        "(default: every registered law but the base's)",
+    )
     dia.add_argument("--specimens", help="specimens to use, comma-separated (default all)")
     dia.add_argument(
         "--threshold",

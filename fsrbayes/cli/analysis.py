@@ -7,6 +7,7 @@ from pathlib import Path
 from ..data import csvio
 from ..physics.effects import EFFECTS
 from ..physics.models import parse_model
+from ..physics.rheology import CREEP_LAWS
 from ..utils import json_ready, write_json_atomic
 from .common import UsageError, writable
 
@@ -94,6 +95,15 @@ def cmd_diagnose(args):
             raise UsageError(
                 f"--effects: unknown effect(s) {unknown}; expected names from {sorted(EFFECTS)}"
             )
+    laws = None
+    if args.laws:
+        laws = [] if args.laws.strip() == "none" else [w.strip() for w in args.laws.split(",")]
+        unknown = [w for w in laws if w not in CREEP_LAWS]
+        if unknown:
+            raise UsageError(
+                f"--laws: unknown creep law(s) {unknown}; expected names from {list(CREEP_LAWS)} "
+                "or 'none'"
+            )
     specimens = [s.strip() for s in args.specimens.split(",")] if args.specimens else None
     missing = [s for s in specimens or () if s not in data.specimens]
     if missing:
@@ -112,6 +122,7 @@ def cmd_diagnose(args):
         data,
         args.base,
         effects=effects,
+        laws=laws,
         specimens=specimens,
         tunneling=args.tunneling,
         likelihood=args.likelihood,
@@ -124,13 +135,16 @@ def cmd_diagnose(args):
         print(f"noise model: {result.noise_model['likelihood']} — {result.noise_model['reason']}")
     print(f"gap before ({args.base}): {result.gap_before:.2f} (adequate below {result.band:.2f})")
     for c in result.candidates:
+        kind = {"readout": "   (readout)", "law": "   (creep law)"}.get(c["kind"], "")
         print(
             f"  step {c['step']}, {c['rank']}. {c['effect']:20s} ln B = {c['log_bf']:9.1f}   "
-            f"gap after = {c['gap_after']:.2f}{'   (readout)' if c['kind'] == 'readout' else ''}"
+            f"gap after = {c['gap_after']:.2f}{kind}"
         )
+    law = [f"creep law {result.law} in place of {args.base}"] if result.law else []
     named = (
-        f": {' + '.join(result.effects)} (gap {result.gap_before:.2f} -> {result.gap_after:.2f})"
-        if result.effects
+        f": {' + '.join(law + result.effects)} (gap {result.gap_before:.2f} -> "
+        f"{result.gap_after:.2f})"
+        if result.named
         else f" (gap {result.gap_before:.2f})"
     )
     print(f"verdict: {result.verdict}{named}")

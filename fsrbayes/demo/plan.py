@@ -50,6 +50,9 @@ class DemoPlan:
         Specimens per sensor in the ``diagnose`` run.
     diagnose_effects : tuple, optional
         Catalogue effects tried (default: every one).
+    diagnose_laws : tuple
+        Creep laws tried in place of Burgers (default none: the demo asks what the paper's model
+        misses among the paper's hypotheses; Zener against Burgers is its evidence comparison).
     crosscheck_sensor : str, optional
         The sensor whose first specimen's Laplace Bayes factor is checked against stepping-stone
         (and bridge sampling) from converged emcee fits of both models (None: no check).
@@ -74,6 +77,7 @@ class DemoPlan:
     n_per_hyper: int = 50
     diagnose_specimens: int = 1
     diagnose_effects: tuple = None
+    diagnose_laws: tuple = ()
     crosscheck_sensor: str = None
     crosscheck_ladder: LadderSettings = field(
         default_factory=lambda: LadderSettings(

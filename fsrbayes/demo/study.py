@@ -94,6 +94,7 @@ def diagnose_sensor(job):
         diagnosis = diagnose(
             data.select(sensor=sensor),
             effects=plan.diagnose_effects,
+            laws=plan.diagnose_laws,
             specimens=chosen,
             n_draws=plan.n_draws,
             n_starts=plan.n_starts,

@@ -1,16 +1,60 @@
 """The candidates of a greedy step of :func:`~.diagnose.diagnose`: ranked, summarised, weighed.
 
-Each candidate effect, refitted on every specimen, is entered with its ln B over the model of
-the step before (Laplace evidences summed over specimens), the gap it leaves, whether its checks
-fail and the posterior of its parameters; :func:`rank_candidates` orders them by ln B.
+A candidate is a catalogue effect added to the model of the step before (nested: the effect is
+off at its null values), or another creep law swapped in for the model's (``law:<name>``, the
+model's effects kept: not nested, so its ln B is a difference of two evidences found apart).
+Each, refitted on every specimen, is entered with its ln B over the model of the step before
+(Laplace evidences summed over specimens), the gap it leaves, whether its checks fail and the
+posterior of its effect parameters; :func:`rank_candidates` orders them by ln B.
 """
+
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..data.sensors import load_sensor
+from ..inference.evidence.laplace import laplace_fit
+from ..inference.likelihood import SpecimenData
+from ..inference.parallel import single_threaded_blas
+from ..inference.posterior import LogPosterior
 from ..physics.effects import EFFECTS
+from ..physics.models import parse_model, register_components
+from ..physics.rheology import CREEP_LAWS
+from .checks import predictive_checks
 from .gaps import drift_gap, failed_checks, gap
+from .nullband import null_quarter_distances
 
-__all__ = ["effect_parameters", "rank_candidates", "step_of"]
+__all__ = [
+    "LAW_PREFIX",
+    "SpecimenDiagnosis",
+    "candidate_model",
+    "effect_parameters",
+    "fit_candidates",
+    "law_candidate",
+    "law_of",
+    "rank_candidates",
+    "step_of",
+    "swapped",
+]
+
+LAW_PREFIX = "law:"
+"""A candidate that swaps the creep law is named ``law:<law>``."""
+
+
+def law_candidate(law):
+    """Return the candidate name of swapping in creep law ``law``."""
+    return f"{LAW_PREFIX}{law}"
+
+
+def law_of(candidate):
+    """Return the creep law a candidate swaps in, or None for a catalogue effect."""
+    return candidate[len(LAW_PREFIX) :] if candidate.startswith(LAW_PREFIX) else None
+
+
+def swapped(model, law):
+    """Return ``model`` with its creep law replaced by ``law``, its effects kept."""
+    _, effects = parse_model(model)
+    return "+".join([law, *effects])
 
 
 def effect_parameters(per_specimen, effect):
@@ -21,6 +65,8 @@ def effect_parameters(per_specimen, effect):
     """
     out = {}
     draws = {}
+    if law_of(effect):
+        return out
     for diag in per_specimen:
         checks = diag.candidates[effect][1]
         for name in EFFECTS[effect].parameters:
@@ -45,13 +91,15 @@ def rank_candidates(step, model, effects, per_specimen, gap_ref):
         per = {d.specimen: float(d.log_bf(effect)) for d in per_specimen}
         after = [d.candidates[effect][1] for d in per_specimen]
         gap_effect = gap(after)
+        law = law_of(effect)
         out.append(
             {
                 "step": step,
                 "effect": effect,
-                "model": f"{model}+{effect}",
-                "summary": EFFECTS[effect].summary,
-                "kind": EFFECTS[effect].kind,
+                "law": law,
+                "model": swapped(model, law) if law else f"{model}+{effect}",
+                "summary": CREEP_LAWS[law].summary if law else EFFECTS[effect].summary,
+                "kind": "law" if law else EFFECTS[effect].kind,
                 "log_bf": float(sum(per.values())),
                 "evidence_method": "laplace",
                 "log_bf_per_specimen": per,
@@ -74,3 +122,84 @@ def rank_candidates(step, model, effects, per_specimen, gap_ref):
 def step_of(candidate):
     """Return what :func:`~.verdict.verdict_of` reads of a greedy step's best candidate."""
     return {k: candidate[k] for k in ("effect", "log_bf", "gap_after", "checks_fail")}
+
+
+@dataclass
+class SpecimenDiagnosis:
+    """One specimen's base fit, checks and candidate refits (what a worker returns)."""
+
+    specimen: str
+    base: object
+    base_checks: object
+    candidates: dict = field(default_factory=dict)
+    """effect → (LaplaceFit, SpecimenChecks)."""
+    null_distances: np.ndarray = None
+    """Quarter distances of null data sets simulated from the base fit, (n_sets, C), when the
+    band is found by simulation (:mod:`.nullband`); None otherwise."""
+
+    def evidence(self, effect=None):
+        """Return the evidence estimate of the base model (``effect=None``) or base + effect."""
+        fitted = self.base if effect is None else self.candidates[effect][0]
+        return fitted.estimate()
+
+    def log_bf(self, effect):
+        """Return ln B of base + effect over the base model (from :meth:`evidence`)."""
+        return self.evidence(effect).log_z - self.evidence().log_z
+
+
+def candidate_model(model, candidate):
+    """Return the model of a candidate: ``model`` itself, plus an effect, or its law swapped."""
+    if candidate == model:
+        return model
+    law = law_of(candidate)
+    return swapped(model, law) if law else f"{model}+{candidate}"
+
+
+def fit_candidates(job):
+    """Fit one specimen's base model (or take the fit given) and every candidate extension."""
+    data, specimen, options = job
+    for components in options["components"].values():  # a user's own laws or effects
+        register_components(components)
+    rng = np.random.default_rng(options["seed"])
+    packed = SpecimenData.select(data, specimen)
+    sensor = load_sensor(options["sensor"] or packed.sensor)
+    kwargs = {"tunneling": options["tunneling"], "likelihood": options["likelihood"]}
+    with single_threaded_blas():
+        start = options.get("start", {}).get(specimen)
+        if start is None:
+            base_post = LogPosterior.for_sensor(packed, sensor, model=options["base"], **kwargs)
+            base = laplace_fit(base_post, rng, n_starts=options["n_starts"])
+            start = (
+                base,
+                predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
+            )
+        out = SpecimenDiagnosis(specimen, *start)
+        if options.get("null_sets"):
+            out.null_distances = null_quarter_distances(
+                data.select(specimen=specimen).tests,
+                out.base,
+                lambda packed_null: LogPosterior.for_sensor(
+                    packed_null, sensor, model=options["base"], **kwargs
+                ),
+                rng,
+                n_sets=options["null_sets"],
+                n_draws=options["n_draws"],
+            )
+        for effect in options["effects"]:
+            model = candidate_model(options["base"], effect)
+            post = LogPosterior.for_sensor(packed, sensor, model=model, **kwargs)
+            if law_of(effect):  # another law: not nested, searched from its own prior
+                fitted = laplace_fit(post, rng, n_starts=options["n_starts"])
+            else:
+                fitted = laplace_fit(
+                    post,
+                    rng,
+                    n_starts=options["n_starts"],
+                    base=out.base,
+                    null=EFFECTS[effect].null,
+                )
+            out.candidates[effect] = (
+                fitted,
+                predictive_checks(post, fitted.local_draws(rng, options["n_draws"]), rng),
+            )
+    return out

@@ -13,7 +13,8 @@
    four quarters of every test against the posterior predictive (level, shape and drift of the
    creep curves; the drift(3600 s) misfit alone is reported as ``drift_gap_before``/``after``);
 4. every effect of the catalogue (:mod:`fsrbayes.physics.effects`, docs/physics.md) is added to
-   the model in turn and refitted on every specimen (each specimen its own effect parameters);
+   the model in turn, and every other creep law put in place of its law, each refitted on every
+   specimen (each specimen its own parameters);
    candidates are ranked by the log Bayes factor over the base model, summed over specimens
    (Laplace evidences), and by how much of the gap they close;
 5. the verdict (:mod:`fsrbayes.discrepancy.verdict`): the base model is ``adequate`` when its
@@ -23,41 +24,55 @@
    and pass their checks, else the diagnosis refuses (``partially-explained``, ``unexplained``);
 6. ``gap_after`` is the gap of the base model plus the named effects;
 7. **noise before physics**: where the standardised residuals of that final model are still
-   correlated in time (lag-1 autocorrelation above :data:`~.fitcheck.AUTOCORRELATION_LIMIT` in
-   a specimen) under white noise, no effect explained the correlation, and steps 1–6 are run
-   again with the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); ``noise_model`` says which
+   correlated in time (lag-1 autocorrelation above :data:`NOISE_LAG1_LIMIT` in a specimen)
+   under white noise, no effect explained the correlation, and steps 1–6 are run again with
+   the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); ``noise_model`` says which
    noise model the result is under, and why. Correlated measurement noise read with a
    white-noise likelihood passes for a mechanism (an effect that follows part of it gains
    evidence); a missing mechanism, once named, leaves white residuals, so a hidden effect
    under white noise keeps its diagnosis — which is why the residuals are read after the
    effects, not before them.
 
-Every extension nests the base model (the effect is off at its null value), so a ln B well
-below zero is the Occam penalty of parameters the data do not need.
+Every effect nests the base model (the effect is off at its null value), so a ln B well below
+zero is the Occam penalty of parameters the data do not need. The other registered creep laws
+are candidates too (``laws``): each is fitted in place of the base model's law, its effects
+kept, and weighed by the same Laplace evidences — not nested, so its ln B is the difference of
+two evidences found apart, without a Monte-Carlo error (the threshold of 10 nats covers the
+Laplace approximation's few). A law is named (``law``) by the same rule as an effect, at most
+one law per diagnosis, and effects may be added to it in the next step.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-import numpy as np
-
-from ..data.sensors import load_sensor
-from ..inference.evidence.laplace import laplace_fit
-from ..inference.likelihood import SpecimenData
-from ..inference.parallel import map_jobs, single_threaded_blas
-from ..inference.posterior import LogPosterior
+from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects
-from ..physics.models import PEER_MODELS, model_components, parse_model, register_components
+from ..physics.models import PEER_MODELS, model_components, parse_model
+from ..physics.rheology import CREEP_LAWS
 from ..utils import json_ready
-from .candidates import rank_candidates, step_of
-from .checks import predictive_checks
-from .fitcheck import AUTOCORRELATION_LIMIT, residual_statistics
+from .candidates import (
+    candidate_model,
+    fit_candidates,
+    law_candidate,
+    law_of,
+    rank_candidates,
+    step_of,
+    swapped,
+)
+from .fitcheck import residual_statistics
 from .gaps import drift_gap, failed_checks, gap, gap_band
 from .locate import locate, misfit_by
-from .nullband import NULL_SETS, formula_band_applies, null_quarter_distances, simulated_band
+from .nullband import NULL_SETS, formula_band_applies, simulated_band
 from .verdict import MAX_EFFECTS, verdict_of
 
-__all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
+__all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "NOISE_LAG1_LIMIT", "Diagnosis", "diagnose"]
+
+NOISE_LAG1_LIMIT = 0.25
+"""Lag-1 autocorrelation of the final model's standardised residuals above which diagnose is made
+again under AR(1) noise. Fits of the model's own physics under white noise gave −0.20…0.05 (six
+one-specimen A201 sets, 279 residuals each: a standard error ~0.06), models naming a hidden
+mechanism −0.09 and 0.15, Ornstein–Uhlenbeck noise with τ 30–300 s on a log-spaced grid
+0.33–0.51 (validation/noise_first.py)."""
 
 DEFAULT_THRESHOLD = 10.0
 """ln B of an effect over the base model (summed over specimens) needed to name it."""
@@ -70,82 +85,16 @@ GAP_METRIC = (
 
 
 @dataclass
-class SpecimenDiagnosis:
-    """One specimen's base fit, checks and candidate refits (what a worker returns)."""
-
-    specimen: str
-    base: object
-    base_checks: object
-    candidates: dict = field(default_factory=dict)
-    """effect → (LaplaceFit, SpecimenChecks)."""
-    null_distances: np.ndarray = None
-    """Quarter distances of null data sets simulated from the base fit, (n_sets, C), when the
-    band is found by simulation (:mod:`.nullband`); None otherwise."""
-
-    def evidence(self, effect=None):
-        """Return the evidence estimate of the base model (``effect=None``) or base + effect."""
-        fitted = self.base if effect is None else self.candidates[effect][0]
-        return fitted.estimate()
-
-    def log_bf(self, effect):
-        """Return ln B of base + effect over the base model (from :meth:`evidence`)."""
-        return self.evidence(effect).log_z - self.evidence().log_z
-
-
-def _diagnose_one(job):
-    """Fit one specimen's base model (or take the fit given) and every candidate extension."""
-    data, specimen, options = job
-    for components in options["components"].values():  # a user's own laws or effects
-        register_components(components)
-    rng = np.random.default_rng(options["seed"])
-    packed = SpecimenData.select(data, specimen)
-    sensor = load_sensor(options["sensor"] or packed.sensor)
-    kwargs = {"tunneling": options["tunneling"], "likelihood": options["likelihood"]}
-    with single_threaded_blas():
-        start = options.get("start", {}).get(specimen)
-        if start is None:
-            base_post = LogPosterior.for_sensor(packed, sensor, model=options["base"], **kwargs)
-            base = laplace_fit(base_post, rng, n_starts=options["n_starts"])
-            start = (
-                base,
-                predictive_checks(base_post, base.local_draws(rng, options["n_draws"]), rng),
-            )
-        out = SpecimenDiagnosis(specimen, *start)
-        if options.get("null_sets"):
-            out.null_distances = null_quarter_distances(
-                data.select(specimen=specimen).tests,
-                out.base,
-                lambda packed_null: LogPosterior.for_sensor(
-                    packed_null, sensor, model=options["base"], **kwargs
-                ),
-                rng,
-                n_sets=options["null_sets"],
-                n_draws=options["n_draws"],
-            )
-        for effect in options["effects"]:
-            post = LogPosterior.for_sensor(
-                packed, sensor, model=f"{options['base']}+{effect}", **kwargs
-            )
-            fitted = laplace_fit(
-                post, rng, n_starts=options["n_starts"], base=out.base, null=EFFECTS[effect].null
-            )
-            out.candidates[effect] = (
-                fitted,
-                predictive_checks(post, fitted.local_draws(rng, options["n_draws"]), rng),
-            )
-    return out
-
-
-@dataclass
 class Diagnosis:
     """The outcome of :func:`diagnose`.
 
     Attributes
     ----------
     verdict : {"adequate", "missing-effect", "partially-explained", "unexplained"}
-    effects : list of str
-        The effects added (greedily, at most :data:`MAX_EFFECTS`); empty for ``adequate`` and
-        ``unexplained``.
+    named : list of str
+        What was added, greedily and in order (at most :data:`MAX_EFFECTS`): catalogue effects,
+        and a creep law swapped in for the base's as ``law:<name>``; empty for ``adequate`` and
+        ``unexplained``. :attr:`effects` and :attr:`law` split it.
     gap_before, gap_after : float
         The headline gap of the base model and of the model with ``effects``.
     band : float
@@ -165,7 +114,7 @@ class Diagnosis:
     """
 
     verdict: str
-    effects: list
+    named: list
     gap_before: float
     gap_after: float
     band: float
@@ -186,9 +135,25 @@ class Diagnosis:
     ``reason`` (module docstring, step 7)."""
 
     @property
+    def effects(self):
+        """The catalogue effects added, in order."""
+        return [n for n in self.named if not law_of(n)]
+
+    @property
+    def law(self):
+        """The creep law swapped in for the base's (None when none is)."""
+        return next((law_of(n) for n in self.named if law_of(n)), None)
+
+    @property
     def effect(self):
         """The first effect added (None when none is)."""
         return self.effects[0] if self.effects else None
+
+    @property
+    def model_after(self):
+        """The model the diagnosis ends with: the base, its law swapped if named, and effects."""
+        model = swapped(self.base, self.law) if self.law else self.base
+        return "+".join([model, *self.effects])
 
     @property
     def specimens(self):
@@ -202,10 +167,10 @@ class Diagnosis:
         return [d.candidates[effect][1] for d in self.rounds[0]]
 
     def checks_after(self):
-        """Return the SpecimenChecks of the final model (base + :attr:`effects`)."""
-        if not self.effects:
+        """Return the SpecimenChecks of the final model (:attr:`model_after`)."""
+        if not self.named:
             return self.checks()
-        return [d.candidates[self.effects[-1]][1] for d in self.rounds[len(self.effects) - 1]]
+        return [d.candidates[self.named[-1]][1] for d in self.rounds[len(self.named) - 1]]
 
     @property
     def indistinguishable(self):
@@ -215,7 +180,7 @@ class Diagnosis:
         a stress-independent change of the sensor's area, on a rig with one supply voltage).
         """
         out = {}
-        for step, effect in enumerate(self.effects, start=1):
+        for step, effect in enumerate(self.named, start=1):
             same_step = [c for c in self.candidates if c["step"] == step]
             named = next(c for c in same_step if c["effect"] == effect)
             out[effect] = [
@@ -238,6 +203,7 @@ class Diagnosis:
                 "verdict": self.verdict,
                 "effect": self.effect,
                 "effects": list(self.effects),
+                "law": self.law,
                 "effect_kinds": [EFFECTS[e].kind for e in self.effects],
                 "artefacts": self.artefacts,
                 "indistinguishable": self.indistinguishable,
@@ -251,7 +217,7 @@ class Diagnosis:
                 "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
                 "base": self.base,
                 "noise_model": self.noise_model,
-                "model_after": "+".join([self.base, *self.effects]),
+                "model_after": self.model_after,
                 "threshold_log_bf": self.threshold,
                 "evidence_method": EVIDENCE_METHOD,
                 "drift_time_s": DRIFT_TIME_S,
@@ -290,6 +256,7 @@ def diagnose(
     base="burgers",
     *,
     effects=None,
+    laws=None,
     specimens=None,
     sensor=None,
     tunneling="smooth",
@@ -311,8 +278,11 @@ def diagnose(
     base : str
         The base model (``"burgers"``, ``"zener"``, ``"nutting"``, possibly with effects already).
     effects : sequence of str, optional
-        Candidate effects (default: every catalogue effect the base model does not have; an empty
-        sequence checks the base model only).
+        Candidate effects (default: every catalogue effect the base model does not have).
+    laws : sequence of str, optional
+        Creep laws tried in place of the base model's, its effects kept (default: every
+        registered creep law but the base's). With ``effects=()`` and ``laws=()`` only the base
+        model is checked.
     specimens : sequence of str, optional
         Default: all specimens.
     sensor : str or Sensor, optional
@@ -345,12 +315,17 @@ def diagnose(
     if family in PEER_MODELS:
         raise ValueError(
             f"diagnose extends the paper's model with catalogue effects; the peer model {family!r} "
-            "takes none: use burgers, zener or nutting"
+            f"takes none: use one of the creep laws {list(CREEP_LAWS)}"
         )
     effects = check_effects(
         effects if effects is not None else [e for e in EFFECTS if e not in had]
     )
     effects = tuple(e for e in effects if e not in had)
+    laws = tuple(laws) if laws is not None else tuple(law for law in CREEP_LAWS if law != family)
+    unknown = [law for law in laws if law not in CREEP_LAWS]
+    if unknown:
+        raise ValueError(f"unknown creep law(s) {unknown}; registered: {list(CREEP_LAWS)}")
+    effects += tuple(law_candidate(law) for law in laws if law != family)
     if threshold <= 0:
         raise ValueError(f"threshold must be > 0 (a ln Bayes factor), got {threshold}")
     if null_sets < 0 or null_sets == 1:
@@ -377,7 +352,7 @@ def diagnose(
                 start=start or {},
                 null_sets=int(null_sets) if simulate_band and step == 0 else 0,
                 components={
-                    name: model_components(name if name == model else f"{model}+{name}")
+                    name: model_components(candidate_model(model, name))
                     for name in (model, *candidates)
                 },
             )
@@ -386,7 +361,7 @@ def diagnose(
                 for k, s in enumerate(specimens)
             ]
             return map_jobs(
-                _diagnose_one, jobs, executor=executor, scheduler=scheduler, processes=processes
+                fit_candidates, jobs, executor=executor, scheduler=scheduler, processes=processes
             )
 
         rounds = [run_step(base, effects, 0)]
@@ -411,10 +386,12 @@ def diagnose(
             steps.append(step_of(best))
             verdict, _, _ = verdict_of(gap_before, True, band, steps, threshold)
             remaining.remove(best["effect"])
+            if best["law"]:  # one law swap at most
+                remaining = [e for e in remaining if not law_of(e)]
             if verdict != "partially-explained" or not remaining or len(steps) == MAX_EFFECTS:
                 break
-            # The best effect helps but does not close the gap: try a second one on top of it.
-            model = f"{model}+{best['effect']}"
+            # The best candidate helps but does not close the gap: try a second one on top of it.
+            model = candidate_model(model, best["effect"])
             start = {d.specimen: d.candidates[best["effect"]] for d in rounds[-1]}
             rounds.append(run_step(model, tuple(remaining), len(steps), start))
             step_candidates = rank_candidates(
@@ -454,10 +431,10 @@ def diagnose(
         "residual_lag1": lag1,
         "reason": "as asked",
     }
-    correlated = {s: v for s, v in lag1.items() if v > AUTOCORRELATION_LIMIT}
+    correlated = {s: v for s, v in lag1.items() if v > NOISE_LAG1_LIMIT}
     if likelihood != "ar1" and correlated:
         worst = max(correlated, key=correlated.get)
-        model_after = "+".join([base, *diagnosis.effects])
+        model_after = diagnosis.model_after
         diagnosis = search("ar1")
         diagnosis.noise_model = {
             "likelihood": "ar1",
@@ -465,7 +442,7 @@ def diagnose(
             "residual_lag1": lag1,
             "reason": f"under {likelihood} noise the residuals of {model_after} stay correlated "
             f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above "
-            f"{AUTOCORRELATION_LIMIT:g}): no effect explains them, so base model and "
+            f"{NOISE_LAG1_LIMIT:g}): no effect explains them, so base model and "
             "candidates were refitted with AR(1) measurement noise",
         }
     diagnosis.seconds = time.perf_counter() - started

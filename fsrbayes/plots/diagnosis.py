@@ -18,9 +18,8 @@ __all__ = [
 def _diagnosis_panels(diagnosis):
     """(title, checks) of the base model and, when effects were added, of the extended model."""
     panels = [(f"before: {diagnosis.base}", diagnosis.checks())]
-    if diagnosis.effects:
-        model = "+".join([diagnosis.base, *diagnosis.effects])
-        panels.append((f"after: {model}", diagnosis.checks_after()))
+    if diagnosis.named:
+        panels.append((f"after: {diagnosis.model_after}", diagnosis.checks_after()))
     return panels
 
 
