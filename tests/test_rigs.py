@@ -252,7 +252,9 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
         weights_g=(133.0, 255.0),
     )
     data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
-    result = diagnose(data, effects=("gain-drift", "area-growth"), null_sets=8, processes=1)
+    result = diagnose(
+        data, effects=("gain-drift", "area-growth"), laws=(), null_sets=8, processes=1
+    )
     assert result.verdict == "missing-effect" and len(result.effects) == 1
     (named,) = result.effects
     (other,) = {"gain-drift", "area-growth"} - {named}
@@ -265,6 +267,27 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     from fsrbayes.discrepancy import diagnose_schema
 
     jsonschema.validate(json.loads(json.dumps(payload)), diagnose_schema())
+
+
+def test_correlated_residuals_of_counts_stay_under_white_noise_and_say_why(tmp_path):
+    """ADC counts take no AR(1) likelihood: where a rig log's residuals run in long stretches
+    (a hidden gain drift, nothing offered to explain it), diagnose keeps white noise and says
+    that correlated noise may then be read as a mechanism."""
+    from fsrbayes.discrepancy import diagnose
+
+    text, truth = simulate_rig(
+        1,
+        seed=2,
+        effects=["gain-drift=gd_amp=-0.05,gd_tau=100"],
+        duration_s=120.0,
+        rate_hz=20.0,
+        weights_g=(133.0, 255.0),
+    )
+    data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
+    result = diagnose(data, effects=(), laws=(), null_sets=0, processes=1)
+    noise = result.noise_model
+    assert max(noise["residual_lag1"].values()) > 0.25, noise
+    assert noise["likelihood"] == "gaussian" and "not available" in noise["reason"], noise
 
 
 def test_the_hand_conversion_holds_each_test_at_its_first_v_fsr_where_the_sensor_creeps_more(

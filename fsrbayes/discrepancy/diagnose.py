@@ -44,6 +44,7 @@ one law per diagnosis, and effects may be added to it in the next step.
 
 from dataclasses import dataclass
 
+from ..inference.likelihood import SpecimenData
 from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects
@@ -251,6 +252,15 @@ BAND_SIMULATED = (
 )
 
 
+def _ar1_available(data, specimens):
+    """Whether every specimen's readings take the AR(1) likelihood (not binned, not quantised)."""
+    for specimen in specimens:
+        packed = SpecimenData.select(data, specimen)
+        if packed.weight is not None or packed.quant_var is not None:
+            return False
+    return True
+
+
 def diagnose(
     data,
     base="burgers",
@@ -434,16 +444,24 @@ def diagnose(
     correlated = {s: v for s, v in lag1.items() if v > NOISE_LAG1_LIMIT}
     if likelihood != "ar1" and correlated:
         worst = max(correlated, key=correlated.get)
-        model_after = diagnosis.model_after
-        diagnosis = search("ar1")
-        diagnosis.noise_model = {
-            "likelihood": "ar1",
-            "asked": likelihood,
-            "residual_lag1": lag1,
-            "reason": f"under {likelihood} noise the residuals of {model_after} stay correlated "
-            f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above "
-            f"{NOISE_LAG1_LIMIT:g}): no effect explains them, so base model and "
-            "candidates were refitted with AR(1) measurement noise",
-        }
+        why = (
+            f"under {likelihood} noise the residuals of {diagnosis.model_after} stay correlated "
+            f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above {NOISE_LAG1_LIMIT:g})"
+        )
+        if _ar1_available(data, specimens):
+            diagnosis = search("ar1")
+            diagnosis.noise_model = {
+                "likelihood": "ar1",
+                "asked": likelihood,
+                "residual_lag1": lag1,
+                "reason": f"{why}: no effect explains them, so base model and candidates were "
+                "refitted with AR(1) measurement noise",
+            }
+        else:
+            diagnosis.noise_model["reason"] = (
+                f"{why}, but AR(1) noise is not available for binned or quantised readings (a "
+                "high-rate log, ADC counts): the result is under white noise, and correlated "
+                "measurement noise may be read as a mechanism"
+            )
     diagnosis.seconds = time.perf_counter() - started
     return diagnosis

@@ -124,7 +124,8 @@ def _red_blue(move, target, walkers, random):
         proposed, factors = propose(move, walkers.coords[chosen], walkers.coords[~chosen], random)
         log_prob, blobs = _log_prob(target, proposed)
         uniforms = random.rand(int(chosen.sum()))
-        accepted[chosen] = factors + log_prob - walkers.log_prob[chosen] > np.log(uniforms)
+        with np.errstate(invalid="ignore"):  # -inf against a walker at -inf: nan, rejected
+            accepted[chosen] = factors + log_prob - walkers.log_prob[chosen] > np.log(uniforms)
         walkers.take(chosen, proposed, log_prob, blobs, accepted)
     return accepted
 
