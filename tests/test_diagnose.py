@@ -76,7 +76,11 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
         seed=3,
     )
     result = diagnose(
-        sim.data, effects=("offset-stress", "area-creep", "contact-creep"), n_draws=200, processes=2
+        sim.data,
+        effects=("offset-stress", "area-creep", "contact-creep"),
+        laws=(),  # the catalogue's effects alone (laws: the test further down)
+        n_draws=200,
+        processes=2,
     )
     assert result.verdict == "missing-effect" and result.effect == "area-creep"
     assert result.gap_after <= 0.5 * result.gap_before
@@ -96,7 +100,9 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
 
 def test_diagnose_calls_burgers_data_adequate():
     sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, seed=4)
-    result = diagnose(sim.data, effects=("area-creep", "power-law-creep"), n_draws=200, processes=2)
+    result = diagnose(
+        sim.data, effects=("area-creep", "power-law-creep"), laws=(), n_draws=200, processes=2
+    )
     assert result.verdict == "adequate" and result.effect is None and result.effects == []
     # adequate means: no check fails, and the gap lies inside the band (not set equal by fiat)
     assert not result.findings["failed"] and result.gap_before <= result.band
@@ -117,6 +123,8 @@ def test_diagnose_rejects_bad_arguments():
         diagnose(sim.data, base="kalantari")
     with pytest.raises(ValueError, match="null_sets must be 0 or >= 2"):
         diagnose(sim.data, null_sets=1)
+    with pytest.raises(ValueError, match=r"unknown creep law\(s\) \['maxwell'\]"):
+        diagnose(sim.data, laws=("maxwell",))
 
 
 # The verdict logic itself, on made-up numbers: each verdict and each way to lose it.
@@ -227,7 +235,11 @@ def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path
         seed=3,
     )
     result = diagnose(
-        sim.data, effects=("area-creep", "gain-drift", "area-growth"), n_draws=200, processes=2
+        sim.data,
+        effects=("area-creep", "gain-drift", "area-growth"),
+        laws=(),
+        n_draws=200,
+        processes=2,
     )
     assert result.verdict == "missing-effect", result.candidates
     assert sorted(result.effects) == ["area-creep", "gain-drift"]
@@ -249,19 +261,19 @@ def test_a_readout_artefact_with_a_physical_effect_is_named_as_the_rigs(tmp_path
 
 
 def test_correlated_noise_is_diagnosed_under_ar1_noise_and_named_as_nothing():
-    # Burgers physics under AR(1) noise (rho 0.9 from sample to sample, sd 1 %), written outside
-    # the package: with white noise, effects that follow part of it gain evidence; the residuals
-    # stay correlated whatever is named, so the diagnosis is made again under AR(1) noise
-    from validation.outside_menu import data_set
+    # Burgers physics under Ornstein-Uhlenbeck noise (tau 91 s, sd 1.4 %), written outside the
+    # package: the white-noise fit's residuals run in long stretches whatever is offered, and
+    # under AR(1) noise the base model is adequate — the noise is the diagnosis
+    from validation.noise_first import data_set
 
+    data, _ = data_set(8100)
     result = diagnose(
-        data_set("ar1-noise", seed=7040), effects=("area-growth", "voltage-degradation"),
-        n_draws=200, processes=2,
-    )  # fmt: skip
+        data, effects=("area-growth", "voltage-degradation"), laws=(), n_draws=200, processes=2
+    )
     noise = result.noise_model
     assert noise["likelihood"] == "ar1" and noise["asked"] == "gaussian", noise
-    assert noise["residual_lag1"]["a201-01"] > 0.5 and "AR(1)" in noise["reason"]
-    assert not result.effects, (result.verdict, result.effects)
+    assert noise["residual_lag1"]["a201-01"] > 0.25 and "AR(1)" in noise["reason"]
+    assert result.verdict == "adequate" and not result.effects, (result.verdict, result.effects)
     _validate(result.as_dict())
 
 

@@ -23,15 +23,18 @@
    otherwise effects are added greedily (at most two) and named only when they close the gap
    and pass their checks, else the diagnosis refuses (``partially-explained``, ``unexplained``);
 6. ``gap_after`` is the gap of the base model plus the named effects;
-7. **noise before physics**: where the standardised residuals of that final model are still
-   correlated in time (lag-1 autocorrelation above :data:`NOISE_LAG1_LIMIT` in a specimen)
-   under white noise, no effect explained the correlation, and steps 1–6 are run again with
-   the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); ``noise_model`` says which
-   noise model the result is under, and why. Correlated measurement noise read with a
-   white-noise likelihood passes for a mechanism (an effect that follows part of it gains
-   evidence); a missing mechanism, once named, leaves white residuals, so a hidden effect
-   under white noise keeps its diagnosis — which is why the residuals are read after the
-   effects, not before them.
+7. **noise before physics**: where no effect was named that closes the gap with its checks
+   passing, and the standardised residuals of the final model are still correlated in time
+   (lag-1 autocorrelation above :data:`NOISE_LAG1_LIMIT` in a specimen) under white noise,
+   steps 1–6 are run again with the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); where
+   the base model is adequate under that noise, correlated measurement noise is the
+   diagnosis, and nothing is named. Otherwise the white-noise result stands. ``noise_model``
+   says which noise model the result is under, and why. Correlated measurement noise read with
+   a white-noise likelihood passes for a mechanism (an effect that follows part of it gains
+   evidence); a missing mechanism whose catalogue form is close but not exact also leaves
+   residuals that run, and its diagnosis must not be lost to the noise model — hence the
+   residuals are read after the effects, and the noise is named only where it explains the
+   data alone.
 
 Every effect nests the base model (the effect is off at its null value), so a ln B well below
 zero is the Occam penalty of parameters the data do not need. The other registered creep laws
@@ -448,15 +451,28 @@ def diagnose(
             f"under {likelihood} noise the residuals of {diagnosis.model_after} stay correlated "
             f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above {NOISE_LAG1_LIMIT:g})"
         )
-        if _ar1_available(data, specimens):
-            diagnosis = search("ar1")
-            diagnosis.noise_model = {
-                "likelihood": "ar1",
-                "asked": likelihood,
-                "residual_lag1": lag1,
-                "reason": f"{why}: no effect explains them, so base model and candidates were "
-                "refitted with AR(1) measurement noise",
-            }
+        if diagnosis.verdict == "missing-effect":  # the gap closed and the checks pass
+            diagnosis.noise_model["reason"] = (
+                f"{why}, but the effects named close the gap and pass the checks: the result "
+                "stays under white noise"
+            )
+        elif _ar1_available(data, specimens):
+            under_ar1 = search("ar1")
+            if under_ar1.verdict == "adequate":  # correlated noise explains the data
+                diagnosis = under_ar1
+                diagnosis.noise_model = {
+                    "likelihood": "ar1",
+                    "asked": likelihood,
+                    "residual_lag1": lag1,
+                    "reason": f"{why}: no effect explains them, and under AR(1) measurement "
+                    "noise the base model is adequate",
+                }
+            else:
+                diagnosis.noise_model["reason"] = (
+                    f"{why}; under AR(1) measurement noise the diagnosis is "
+                    f"{under_ar1.verdict}, not adequate: correlated noise does not explain the "
+                    "data alone, and the result stays under white noise"
+                )
         else:
             diagnosis.noise_model["reason"] = (
                 f"{why}, but AR(1) noise is not available for binned or quantised readings (a "

@@ -11,12 +11,12 @@ effect as a candidate:
 - the model's own physics with white noise: ``adequate``, nothing named, no candidate near the
   evidence threshold;
 - the same physics under correlated (AR(1), ρ = 0.9 from sample to sample) measurement noise:
-  read as noise, not as a mechanism — the residuals stay correlated whatever effect is tried,
-  so the diagnosis is made again under the AR(1) likelihood, and nothing is named. (Under
-  white noise alone this seed gave ``partially-explained``, ``voltage-degradation``, gap 2.13
-  → 1.8 against a band of 1.0. The AR(1) likelihood's noise is correlated in time, the data's
-  from sample to sample on a log-spaced grid, so on this seed the gap stays out of the band,
-  1.51, and the verdict is ``unexplained``; ``adequate`` under AR(1) noise would be right too.)
+  never ``adequate`` and never ``missing-effect`` — no mechanism is said to explain it. Its
+  residuals run (lag-1 0.73), so the diagnosis is made again under AR(1) noise, but that
+  noise, correlated in time, is not the data's (correlated from sample to sample on a
+  log-spaced grid): not adequate under it either, so the white-noise result stands and says so
+  (an effect that takes part of the misfit may be listed under ``partially-explained``:
+  ``voltage-degradation``, gap 2.13 → 1.8 against a band of 1.0).
 
 The seeds are not those of the slow studies (VALIDATION.md §6).
 """
@@ -54,10 +54,11 @@ def test_the_models_own_physics_is_adequate_and_nothing_is_named():
     assert max(c["log_bf"] for c in result.candidates) < 10
 
 
-def test_correlated_noise_is_read_as_noise_not_a_mechanism():
+def test_correlated_noise_is_neither_adequate_nor_a_mechanism():
     data = outside_menu.data_set("ar1-noise", seed=7033)
     result = diagnose(data, seed=3, processes=1)
     print(result.verdict, result.effects, result.gap_before, result.band, result.noise_model)
-    assert result.noise_model["likelihood"] == "ar1" and result.noise_model["asked"] == "gaussian"
-    assert max(result.noise_model["residual_lag1"].values()) > 0.5
-    assert not result.effects and result.verdict in ("adequate", "unexplained"), result.verdict
+    assert result.verdict in ("partially-explained", "unexplained"), result.verdict
+    assert result.gap_after > result.band  # whatever is listed does not close the gap
+    noise = result.noise_model
+    assert noise["likelihood"] == "gaussian" and "under AR(1) measurement noise" in noise["reason"]
