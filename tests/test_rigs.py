@@ -234,6 +234,19 @@ def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
     assert not (tmp_path / "x.csv").exists()
 
 
+def _gain_drift_rig(tmp_path):
+    """A one-supply divider log with a hidden gain drift (−5 %, τ 100 s): two weights × 2 min."""
+    text, truth = simulate_rig(
+        1,
+        seed=2,
+        effects=["gain-drift=gd_amp=-0.05,gd_tau=100"],
+        duration_s=120.0,
+        rate_hz=20.0,
+        weights_g=(133.0, 255.0),
+    )
+    return read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
+
+
 @pytest.mark.validation  # diagnose on a rig: the tier's (~20 s)
 def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_path):
     """A gain drift hidden in a one-supply divider log: the diagnosis names it or a
@@ -243,15 +256,7 @@ def test_diagnose_reads_a_rig_and_says_when_it_cannot_tell_rig_from_sensor(tmp_p
     the gain drift is the rig's. The band is the rig's own, from 8 null sets (20 by default)."""
     from fsrbayes.discrepancy import diagnose
 
-    text, truth = simulate_rig(
-        1,
-        seed=2,
-        effects=["gain-drift=gd_amp=-0.05,gd_tau=100"],
-        duration_s=120.0,
-        rate_hz=20.0,
-        weights_g=(133.0, 255.0),
-    )
-    data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
+    data = _gain_drift_rig(tmp_path)
     result = diagnose(
         data, effects=("gain-drift", "area-growth"), laws=(), null_sets=8, processes=1
     )
@@ -275,15 +280,7 @@ def test_correlated_residuals_of_counts_stay_under_white_noise_and_say_why(tmp_p
     that correlated noise may then be read as a mechanism."""
     from fsrbayes.discrepancy import diagnose
 
-    text, truth = simulate_rig(
-        1,
-        seed=2,
-        effects=["gain-drift=gd_amp=-0.05,gd_tau=100"],
-        duration_s=120.0,
-        rate_hz=20.0,
-        weights_g=(133.0, 255.0),
-    )
-    data = read_csv(write_rig(text, truth, tmp_path / "rig.csv")[0])
+    data = _gain_drift_rig(tmp_path)
     result = diagnose(data, effects=(), laws=(), null_sets=0, processes=1)
     noise = result.noise_model
     assert max(noise["residual_lag1"].values()) > 0.25, noise
