@@ -99,3 +99,38 @@ def test_cli_fit_says_when_it_treats_the_loads_as_hand_placed(staircase, tmp_pat
     )  # fmt: skip
     assert r.returncode == 0 and "put on by hand" not in r.stderr
     assert json.loads((tmp_path / "y" / "summary.json").read_text())["settle_s"] == 0.0
+
+
+def test_diagnose_treats_hand_placed_loads_as_fit_does(tmp_path):
+    from fsrbayes.discrepancy import diagnose
+    from fsrbayes.inference.nuisance import HAND_PLACED_SETTLE_S
+
+    text, truth = simulate_rig(1, weights_g=(100.0, 300.0), duration_s=5.0, rate_hz=10.0, seed=3)
+    path = write_rig(text, truth, tmp_path / "two.csv")[0]
+    data = read_csv(path)
+    (specimen,) = data.specimens
+    options = dict(base="zener", effects=(), laws=(), null_sets=0, n_draws=50, processes=1)
+    placed = diagnose(data, **options)
+    assert placed.loading == {
+        specimen: {"settle_s": HAND_PLACED_SETTLE_S, "placement": True}
+    }
+    names = placed.specimens[0].base.posterior.names
+    assert "placement[0]" in names and "placement[1]" in names
+    settled = SpecimenData.select(data, settle_s=HAND_PLACED_SETTLE_S)
+    assert placed.specimens[0].base.posterior.data.n_obs == settled.n_obs
+    pooled = diagnose(data, settle_s=0.0, placement=False, **options)
+    assert pooled.loading == {specimen: {"settle_s": 0.0, "placement": False}}
+    assert not any(n.startswith("placement") for n in pooled.specimens[0].base.posterior.names)
+    assert pooled.specimens[0].base.posterior.data.n_obs == SpecimenData.select(data).n_obs
+    # the CLI says so, records it, and refuses a settling that leaves nothing
+    out = tmp_path / "d.json"
+    r = fsrbayes_command(
+        "diagnose", str(path), "--base", "zener", "--effects", "area-growth", "--laws", "none",
+        "--null-sets", "0", "--processes", "1", "--json", str(out),
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "fsrbayes diagnose: note:" in r.stderr and "own level" in r.stderr
+    assert json.loads(out.read_text())["loading"][specimen]["placement"] is True
+    r = fsrbayes_command("diagnose", str(path), "--settle-s", "1e6", "--laws", "none")
+    assert r.returncode == 2 and "leaves no sample" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1

@@ -23,6 +23,32 @@ from .predicting import cmd_predict
 __all__ = ["main", "build_parser", "UsageError"]
 
 
+def add_loading_flags(parser):
+    """Add ``--settle-s`` and ``--placement``: how hand-placed loads are treated."""
+    parser.add_argument(
+        "--settle-s",
+        type=float,
+        default=None,
+        help=(
+            "leave each test's readings in the first SETTLE_S seconds after every load change out "
+            "of every fit: hand-placed weights settle, and presses before the weight, logged as no "
+            "load, leave creep that fades over seconds (default: 1 where the loads land while "
+            "the log records, as when put on by hand; else 0)"
+        ),
+    )
+    parser.add_argument(
+        "--placement",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help=(
+            "sample each test's own level (placement[k]) and creep factor (placement_creep[k]): "
+            "a dead weight put on again reads a few percent off and creeps by its own amount "
+            "(default: on where the loads land while the log records and a specimen has two "
+            "tests or more)"
+        ),
+    )
+
+
 def build_parser():
     """Return the ``fsrbayes`` argument parser with every subcommand."""
     parser = argparse.ArgumentParser(prog="fsrbayes", description=__doc__.splitlines()[0])
@@ -100,28 +126,7 @@ def build_parser():
             "hand-placed weights whose settling nobody measured)"
         ),
     )
-    fit_.add_argument(
-        "--settle-s",
-        type=float,
-        default=None,
-        help=(
-            "leave each test's readings in the first SETTLE_S seconds after every load change out "
-            "of the fit: hand-placed weights settle, and presses before the weight, logged as no "
-            "load, leave creep that fades over seconds (default: 1 where the loads land while "
-            "the log records, as when put on by hand; else 0)"
-        ),
-    )
-    fit_.add_argument(
-        "--placement",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help=(
-            "sample each test's own level (placement[k]) and creep factor (placement_creep[k]): "
-            "a dead weight put on again reads a few percent off and creeps by its own amount "
-            "(default: on where the loads land while the log records and a specimen has two "
-            "tests or more)"
-        ),
-    )
+    add_loading_flags(fit_)
     fit_.add_argument("--seed", type=int, default=0, help="random seed (same seed, same chains)")
     fit_.add_argument("--ensembles", type=int, default=2, help="independent ensembles (default 2)")
     fit_.add_argument("--walkers", type=int, help="walkers per ensemble (default max(32, 4·ndim))")
@@ -300,6 +305,7 @@ def build_parser():
         help="null data sets per specimen simulated for the band of a rig log (default "
         f"{NULL_SETS}; 0: the constant-voltage formula)",
     )
+    add_loading_flags(dia)
     dia.add_argument("--processes", type=int, help="specimens side by side (default: one per core)")
     dia.add_argument("--seed", type=int, default=0)
     dia.add_argument("--sep", default=",", help="CSV field separator")

@@ -1,6 +1,7 @@
 """Commands that compare models and diagnose what they miss: compare, diagnose."""
 
 import os
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -9,7 +10,7 @@ from ..physics.effects import EFFECTS
 from ..physics.models import parse_model
 from ..physics.rheology import CREEP_LAWS
 from ..utils import json_ready, write_json_atomic
-from .common import UsageError, writable
+from .common import UsageError, loading_notes, writable
 
 
 def cmd_compare(args):
@@ -118,6 +119,7 @@ def cmd_diagnose(args):
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     if args.null_sets < 0 or args.null_sets == 1:
         raise UsageError(f"--null-sets must be 0 or >= 2, got {args.null_sets}")
+    said = loading_notes(data, specimens or data.specimens, args.settle_s, args.placement)
     result = diagnose(
         data,
         args.base,
@@ -128,9 +130,13 @@ def cmd_diagnose(args):
         likelihood=args.likelihood,
         threshold=args.threshold,
         seed=args.seed,
+        settle_s=args.settle_s,
+        placement=args.placement,
         null_sets=args.null_sets,
         processes=args.processes,
     )
+    for note in said:  # said once the fits have run: errors come alone
+        print(f"fsrbayes diagnose: {note}", file=sys.stderr)
     if result.noise_model["likelihood"] != result.noise_model["asked"]:
         print(f"noise model: {result.noise_model['likelihood']} — {result.noise_model['reason']}")
     print(f"gap before ({args.base}): {result.gap_before:.2f} (adequate below {result.band:.2f})")

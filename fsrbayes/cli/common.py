@@ -135,6 +135,8 @@ def loading_notes(data, specimens, settle_s, placement):
     """
     from ..inference.nuisance import loading_treatment
 
+    if settle_s is not None and not settle_s >= 0:
+        raise UsageError(f"--settle-s must be a number of seconds >= 0, got {settle_s:g}")
     chosen = {}
     for specimen in specimens:
         settle, placed = loading_treatment(data, specimen, settle_s, placement)
@@ -152,7 +154,7 @@ def loading_notes(data, specimens, settle_s, placement):
         what.append("gives each test its own level and creep (two tests or more)")
     names = ", ".join(list(chosen)[:4]) + (" …" if len(chosen) > 4 else "")
     return [
-        f"note: the loads of {names} land while the log records (put on by hand): the fit "
+        f"note: the loads of {names} land while the log records (put on by hand): every fit "
         f"{' and '.join(what)}; --settle-s 0 and --no-placement keep and pool them"
     ]
 

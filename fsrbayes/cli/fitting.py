@@ -51,8 +51,6 @@ def cmd_fit(args):
         raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
     if args.check_every is not None and args.check_every < 1:
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
-    if args.settle_s is not None and not args.settle_s >= 0:
-        raise UsageError(f"--settle-s must be a number of seconds >= 0, got {args.settle_s:g}")
     specimens = [args.specimen] if args.specimen else data.specimens
     said = loading_notes(data, specimens, args.settle_s, args.placement)  # after a fit has run
     out = Path(args.out)

@@ -163,7 +163,11 @@ def fit_candidates(job):
     rng = np.random.default_rng(options["seed"])
     packed = SpecimenData.select(data, specimen)
     sensor = load_sensor(options["sensor"] or packed.sensor)
-    kwargs = {"tunneling": options["tunneling"], "likelihood": options["likelihood"]}
+    kwargs = {
+        "tunneling": options["tunneling"],
+        "likelihood": options["likelihood"],
+        "placement": options.get("placement", False),
+    }
     with single_threaded_blas():
         start = options.get("start", {}).get(specimen)
         if start is None:

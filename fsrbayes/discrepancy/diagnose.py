@@ -47,7 +47,9 @@ one law per diagnosis, and effects may be added to it in the next step.
 
 from dataclasses import dataclass
 
+from ..data.creep import CreepData
 from ..inference.likelihood import SpecimenData
+from ..inference.nuisance import loading_treatment
 from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects
@@ -137,6 +139,10 @@ class Diagnosis:
     """The likelihood of the result and why: ``likelihood``, ``asked`` (the caller's),
     ``residual_lag1`` (per specimen, of the final model under the asked likelihood) and
     ``reason`` (module docstring, step 7)."""
+    loading: dict = None
+    """Per specimen, how its loads were treated: ``settle_s`` (readings left out after each load
+    change) and ``placement`` (each test's own level and creep factor sampled), as in
+    :func:`fsrbayes.fit` (:func:`~fsrbayes.inference.nuisance.loading_treatment`)."""
 
     @property
     def effects(self):
@@ -221,6 +227,7 @@ class Diagnosis:
                 "drift_gap_metric": "rms standardised misfit of drift(3600 s) over all creep tests",
                 "base": self.base,
                 "noise_model": self.noise_model,
+                "loading": self.loading,
                 "model_after": self.model_after,
                 "threshold_log_bf": self.threshold,
                 "evidence_method": EVIDENCE_METHOD,
@@ -278,6 +285,8 @@ def diagnose(
     n_draws=400,
     n_starts=2,
     seed=0,
+    settle_s=None,
+    placement=None,
     null_sets=NULL_SETS,
     processes=None,
     executor=None,
@@ -310,6 +319,15 @@ def diagnose(
         MAP optimisations per round of each Laplace fit; rounds are added until two starts
         reach the same best optimum (:func:`~fsrbayes.inference.evidence.laplace.laplace_fit`).
     seed : int
+    settle_s : float, optional
+        Leave each test's readings in the first ``settle_s`` s after each load change out, in
+        every fit and check (the load history is kept).
+    placement : bool, optional
+        Sample each test's own level and creep factor in every model, as :func:`fsrbayes.fit`
+        does. ``settle_s`` and ``placement`` default, per specimen, to what its log says of its
+        loading (:func:`~fsrbayes.inference.nuisance.loading_treatment`): hand-placed weights are
+        fitted without their first second and with their placements' own levels and creeps, so
+        that a weight's settling and its placement's few percent are not read as a mechanism.
     null_sets : int
         Null data sets simulated per specimen for the band of data unlike the band formula's
         (a rig log: a divider or ADC readout, binned high-rate readings, load histories, ramps;
@@ -344,6 +362,11 @@ def diagnose(
     if null_sets < 0 or null_sets == 1:
         raise ValueError(f"null_sets must be 0 or >= 2 (a band needs a spread), got {null_sets}")
     specimens = list(specimens) if specimens is not None else list(data.specimens)
+    loading = {s: loading_treatment(data, s, settle_s, placement) for s in specimens}
+    data = CreepData(
+        tuple(t.settled(loading[t.specimen][0]) for t in data.tests if t.specimen in loading),
+        data.source,
+    )
     simulate_band = null_sets > 0 and not formula_band_applies(
         [t for t in data.tests if t.specimen in specimens]
     )
@@ -370,7 +393,11 @@ def diagnose(
                 },
             )
             jobs = [
-                (data.select(specimen=s), s, dict(step_options, seed=[seed, step, k]))
+                (
+                    data.select(specimen=s),
+                    s,
+                    dict(step_options, placement=loading[s][1], seed=[seed, step, k]),
+                )
                 for k, s in enumerate(specimens)
             ]
             return map_jobs(
@@ -479,5 +506,6 @@ def diagnose(
                 "high-rate log, ADC counts): the result is under white noise, and correlated "
                 "measurement noise may be read as a mechanism"
             )
+    diagnosis.loading = {s: {"settle_s": a, "placement": b} for s, (a, b) in loading.items()}
     diagnosis.seconds = time.perf_counter() - started
     return diagnosis
