@@ -11,7 +11,9 @@ and level: a thermal drift of the amplifier, a slow vibration of the weight). No
 catalogue is present, so what must hold: ``diagnose`` names no effect (and no law) on at least
 9 of 10 seeds, and says which noise model its verdict is under.
 
-Run ``python -m validation.noise_first [n_sets] [rows.json]``; VALIDATION.md records the table.
+Run ``python -m validation.noise_first [n_sets] [rows.json] [first_seed]`` (seeds from 8100 by
+default); VALIDATION.md records the table. ``effects`` in a row holds everything named, laws
+(``law:<name>``) included.
 """
 
 import json
@@ -75,7 +77,7 @@ def run(n_sets=10, first_seed=8100, processes=2):
                 "seed": seed,
                 **noise,
                 "verdict": result.verdict,
-                "effects": list(result.effects),
+                "effects": list(result.named),
                 "noise_model": result.noise_model["likelihood"],
                 "residual_lag1": max(result.noise_model["residual_lag1"].values()),
                 "gap_before": result.gap_before,
@@ -109,7 +111,10 @@ def format_rows(rows):
 
 
 if __name__ == "__main__":
-    rows = run(n_sets=int(sys.argv[1]) if len(sys.argv) > 1 else 10)
+    rows = run(
+        n_sets=int(sys.argv[1]) if len(sys.argv) > 1 else 10,
+        first_seed=int(sys.argv[3]) if len(sys.argv) > 3 else 8100,
+    )
     print(format_rows(rows))
     if len(sys.argv) > 2:
         with open(sys.argv[2], "w") as f:

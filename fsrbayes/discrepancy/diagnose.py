@@ -23,18 +23,10 @@
    otherwise effects are added greedily (at most two) and named only when they close the gap
    and pass their checks, else the diagnosis refuses (``partially-explained``, ``unexplained``);
 6. ``gap_after`` is the gap of the base model plus the named effects;
-7. **noise before physics**: where no effect was named that closes the gap with its checks
-   passing, and the standardised residuals of the final model are still correlated in time
-   (lag-1 autocorrelation above :data:`NOISE_LAG1_LIMIT` in a specimen) under white noise,
-   steps 1–6 are run again with the AR(1) likelihood (:mod:`fsrbayes.inference.ar1`); where
-   the base model is adequate under that noise, correlated measurement noise is the
-   diagnosis, and nothing is named. Otherwise the white-noise result stands. ``noise_model``
-   says which noise model the result is under, and why. Correlated measurement noise read with
-   a white-noise likelihood passes for a mechanism (an effect that follows part of it gains
-   evidence); a missing mechanism whose catalogue form is close but not exact also leaves
-   residuals that run, and its diagnosis must not be lost to the noise model — hence the
-   residuals are read after the effects, and the noise is named only where it explains the
-   data alone.
+7. **noise before physics** (:mod:`fsrbayes.discrepancy.noise`): where nothing named closes
+   the gap and the final model's residuals are still correlated in time under white noise,
+   steps 1–6 are run again under AR(1) noise; ``noise_model`` says which noise model the result
+   is under, and why.
 
 Every effect nests the base model (the effect is off at its null value), so a ln B well below
 zero is the Occam penalty of parameters the data do not need. The other registered creep laws
@@ -65,20 +57,13 @@ from .candidates import (
     step_of,
     swapped,
 )
-from .fitcheck import residual_statistics
 from .gaps import drift_gap, failed_checks, gap, gap_band
 from .locate import locate, misfit_by
+from .noise import noise_before_physics
 from .nullband import NULL_SETS, formula_band_applies, simulated_band
 from .verdict import MAX_EFFECTS, verdict_of
 
-__all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "NOISE_LAG1_LIMIT", "Diagnosis", "diagnose"]
-
-NOISE_LAG1_LIMIT = 0.25
-"""Lag-1 autocorrelation of the final model's standardised residuals above which diagnose is made
-again under AR(1) noise. Fits of the model's own physics under white noise gave −0.20…0.05 (six
-one-specimen A201 sets, 279 residuals each: a standard error ~0.06), models naming a hidden
-mechanism −0.09 and 0.15, Ornstein–Uhlenbeck noise with τ 30–300 s on a log-spaced grid
-0.33–0.51 (validation/noise_first.py)."""
+__all__ = ["DEFAULT_THRESHOLD", "GAP_METRIC", "Diagnosis", "diagnose"]
 
 DEFAULT_THRESHOLD = 10.0
 """ln B of an effect over the base model (summed over specimens) needed to name it."""
@@ -461,51 +446,9 @@ def diagnose(
         return diagnosis
 
     diagnosis = search(likelihood)
-    lag1 = {
-        d.specimen: residual_statistics(c.innovation_observed)[1]
-        for d, c in zip(diagnosis.specimens, diagnosis.checks_after(), strict=True)
-    }
-    diagnosis.noise_model = {
-        "likelihood": likelihood,
-        "asked": likelihood,
-        "residual_lag1": lag1,
-        "reason": "as asked",
-    }
-    correlated = {s: v for s, v in lag1.items() if v > NOISE_LAG1_LIMIT}
-    if likelihood != "ar1" and correlated:
-        worst = max(correlated, key=correlated.get)
-        why = (
-            f"under {likelihood} noise the residuals of {diagnosis.model_after} stay correlated "
-            f"in time (lag-1 {correlated[worst]:.2f} in {worst}, above {NOISE_LAG1_LIMIT:g})"
-        )
-        if diagnosis.verdict == "missing-effect":  # the gap closed and the checks pass
-            diagnosis.noise_model["reason"] = (
-                f"{why}, but the effects named close the gap and pass the checks: the result "
-                "stays under white noise"
-            )
-        elif _ar1_available(data, specimens):
-            under_ar1 = search("ar1")
-            if under_ar1.verdict == "adequate":  # correlated noise explains the data
-                diagnosis = under_ar1
-                diagnosis.noise_model = {
-                    "likelihood": "ar1",
-                    "asked": likelihood,
-                    "residual_lag1": lag1,
-                    "reason": f"{why}: no effect explains them, and under AR(1) measurement "
-                    "noise the base model is adequate",
-                }
-            else:
-                diagnosis.noise_model["reason"] = (
-                    f"{why}; under AR(1) measurement noise the diagnosis is "
-                    f"{under_ar1.verdict}, not adequate: correlated noise does not explain the "
-                    "data alone, and the result stays under white noise"
-                )
-        else:
-            diagnosis.noise_model["reason"] = (
-                f"{why}, but AR(1) noise is not available for binned or quantised readings (a "
-                "high-rate log, ADC counts): the result is under white noise, and correlated "
-                "measurement noise may be read as a mechanism"
-            )
+    diagnosis = noise_before_physics(
+        diagnosis, search, likelihood, ar1_available=_ar1_available(data, specimens)
+    )
     diagnosis.loading = {s: {"settle_s": a, "placement": b} for s, (a, b) in loading.items()}
     diagnosis.seconds = time.perf_counter() - started
     return diagnosis
