@@ -1,8 +1,8 @@
 """``fsrbayes.compare`` as a user runs it, on a bent-ridge specimen: the default (bridge) path
 against the referenced ladder.
 
-The specimen: one A201 made like ``fsrbayes simulate --sensor a201 --specimens 1 --voltages
-0.2,0.5,2 --stresses 42100,105400,210800 --samples 61`` (9 tests; its Burgers posterior bends).
+The specimen: one A201 made like ``fsrbayes simulate --sensor a201 --n-specimens 1 --voltages-v
+0.2,0.5,2 --stresses-pa 42100,105400,210800 --samples 61`` (9 tests; its Burgers posterior bends).
 ``compare(data, ["zener", "burgers"])`` with its defaults — a fit per model, bridge sampling
 from its draws, the ladder only as a fallback — runs for five seeds, fits included in the wall
 time; the referenced ladder (``path="reference"``, the former default) runs once beside it. Each

@@ -80,7 +80,7 @@ def test_diagnose_writes_json_and_report(area_creep_csv, tmp_path):
         (("--effects", "area-crepe"), "unknown effect(s) ['area-crepe']"),
         (("--laws", "maxwell"), "--laws: unknown creep law(s) ['maxwell']"),
         (("--base", "maxwell"), "the first term must be one of"),
-        (("--specimens", "x-99"), "--specimens ['x-99'] not in"),
+        (("--specimen", "x-99"), "--specimen 'x-99' is not in"),
         (("--processes", "0"), "--processes must be >= 1"),
     ],
 )

@@ -422,7 +422,7 @@ def test_the_settling_rows_of_a_hand_placed_weight_are_left_out(tmp_path):
 def test_the_cli_simulates_a_hidden_ramp_and_refuses_to_fit_a_given_one(tmp_path, capsys):
     from fsrbayes.cli import main
 
-    common = ["--ramp", "0.5", "--duration", "20", "--weights-g", "200", "--rate-hz", "20"]
+    common = ["--ramp-s", "0.5", "--duration-s", "20", "--weights-g", "200", "--rate-hz", "20"]
     hidden, given = tmp_path / "hidden.csv", tmp_path / "given.csv"
     assert main(["simulate-rig", "-o", str(hidden), "--hide-ramp", *common]) == 0
     assert main(["simulate-rig", "-o", str(given), *common]) == 0

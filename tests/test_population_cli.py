@@ -166,7 +166,7 @@ def test_drift_command_gives_groups_optimal_voltage_and_figure(hierarchical_fit,
     run = fsrbayes(
         "drift",
         str(out),
-        "--time",
+        "--time-s",
         "3600",
         "--json",
         str(tmp_path / "drift.json"),

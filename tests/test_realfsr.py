@@ -315,17 +315,17 @@ def test_command_line(tmp_path):
     without --preset the real-402 options are refused and the old bench is unchanged."""
     out = tmp_path / "b.csv"
     run = fsrbayes_command(
-        "simulate-rig", "--preset", "real-402", "--rig", "B", "--duration", "60", "-o", str(out)
+        "simulate-rig", "--preset", "real-402", "--rig", "B", "--duration-s", "60", "-o", str(out)
     )
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "b.truth.json").exists() and read_csv(out).tests
-    for bad in (["--preset", "real-402", "--duration", "-1"], ["--protocol", "cycles"],
+    for bad in (["--preset", "real-402", "--duration-s", "-1"], ["--protocol", "cycles"],
                 ["--preset", "real-402", "--protocol", "history", "--history", "x"],
                 ["--preset", "real-402", "--rm-ohm", "1000"]):  # fmt: skip
         run = fsrbayes_command("simulate-rig", *bad, "-o", str(out))
         assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
     run = fsrbayes_command(
-        "simulate-rig", "--duration", "5", "--rate-hz", "10", "-o", str(tmp_path / "m.csv")
+        "simulate-rig", "--duration-s", "5", "--rate-hz", "10", "-o", str(tmp_path / "m.csv")
     )
     assert run.returncode == 0, run.stderr
     assert "w4" in (tmp_path / "m.csv").read_text()

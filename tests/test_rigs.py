@@ -224,7 +224,7 @@ def test_the_truth_file_describes_the_rig(tmp_path):
 
 def test_simulate_rig_writes_a_log_that_check_reads(tmp_path):
     out = tmp_path / "rig.csv"
-    made = fsrbayes_command("simulate-rig", "-o", out, "--duration", "30", "--rate-hz", "10")
+    made = fsrbayes_command("simulate-rig", "-o", out, "--duration-s", "30", "--rate-hz", "10")
     assert made.returncode == 0, made.stderr
     checked = fsrbayes_command("check", out)
     assert checked.returncode == 0, checked.stderr

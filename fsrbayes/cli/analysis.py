@@ -10,7 +10,7 @@ from ..physics.effects import EFFECTS
 from ..physics.models import parse_model
 from ..physics.rheology import CREEP_LAWS
 from ..utils import json_ready, write_json_atomic
-from .common import UsageError, loading_notes, writable
+from .common import UsageError, chosen_specimens, loading_notes, writable
 
 
 def cmd_compare(args):
@@ -27,10 +27,7 @@ def cmd_compare(args):
         raise UsageError(f"--models needs at least two comma-separated models, got {args.models!r}")
     for model in models:
         parse_model(model)
-    if args.specimen is not None and args.specimen not in data.specimens:
-        raise UsageError(
-            f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
-        )
+    specimens = chosen_specimens(args, data)
     base = LadderSettings() if args.path == "prior" else REFERENCED_LADDER
     chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
     try:
@@ -55,7 +52,7 @@ def cmd_compare(args):
     result = compare(
         data,
         models,
-        [args.specimen] if args.specimen else None,
+        specimens,
         tunneling=args.tunneling,
         likelihood=args.likelihood,
         settings=settings,
@@ -105,10 +102,7 @@ def cmd_diagnose(args):
                 f"--laws: unknown creep law(s) {unknown}; expected names from {list(CREEP_LAWS)} "
                 "or 'none'"
             )
-    specimens = [s.strip() for s in args.specimens.split(",")] if args.specimens else None
-    missing = [s for s in specimens or () if s not in data.specimens]
-    if missing:
-        raise UsageError(f"--specimens {missing} not in {args.data}; it has {data.specimens[:8]}")
+    specimens = chosen_specimens(args, data)
     for path in (
         Path(args.json).parent if args.json else None,
         Path(args.report) if args.report else None,
@@ -202,8 +196,8 @@ def cmd_calibrate(args):
     design = SBCDesign(
         args.sensor,
         args.model,
-        tuple(floats(args.voltages, "voltages")),
-        tuple(floats(args.forces, "forces")),
+        tuple(floats(args.voltages_v, "voltages-v")),
+        tuple(floats(args.forces_n, "forces-n")),
         args.samples,
     )
     if tempered:

@@ -52,6 +52,21 @@ def floats(text, name):
     return np.array(values)
 
 
+def chosen_specimens(args, data):
+    """Return the specimens ``--specimen`` names (in the order given), or None for every one.
+
+    UsageError naming the first id that is not in the data.
+    """
+    if not args.specimen:
+        return None
+    for specimen in args.specimen:
+        if specimen not in data.specimens:
+            raise UsageError(
+                f"--specimen {specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
+            )
+    return list(dict.fromkeys(args.specimen))
+
+
 def writable(folder):
     """Create ``folder`` and check it takes a small file, before any long computation starts."""
     try:

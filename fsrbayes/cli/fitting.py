@@ -13,12 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from ..data import csvio
+from ..data.creep import CreepData
 from ..utils import write_json_atomic
 from .common import (
     FitFailed,
     UsageError,
     calibration_notes,
     checked_fit,
+    chosen_specimens,
     default_model,
     drift_lines,
     enough_space,
@@ -41,17 +43,13 @@ def cmd_fit(args):
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
-    if args.specimen is not None and args.specimen not in data.specimens:
-        raise UsageError(
-            f"--specimen {args.specimen!r} is not in {args.data}; it has {data.specimens[:8]}"
-        )
+    specimens = chosen_specimens(args, data) or data.specimens
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     if args.map_starts < 1:
         raise UsageError(f"--map-starts must be >= 1, got {args.map_starts}")
     if args.check_every is not None and args.check_every < 1:
         raise UsageError(f"--check-every must be >= 1, got {args.check_every}")
-    specimens = [args.specimen] if args.specimen else data.specimens
     said = loading_notes(data, specimens, args.settle_s, args.placement)  # after a fit has run
     out = Path(args.out)
     writable(out)
@@ -71,8 +69,9 @@ def cmd_fit(args):
         settings = _tempered_settings(args)
     _check_space(args, data, specimens, settings, out)
     notes = [f"warning: {n}" for n in calibration_notes(data, args.model)] + said
-    if args.hierarchical:
-        return _fit_hierarchical(args, data, settings, out, notes)
+    if args.hierarchical:  # the population of the specimens chosen
+        chosen = CreepData(tuple(t for t in data.tests if t.specimen in specimens), data.source)
+        return _fit_hierarchical(args, chosen, settings, out, notes)
     install_sigterm_handler()
     summaries = {}
     for specimen in specimens:
@@ -187,8 +186,6 @@ def _fit_hierarchical(args, data, settings, out, notes):
     from ..inference.population.predictive import ForwardTemplate
     from ..inference.population.routes import SpecimenFitWarning, fit_specimens, joint, two_stage
 
-    if args.specimen is not None:
-        raise UsageError("--hierarchical fits every specimen of the data; leave out --specimen")
     install_sigterm_handler()
     overall = {"converged": True, "sensors": {}}
     for sensor in data.sensors:
@@ -309,8 +306,8 @@ def cmd_drift(args):
         zero_drift_voltage,
     )
 
-    if args.time <= 0:
-        raise UsageError(f"--time must be > 0 s, got {args.time:g}")
+    if args.time_s <= 0:
+        raise UsageError(f"--time-s must be > 0, got {args.time_s:g}")
     v_range = floats(args.optimal_voltage, "optimal-voltage") if args.optimal_voltage else None
     if v_range is not None and (len(v_range) != 2 or not 0 < v_range[0] < v_range[1]):
         raise UsageError(
@@ -324,7 +321,7 @@ def cmd_drift(args):
     for path in (args.json, args.plot):
         if path:
             writable(Path(path).parent)
-    payload = {"time_s": args.time, "groups": [], "optimal_voltage": [], "zero_drift_voltage": []}
+    payload = {"time_s": args.time_s, "groups": [], "optimal_voltage": [], "zero_drift_voltage": []}
     figures = []
     for folder in population_folders(args.fit_dir):
         tree = open_fit_tree(folder / "population.nc")
@@ -346,22 +343,26 @@ def cmd_drift(args):
             for k in ("voltage_V", "stress_Pa", "observed_drift_3600")
         }
         volts = (
-            floats(args.voltages, "voltages") if args.voltages else np.unique(constant["voltage_V"])
+            floats(args.voltages_v, "voltages-v")
+            if args.voltages_v
+            else np.unique(constant["voltage_V"])
         )
         stresses = (
-            floats(args.stresses, "stresses") if args.stresses else np.unique(constant["stress_Pa"])
+            floats(args.stresses_pa, "stresses-pa")
+            if args.stresses_pa
+            else np.unique(constant["stress_Pa"])
         )
         specimens = new_specimens(
             population, hyper, template, n_hyper=args.hyper_draws, seed=args.seed
         )
         noise = float(attrs.get("measurement_noise", 0.0)) if args.as_measured else None
         groups = drift_groups(
-            specimens, volts, stresses, time_s=args.time, noise_rel=noise, seed=args.seed
+            specimens, volts, stresses, time_s=args.time_s, noise_rel=noise, seed=args.seed
         )
         payload["groups"] += groups
         if v_range is not None:
             for stress in stresses:
-                best = optimal_voltage(specimens, stress, v_range, time_s=args.time)
+                best = optimal_voltage(specimens, stress, v_range, time_s=args.time_s)
                 payload["optimal_voltage"].append({"sensor": sensor.name, **best})
                 print(
                     f"{sensor.name} at {stress / 1e3:.0f} kPa: optimal V_FSR {best['median']:.3g} "
@@ -370,7 +371,7 @@ def cmd_drift(args):
                 )
         if zero_range is not None:
             for stress in stresses:
-                root = zero_drift_voltage(specimens, stress, zero_range, time_s=args.time)
+                root = zero_drift_voltage(specimens, stress, zero_range, time_s=args.time_s)
                 payload["zero_drift_voltage"].append({"sensor": sensor.name, **root})
                 where = (
                     f"median {root['q50']:.3g} V (90 %: {root['q05']:.3g}–{root['q95']:.3g})"
@@ -378,7 +379,7 @@ def cmd_drift(args):
                     else "no median: fewer than half of new specimens have one"
                 )
                 print(
-                    f"{sensor.name} at {stress / 1e3:.0f} kPa: drift({args.time:g} s) = 0 in "
+                    f"{sensor.name} at {stress / 1e3:.0f} kPa: drift({args.time_s:g} s) = 0 in "
                     f"{zero_range[0]:g}–{zero_range[1]:g} V for {root['p_root_in_range']:.0%} of "
                     f"new specimens; {where}"
                 )

@@ -44,13 +44,13 @@ def cmd_demo(args):
     Run the main job: the paper's Figure 7 from Table 1, then the Bayesian study of the default data
     (:func:`fsrbayes.demo.run_demo`); one HTML report, JSON and netCDF results in ``--out``.
     """
-    if args.time < 0:
-        raise UsageError(f"--time must be >= 0 s, got {args.time:g}")
+    if args.time_s < 0:
+        raise UsageError(f"--time-s must be >= 0, got {args.time_s:g}")
     if args.processes is not None and args.processes < 1:
         raise UsageError(f"--processes must be >= 1, got {args.processes}")
     out = Path(args.out)
     writable(out)
-    _figure7(args.time, out)
+    _figure7(args.time_s, out)
     if args.figure7_only:
         return 0
     from ..demo import FULL, QUICK, run_demo
@@ -175,18 +175,18 @@ def _default_data_drift(time_s):
 def cmd_forward(args):
     """Drift(t) table of a sensor over voltages × stresses from its default parameters."""
     sensor = load_sensor(args.sensor)
-    voltages = floats(args.voltages, "voltages")
-    if args.forces is not None:
-        stresses = sensor.stress(floats(args.forces, "forces"))
+    voltages = floats(args.voltages_v, "voltages-v")
+    if args.forces_n is not None:
+        stresses = sensor.stress(floats(args.forces_n, "forces-n"))
     else:
-        stresses = floats(args.stresses, "stresses")
+        stresses = floats(args.stresses_pa, "stresses-pa")
     if np.any(voltages <= 0):
-        raise UsageError(f"--voltages must be > 0 V, got {voltages.min():g}")
+        raise UsageError(f"--voltages-v must be > 0, got {voltages.min():g}")
     if np.any(stresses <= 0):
         raise UsageError(f"stresses must be > 0 Pa, got {stresses.min():g}")
-    table = _drift_table(dict(sensor.params), voltages, stresses, args.time, args.tunneling)
+    table = _drift_table(dict(sensor.params), voltages, stresses, args.time_s, args.tunneling)
     print(
-        f"{sensor.description}: drift({args.time:g} s) in %, rheology burgers, tunneling "
+        f"{sensor.description}: drift({args.time_s:g} s) in %, rheology burgers, tunneling "
         f"{args.tunneling}"
     )
     print(_format_table(table, voltages, stresses))
@@ -201,12 +201,12 @@ def cmd_forward(args):
 def cmd_simulate(args):
     """Simulate creep tests on the virtual test bench, with known truth."""
     sensors = [s.strip() for s in args.sensor.split(",") if s.strip()]
-    out = Path(args.output)
+    out = Path(args.out)
     if not out.parent.is_dir():
-        raise UsageError(f"-o: directory {out.parent} does not exist")
+        raise UsageError(f"--out: directory {out.parent} does not exist")
     common = dict(
-        noise_rel=args.noise,
-        amp_offset_V=args.amp_offset,
+        noise_rel=args.noise_rel,
+        amp_offset_V=args.amp_offset_v,
         readout=args.readout,
         rheology=args.rheology,
         tunneling=args.tunneling,
@@ -215,29 +215,30 @@ def cmd_simulate(args):
         scatter=args.scatter,
     )
     if args.preset:
-        for flag in ("voltages", "stresses", "forces", "effect"):
+        for flag in ("voltages_v", "stresses_pa", "forces_n", "effect"):
             if getattr(args, flag) is not None:
-                raise UsageError(f"--preset {args.preset} fixes the protocol; drop --{flag}")
+                name = flag.replace("_", "-")
+                raise UsageError(f"--preset {args.preset} fixes the protocol; drop --{name}")
     if args.preset == "paper-like":
         sim = paperlike.simulate_paper_like(
-            sensors, n_specimens=args.specimens or 16, samples=args.samples or 25, seed=args.seed
+            sensors, n_specimens=args.n_specimens or 16, samples=args.samples or 25, seed=args.seed
         )
     elif args.preset == "paper":
         sim = synthetic.paper_protocol(
             sensors,
             samples=args.samples or 361,
             spacing=args.spacing or "linear",
-            n_specimens=args.specimens or 16,
+            n_specimens=args.n_specimens or 16,
             **common,
         )
     else:
         sim = synthetic.simulate(
             sensors,
-            n_specimens=args.specimens or 16,
-            voltages=None if args.voltages is None else floats(args.voltages, "voltages"),
-            stresses=None if args.stresses is None else floats(args.stresses, "stresses"),
-            forces=None if args.forces is None else floats(args.forces, "forces"),
-            duration=args.duration,
+            n_specimens=args.n_specimens or 16,
+            voltages=None if args.voltages_v is None else floats(args.voltages_v, "voltages-v"),
+            stresses=None if args.stresses_pa is None else floats(args.stresses_pa, "stresses-pa"),
+            forces=None if args.forces_n is None else floats(args.forces_n, "forces-n"),
+            duration=args.duration_s,
             samples=args.samples or 25,
             spacing=args.spacing or "log",
             **common,
@@ -263,22 +264,22 @@ def cmd_simulate_rig(args):
     """Simulate a divider rig's log (dead weights from rest or a staircase), with known truth."""
     from ..data.rigsim import simulate_rig, write_rig
 
-    out = Path(args.output)
+    out = Path(args.out)
     if not out.parent.is_dir():
-        raise UsageError(f"-o: directory {out.parent} does not exist")
-    for flag in ("specimens", "supply_v", "rm_ohm", "adc_bits", "adc_vref_v", "rate_hz"):
+        raise UsageError(f"--out: directory {out.parent} does not exist")
+    for flag in ("n_specimens", "supply_v", "rm_ohm", "adc_bits", "adc_vref_v", "rate_hz"):
         if getattr(args, flag) <= 0:
             raise UsageError(f"--{flag.replace('_', '-')} must be > 0, got {getattr(args, flag)}")
     try:
         text, truth = simulate_rig(
-            args.specimens,
+            args.n_specimens,
             reading=args.reading,
             time_unit=args.time_unit,
             seed=args.seed,
             effects=args.effect or (),
             protocol=args.protocol,
-            rest_s=args.rest,
-            ramp_s=_one_or_many(floats(args.ramp, "ramp")),
+            rest_s=args.rest_s,
+            ramp_s=_one_or_many(floats(args.ramp_s, "ramp-s")),
             ramp_column=not args.hide_ramp,
             sensor=args.sensor,
             weights_g=tuple(floats(args.weights_g, "weights-g")),
@@ -287,9 +288,9 @@ def cmd_simulate_rig(args):
             adc_bits=args.adc_bits,
             adc_vref_V=args.adc_vref_v,
             rate_hz=args.rate_hz,
-            duration_s=args.duration,
-            pre_s=args.pre,
-            noise_rel=args.noise,
+            duration_s=args.duration_s,
+            pre_s=args.pre_s,
+            noise_rel=args.noise_rel,
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None

@@ -1,0 +1,200 @@
+"""The command line's grammar: how options are named, shown and retired.
+
+One grammar across the subcommands:
+
+* ``--out`` names a command's primary artefact (a file or a folder, said in its help); ``--json``,
+  ``--plot`` and ``--report`` name the extras;
+* ``--specimen ID`` picks a specimen and may be repeated; ``--n-specimens`` counts them;
+* a flag that takes a quantity carries its unit in its name (``--duration-s``, ``--stresses-pa``,
+  ``--voltages-v``, ``--weights-g``);
+* every option has help, and the help shows its default.
+
+A spelling the grammar replaced still works for one minor version: it prints one line saying
+what to write instead (:data:`DEPRECATED_IN`, :data:`REMOVED_IN`) and is hidden from the help.
+"""
+
+import argparse
+import sys
+
+__all__ = [
+    "DEPRECATED_IN",
+    "REMOVED_IN",
+    "HelpFormatter",
+    "add_loading_options",
+    "add_model_options",
+    "add_reading_options",
+    "add_specimen_option",
+    "deprecated_spellings",
+    "option",
+]
+
+DEPRECATED_IN = "0.2.0"
+"""The version whose grammar replaced the old spellings."""
+REMOVED_IN = "0.3.0"
+"""The version that drops them."""
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Argparse's formatter, with each option's default shown where its help does not say it."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        shown = "default" in text or "%(default)" in text
+        if (
+            shown
+            or not action.option_strings
+            or action.default in (None, False, True, argparse.SUPPRESS)
+            or text == argparse.SUPPRESS
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+class _Deprecated(argparse.Action):
+    """An old spelling of an option: says what to write instead, then acts as the new one."""
+
+    def __init__(self, option_strings, dest, replacement, split=False, **kwargs):
+        self.replacement = replacement
+        self.split = split
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(
+            f"{parser.prog}: {option_string} is deprecated since {DEPRECATED_IN} and goes in "
+            f"{REMOVED_IN}: write {self.replacement}",
+            file=sys.stderr,
+        )
+        if self.split:  # a comma-separated list given to an option that is now repeated
+            values = list(getattr(namespace, self.dest, None) or []) + [
+                v.strip() for v in values.split(",") if v.strip()
+            ]
+        setattr(namespace, self.dest, values)
+
+
+def option(parser, *names, old=(), **kwargs):
+    """Add an option under ``names``, and each spelling in ``old`` as a deprecated alias.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser or argument group
+    *names : str
+        The option's spellings (the last is the one the deprecation line recommends).
+    old : sequence of str
+        Retired spellings: accepted, hidden from the help, one line on stderr when used.
+    **kwargs
+        As :meth:`argparse.ArgumentParser.add_argument`; ``help`` is required.
+
+    Returns
+    -------
+    argparse.Action
+    """
+    if not kwargs.get("help"):
+        raise ValueError(f"option {names[-1]} needs help")
+    action = parser.add_argument(*names, **kwargs)
+    for spelling in old:
+        _alias(parser, spelling, action, split=False)
+    return action
+
+
+def _alias(parser, spelling, action, split):
+    """Add ``spelling`` as a deprecated alias of ``action``."""
+    extra = {"type": action.type, "choices": action.choices} if not split else {}
+    parser.add_argument(
+        spelling,
+        dest=action.dest,
+        action=_Deprecated,
+        replacement=action.option_strings[-1],
+        split=split,
+        default=argparse.SUPPRESS,
+        help=argparse.SUPPRESS,
+        metavar=action.metavar,
+        **extra,
+    )
+
+
+def deprecated_spellings(parser):
+    """Return ``{old spelling: replacement}`` of every deprecated alias of ``parser``."""
+    return {
+        spelling: action.replacement
+        for action in parser._actions
+        if isinstance(action, _Deprecated)
+        for spelling in action.option_strings
+    }
+
+
+def add_reading_options(parser):
+    """``--sep`` and ``--shift-time``: how the CSV is read."""
+    option(
+        parser,
+        "--sep",
+        default=",",
+        help="field separator (default ','; ';' also reads decimal commas)",
+    )
+    option(
+        parser,
+        "--shift-time",
+        action="store_true",
+        help="shift each test to start at t = 0 (logs whose clock runs from power-on)",
+    )
+
+
+def add_model_options(parser, likelihood=True):
+    """``--tunneling`` and (where ``likelihood``) ``--likelihood``: the current's law, the noise."""
+    option(
+        parser,
+        "--tunneling",
+        choices=("smooth", "paper"),
+        default="smooth",
+        help="the tunnelling law: smooth (eq. 10 below Va/e, Simmons' forward term above it: "
+        "continuous and increasing at any voltage, for inference) or paper (eqs. 9-11 as "
+        "published, valid below eq. 11's peak)",
+    )
+    if not likelihood:
+        return
+    option(
+        parser,
+        "--likelihood",
+        choices=("gaussian", "student", "ar1"),
+        default="gaussian",
+        help="measurement noise on the log-current: gaussian (independent), student (heavy "
+        "tails), ar1 (correlated from sample to sample)",
+    )
+
+
+def add_specimen_option(parser, what, old_list=False):
+    """``--specimen ID``, repeatable (``dest="specimen"``: a list, or None for every specimen).
+
+    ``old_list``: also accept the retired ``--specimens a,b`` (comma-separated).
+    """
+    action = option(
+        parser,
+        "--specimen",
+        action="append",
+        metavar="ID",
+        help=f"{what}; repeat for several (default: every specimen)",
+    )
+    if old_list:
+        _alias(parser, "--specimens", action, split=True)
+    return action
+
+
+def add_loading_options(parser):
+    """``--settle-s`` and ``--placement``: how hand-placed loads are treated."""
+    option(
+        parser,
+        "--settle-s",
+        type=float,
+        help="leave each test's readings in the first SETTLE_S seconds after every load change "
+        "out of every fit: hand-placed weights settle, and presses before the weight, logged "
+        "as no load, leave creep that fades over seconds (default: 1 where the loads land "
+        "while the log records, as when put on by hand; else 0)",
+    )
+    option(
+        parser,
+        "--placement",
+        action=argparse.BooleanOptionalAction,
+        help="sample each test's own level (placement[k]) and creep factor (placement_creep[k]): "
+        "a dead weight put on again reads a few percent off and creeps by its own amount "
+        "(default: on where the loads land while the log records and a specimen has two "
+        "tests or more)",
+    )
