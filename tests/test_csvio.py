@@ -216,16 +216,63 @@ def test_bad_input_raises_one_located_line(tmp_path, case):
 
 
 @pytest.mark.parametrize("case", sorted(BAD))
-def test_cli_reports_bad_input_in_one_line_with_exit_2(tmp_path, case):
-    text, message = BAD[case]
-    path = write(tmp_path, text)
-    result = fsrbayes_command("check", path)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in result.stderr
+def test_cli_reports_bad_input_with_exit_2(tmp_path, case):
     import re
 
+    text, message = BAD[case]
+    path = write(tmp_path, text)
+    result = fsrbayes_command("check", path)  # every problem, the first as read_csv's
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    lines = result.stderr.strip().splitlines()
     assert re.search(message, lines[0]), lines[0]
+    assert all(line.startswith("fsrbayes check: ") for line in lines)
+    if len(lines) > 1:
+        assert lines[-1].startswith(f"fsrbayes check: {len(lines) - 1} problems in ")
+    fitted = fsrbayes_command("fit", path, "--out", tmp_path / "fit")  # the first, in one line
+    assert fitted.returncode == 2 and len(fitted.stderr.strip().splitlines()) == 1
+    assert re.search(message, fitted.stderr) and not (tmp_path / "fit").exists()
+
+
+def test_check_lists_every_problem_of_a_file(tmp_path):
+    rows = [  # three tests of six samples, lines 2-19
+        [spec, "a201", volt, "100000", str(10 * k), f"{1 + 0.01 * k}e-6"]
+        for spec, volt in (("s1", "1.0"), ("s1", "2.0"), ("s2", "1.0"))
+        for k in range(6)
+    ]
+    rows[1][5] = "n/a"  # line 3: not a number
+    rows[2] = rows[2][:5]  # line 4: a field short
+    rows[7][0] = ""  # line 9: no specimen id
+    rows[13][3] = "-5"  # line 15: a negative stress
+    rows[15][4], rows[16][4] = "40", "30"  # lines 17-18: time runs backwards in s2's test
+    text = "\n".join([HEADER, *(",".join(r) for r in rows)]) + "\n"
+    path = write(tmp_path, text, name="faults.csv")
+    result = fsrbayes_command("check", path)
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert lines[-1] == f"fsrbayes check: 5 problems in {path}", lines
+    found = "\n".join(lines[:-1])
+    for where in (
+        "line 3, column current_A: expected a number, got 'n/a'",
+        "line 4: expected 6 fields like the header, got 5",
+        "line 9, column specimen: expected a specimen id",
+        "line 15, column stress_Pa: stress must be > 0",
+        "line 18, column time_s: time must increase",
+    ):
+        assert where in found, (where, found)
+    from fsrbayes.data.csvio import list_problems
+
+    problems, data = list_problems(good(tmp_path))  # a good file: no problem, the data
+    assert problems == [] and len(data) == 3 and data.n_rows == 9
+    assert [p.line for p in list_problems(path, cap=2)[0]] == [4, 9]  # the cap holds
+    assert list_problems(path)[1] is None
+
+
+def test_errors_name_the_users_own_time_column(tmp_path):
+    text = "specimen,sensor,voltage_V,stress_Pa,time_ms,current_A\n" + "\n".join(
+        f"s1,a201,1,1e5,{t},1e-6" for t in (0, 2000, 1000)
+    )
+    with pytest.raises(DataError, match="column time_ms: time must increase"):
+        read_csv(write(tmp_path, text))
 
 
 def test_missing_file_and_directory(tmp_path):

@@ -135,7 +135,8 @@ def test_cli_simulate_paper_like_writes_data_and_truth(tmp_path):
 
     out = tmp_path / "pl.csv"
     args = ["simulate", "--preset", "paper-like"]
-    run = fsrbayes_command(*args, "--sensor", "a201", "--n-specimens", "1", "--seed", "3", "-o", out)
+    one = ["--sensor", "a201", "--n-specimens", "1"]
+    run = fsrbayes_command(*args, *one, "--seed", "3", "-o", out)
     assert run.returncode == 0, run.stderr
     assert "path-loss" in run.stdout
     truth = json.loads((tmp_path / "pl.truth.json").read_text())

@@ -329,3 +329,20 @@ def test_predict_command_calibrates_a_new_sensor(hierarchical_fit, tmp_path):
     result = json.loads((tmp_path / "p.json").read_text())
     jsonschema.validate(result, predict_schema())
     assert {t["specimen_source"] for t in result["tests"]} == {"calibrated"}
+
+
+def test_a_hierarchical_fit_takes_the_specimens_chosen(tmp_path, monkeypatch):
+    write_csv(bench().data, tmp_path / "data.csv")
+    seen = {}
+
+    def record(args, data, settings, out, notes):
+        seen["specimens"] = data.specimens
+        return 0
+
+    monkeypatch.setattr("fsrbayes.cli.fitting._fit_hierarchical", record)
+    run = fsrbayes(
+        "fit", str(tmp_path / "data.csv"), "--hierarchical", "--out", str(tmp_path / "fit"),
+        "--specimen", "a201-03", "--specimen", "a201-01",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert seen["specimens"] == ["a201-01", "a201-03"]  # in the file's order

@@ -111,9 +111,7 @@ def test_diagnose_treats_hand_placed_loads_as_fit_does(tmp_path):
     (specimen,) = data.specimens
     options = dict(base="zener", effects=(), laws=(), null_sets=0, n_draws=50, processes=1)
     placed = diagnose(data, **options)
-    assert placed.loading == {
-        specimen: {"settle_s": HAND_PLACED_SETTLE_S, "placement": True}
-    }
+    assert placed.loading == {specimen: {"settle_s": HAND_PLACED_SETTLE_S, "placement": True}}
     names = placed.specimens[0].base.posterior.names
     assert "placement[0]" in names and "placement[1]" in names
     settled = SpecimenData.select(data, settle_s=HAND_PLACED_SETTLE_S)

@@ -4,6 +4,7 @@ Commands on the forward model and data: demo (which goes on to the Bayesian stud
 simulate, check.
 """
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -327,8 +328,20 @@ def cmd_sensor_new(args):
 
 
 def cmd_check(args):
-    """Read and validate a creep-test CSV; print what it holds."""
-    data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
+    """Read and validate a creep-test CSV: every problem it has, or a summary of what it holds.
+
+    Exit 2 when the file has problems, each printed on its own line (at most
+    :data:`~fsrbayes.data.csvio.MAX_PROBLEMS`).
+    """
+    problems, data = csvio.list_problems(args.data, sep=args.sep, shift_time=args.shift_time)
+    if problems:
+        for problem in problems:
+            print(f"fsrbayes check: error: {problem}", file=sys.stderr)
+        if len(problems) > 1:
+            more = " (the first ones: there may be more)"
+            more = more if len(problems) >= csvio.MAX_PROBLEMS else ""
+            print(f"fsrbayes check: {len(problems)} problems in {args.data}{more}", file=sys.stderr)
+        return 2
     print(data.summary())
     for note in calibration_notes(data):
         print(f"  note: {note}")

@@ -231,19 +231,22 @@ class CreepData:
 
     def summary(self):
         """Return a few lines describing the data set."""
-        n_spec = len(self.specimens)
+        n_spec, n_tests = len(self.specimens), len(self)
         lines = [
-            f"{self.source}: {self.n_rows} samples in {len(self)} creep tests of {n_spec} "
-            f"specimen{'s' if n_spec != 1 else ''} ({', '.join(self.sensors)})"
+            f"{self.source}: {self.n_rows} samples in {n_tests} creep test"
+            f"{'s' if n_tests != 1 else ''} of {n_spec} specimen{'s' if n_spec != 1 else ''} "
+            f"({', '.join(self.sensors)})"
         ]
         for sensor in self.sensors:
             sub = self.select(sensor=sensor)
             volts = sorted({t.voltage_V for t in sub})
             stresses = sorted({t.stress_Pa for t in sub})
             longest = max(t.time_s[-1] for t in sub)
+            divider = all(t.readout is not None and t.readout.circuit == "divider" for t in sub)
+            source = "supply" if divider else "voltage" if len(volts) == 1 else "voltages"
             lines.append(
                 f"  {sensor}: {len(sub.specimens)} "
-                f"specimen{'s' if len(sub.specimens) != 1 else ''}, voltages "
+                f"specimen{'s' if len(sub.specimens) != 1 else ''}, {source} "
                 f"{', '.join(f'{v:g}' for v in volts)} V, stresses "
                 f"{', '.join(f'{s / 1e3:.4g}' for s in stresses)} kPa, up to {longest:g} s"
             )

@@ -17,19 +17,22 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.circuits import current_from_amplifier
-from ..utils import codes_of
-from .creep import CreepData, CreepTest, DataError
+from .creep import CreepData, DataError
+from .grouping import check_sensor_per_specimen, group_tests
 from .readouts import UNIT_COLUMNS
 from .rigio import is_rig_file, rig_tests
 from .sensors import load_sensor
 
-__all__ = ["read_csv"]
+__all__ = ["MAX_PROBLEMS", "list_problems", "read_csv"]
 
 STRESS_PLAUSIBLE_MIN_PA = 1e3
 """Stresses below 1 kPa (0.04 N on an A201) are taken for kPa written into stress_Pa."""
 VOLTAGE_PLAUSIBLE_MAX_V = 100.0
 CURRENT_PLAUSIBLE_MAX_A = 1.0
 
+
+MAX_PROBLEMS = 20
+"""Problems :func:`list_problems` (``fsrbayes check``) lists at most."""
 
 MAX_TEXT_BYTES = 4 * 2**30
 """Largest CSV text read (after decompression): a guard against gzip bombs and files that would
@@ -179,6 +182,108 @@ def read_csv(path, *, sep=",", shift_time=False, readings="required"):
     if readings not in ("required", "optional"):
         raise ValueError(f"readings must be 'required' or 'optional', got {readings!r}")
     required = readings == "required"
+    names, renamed, body, line_numbers, odd = _table(path, sep, required)
+    if odd:
+        raise odd[0]
+    return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time, required)
+
+
+def list_problems(path, *, sep=",", shift_time=False, cap=MAX_PROBLEMS):
+    """Return every problem of a creep-test CSV (up to ``cap``), and the data when it has none.
+
+    Where :func:`read_csv` stops at the first problem, this goes on: a row with a bad field is
+    set aside and the rest read again, a test whose times are wrong is set aside whole, and so
+    on until the file reads or ``cap`` problems are found. A problem of the file itself (not
+    found, not CSV, a header without the columns needed) ends the list.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    sep, shift_time
+        As :func:`read_csv`.
+    cap : int
+        Problems listed at most.
+
+    Returns
+    -------
+    problems : list of DataError
+        In the order found; empty when the file reads whole.
+    data : CreepData or None
+        The data (None when there is a problem).
+    """
+    try:
+        names, renamed, body, line_numbers, odd = _table(path, sep, True)
+    except DataError as exc:
+        return [exc], None
+    problems = odd[:cap]
+    keep = np.ones(len(body), dtype=bool)
+    if odd:  # rows whose fields do not match the header: set aside
+        keep[np.isin(line_numbers, [e.line for e in odd])] = False
+    while len(problems) < cap and keep.any():
+        rows = [row for row, k in zip(body, keep, strict=True) if k]
+        try:
+            data = _validate(names, renamed, rows, line_numbers[keep], path, sep == ";", shift_time)
+        except DataError as exc:
+            drop = _rows_of_problem(exc, names, renamed, body, line_numbers)
+            # a test too short, or starting late, once its specimen's rows were set aside: not a
+            # problem of its own
+            consequence = (
+                drop is not None
+                and ("a creep test needs" in str(exc) or "starts at t =" in str(exc))
+                and (_same_specimen(exc.line, names, body, line_numbers) & ~keep).any()
+            )
+            if not consequence:
+                problems.append(exc)
+            if drop is None or not (drop & keep).any():
+                break
+            keep &= ~drop
+            continue
+        return problems, (None if problems else data)
+    return problems, None
+
+
+def _same_specimen(line, names, body, line_numbers):
+    """Rows of the specimen named on ``line``."""
+    column = names.index("specimen")
+    specimen = body[int(np.argmax(line_numbers == line))][column].strip()
+    return np.array([len(r) == len(names) and r[column].strip() == specimen for r in body])
+
+
+def _rows_of_problem(problem, names, renamed, body, line_numbers):
+    """Rows to set aside for ``problem``: its row, or its whole test; None for the file's."""
+    if problem.line is None or problem.line <= 1:
+        return None
+    row = int(np.argmax(line_numbers == problem.line))
+    if line_numbers[row] != problem.line:
+        return None
+    message = str(problem)
+    whole_test = not message.split(": ", 1)[-1].startswith("duplicate") and (
+        problem.column is None
+        or " within " in message
+        or "starts at t =" in message
+        or "a creep test needs" in message
+        or (problem.column == "sensor" and " is a " in message)
+    )
+    drop = np.zeros(len(body), dtype=bool)
+    if not whole_test:
+        drop[row] = True
+        return drop
+    identity = ["specimen", "test"]
+    if not is_rig_file(names):
+        identity += ["voltage_V", "stress_Pa" if "stress_Pa" in names else "force_N"]
+    columns = [names.index(c) for c in identity if c in names]
+    key = [body[row][c].strip() for c in columns]
+    for i, other in enumerate(body):
+        drop[i] = len(other) == len(names) and [other[c].strip() for c in columns] == key
+    return drop
+
+
+def _table(path, sep, required):
+    """Return the header's names, the renaming, the rows, their line numbers and misshapen rows.
+
+    Problems of the file itself raise; rows whose fields do not match the header come back as
+    DataErrors (blank lines are dropped: they hold no sample).
+    """
     text = _decode(path)
     if not text.strip():
         raise DataError(
@@ -208,22 +313,24 @@ def read_csv(path, *, sep=",", shift_time=False, readings="required"):
     body = rows[1:]
     line_numbers = np.arange(2, len(rows) + 1)
     odd = np.flatnonzero(np.fromiter(map(len, body), dtype=np.intp, count=len(body)) != width)
+    misshapen = []
     if odd.size:
         blank = [i for i in odd if not body[i] or (len(body[i]) == 1 and not body[i][0].strip())]
-        wrong = sorted(set(odd) - set(blank))
-        if wrong:
-            raise DataError(
-                f"expected {width} fields like the header, got {len(body[wrong[0]])}",
+        misshapen = [
+            DataError(
+                f"expected {width} fields like the header, got {len(body[i])}",
                 path,
-                int(line_numbers[wrong[0]]),
+                int(line_numbers[i]),
             )
+            for i in sorted(set(odd) - set(blank))
+        ]
         keep = np.ones(len(body), dtype=bool)
         keep[blank] = False  # a blank line holds no sample
         body = [row for row, k in zip(body, keep, strict=True) if k]
         line_numbers = line_numbers[keep]
     if not body:
         raise DataError("the file has a header but no data rows", path, 1)
-    return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time, required)
+    return names, renamed, body, line_numbers, misshapen
 
 
 def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, required=True):
@@ -269,7 +376,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
     if rig:
         if "stress_Pa" in cols:
             _check_stress_unit(stress[stress > 0], line_no[stress > 0], path)
-        _check_sensor_per_specimen(specimen, sensor_names, line_no, path)
+        check_sensor_per_specimen(specimen, sensor_names, line_no, path)
         tests = rig_tests(
             names,
             cols,
@@ -309,7 +416,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
     _check_units(stress, voltage, np.nan_to_num(current), line_no, path, "stress_Pa" in cols)
     test = list(map(str.strip, cols["test"])) if "test" in cols else [""] * len(body)
     return CreepData(
-        _group(
+        group_tests(
             specimen,
             sensor_names,
             voltage,
@@ -321,6 +428,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
             path,
             body,
             shift_time,
+            renamed.get("time_s", ("time_s",))[0],
         ),
         str(path),
     )
@@ -378,82 +486,3 @@ def _check_units(stress, voltage, current, line_no, path, stress_given):
             int(line_no[i]),
             "current_A",
         )
-
-
-def _check_sensor_per_specimen(specimen, sensor, line_no, path):
-    """Check that a specimen is one sensor; return the specimen codes and names."""
-    spec_code, spec_names = codes_of(specimen)
-    sensor_code, _ = codes_of(sensor)
-    first_sensor = np.full(len(spec_names), -1)
-    first_sensor[spec_code[::-1]] = sensor_code[::-1]
-    clash = sensor_code != first_sensor[spec_code]
-    if clash.any():
-        i = int(np.argmax(clash))
-        j = int(np.argmax(spec_code == spec_code[i]))
-        raise DataError(
-            f"specimen {specimen[i]!r} is a {sensor[j]} on line {line_no[j]} but a {sensor[i]} "
-            "here",
-            path,
-            int(line_no[i]),
-            "sensor",
-        )
-    return spec_code, spec_names
-
-
-def _group(specimen, sensor, voltage, stress, test, time, current, line_no, path, body, shift_time):
-    spec_code, _ = _check_sensor_per_specimen(specimen, sensor, line_no, path)
-    test_code, test_names = codes_of(test)
-    keys = np.rec.fromarrays([spec_code, voltage, stress, test_code])
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
-    order = np.argsort(inverse, kind="stable")  # rows of each test, in file order
-    bounds = np.cumsum(np.bincount(inverse, minlength=first.size))[:-1]
-    members = np.split(order, bounds)
-    tests = []
-    for g in np.argsort(first, kind="stable"):  # tests in order of first appearance
-        idx = members[g]
-        i0 = idx[0]
-        spec, volt, sigma, label = specimen[i0], float(voltage[i0]), float(stress[i0]), test[i0]
-        name = (
-            f"test (specimen {spec!r}, {volt:g} V, {sigma:g} Pa"
-            + (f", test {label!r}" if label else "")
-            + ")"
-        )
-        t, lines = time[idx], line_no[idx]
-        if idx.size < 3:
-            raise DataError(
-                f"{name} has {idx.size} sample(s); a creep test needs at least 3",
-                path,
-                int(lines[0]),
-            )
-        steps = np.diff(t)
-        if np.any(steps <= 0):
-            j = int(np.argmax(steps <= 0)) + 1
-            _report_duplicate(body, idx, j, lines, path)
-            raise DataError(
-                f"time must increase within {name}: {t[j]:g} s follows {t[j - 1]:g} s (line "
-                f"{lines[j - 1]})",
-                path,
-                int(lines[j]),
-                "time_s",
-            )
-        if t[0] != 0:
-            if not shift_time:
-                raise DataError(
-                    f"{name} starts at t = {t[0]:g} s, expected 0 (the stress step); shift its "
-                    "times to start at 0 (read_csv(..., shift_time=True), CLI --shift-time)",
-                    path,
-                    int(lines[0]),
-                    "time_s",
-                )
-            t = t - t[0]
-        tests.append(CreepTest(spec, sensor[i0], volt, sigma, label, t, current[idx], lines))
-    return tuple(tests)
-
-
-def _report_duplicate(body, idx, j, lines, path):
-    """Raise 'duplicate of line …' if row j of a test repeats an earlier row of it exactly."""
-    row = [cell.strip() for cell in body[idx[j]]]
-    for k in range(j):
-        if [cell.strip() for cell in body[idx[k]]] == row:
-            raise DataError(f"duplicate of line {lines[k]}", path, int(lines[j]))

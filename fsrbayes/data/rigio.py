@@ -192,7 +192,7 @@ def rig_tests(
                 f"time must increase within {what}: {t[j]:g} s follows {t[j - 1]:g} s",
                 path,
                 int(lines[j]),
-                "time_s",
+                (renamed or {}).get("time_s", ("time_s",))[0],
             )
         level = stress[idx].copy()
         loaded = level > 0
