@@ -1,7 +1,11 @@
-"""Run the benchmarks and print the results: ``python -m benchmarks [solver] [scattered] [csv]
-[rig-read] [predict] [likelihood] [creep-laws] [engine] [map-search] [long-run] [fit] [rig-fit]
-[evidence] [evidence-seeds] [compare] [dynesty] [hierarchical] [population-sizes] [diagnose]
-[demo]``.
+"""Run the benchmarks and print the results: ``python -m benchmarks [--markdown [FILE]] [solver]
+[scattered] [csv] [rig-read] [predict] [likelihood] [creep-laws] [engine] [map-search] [long-run]
+[fit] [rig-fit] [evidence] [evidence-seeds] [compare] [dynesty] [hierarchical]
+[population-sizes] [diagnose] [demo]``.
+
+``--markdown`` also writes each benchmark's result as a row of the current table of FILE
+(default BENCHMARKS.md, the table ``benchmarks``; :mod:`validation.tables`): the rows of the
+benchmarks run are replaced, each with its date, commit and machine; the others are kept.
 
 Each run first prints the machine and its speed on fixed reference loads (``benchmarks.machine``),
 so numbers from different days can be read against their machine. Without names all run but
@@ -43,6 +47,9 @@ from benchmarks import (  # noqa: E402
     solver,
 )  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
+from validation.tables import measured_on, update_table  # noqa: E402
+
+TABLE_HEADER = ("benchmark", "result", "measured", "commit", "machine")
 
 BENCHMARKS = {
     "solver": lambda: solver.report(solver.run(dict(load_sensor("a201").params))),
@@ -72,16 +79,30 @@ BENCHMARKS = {
 }
 
 
-def main(names):
+def main(argv):
+    markdown = None
+    if argv and argv[0] == "--markdown":
+        argv = argv[1:]
+        markdown = "BENCHMARKS.md"
+        if argv and argv[0].endswith(".md"):
+            markdown, argv = argv[0], argv[1:]
+    names = argv
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
         print(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}", file=sys.stderr)
         return 2
-    print(machine.report(machine.run()), flush=True)
+    box = machine.run()
+    print(machine.report(box), flush=True)
+    rows = []
     for name in names or [
         n for n in BENCHMARKS if n not in ("dynesty", "evidence-seeds", "compare")
     ]:
-        print(BENCHMARKS[name](), flush=True)
+        result = BENCHMARKS[name]()
+        print(result, flush=True)
+        rows.append([name, result, *measured_on(box["cpu"], box["cores"])])
+    if markdown:
+        update_table(markdown, "benchmarks", TABLE_HEADER, rows)
+        print(f"{len(rows)} row(s) of {markdown}'s current table written", flush=True)
     return 0
 
 
