@@ -186,6 +186,8 @@ def run_case(case, *, n_specimens=2, samples=31, seed=0, processes=1):
         "expected": truth_effect,
         "verdict": result.verdict,
         "effect": result.effect,
+        "law": result.law,
+        "named": list(result.named),
         "gap_before": result.gap_before,
         "gap_after": result.gap_after,
         "gap_ratio": result.gap_after / result.gap_before,
@@ -194,7 +196,8 @@ def run_case(case, *, n_specimens=2, samples=31, seed=0, processes=1):
         "drift_gap_before": out["drift_gap_before"],
         "drift_gap_after": out["drift_gap_after"],
         "gap_check": case.gap_check,
-        "correct": result.effect == truth_effect,
+        "correct": result.effect == truth_effect
+        and result.law in (None, None if case.rheology == "burgers" else case.rheology),
         "indistinguishable": result.indistinguishable,
         "seconds": time.perf_counter() - started,
     }

@@ -32,7 +32,7 @@ from fsrbayes.data.synthetic import PAPER_FORCES_N, draw_specimens
 from fsrbayes.discrepancy import diagnose
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
-from validation.rates import outcome
+from validation.rates import CREEP_KINETICS, outcome
 
 VOLTAGES = (0.5, 2.0, 4.5)
 SAMPLES = 31
@@ -44,8 +44,8 @@ CASES = (
     ("contact-paths", 0.4, ("contact-creep", "contact-growth")),
     ("soft-degradation", 0.05, ("voltage-degradation",)),
     ("soft-degradation", 0.15, ("voltage-degradation",)),
-    ("findley-creep", 0.5, ("power-law-creep", "log-creep", "second-kelvin")),
-    ("findley-creep", 1.5, ("power-law-creep", "log-creep", "second-kelvin")),
+    ("findley-creep", 0.5, ("power-law-creep", "log-creep", "second-kelvin", *CREEP_KINETICS)),
+    ("findley-creep", 1.5, ("power-law-creep", "log-creep", "second-kelvin", *CREEP_KINETICS)),
 )
 """(mechanism, magnitude, names that count as right)."""
 
@@ -93,11 +93,9 @@ def run(n_sets=1, processes=2):
                     "magnitude": magnitude,
                     "seed": seed,
                     "verdict": result.verdict,
-                    "effects": list(result.effects),
-                    "right": bool(result.effects) and result.effects[0] in right,
-                    "false_name": outcome(result.verdict, list(result.effects), right)[
-                        "false_name"
-                    ],
+                    "effects": list(result.named),
+                    "right": bool(result.named) and result.named[0] in right,
+                    "false_name": outcome(result.verdict, list(result.named), right)["false_name"],
                     "gap_before": before,
                     "gap_after": after,
                     "band": band,

@@ -40,7 +40,7 @@ from fsrbayes.data.synthetic import PAPER_FORCES_N, draw_specimens, simulate
 from fsrbayes.discrepancy import diagnose
 from fsrbayes.physics.sensor import sensor_state
 from fsrbayes.physics.solver import solve_bulk
-from validation.rates import outcome
+from validation.rates import CREEP_KINETICS, outcome
 
 KINDS = (
     "temperature-cycle",
@@ -54,7 +54,7 @@ ACCEPTED = {
     "temperature-cycle": ("gain-drift",),
     "gain-warm-up": ("gain-drift",),
     "offset-drift": ("gain-drift",),
-    "kww-creep": ("log-creep", "power-law-creep", "second-kelvin"),
+    "kww-creep": ("log-creep", "power-law-creep", "second-kelvin", *CREEP_KINETICS),
     "paper-law": (),
     "ar1-noise": (),
 }
@@ -160,14 +160,14 @@ def run(kinds=KINDS, n_sets=5, processes=2):
             started = time.perf_counter()
             result = diagnose(data_set(kind, 1000 + k), seed=k, processes=processes)
             kinds = {c["effect"]: c["kind"] for c in result.candidates}
-            flags = outcome(result.verdict, list(result.effects), ACCEPTED[kind])
+            flags = outcome(result.verdict, list(result.named), ACCEPTED[kind])
             rows.append(
                 {
                     "kind": kind,
                     "seed": 1000 + k,
                     "verdict": result.verdict,
-                    "effects": list(result.effects),
-                    "kinds": [kinds[e] for e in result.effects],
+                    "effects": list(result.named),
+                    "kinds": [kinds[e] for e in result.named],
                     "right_name": bool(flags["right_name"]),
                     "false_name": flags["false_name"],
                     "gap_before": result.gap_before,

@@ -18,7 +18,7 @@ import json
 import sys
 from math import sqrt
 
-__all__ = ["Rate", "outcome", "rate", "rates", "format_rates"]
+__all__ = ["CREEP_KINETICS", "Rate", "outcome", "rate", "rates", "format_rates"]
 
 
 class Rate(tuple):
@@ -47,6 +47,12 @@ class Rate(tuple):
     def __str__(self):
         lo, hi = self.interval
         return f"{self[0]}/{self[1]} = {self.share:.2f} (95 %: {lo:.2f}–{hi:.2f})"
+
+
+CREEP_KINETICS = ("law:nutting", "law:log-spectrum", "law:log-spectrum-sat")
+"""Creep laws whose kinetics are not a Kelvin element's (a power law in time, a spectrum of
+retardation times): named in the base law's place, the right kind of name for a creep whose
+time course is foreign to Burgers (a Findley or a stretched-exponential creep)."""
 
 
 def rate(flags):
