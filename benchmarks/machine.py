@@ -12,9 +12,10 @@ import multiprocessing
 import os
 import platform
 import time
-from pathlib import Path
 
 import numpy as np
+
+from validation.tables import cpu_name
 
 LOOP = 10_000_000
 """Iterations of the pure-Python reference loop (about a second on a 2-core cloud machine)."""
@@ -33,17 +34,6 @@ def _exp_seconds():
     start = time.perf_counter()
     np.exp(x)
     return time.perf_counter() - start
-
-
-def cpu_name():
-    """The CPU's model name from /proc/cpuinfo, or what the platform says."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def run(repeats=3):

@@ -22,11 +22,23 @@ import re
 import subprocess
 from pathlib import Path
 
-__all__ = ["measured_on", "read_table", "update_table"]
+__all__ = ["cpu_name", "measured_on", "read_table", "update_table"]
 
 
-def measured_on(cpu, cores=None):
+def cpu_name():
+    """The CPU's model name from /proc/cpuinfo, or what the platform says."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def measured_on(cpu=None, cores=None):
     """Return ``(date, commit, machine)`` cells for rows measured now on this checkout."""
+    cpu = cpu or cpu_name()
     try:
         commit = subprocess.run(
             ["git", "rev-parse", "--short", "HEAD"],
