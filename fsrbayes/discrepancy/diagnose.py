@@ -73,6 +73,7 @@ GAP_METRIC = (
     "= (observed - predictive mean)' inverse(predictive covariance) (observed - predictive mean); "
     "about 0.87 for an adequate model fitted to its own data; the band G0 in `band` bounds it"
 )
+"""What the headline gap of a diagnosis measures (written into its JSON as ``gap_metric``)."""
 
 
 @dataclass

@@ -58,6 +58,8 @@ __all__ = [
 ]
 
 LIKELIHOODS = ("gaussian", "student", "ar1")
+"""The measurement-noise models of the log-current: independent Gaussian, Student-t (heavy
+tails), AR(1) (correlated from sample to sample)."""
 
 
 @dataclass(frozen=True)

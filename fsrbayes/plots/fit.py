@@ -121,6 +121,9 @@ def band_plot(tree, kind="drift", max_tests=12):
 def drift_time_plot(trees, titles, tests):
     """Drift(t) of chosen tests of one specimen, one panel per model (the paper's Figure 12).
 
+    Each test: the measured drift I(t)/I(t₀) − 1 (eq. 22) as points, the posterior median and
+    its 90 % credible band as a line and a shaded band.
+
     Parameters
     ----------
     trees : sequence of DataTree
@@ -130,8 +133,9 @@ def drift_time_plot(trees, titles, tests):
     tests : sequence of int
         Test indices to draw, one colour each (typically one stress, several voltages).
 
-    Each test: the measured drift I(t)/I(t₀) − 1 (eq. 22) as points, the posterior median and
-    its 90 % credible band as a line and a shaded band.
+    Returns
+    -------
+    fig, axes
     """
     fig, axes = plt.subplots(
         1, len(trees), figsize=(4.8 * len(trees), 3.6), sharey=True, squeeze=False
