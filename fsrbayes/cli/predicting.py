@@ -76,7 +76,7 @@ def cmd_predict(args):
     for test in result["tests"]:
         label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
         covered = (
-            f"; {test['n_inside_90']}/{test['n_readings']} readings inside the 90 % band"
+            f"; {test['n_inside_90']:.1f} of {test['n_readings']} readings inside the 90 % band"
             if test["n_readings"]
             else ""
         )

@@ -277,7 +277,8 @@ class CreepData:
                 if t.load_steps is not None:
                     loads = np.cumsum(t.load_steps[1])
                     lines.append(
-                        f"    test {t.test or t.key}: the load changes {len(loads) - 1} times — "
+                        f"    test {t.test or t.key}: the load changes {len(loads) - 1} "
+                        f"time{'s' if len(loads) > 2 else ''} — "
                         f"{' → '.join(f'{v / 1e3:.4g}' for v in loads)} kPa at "
                         f"{', '.join(f'{a:g}' for a in t.load_steps[0])} s"
                     )

@@ -25,9 +25,12 @@ def noise_before_physics(diagnosis, search, likelihood, *, ar1_available):
     Where the final model's standardised residuals are correlated in time (lag-1 above
     :data:`NOISE_LAG1_LIMIT` in a specimen) and no effect was named that closes the gap with its
     checks passing, the search is made again under AR(1) noise. Its result is taken where the
-    base model is adequate under that noise (correlated noise explains the data), or where what
-    white noise named gains no evidence under it (``unexplained`` there: nothing is named, the
-    gap outside its band is reported). Otherwise the white-noise result stands, and says why.
+    base model is adequate under that noise (correlated noise explains the data), or where no
+    candidate reaches the evidence threshold under it (``unexplained`` there, every ln B below
+    the threshold: what white noise named was the noise's; nothing is named, and the gap outside
+    its band is reported). A mechanism that keeps its evidence under AR(1) noise — a real one
+    whose catalogue form is close but not exact — stays named under white noise, and the result
+    says why.
 
     Parameters
     ----------
@@ -77,7 +80,7 @@ def noise_before_physics(diagnosis, search, likelihood, *, ar1_available):
                     "reason": f"{why}: no effect explains them, and under AR(1) measurement "
                     "noise the base model is adequate",
                 }
-            elif under_ar1.verdict == "unexplained" and diagnosis.named:
+            elif diagnosis.named and _no_evidence(under_ar1):
                 # what white noise named was the noise's: under AR(1) no candidate gains
                 # evidence, though the base model's gap stays outside its band
                 listed = " + ".join(diagnosis.named)
@@ -92,10 +95,11 @@ def noise_before_physics(diagnosis, search, likelihood, *, ar1_available):
                     "its band under AR(1) noise too, so the result is unexplained",
                 }
             else:
+                best = max((c["log_bf"] for c in under_ar1.candidates), default=float("nan"))
                 diagnosis.noise_model["reason"] = (
                     f"{why}; under AR(1) measurement noise the diagnosis is "
-                    f"{under_ar1.verdict}, not adequate: correlated noise does not explain the "
-                    "data alone, and the result stays under white noise"
+                    f"{under_ar1.verdict} (best ln B {best:.1f}), not adequate: correlated noise "
+                    "does not explain the data alone, and the result stays under white noise"
                 )
         else:
             diagnosis.noise_model["reason"] = (
@@ -104,3 +108,10 @@ def noise_before_physics(diagnosis, search, likelihood, *, ar1_available):
                 "measurement noise may be read as a mechanism"
             )
     return diagnosis
+
+
+def _no_evidence(diagnosis):
+    """Whether no candidate of a diagnosis reaches its evidence threshold (nothing named)."""
+    return diagnosis.verdict == "unexplained" and all(
+        c["log_bf"] < diagnosis.threshold for c in diagnosis.candidates
+    )
