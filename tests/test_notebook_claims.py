@@ -55,3 +55,18 @@ def test_04_names_what_its_text_says():
     ranked = re.findall(r"^\d+\. ([a-z-]+) +ln B", shown, re.M)
     assert len(ranked) == 10 and "ten of them" in text  # the whole catalogue, no law
     assert not [r for r in ranked if r.startswith("law:")]
+
+
+def test_06_reads_a_20_hz_log_and_compares_the_noise_with_the_rigs():
+    cells = _cells("06_your_rig")
+    text = "".join(t for k, t, _ in cells if k == "markdown")
+    code = "".join(t for k, t, _ in cells if k == "code")
+    shown = "".join(s for _, _, s in cells)
+    assert "(20 Hz here)" in text and "rate_hz=20.0" in code
+    number = r"([\d.]+)"
+    sigma = re.search(
+        rf"sigma_rel +{number} \(90 %: {number}\.\.{number}\); simulated {number}", shown
+    )
+    low, high, simulated = (float(sigma.group(k)) for k in (2, 3, 4))
+    assert simulated == 0.002 and low <= simulated <= high  # the rig's noise, inside its interval
+    assert "coverage_90 = 0.8" in shown or "coverage_90 = 0.9" in shown
