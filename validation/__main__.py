@@ -85,8 +85,8 @@ def _foreign_summary(rows):
 
 STUDIES = {
     "noise_first": Study(
-        "10 one-specimen A201 sets under Ornstein–Uhlenbeck noise (τ 30–300 s, sd 0.5–2 %), "
-        "every effect and law a candidate (`python -m validation.noise_first 10`)",
+        "one-specimen A201 sets under Ornstein–Uhlenbeck noise (τ 30–300 s, sd 0.5–2 %), every "
+        "effect and law a candidate (`python -m validation.noise_first N ROWS.json FIRST_SEED`)",
         lambda: _noise_first().run(10),
         lambda rows: _noise_first().format_rows(rows),
         _noise_summary,
