@@ -47,7 +47,7 @@ from benchmarks import (  # noqa: E402
     solver,
 )  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
-from validation.tables import measured_on, update_table  # noqa: E402
+from validation.tables import markdown_option, measured_on, write_rows  # noqa: E402
 
 TABLE_HEADER = ("benchmark", "result", "measured", "commit", "machine")
 
@@ -80,12 +80,7 @@ BENCHMARKS = {
 
 
 def main(argv):
-    markdown = None
-    if argv and argv[0] == "--markdown":
-        argv = argv[1:]
-        markdown = "BENCHMARKS.md"
-        if argv and argv[0].endswith(".md"):
-            markdown, argv = argv[0], argv[1:]
+    markdown, argv = markdown_option(argv, "BENCHMARKS.md")
     names = argv
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
@@ -101,8 +96,7 @@ def main(argv):
         print(result, flush=True)
         rows.append([name, result, *measured_on(box["cpu"], box["cores"])])
     if markdown:
-        update_table(markdown, "benchmarks", TABLE_HEADER, rows)
-        print(f"{len(rows)} row(s) of {markdown}'s current table written", flush=True)
+        write_rows(markdown, "benchmarks", TABLE_HEADER, rows)
     return 0
 
 

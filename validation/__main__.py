@@ -19,7 +19,7 @@ import sys
 from dataclasses import dataclass
 from typing import Callable
 
-from validation.tables import measured_on, update_table
+from validation.tables import markdown_option, measured_on, write_rows
 
 TABLE_HEADER = ("study", "how", "result", "measured", "commit", "machine")
 
@@ -108,12 +108,7 @@ STUDIES = {
 
 
 def main(argv):
-    markdown = None
-    if argv and argv[0] == "--markdown":
-        argv = argv[1:]
-        markdown = "VALIDATION.md"
-        if argv and argv[0].endswith(".md"):
-            markdown, argv = argv[0], argv[1:]
+    markdown, argv = markdown_option(argv, "VALIDATION.md")
     jobs = [arg.partition("=")[::2] for arg in argv]
     unknown = [name for name, _ in jobs if name not in STUDIES]
     if unknown or not jobs:
@@ -134,8 +129,7 @@ def main(argv):
         print(f"{name}: {line}", flush=True)
         rows_out.append([name, study.how, line, *measured_on()])
     if markdown:
-        update_table(markdown, "studies", TABLE_HEADER, rows_out)
-        print(f"{len(rows_out)} row(s) of {markdown}'s current table written", flush=True)
+        write_rows(markdown, "studies", TABLE_HEADER, rows_out)
     return 0
 
 

@@ -22,7 +22,7 @@ import re
 import subprocess
 from pathlib import Path
 
-__all__ = ["cpu_name", "measured_on", "read_table", "update_table"]
+__all__ = ["cpu_name", "markdown_option", "measured_on", "read_table", "update_table", "write_rows"]
 
 
 def cpu_name():
@@ -115,3 +115,19 @@ def update_table(path, name, header, rows):
     temporary.write_text(replaced)
     os.replace(temporary, path)
     return merged
+
+
+def markdown_option(argv, default):
+    """Split ``[--markdown [FILE.md]] ARGS...`` into (the file to write, or None; ARGS)."""
+    if not argv or argv[0] != "--markdown":
+        return None, list(argv)
+    argv = list(argv[1:])
+    if argv and argv[0].endswith(".md"):
+        return argv[0], argv[1:]
+    return default, argv
+
+
+def write_rows(path, name, header, rows):
+    """:func:`update_table`, then say on stdout how many rows of ``path`` were written."""
+    update_table(path, name, header, rows)
+    print(f"{len(rows)} row(s) of {path}'s current table written", flush=True)

@@ -71,30 +71,28 @@ def noise_before_physics(diagnosis, search, likelihood, *, ar1_available):
             )
         elif ar1_available:
             under_ar1 = search("ar1")
+            taken = None
             if under_ar1.verdict == "adequate":  # correlated noise explains the data
-                diagnosis = under_ar1
-                diagnosis.noise_model = {
-                    "likelihood": "ar1",
-                    "asked": likelihood,
-                    "residual_lag1": lag1,
-                    "reason": f"{why}: no effect explains them, and under AR(1) measurement "
-                    "noise the base model is adequate",
-                }
+                taken = "no effect explains them, and under AR(1) measurement noise the base "
+                taken += "model is adequate"
             elif diagnosis.named and _no_evidence(under_ar1):
                 # what white noise named was the noise's: under AR(1) no candidate gains
                 # evidence, though the base model's gap stays outside its band
-                listed = " + ".join(diagnosis.named)
+                taken = (
+                    f"under white noise {' + '.join(diagnosis.named)} took part of the misfit, "
+                    "but under AR(1) measurement noise no candidate reaches the evidence "
+                    "threshold: the evidence for it was the noise's. The base model's gap stays "
+                    "outside its band under AR(1) noise too, so the result is unexplained"
+                )
+            if taken:
                 diagnosis = under_ar1
                 diagnosis.noise_model = {
                     "likelihood": "ar1",
                     "asked": likelihood,
                     "residual_lag1": lag1,
-                    "reason": f"{why}: under white noise {listed} took part of the misfit, but "
-                    "under AR(1) measurement noise no candidate reaches the evidence threshold: "
-                    "the evidence for it was the noise's. The base model's gap stays outside "
-                    "its band under AR(1) noise too, so the result is unexplained",
+                    "reason": f"{why}: {taken}",
                 }
-            else:
+            else:  # correlated noise does not explain the data alone
                 best = max((c["log_bf"] for c in under_ar1.candidates), default=float("nan"))
                 diagnosis.noise_model["reason"] = (
                     f"{why}; under AR(1) measurement noise the diagnosis is "
