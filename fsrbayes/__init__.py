@@ -16,6 +16,7 @@ __all__ = [
     "compare",
     "diagnose",
     "predict",
+    "force",
     "calibrate",
     "load_sensor",
     "available_sensors",
@@ -39,6 +40,10 @@ def __getattr__(name):
         from .inference.predict import predict
 
         return predict
+    if name == "force":
+        from .inference.force import force
+
+        return force
     if name == "calibrate":
         from .inference.predictive_draws import calibrate
 

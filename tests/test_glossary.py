@@ -47,7 +47,7 @@ def _undefined(keys):
     )
 
 
-@pytest.mark.parametrize("schema", ["diagnose", "predict"])
+@pytest.mark.parametrize("schema", ["diagnose", "predict", "force"])
 def test_every_key_of_a_shipped_schema_is_in_the_glossary(schema):
     path = ROOT / "fsrbayes" / "schemas" / f"{schema}.schema.json"
     assert not _undefined(_properties(json.loads(path.read_text())))

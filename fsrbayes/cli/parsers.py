@@ -1,4 +1,7 @@
-"""Parsers of the commands that question data: fit, compare, diagnose, calibrate, drift, predict."""
+"""Parsers of the commands that question data.
+
+fit, compare, diagnose, calibrate, drift, predict, force.
+"""
 
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
@@ -7,6 +10,7 @@ from ..inference.nuisance import RAMPS
 from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
 from .fitting import cmd_drift, cmd_fit
+from .forcing import cmd_force
 from .grammar import (
     HelpFormatter,
     add_loading_options,
@@ -31,13 +35,14 @@ def _command(sub, name, question, what):
 
 
 def add_analysis_commands(sub):
-    """Add ``fit``, ``compare``, ``diagnose``, ``calibrate``, ``drift``, ``predict`` to ``sub``."""
+    """Add ``fit``, ``compare``, ``diagnose``, ``calibrate``, ``drift``, ``predict``, ``force``."""
     _add_fit(sub)
     _add_compare(sub)
     _add_diagnose(sub)
     _add_calibrate(sub)
     _add_drift(sub)
     _add_predict(sub)
+    _add_force(sub)
 
 
 def _add_fit(sub):
@@ -441,3 +446,46 @@ def _add_predict(sub):
     )
     option(prd, "--seed", type=int, default=0, help="random seed")
     prd.set_defaults(func=cmd_predict)
+
+
+def _add_force(sub):
+    frc = _command(
+        sub,
+        "force",
+        "what force was on my sensor?",
+        "The load history behind a log of readings whose load is unknown, read through a fitted "
+        "sensor's creep: per sample the force's median and 50 %%/90 %% bands (joint over the "
+        "sensor's posterior, its placements and the load history), and the static reading with "
+        "the creep switched off.",
+    )
+    frc.add_argument(
+        "fit_dir",
+        help="output folder of 'fsrbayes fit': specimens it fitted are read through their "
+        "posterior, others through the population of a --hierarchical fit",
+    )
+    frc.add_argument(
+        "log",
+        help="CSV of readings in the rig format (adc_counts, vout_V, resistance_ohm or "
+        "current_A); the load column may be absent or empty, and is never used",
+    )
+    option(frc, "--json", help="write the force's quantiles per sample here, atomically")
+    option(frc, "--plot", help="figure of the force and its bands (PNG/PDF/SVG)")
+    option(frc, "--unit", choices=("N", "g"), default="N", help="unit of the force")
+    option(frc, "--draws", type=int, default=200, help="posterior draws the band is made of")
+    option(
+        frc,
+        "--calibration",
+        metavar="DIR",
+        help="fits of new specimens' calibrations ('fsrbayes calibrate'): each is read as a new "
+        "specimen of the population conditioned on its calibration",
+    )
+    option(
+        frc,
+        "--settle-s",
+        type=float,
+        help="seconds after each change of load left out of its segment's match (default: the "
+        "fit's settle time, else 1)",
+    )
+    option(frc, "--sep", default=",", help="field separator (';': decimal commas)")
+    option(frc, "--seed", type=int, default=0, help="random seed")
+    frc.set_defaults(func=cmd_force)

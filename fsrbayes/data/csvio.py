@@ -23,7 +23,14 @@ from .readouts import UNIT_COLUMNS
 from .rigio import is_rig_file, rig_tests
 from .sensors import load_sensor
 
-__all__ = ["MAX_PROBLEMS", "list_problems", "read_csv"]
+__all__ = [
+    "MAX_PROBLEMS",
+    "list_problems",
+    "parse_floats",
+    "read_csv",
+    "read_table",
+    "sensor_column",
+]
 
 STRESS_PLAUSIBLE_MIN_PA = 1e3
 """Stresses below 1 kPa (0.04 N on an A201) are taken for kPa written into stress_Pa."""
@@ -84,7 +91,8 @@ def _decode(path):
         ) from None
 
 
-def _parse_floats(values, name, line_no, path, decimal_comma):
+def parse_floats(values, name, line_no, path, decimal_comma=False):
+    """Parse a column's fields as finite floats; a DataError names the first that is not."""
     if decimal_comma:
         values = [v.replace(",", ".") for v in values]
     try:
@@ -113,7 +121,7 @@ def _require_positive(array, name, path, lines, what):
         raise DataError(f"{what} must be > 0, got {array[i]:g}", path, int(lines[i]), name)
 
 
-def _columns_of(header, path, readings=True):
+def _columns_of(header, path, readings=True, load=True):
     """Return the header's names, suffixed unit columns renamed to SI, and the renaming.
 
     ``readings=False`` reads a protocol: the reading column may be absent.
@@ -135,7 +143,7 @@ def _columns_of(header, path, readings=True):
     missing = [c for c in ("specimen", "sensor", "time_s") if c not in names]
     if not rig and "voltage_V" not in names:
         missing.append("voltage_V (or supply_V and rm_ohm for a divider)")
-    if "stress_Pa" not in names and "force_N" not in names:
+    if load and "stress_Pa" not in names and "force_N" not in names:
         missing.append("stress_Pa (or force_N, force_g)")
     if (
         readings
@@ -182,7 +190,7 @@ def read_csv(path, *, sep=",", shift_time=False, readings="required"):
     if readings not in ("required", "optional"):
         raise ValueError(f"readings must be 'required' or 'optional', got {readings!r}")
     required = readings == "required"
-    names, renamed, body, line_numbers, odd = _table(path, sep, required)
+    names, renamed, body, line_numbers, odd = read_table(path, sep, required)
     if odd:
         raise odd[0]
     return _validate(names, renamed, body, line_numbers, path, sep == ";", shift_time, required)
@@ -212,7 +220,7 @@ def list_problems(path, *, sep=",", shift_time=False, cap=MAX_PROBLEMS):
         The data (None when there is a problem).
     """
     try:
-        names, renamed, body, line_numbers, odd = _table(path, sep, True)
+        names, renamed, body, line_numbers, odd = read_table(path, sep, True)
     except DataError as exc:
         return [exc], None
     problems = odd[:cap]
@@ -278,11 +286,13 @@ def _rows_of_problem(problem, names, renamed, body, line_numbers):
     return drop
 
 
-def _table(path, sep, required):
+def read_table(path, sep=",", required=True, load=True):
     """Return the header's names, the renaming, the rows, their line numbers and misshapen rows.
 
     Problems of the file itself raise; rows whose fields do not match the header come back as
-    DataErrors (blank lines are dropped: they hold no sample).
+    DataErrors (blank lines are dropped: they hold no sample). ``required``: the reading column
+    must be there; ``load``: the load column must be there (False for a log whose load is
+    unknown, :mod:`.logs`).
     """
     text = _decode(path)
     if not text.strip():
@@ -308,7 +318,7 @@ def _table(path, sep, required):
             path,
             reader.line_num,
         ) from None
-    names, renamed = _columns_of(rows[0], path, required)
+    names, renamed = _columns_of(rows[0], path, required, load)
     width = len(names)
     body = rows[1:]
     line_numbers = np.arange(2, len(rows) + 1)
@@ -343,7 +353,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
             missing = np.array([not v.strip() for v in values])
             parsed = np.full(len(values), np.nan)
             keep = ~missing
-            parsed[keep] = _parse_floats(
+            parsed[keep] = parse_floats(
                 [v for v, k in zip(values, keep, strict=True) if k],
                 raw,
                 line_no[keep],
@@ -352,7 +362,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
             )
             values = parsed
         else:
-            values = _parse_floats(values, raw, line_no, path, decimal_comma)
+            values = parse_floats(values, raw, line_no, path, decimal_comma)
         return values * factor if factor != 1.0 else values
 
     rig = is_rig_file(names)
@@ -362,7 +372,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
         raise DataError(
             "expected a specimen id, got an empty field", path, int(line_no[empty[0]]), "specimen"
         )
-    sensor_names = _sensor_column(cols["sensor"], line_no, path)
+    sensor_names = sensor_column(cols["sensor"], line_no, path)
     load_name = "stress_Pa" if "stress_Pa" in cols else "force_N"
     load = floats(load_name)
     if not rig:
@@ -434,7 +444,7 @@ def _validate(names, renamed, body, line_no, path, decimal_comma, shift_time, re
     )
 
 
-def _sensor_column(values, line_no, path):
+def sensor_column(values, line_no, path):
     """Canonical sensor per row: a catalogue name, or a sensor file's resolved path.
 
     A ``.toml`` path is read relative to the CSV's folder; its resolved path is the sensor's name

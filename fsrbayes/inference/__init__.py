@@ -8,7 +8,8 @@ user-facing simulation-based calibration (:mod:`.calibration`). Three rooms hold
 
 - :mod:`.samplers` — emcee ensembles run to shown convergence, moves, transport maps;
 - :mod:`.evidence` — log Z estimators, each returning an :class:`EvidenceEstimate`;
-- :mod:`.population` — hierarchical models and new-specimen predictions.
+- :mod:`.population` — hierarchical models and new-specimen predictions;
+- :mod:`.force` — the force behind a log whose load is unknown (:func:`fsrbayes.force`).
 
 The entry points themselves are :func:`fsrbayes.fit` and :func:`fsrbayes.compare` (the
 modules :mod:`.fit` and :mod:`.compare` keep their names here, so they are not re-exported).

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..data.readouts import reading_of
 from .likelihood import SpecimenData
-from .predictive_draws import fit_folders, population_draws, population_folders, specimen_draws
+from .predictive_draws import draw_sources, population_draws, specimen_draws
 from .replicates import median_or_none, relative_noise, relative_widths, share_inside
 
 __all__ = [
@@ -319,7 +319,8 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
         A specimen of the protocol has neither a fit nor a population in ``fit_dir``, was fitted
         as another sensor, or the protocol mixes reading columns.
     """
-    sources = _sources(fit_dir, protocol, calibration)
+    pairs = [(sp, protocol.select(specimen=sp).tests[0].sensor) for sp in protocol.specimens]
+    sources = draw_sources(fit_dir, pairs, calibration, what="the protocol")
     readings = sorted({reading_name(t) for t in protocol})
     if len(readings) != 1:
         raise ValueError(
@@ -345,36 +346,6 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
         "n_readings": total,
         "width_90_rel": median_or_none(np.concatenate(widths)),
     }
-
-
-def _sources(fit_dir, protocol, calibration):
-    """Specimen → where its draws come from (:func:`_predict_tests`'s ``source``)."""
-    folders = fit_folders(fit_dir)
-    populations = population_folders(fit_dir)
-    if not folders:
-        raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
-    calibrated = fit_folders(calibration) if calibration is not None else {}
-    sources, missing = {}, []
-    for specimen in protocol.specimens:
-        sensor = protocol.select(specimen=specimen).tests[0].sensor
-        population = populations.get(sensor)
-        if specimen in calibrated and specimen in folders:
-            raise ValueError(
-                f"specimen {specimen!r} was fitted in {fit_dir}: a calibration is for a new "
-                "specimen of a population"
-            )
-        if specimen in folders:
-            sources[specimen] = ("fitted", folders[specimen])
-        elif population is not None:
-            sources[specimen] = ("population", population, calibrated.get(specimen))
-        else:
-            missing.append(specimen)
-    if missing:
-        raise ValueError(
-            f"specimen(s) {missing} of the protocol have no fit in {fit_dir} and no population of "
-            f"their sensor ('fsrbayes fit --hierarchical'); it holds {sorted(folders)[:8]}"
-        )
-    return sources
 
 
 def predict_schema():

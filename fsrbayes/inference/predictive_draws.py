@@ -49,6 +49,7 @@ from .posterior import LogPosterior
 __all__ = [
     "calibrate",
     "calibration_prior",
+    "draw_sources",
     "fit_folders",
     "placement_draws",
     "population_draws",
@@ -389,3 +390,56 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
         save_fit(result, folder, extra=on_fit(specimen, result) if on_fit else None)
         results[specimen] = result
     return results
+
+
+def draw_sources(fit_dir, specimens, calibration=None, what="the data"):
+    """Where each specimen's draws come from: its own fit, or a population of its sensor.
+
+    Parameters
+    ----------
+    fit_dir : str or Path
+        Output folder of ``fsrbayes fit``.
+    specimens : sequence of (str, str)
+        (specimen, sensor) pairs.
+    calibration : str or Path, optional
+        Fits of new specimens' calibration tests (:func:`calibrate`).
+    what : str
+        What the specimens come from, for messages.
+
+    Returns
+    -------
+    dict
+        Specimen → ``("fitted", folder)`` or ``("population", folder, calibration folder or
+        None)``.
+
+    Raises
+    ------
+    ValueError
+        A specimen has neither a fit nor a population of its sensor, or is calibrated and
+        fitted both.
+    """
+    folders = fit_folders(fit_dir)
+    populations = population_folders(fit_dir)
+    if not folders:
+        raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
+    calibrated = fit_folders(calibration) if calibration is not None else {}
+    sources, missing = {}, []
+    for specimen, sensor in specimens:
+        population = populations.get(sensor)
+        if specimen in calibrated and specimen in folders:
+            raise ValueError(
+                f"specimen {specimen!r} was fitted in {fit_dir}: a calibration is for a new "
+                "specimen of a population"
+            )
+        if specimen in folders:
+            sources[specimen] = ("fitted", folders[specimen])
+        elif population is not None:
+            sources[specimen] = ("population", population, calibrated.get(specimen))
+        else:
+            missing.append(specimen)
+    if missing:
+        raise ValueError(
+            f"specimen(s) {missing} of {what} have no fit in {fit_dir} and no population of "
+            f"their sensor ('fsrbayes fit --hierarchical'); it holds {sorted(folders)[:8]}"
+        )
+    return sources

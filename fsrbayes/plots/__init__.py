@@ -1,7 +1,7 @@
 """The package's figures, grouped by what they show; every function returns ``(fig, axes)``.
 
 - :mod:`.fit` — one specimen's fit: corner plot, credible bands of I(t) and drift(t),
-  drift(3600 s) per test, SBC ranks, predicted readings.
+  drift(3600 s) per test, SBC ranks, predicted readings, forces read from a log.
 - :mod:`.population` — a population: box plots of a new specimen's drift(3600 s), drift(t)
   curve families.
 - :mod:`.diagnosis` — a diagnosis: drift, misfit, residuals, discrepancy shapes.
@@ -30,6 +30,7 @@ from .fit import (  # noqa: E402
     corner_plot,
     drift_3600_plot,
     drift_time_plot,
+    force_plot,
     predict_plot,
     sbc_rank_plot,
 )
@@ -55,6 +56,7 @@ __all__ = [
     "diagnosis_residual_plot",
     "sbc_rank_plot",
     "predict_plot",
+    "force_plot",
     "save_figure",
 ]
 

@@ -255,3 +255,22 @@ def predict_plot(prediction, max_tests=12):
     fig.suptitle("posterior predictive reading: 50 % and 90 % bands", fontsize=10)
     fig.tight_layout()
     return fig, axes
+
+
+def force_plot(reading, max_tests=6):
+    """Per part of a log: the force's 50 % and 90 % bands, its median and the static reading."""
+    tests = reading["tests"][:max_tests]
+    fig, axes = plt.subplots(len(tests), 1, figsize=(9.0, 2.8 * len(tests)), squeeze=False)
+    unit = reading["force_unit"]
+    for ax, test in zip(axes[:, 0], tests, strict=True):
+        t = np.asarray(test["time_s"])
+        for (lo, hi), alpha in ((("q05", "q95"), 0.25), (("q25", "q75"), 0.45)):
+            ax.fill_between(t, test[lo], test[hi], color="C0", alpha=alpha, lw=0, step="mid")
+        ax.plot(t, test["q50"], "C0", lw=1, label="creep-compensated (median, 50 %, 90 %)")
+        ax.plot(t, test["static"], "C3", lw=0.8, alpha=0.8, label="static (creep switched off)")
+        ax.set(title=f"{test['specimen']} {test['test']}".strip(), xlabel="time (s)",
+               ylabel=f"force ({unit})")  # fmt: skip
+        ax.set_ylim(bottom=0)
+    axes[0, 0].legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    return fig, axes

@@ -1,0 +1,160 @@
+"""What force is on the sensor now: the load history behind a drifting log, with credible bands.
+
+``force(fit_dir, log)`` reads a log of readings whose load is unknown (any readout of the data
+format: ADC counts, vout, resistance, current; :func:`~fsrbayes.data.logs.read_log`) through a
+fitted sensor's creep, and returns, per sample, the 5/25/50/75/95 % quantiles of the force —
+joint over the sensor's parameter posterior, the fit's own misfit to its calibration and the
+load history the reading allows (:mod:`.segments` states that prior, :mod:`.estimate` the
+inversion) — and ``static``, the same log read with the fit's creep switched off.
+
+The fit must explain its calibration weights by its stress laws: a fit that sampled each
+placement's own level (``fit --placement``, the default where weights were placed by hand) is
+refused, since a placement's level and a force are one unknown in a log whose load is unknown;
+calibrate with ``fsrbayes fit --no-placement``.
+
+A specimen the fit saw is read through its own posterior; one it never saw, of a sensor type
+fitted with ``--hierarchical``, as a new specimen of the population, conditioned on its own
+calibration where one is given (``calibration``, :func:`~fsrbayes.inference.predictive_draws.
+calibrate`), exactly as ``predict`` does.
+"""
+
+import json
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ...data.logs import read_log
+from ..nuisance import is_placement
+from ..output import open_fit_tree
+from ..predictive_draws import draw_sources
+from .estimate import FORCE_QUANTILES, STATIC_AT_S, STRESS_MIN_PA, force_of_stress, read_force
+from .segments import find_segments
+
+__all__ = ["FORCE_QUANTILES", "FORCE_UNITS", "find_segments", "force", "force_schema"]
+
+FORCE_UNITS = ("N", "g")
+
+QUANTILE_KEYS = tuple(f"q{round(100 * q):02d}" for q in FORCE_QUANTILES)
+
+
+def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, settle_s=None):
+    """Return the force behind every sample of a log, with its band (module docstring).
+
+    Parameters
+    ----------
+    fit_dir : str or Path
+        Output folder of ``fsrbayes fit`` (a specimen fit, or ``--hierarchical``).
+    log : str, Path or list of ReadingLog
+        The log (``read_log`` reads a path): the load column absent, empty or ignored.
+    unit : {"N", "g"}
+        The force's unit (g: the mass whose weight presses so, F/g₀).
+    n_draws : int
+        Posterior draws the band is made of.
+    seed : int
+    calibration : str or Path, optional
+        Fits of new specimens' calibrations (:func:`~fsrbayes.calibrate`).
+    settle_s : float, optional
+        Seconds after each change left out of its segment's match (default: the fit's, else 1).
+
+    Returns
+    -------
+    dict
+        ``force_unit``, ``quantiles``, ``loading`` (how the fit's loads were applied: sensor,
+        area, settle time), ``tests`` (per part: ``specimen``, ``test``,
+        ``time_s``, ``q05`` … ``q95``, ``static``, ``unloaded``, ``segments``, ``fit``,
+        ``specimen_source``, ``model``).
+
+    Raises
+    ------
+    ValueError
+        A specimen of the log has no fit and no population, was fitted as another sensor or
+        with placement levels, or ``unit``/``n_draws`` are out of range.
+    """
+    if unit not in FORCE_UNITS:
+        raise ValueError(f"unit must be one of {FORCE_UNITS}, got {unit!r}")
+    if int(n_draws) < 10:
+        raise ValueError(f"n_draws must be >= 10, got {n_draws!r}")
+    logs = read_log(log) if isinstance(log, (str, Path)) else list(log)
+    pairs = list(dict.fromkeys((part.specimen, part.sensor) for part in logs))
+    sources = draw_sources(fit_dir, pairs, calibration, what="the log")
+    tests, loading = [], None
+    for part in logs:
+        source = sources[part.specimen]
+        attrs = _fit_attrs(source)
+        if attrs["sensor"] != part.sensor:
+            raise ValueError(
+                f"specimen {part.specimen!r} was fitted as a {attrs['sensor']} sensor, the log "
+                f"says {part.sensor}"
+            )
+        settle = float(attrs.get("settle_s", 1.0)) if settle_s is None else float(settle_s)
+        read = read_force(source, part, n_draws=n_draws, seed=seed, settle_s=settle)
+        area = read["area_m2"]
+        bands = np.quantile(
+            force_of_stress(read["stress_draws"], area, unit), FORCE_QUANTILES, axis=0
+        )
+        loading = loading or {
+            "sensor": part.sensor,
+            "area_m2": area,
+            "settle_s": settle,
+            "note": "a force holds for loads applied as the fit's were: through the sensor's "
+            "active area, by the same kind of puck or weight",
+        }
+        tests.append(
+            {
+                "specimen": part.specimen,
+                "test": part.test,
+                "time_s": part.time_s,
+                **dict(zip(QUANTILE_KEYS, bands, strict=True)),
+                "static": force_of_stress(read["static_Pa"], area, unit),
+                "unloaded": np.mean(read["stress_draws"] > 0, axis=0) < 0.5,
+                "segments": [
+                    {**s, "median": float(force_of_stress(s.pop("median_Pa"), area, unit))}
+                    for s in read["segments"]
+                ],
+                "fit": str(source[1]),
+                "specimen_source": source[0] if source[0] == "fitted" or source[2] is None
+                else "calibrated",
+                "model": read["model"],
+                "draws": int(n_draws),
+            }
+        )  # fmt: skip
+    return {
+        "force_unit": unit,
+        "quantiles": list(FORCE_QUANTILES),
+        "static_at_s": STATIC_AT_S,
+        "stress_min_Pa": STRESS_MIN_PA,
+        "loading": loading,
+        "tests": tests,
+    }
+
+
+def _fit_attrs(source):
+    """Return the attributes of the fit (or population) a specimen's draws come from.
+
+    Raises ValueError where a fit the draws come from sampled each placement's own level: a
+    placement's level and the force are one unknown in a log of an unknown load, so a fit
+    whose placements absorbed part of its weights' readings cannot read a force.
+    """
+    name = "posterior.nc" if source[0] == "fitted" else "population.nc"
+    with open_fit_tree(Path(source[1]) / name) as tree:
+        attrs = dict(tree.attrs)
+    fits = [Path(source[1])] if source[0] == "fitted" else sorted(
+        p.parent for p in Path(source[1]).glob("*/posterior.nc")
+    )  # fmt: skip
+    for folder in fits:
+        with open_fit_tree(folder / "posterior.nc") as tree:
+            placed = any(is_placement(str(n)) for n in tree.posterior.data_vars)
+        if placed:
+            raise ValueError(
+                f"{folder} was fitted with each placement's own level (placement[k]): a level "
+                "and a force are one unknown in a log whose load is unknown; fit the "
+                "calibration again with 'fsrbayes fit --no-placement' to read forces with it"
+            )
+    return attrs
+
+
+def force_schema():
+    """Return the JSON Schema of a force reading (``fsrbayes/schemas/force.schema.json``)."""
+    text = resources.files("fsrbayes").joinpath("schemas/force.schema.json").read_text()
+    return json.loads(text)
