@@ -201,3 +201,30 @@ def test_a_fit_folder_of_another_format_and_a_fit_with_placements_are_refused(
     placed.to_netcdf(tmp_path / "placed" / "posterior.nc", engine="h5netcdf")
     assert main(["force", str(tmp_path / "placed"), str(staircase["csv"])]) == 2
     assert "--no-placement" in capsys.readouterr().err
+
+
+def test_the_online_reader_follows_the_offline_one_reading_by_reading(staircase):
+    from fsrbayes.inference.force import OnlineForce
+
+    (part,) = read_log(staircase["csv"])
+    offline = force(staircase["fit"], [part], unit="g", n_draws=20)["tests"][0]
+    reader = OnlineForce(staircase["fit"], part.specimen, part.sensor, part.readout,
+                         n_draws=20, unit="g", rate_hz=10.0)  # fmt: skip
+    online = np.array([reader.update(t, r) for t, r in zip(part.time_s, part.reading, strict=True)])
+    t = part.time_s
+    true = _true_grams(t)
+    # the first weight is from rest: the online median agrees with the offline one at its end
+    end = np.flatnonzero((t > 50.0) & (t < 61.0))
+    assert np.median(online[end, 0]) == pytest.approx(
+        np.median(np.asarray(offline["q50"])[end]), rel=0.01
+    )
+    # every weight is read within a few percent once settled, the rests as nothing
+    for k, g in enumerate((150.0, 400.0, 255.0)):
+        held = (t > 1.5 + 80 * k + 5) & (t < 1.5 + 80 * k + 59)
+        assert np.median(online[held, 0]) == pytest.approx(g, rel=0.03)
+        assert (
+            np.mean((online[held, 1] <= online[held, 0]) & (online[held, 0] <= online[held, 2]))
+            == 1
+        )
+    rest = (true == 0) & (t > 3.0) & (np.abs((t - 1.5) % 80.0 - 60.0) > 0.15)
+    assert np.all(online[rest] == 0)

@@ -15,7 +15,8 @@ calibrate with ``fsrbayes fit --no-placement``.
 A specimen the fit saw is read through its own posterior; one it never saw, of a sensor type
 fitted with ``--hierarchical``, as a new specimen of the population, conditioned on its own
 calibration where one is given (``calibration``, :func:`~fsrbayes.inference.predictive_draws.
-calibrate`), exactly as ``predict`` does.
+calibrate`), exactly as ``predict`` does. :class:`OnlineForce` gives the force now, one reading
+at a time, for an acquisition loop (:mod:`.online`).
 """
 
 import json
@@ -29,9 +30,17 @@ from ..nuisance import is_placement
 from ..output import open_fit_tree
 from ..predictive_draws import draw_sources
 from .estimate import FORCE_QUANTILES, STATIC_AT_S, STRESS_MIN_PA, force_of_stress, read_force
+from .online import OnlineForce
 from .segments import find_segments
 
-__all__ = ["FORCE_QUANTILES", "FORCE_UNITS", "find_segments", "force", "force_schema"]
+__all__ = [
+    "FORCE_QUANTILES",
+    "FORCE_UNITS",
+    "OnlineForce",
+    "find_segments",
+    "force",
+    "force_schema",
+]
 
 FORCE_UNITS = ("N", "g")
 

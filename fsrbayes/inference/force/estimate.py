@@ -38,7 +38,18 @@ from ..predict import evaluation_packing
 from ..predictive_draws import population_draws, specimen_draws
 from .segments import find_segments
 
-__all__ = ["FORCE_QUANTILES", "STATIC_AT_S", "STRESS_MIN_PA", "read_force"]
+__all__ = [
+    "FORCE_QUANTILES",
+    "STATIC_AT_S",
+    "STRESS_GRID",
+    "STRESS_MIN_PA",
+    "ModelDraws",
+    "candidate_test",
+    "force_of_stress",
+    "fsr_log_r",
+    "match_log_stress",
+    "read_force",
+]
 
 FORCE_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
@@ -58,7 +69,7 @@ BINS = 24
 FAMILIES = (is_ramp, is_landing)
 
 
-class _Draws:
+class ModelDraws:
     """The fit's draws on candidate tests: the same parameter rows for every segment.
 
     Every draw carries one level drawn from the fit's own misfit (:func:`_misfit`): the model
@@ -127,7 +138,7 @@ def _population_fits(folder, calibration):
     return sorted(p.parent for p in Path(folder).glob("*/posterior.nc"))
 
 
-def _candidate(log, history, stress, start_s, times_s, label):
+def candidate_test(log, history, stress, start_s, times_s, label):
     """Return a creep test whose load follows ``history`` then ``stress`` from ``start_s``.
 
     ``history``: (start_s, level) pairs; the test's onset is its first change (or ``start_s``).
@@ -147,7 +158,7 @@ def _candidate(log, history, stress, start_s, times_s, label):
     )  # fmt: skip
 
 
-def _fsr_log_r(log_current, readout):
+def fsr_log_r(log_current, readout):
     """Log R of the FSR from the model's log current through it in the log's circuit."""
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         r = readout.source_V / np.exp(log_current) - readout.rm_ohm
@@ -156,8 +167,10 @@ def _fsr_log_r(log_current, readout):
 
 def _static_curve(draws, log):
     """Return the fit's log R :data:`STATIC_AT_S` after a load on a rested sensor, per stress."""
-    tests = [_candidate(log, [], s, 0.0, [STATIC_AT_S], f"s{i}") for i, s in enumerate(STRESS_GRID)]
-    log_r = _fsr_log_r(draws.log_current(tests)[:, :, 0], log.readout)
+    tests = [
+        candidate_test(log, [], s, 0.0, [STATIC_AT_S], f"s{i}") for i, s in enumerate(STRESS_GRID)
+    ]
+    log_r = fsr_log_r(draws.log_current(tests)[:, :, 0], log.readout)
     valid = np.isfinite(log_r)
     # where no draw gives a reading (the gap closed), the curve is NaN and never inverted
     ranked = np.sort(np.where(valid, log_r, np.inf), axis=0)
@@ -194,16 +207,22 @@ def _bins(t, y):
     return times, means, counts[keep]
 
 
-def _solve_segment(draws, log, history, start_s, t, log_r, rng):
-    """Per draw, the stress of one loaded segment (S,), and the candidates' validity."""
-    times, means, counts = _bins(t, log_r)
-    tests = [
-        _candidate(log, history, s, start_s, times, f"c{i}") for i, s in enumerate(STRESS_GRID)
-    ]
-    pred = _fsr_log_r(draws.log_current(tests), log.readout)  # (S, G, B)
-    pred = np.where(np.isfinite(pred), pred, -np.inf)  # a closed gap: R → 0, read as heavier
-    weights = counts / counts.sum()
-    residual = np.sum((means[None, None, :] - pred) * weights, axis=2)  # rises with stress
+def match_log_stress(residual):
+    """Per draw, the log stress at which a residual rising over STRESS_GRID crosses 0.
+
+    Parameters
+    ----------
+    residual : ndarray, shape (S, G)
+        The readings' mean minus the model's, per draw and grid stress (NaN: no reading).
+
+    Returns
+    -------
+    log_stress, slope : ndarray, shape (S,)
+        Interpolated linearly in log stress between the grid points around the crossing (the
+        grid's ends where it never crosses); the residual's slope there.
+    k : ndarray of int, shape (S,)
+        The grid point above the crossing.
+    """
     residual = np.where(np.isnan(residual), np.inf, residual)
     above = residual >= 0
     k = np.where(above.any(axis=1), np.argmax(above, axis=1), len(STRESS_GRID) - 1)
@@ -214,12 +233,26 @@ def _solve_segment(draws, log, history, start_s, t, log_r, rng):
     with np.errstate(invalid="ignore", divide="ignore"):
         frac = np.clip(np.where(np.isfinite(r1) & (r1 != r0), -r0 / (r1 - r0), 0.5), 0.0, 1.0)
         slope = np.where(np.isfinite(r1), (r1 - r0) / (x1 - x0), np.inf)
-    log_stress = x0 + frac * (x1 - x0)
+    return x0 + frac * (x1 - x0), slope, k
+
+
+def _solve_segment(draws, log, history, start_s, t, log_r, rng):
+    """Per draw, the stress of one loaded segment (S,), and the candidates' validity."""
+    times, means, counts = _bins(t, log_r)
+    tests = [
+        candidate_test(log, history, s, start_s, times, f"c{i}") for i, s in enumerate(STRESS_GRID)
+    ]
+    pred = fsr_log_r(draws.log_current(tests), log.readout)  # (S, G, B)
+    pred = np.where(np.isfinite(pred), pred, -np.inf)  # a closed gap: R → 0, read as heavier
+    weights = counts / counts.sum()
+    residual = np.sum((means[None, None, :] - pred) * weights, axis=2)  # rises with stress
+    log_stress, slope, k = match_log_stress(residual)
+    rows = np.arange(len(k))
     # the segment's own scatter about the match: the standard error of its weighted mean
-    scatter = means[None, :] - pred[rows, k]
-    spread = np.sqrt(
-        np.sum(weights * (scatter - np.sum(weights * scatter, axis=1, keepdims=True)) ** 2, axis=1)
-    )
+    with np.errstate(invalid="ignore"):  # a draw whose gap closed there has no scatter
+        scatter = means[None, :] - pred[rows, k]
+        centred = scatter - np.sum(weights * scatter, axis=1, keepdims=True)
+        spread = np.nan_to_num(np.sqrt(np.sum(weights * centred**2, axis=1)))
     se = spread / np.sqrt(max(len(means) - 1, 1))
     with np.errstate(invalid="ignore", divide="ignore"):
         jitter = np.where(slope > 0, se / slope, 0.0) * rng.standard_normal(len(k))
@@ -250,7 +283,7 @@ def read_force(source, log, *, n_draws=200, seed=0, settle_s=1.0):
         fit's).
     """
     sensor = load_sensor(log.sensor)
-    draws = _Draws(source, n_draws, seed)
+    draws = ModelDraws(source, n_draws, seed)
     curve = _static_curve(draws, log)
     r = log.resistance_ohm
     with np.errstate(divide="ignore"):
