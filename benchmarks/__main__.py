@@ -1,6 +1,6 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [--markdown [FILE]] [solver]
-[scattered] [csv] [rig-read] [predict] [likelihood] [creep-laws] [engine] [map-search] [long-run]
-[fit] [rig-fit] [evidence] [evidence-seeds] [compare] [dynesty] [hierarchical]
+[scattered] [csv] [rig-read] [predict] [force] [likelihood] [creep-laws] [engine] [map-search]
+[long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [compare] [dynesty] [hierarchical]
 [population-sizes] [diagnose] [demo]``.
 
 ``--markdown`` also writes each benchmark's result as a row of the current table of FILE
@@ -14,7 +14,8 @@ so numbers from different days can be read against their machine. Without names 
 (converged Burgers fits of one specimen, five seeds, in both coordinates), ``rig-fit`` (the divider
 rig in both coordinates), ``evidence``, ``hierarchical``, ``population-sizes`` (3, 6, 16 specimens'
 hyper-posteriors in both coordinates), ``map-search`` (the MAP search before and after its
-tangent gradients and compact Hessians), ``diagnose`` and ``demo`` take minutes.
+tangent gradients and compact Hessians), ``diagnose``, ``demo`` and ``force`` (a calibration fit
+before the timed reading) take minutes.
 """
 
 import os
@@ -34,6 +35,7 @@ from benchmarks import (  # noqa: E402
     engine,
     evidence,
     fit,
+    force,
     hierarchical,
     likelihood,
     long_run,
@@ -57,6 +59,7 @@ BENCHMARKS = {
     "csv": lambda: csv_read.report(csv_read.run()),
     "rig-read": lambda: rig_read.report(rig_read.run()),
     "predict": lambda: predict.report(predict.run()),
+    "force": lambda: force.report(force.run()),
     "likelihood": lambda: "\n".join(
         [likelihood.report(likelihood.run()), likelihood.report_rig(likelihood.run_rig())]
     ),

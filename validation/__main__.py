@@ -8,12 +8,14 @@ are summarised instead of run again — the studies take tens of minutes. ``--ma
 each summary as a row of the table ``studies`` of FILE (default VALIDATION.md), with its date,
 commit and machine; rows of studies not run are kept (:mod:`validation.tables`).
 
-The studies registered here are the ones whose rows say what ``diagnose`` named: ``noise_first``
-(correlated noise, nothing hidden), ``outside_menu`` (causes outside the catalogue) and
-``foreign_forms`` (catalogue mechanisms with foreign time courses). The others print their own
+The studies registered here: ``noise_first`` (correlated noise, nothing hidden),
+``outside_menu`` (causes outside the catalogue) and ``foreign_forms`` (catalogue mechanisms with
+foreign time courses), whose rows say what ``diagnose`` named; ``force_bench`` (creep-compensated
+force on the real-402 bench's frozen load histories). The others print their own
 tables (``python -m validation.NAME``) and are recorded by hand in VALIDATION.md's summary.
 """
 
+import importlib
 import json
 import sys
 from dataclasses import dataclass
@@ -34,22 +36,9 @@ class Study:
     summary: Callable
 
 
-def _noise_first():
-    from validation import noise_first
-
-    return noise_first
-
-
-def _outside_menu():
-    from validation import outside_menu
-
-    return outside_menu
-
-
-def _foreign_forms():
-    from validation import foreign_forms
-
-    return foreign_forms
+def _module(name):
+    """Import a study's module on first use (the studies pull in the samplers)."""
+    return importlib.import_module(f"validation.{name}")
 
 
 def _noise_summary(rows):
@@ -87,22 +76,31 @@ STUDIES = {
     "noise_first": Study(
         "one-specimen A201 sets under Ornstein–Uhlenbeck noise (τ 30–300 s, sd 0.5–2 %), every "
         "effect and law a candidate (`python -m validation.noise_first N ROWS.json FIRST_SEED`)",
-        lambda: _noise_first().run(10),
-        lambda rows: _noise_first().format_rows(rows),
+        lambda: _module("noise_first").run(10),
+        lambda rows: _module("noise_first").format_rows(rows),
         _noise_summary,
     ),
     "outside_menu": Study(
         "6 kinds × 5 data sets simulated by code outside the package's effects "
         "(`python -m validation.outside_menu 5`)",
-        lambda: _outside_menu().run(n_sets=5),
-        lambda rows: _outside_menu().format_rows(rows),
+        lambda: _module("outside_menu").run(n_sets=5),
+        lambda rows: _module("outside_menu").format_rows(rows),
         _outside_summary,
     ),
     "foreign_forms": Study(
         "4 mechanisms × 2 magnitudes × 5 data sets (`python -m validation.foreign_forms 5`)",
-        lambda: _foreign_forms().run(n_sets=5),
-        lambda rows: _foreign_forms().format_rows(rows),
+        lambda: _module("foreign_forms").run(n_sets=5),
+        lambda rows: _module("foreign_forms").format_rows(rows),
         _foreign_summary,
+    ),
+    "force_bench": Study(
+        "the real-402 bench's frozen load histories (5 of the force set, B-hold-60min) read "
+        "through calibrations of the same sensors (4 weights × 3 min, `fit --no-placement`), "
+        "against a static power law through readings 4–6 s after landing "
+        "(`python -m validation.force_bench FOLDER ROWS.json`)",
+        lambda: _module("force_bench").run("force-bench"),
+        lambda rows: _module("force_bench").format_rows(rows),
+        lambda rows: _module("force_bench").summary(rows),
     ),
 }
 
