@@ -231,28 +231,53 @@ def sbc_rank_plot(result, bins=10, per_row=4):
     return fig, axes
 
 
+MAX_POINTS = 1500
+"""Readings drawn per panel at most (every k-th beyond)."""
+
+
 def predict_plot(prediction, max_tests=12):
-    """Per protocol test: the predictive reading's 50 % and 90 % bands and any logged readings."""
+    """Per protocol test, two panels: the reading with its bands, and both relative to the median.
+
+    The upper panel shows the predictive median, its 50 % and 90 % bands and any logged readings
+    (thinned beneath the bands); the lower one the same in % of the median, where a band of a
+    percent — invisible beside a staircase's steps — shows, with the readings that leave it.
+    """
     tests = prediction["tests"][:max_tests]
     cols = min(3, len(tests))
     rows = int(np.ceil(len(tests) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = plt.subplots(2 * rows, cols, figsize=(4.2 * cols, 4.6 * rows), squeeze=False,
+                             gridspec_kw={"height_ratios": [3, 2] * rows})  # fmt: skip
     unit = f"{prediction['reading']} ({prediction['reading_unit']})"
-    for ax, test in zip(axes.ravel(), tests, strict=False):
+    for k, test in enumerate(tests):
+        top, low = axes[2 * (k // cols), k % cols], axes[2 * (k // cols) + 1, k % cols]
         t = np.asarray(test["time_s"])
-        for (lo, hi), alpha in ((("q05", "q95"), 0.25), (("q25", "q75"), 0.45)):
-            ax.fill_between(t, test[lo], test[hi], color="C0", alpha=alpha, lw=0, step="mid")
-        ax.plot(t, test["q50"], "C0", lw=1)
-        if test["observed"] is not None:
-            ax.plot(t, test["observed"], "k.", ms=2)
+        median = np.asarray(test["q50"], dtype=float)
+        scale = np.where(median != 0, median, np.nan)
+        for ax, relative in ((top, False), (low, True)):
+
+            def shown(values, relative=relative, scale=scale):
+                return 100.0 * (values / scale - 1.0) if relative else values
+
+            if test["observed"] is not None:  # beneath the bands, thinned
+                every = max(1, t.size // MAX_POINTS)
+                observed = np.asarray(test["observed"], dtype=float)
+                ax.plot(t[::every], shown(observed)[::every], ".", color="0.45", ms=1.5, zorder=1)
+            for (lo, hi), alpha in ((("q05", "q95"), 0.35), (("q25", "q75"), 0.55)):
+                lower = shown(np.asarray(test[lo], dtype=float))
+                upper = shown(np.asarray(test[hi], dtype=float))
+                ax.fill_between(t, lower, upper, color="C0", alpha=alpha, lw=0, step="mid",
+                                zorder=2)  # fmt: skip
+            ax.plot(t, shown(median), "C1", lw=1, zorder=3)
+            if t.size and t.min() > 0:
+                ax.set_xscale("log")
         covered = "" if test["coverage_90"] is None else f"; {test['coverage_90']:.0%} in 90 %"
         label = test["test"] or f"{test['voltage_V']:g} V, {test['stress_Pa'] / 1e3:.3g} kPa"
-        ax.set(title=f"{test['specimen']} {label}{covered}", xlabel="time (s)", ylabel=unit)
-        if t.size and t.min() > 0:
-            ax.set_xscale("log")
-    for ax in axes.ravel()[len(tests) :]:
-        ax.set_visible(False)
-    fig.suptitle("posterior predictive reading: 50 % and 90 % bands", fontsize=10)
+        top.set(title=f"{test['specimen']} {label}{covered}", ylabel=unit)
+        low.set(xlabel="time (s)", ylabel="% of the median")
+    for k in range(len(tests), rows * cols):
+        axes[2 * (k // cols), k % cols].set_visible(False)
+        axes[2 * (k // cols) + 1, k % cols].set_visible(False)
+    fig.suptitle("posterior predictive reading: median, 50 % and 90 % bands", fontsize=10)
     fig.tight_layout()
     return fig, axes
 
