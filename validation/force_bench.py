@@ -178,18 +178,27 @@ def _pooled(rows, key, static_key):
     return float(np.median([c / s for c, s in pairs]))
 
 
+def _coverage(rows):
+    """The share of loaded samples inside the 90 % band, pooled over ``rows``."""
+    return sum(r["inside_90"] for r in rows) / sum(r["loaded"] for r in rows)
+
+
 def summary(rows):
-    """One line: pooled coverage, the error ratios, unloaded samples read as 0."""
+    """One line: pooled coverage (all, the force set alone, per history), the error ratios,
+    unloaded samples read as 0."""
     loaded = sum(r["loaded"] for r in rows)
-    coverage = sum(r["inside_90"] for r in rows) / loaded
+    force_set = [r for r in rows if r["entry"].startswith("F-")]
+    per_history = [_coverage([r for r in rows if r["entry"] == e])
+                   for e in dict.fromkeys(r["entry"] for r in rows)]  # fmt: skip
     whole = _pooled(rows, "median_err", "median_err_static")
     late4 = _pooled(rows, "err_after_240s", "err_static_after_240s")
     late10 = _pooled(rows, "err_after_600s", "err_static_after_600s")
     zero = [r["unloaded_zero"] for r in rows if r["unloaded_zero"] is not None]
     return (
-        f"90 % band covers the true force on {coverage:.3f} of {loaded} loaded samples "
-        f"(target 0.80–0.98); median error compensated/static {whole:.2f} over whole histories "
-        f"(target ≤ 0.5)"
+        f"90 % band covers the true force on {_coverage(rows):.3f} of {loaded} loaded samples, "
+        f"{_coverage(force_set):.3f} on the force set alone, {min(per_history):.2f}–"
+        f"{max(per_history):.2f} per history (target 0.80–0.98 pooled); median error "
+        f"compensated/static {whole:.2f} over whole histories (target ≤ 0.5)"
         + (f", {late4:.2f} ≥ 4 min into a hold" if late4 is not None else "")
         + (f", {late10:.2f} ≥ 10 min (target ≤ 0.33)" if late10 is not None else "")
         + f"; unloaded samples read 0 on {np.mean(zero):.3f}; the band's median width "
