@@ -36,8 +36,9 @@ def cmd_force(args):
     for test in result["tests"]:
         loaded = [s for s in test["segments"] if s["loaded"]]
         label = f"{test['specimen']} {test['test']}".strip()
+        unconverged = "" if test["fit_converged"] else "; fit NOT converged: bands unreliable"
         print(f"{label}: {len(loaded)} loaded segment(s) of {len(test['segments'])} "
-              f"[{test['specimen_source']}, {test['model']}]")  # fmt: skip
+              f"[{test['specimen_source']}, {test['model']}{unconverged}]")  # fmt: skip
         for seg in loaded:
             i = int(min(len(test["time_s"]) - 1, _index(test["time_s"], seg["end_s"])))
             print(

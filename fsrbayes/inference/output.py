@@ -12,6 +12,7 @@ import json
 import numpy as np
 
 from ..data.creep import observed_drift
+from ..data.sensors import load_sensor
 from ..physics.constants import DRIFT_TIME_S
 from ..utils import atomic_path, json_ready, write_json_atomic
 from .posterior import drift_between
@@ -149,6 +150,7 @@ def to_datatree(result, *, max_draws=2000, seed=0):
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
         "settle_s": data.settle_s,
+        "area_m2": load_sensor(data.sensor).area_m2,
         "test_keys": json.dumps([list(key) for key in data.test_keys]),
         "specimen": data.specimen,
         "sensor": data.sensor,
@@ -259,6 +261,7 @@ def summary(result, tree):
         "tunneling": posterior.tunneling,
         "likelihood": posterior.likelihood,
         "settle_s": data.settle_s,
+        "area_m2": load_sensor(data.sensor).area_m2,
         "parameters": parameters,
         "tests": tests,
         "convergence": {

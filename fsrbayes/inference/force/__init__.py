@@ -98,7 +98,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
             )
         settle = float(attrs.get("settle_s", 1.0)) if settle_s is None else float(settle_s)
         read = read_force(source, part, n_draws=n_draws, seed=seed, settle_s=settle)
-        area = read["area_m2"]
+        area = float(attrs.get("area_m2", read["area_m2"]))  # the area the fit's loads were on
         bands = np.quantile(
             force_of_stress(read["stress_draws"], area, unit), FORCE_QUANTILES, axis=0
         )
@@ -126,6 +126,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
                 else "calibrated",
                 "model": read["model"],
                 "draws": int(n_draws),
+                "fit_converged": bool(int(attrs.get("converged", 1))),
             }
         )  # fmt: skip
     return {
@@ -148,6 +149,9 @@ def _fit_attrs(source):
     name = "posterior.nc" if source[0] == "fitted" else "population.nc"
     with open_fit_tree(Path(source[1]) / name) as tree:
         attrs = dict(tree.attrs)
+    if source[0] == "population" and source[2] is not None:  # its calibration's convergence
+        with open_fit_tree(Path(source[2]) / "posterior.nc") as tree:
+            attrs["converged"] = tree.attrs.get("converged", 0)
     fits = [Path(source[1])] if source[0] == "fitted" else sorted(
         p.parent for p in Path(source[1]).glob("*/posterior.nc")
     )  # fmt: skip
