@@ -228,3 +228,93 @@ def test_the_online_reader_follows_the_offline_one_reading_by_reading(staircase)
         )
     rest = (true == 0) & (t > 3.0) & (np.abs((t - 1.5) % 80.0 - 60.0) > 0.15)
     assert np.all(online[rest] == 0)
+
+
+def _as_resistance_log(csv, path, specimen=None, start_s=0.0):
+    """The staircase's ADC log rewritten as an ohmmeter's (inf when open), optionally renamed
+    and cut to start at ``start_s``."""
+    (part,) = read_log(csv)
+    keep = part.time_s >= start_s
+    r = part.resistance_ohm[keep]
+    name = specimen or part.specimen
+    rows = [f"{name},fsr402,{t:g},5,{v:.6g}" for t, v in zip(part.time_s[keep], r, strict=True)]
+    return _write(path, rows, "specimen,sensor,time_s,voltage_V,resistance_ohm")
+
+
+def test_an_ohmmeters_log_with_overflows_reads_its_weights_and_rests(staircase, tmp_path):
+    # the same resistances read at a constant 5 V: the model's circuit differs from the
+    # divider's, so the forces are not compared with the truth, only where loads are found
+    path = _as_resistance_log(staircase["csv"], tmp_path / "ohm.csv")
+    (part,) = read_log(path)
+    assert part.readout.reading == "resistance_ohm" and np.isinf(part.resistance_ohm).any()
+    (test,) = force(staircase["fit"], [part], unit="g", n_draws=20)["tests"]
+    loaded = [s for s in test["segments"] if s["loaded"]]
+    assert [round(s["start_s"]) for s in loaded] == [2, 82, 162]
+    t, q50 = np.asarray(test["time_s"]), np.asarray(test["q50"])
+    rest = (_true_grams(t) == 0) & (t > 3.0) & (np.abs((t - 1.5) % 80.0 - 60.0) > 0.15)
+    assert np.all(q50[rest] == 0)
+
+
+def test_a_log_of_two_specimens_and_one_that_starts_loaded(staircase, tmp_path):
+    params_fit = staircase["fit"] / "posterior.nc"
+    root = tmp_path / "fits"
+    for name in ("fsr402-01", "second"):
+        (root / name).mkdir(parents=True)
+        import xarray as xr
+
+        with xr.open_datatree(params_fit, engine="h5netcdf") as tree:
+            copy = tree.load()
+        copy.attrs["specimen"] = name
+        copy.to_netcdf(root / name / "posterior.nc", engine="h5netcdf")
+    text = staircase["csv"].read_text().splitlines()
+    late = [line for line in text[1:] if 10.0 <= float(line.split(",")[3]) < 75.0]
+    second = [line.replace("fsr402-01,", "second,", 1) for line in late]
+    both = _write(tmp_path / "both.csv", text[1:] + second, text[0])
+    result = force(root, both, unit="g", n_draws=20)
+    assert [t["specimen"] for t in result["tests"]] == ["fsr402-01", "second"]
+    first, cut = result["tests"]
+    assert [round(s["median"]) for s in first["segments"] if s["loaded"]] == pytest.approx(
+        [150, 400, 255], rel=0.02
+    )
+    # a log that starts 8.5 s into a hold reads the weight as landed at its first sample:
+    # light by what the creep of those seconds would add, within a few percent
+    (held,) = [s for s in cut["segments"] if s["loaded"]]
+    assert held["start_s"] == 0.0 and held["median"] == pytest.approx(150.0, rel=0.05)
+
+
+def test_the_online_reader_refuses_what_force_refuses(staircase, tmp_path):
+    import xarray as xr
+
+    from fsrbayes.data.readouts import Readout
+    from fsrbayes.inference.force import OnlineForce
+
+    readout = Readout("divider", "adc_counts", 4.9, 3300.0, adc_bits=10, adc_vref_V=5.0)
+    with pytest.raises(ValueError, match="unit must be"):
+        OnlineForce(staircase["fit"], "fsr402-01", "fsr402", readout, unit="kg")
+    with pytest.raises(ValueError, match="fitted as a fsr402 sensor, the log says a201"):
+        OnlineForce(staircase["fit"], "fsr402-01", "a201", readout)
+    with xr.open_datatree(staircase["fit"] / "posterior.nc", engine="h5netcdf") as tree:
+        placed = tree.load()
+    placed["posterior"]["placement[0]"] = placed["posterior"]["sigma_rel"] * 0
+    (tmp_path / "placed").mkdir()
+    placed.to_netcdf(tmp_path / "placed" / "posterior.nc", engine="h5netcdf")
+    with pytest.raises(ValueError, match="--no-placement"):
+        OnlineForce(tmp_path / "placed", "fsr402-01", "fsr402", readout)
+
+
+@pytest.mark.parametrize(
+    ("header", "row", "says"),
+    [
+        ("specimen,sensor,time_s,supply_V,rm_ohm,adc_bits,adc_vref_V,adc_counts",
+         "s1,fsr402,{t},5,0,10,5,100", "rm_ohm must be > 0"),
+        ("specimen,sensor,time_s,supply_V,rm_ohm,current_A", "s1,fsr402,{t},5,3300,1e-3",
+         "current_A is read at a constant voltage_V"),
+        ("specimen,sensor,time_s,supply_V,rm_ohm,adc_bits,adc_vref_V,adc_counts",
+         "s1,fsr402,{t},5,3300,10.5,5,100", "adc_bits must be a whole number"),
+    ],
+)  # fmt: skip
+def test_a_log_whose_circuit_cannot_be_is_refused_in_one_line(tmp_path, header, row, says):
+    path = _write(tmp_path / "bad.csv", [row.format(t=t) for t in range(4)], header)
+    with pytest.raises(DataError) as err:
+        read_log(path)
+    assert says in str(err.value) and "\n" not in str(err.value)

@@ -455,8 +455,8 @@ def _add_force(sub):
         "what force was on my sensor?",
         "The load history behind a log of readings whose load is unknown, read through a fitted "
         "sensor's creep: per sample the force's median and 50 %%/90 %% bands (joint over the "
-        "sensor's posterior, its placements and the load history), and the static reading with "
-        "the creep switched off.",
+        "sensor's posterior, the fit's misfit to its calibration and each stretch's scatter), "
+        "and the static reading with the creep switched off.",
     )
     frc.add_argument(
         "fit_dir",

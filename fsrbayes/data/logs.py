@@ -137,6 +137,15 @@ def read_log(path, *, sep=","):
         raise DataError(
             f"{reading_name} is read across a divider: give supply_V and rm_ohm", path, 1
         )
+    if divider and reading_name == "current_A":
+        raise DataError(
+            "a divider is read as vout_V, adc_counts or resistance_ohm; current_A is read at a "
+            "constant voltage_V",
+            path,
+            1,
+        )
+    if not divider and "voltage_V" not in names:
+        raise DataError("expected voltage_V (or supply_V and rm_ohm for a divider)", path, 1)
     cols = dict(zip(names, (list(c) for c in zip(*body, strict=False)), strict=False))
     decimal_comma = sep == ";"
 
@@ -159,11 +168,26 @@ def read_log(path, *, sep=","):
     values = _readings(cols, renamed, reading_name, line_no, path, decimal_comma)
     logged = _logged_load(cols, renamed, line_no, path, decimal_comma)
     adc = (floats("adc_bits"), floats("adc_vref_V")) if reading_name == "adc_counts" else None
+    positive = [("supply_V" if divider else "voltage_V", source)] + (
+        [("rm_ohm", rm)] if divider else []
+    )  # fmt: skip
+    if adc:
+        positive.append(("adc_vref_V", adc[1]))
+        whole = (adc[0] != np.round(adc[0])) | (adc[0] < 1) | (adc[0] > 32)
+        if whole.any():
+            i = int(np.argmax(whole))
+            raise DataError(f"adc_bits must be a whole number in 1..32, got {adc[0][i]:g}",
+                            path, int(line_no[i]), "adc_bits")  # fmt: skip
+    for name, column in positive:
+        if np.any(column <= 0):
+            i = int(np.argmax(column <= 0))
+            raise DataError(f"{name} must be > 0, got {column[i]:g}", path, int(line_no[i]), name)
+    constant = positive + ([("adc_bits", adc[0])] if adc else [])
     logs = []
     for key in dict.fromkeys(zip(specimen, test, strict=True)):
         idx = np.flatnonzero([(s, t) == key for s, t in zip(specimen, test, strict=True)])
         where = f"specimen {key[0]!r}" + (f", test {key[1]!r}" if key[1] else "")
-        for name, column in (("supply_V" if divider else "voltage_V", source), ("rm_ohm", rm)):
+        for name, column in constant:
             if np.any(column[idx] != column[idx[0]]):
                 j = idx[np.argmax(column[idx] != column[idx[0]])]
                 raise DataError(
@@ -180,9 +204,9 @@ def read_log(path, *, sep=","):
         t = time[idx]
         back = np.flatnonzero(np.diff(t) <= 0)
         if back.size:
-            j = idx[back[0] + 1]
+            j, before = idx[back[0] + 1], idx[back[0]]
             raise DataError(
-                f"time must increase within {where}: {time[j]:g} s follows {time[j - 1]:g} s",
+                f"time must increase within {where}: {time[j]:g} s follows {time[before]:g} s",
                 path,
                 int(line_no[j]),
                 renamed.get("time_s", ("time_s",))[0],
@@ -210,13 +234,21 @@ def read_log(path, *, sep=","):
 
 
 def _logged_load(cols, renamed, line_no, path, decimal_comma):
-    """Return the load column as logged, in N (None where the log has none or leaves it empty)."""
-    name = "force_N" if "force_N" in cols else "stress_Pa" if "stress_Pa" in cols else None
-    if name is None or name == "stress_Pa" or not any(v.strip() for v in cols[name]):
+    """Return the load column as logged, in N.
+
+    None where the log has none, leaves it empty or holds what is not a number: it is never
+    used to read the force.
+    """
+    name = "force_N" if "force_N" in cols else None
+    if name is None or not any(v.strip() for v in cols[name]):
         return None
-    raw, factor = renamed.get(name, (name, 1.0))
-    fields = [v if v.strip() else "nan" for v in cols[name]]
-    return np.array([float(v.replace(",", ".") if decimal_comma else v) for v in fields]) * factor
+    factor = renamed.get(name, (name, 1.0))[1]
+    fields = [v.strip() or "nan" for v in cols[name]]
+    try:
+        values = np.array([v.replace(",", ".") if decimal_comma else v for v in fields], float)
+    except ValueError:
+        return None
+    return values * factor
 
 
 def _readings(cols, renamed, name, line_no, path, decimal_comma):

@@ -3,9 +3,10 @@
 ``force(fit_dir, log)`` reads a log of readings whose load is unknown (any readout of the data
 format: ADC counts, vout, resistance, current; :func:`~fsrbayes.data.logs.read_log`) through a
 fitted sensor's creep, and returns, per sample, the 5/25/50/75/95 % quantiles of the force —
-joint over the sensor's parameter posterior, the fit's own misfit to its calibration and the
-load history the reading allows (:mod:`.segments` states that prior, :mod:`.estimate` the
-inversion) — and ``static``, the same log read with the fit's creep switched off.
+joint over the sensor's parameter posterior, the fit's own misfit to its calibration and each
+stretch's own scatter, given the change points the reading fixes (:mod:`.segments` states that
+prior on load histories, :mod:`.estimate` the inversion; earlier stretches enter at their
+median forces) — and ``static``, the same log read with the fit's creep switched off.
 
 The fit must explain its calibration weights by its stress laws: a fit that sampled each
 placement's own level (``fit --placement``, the default where weights were placed by hand) is
@@ -26,10 +27,15 @@ from pathlib import Path
 import numpy as np
 
 from ...data.logs import read_log
-from ..nuisance import is_placement
-from ..output import open_fit_tree
 from ..predictive_draws import draw_sources
-from .estimate import FORCE_QUANTILES, STATIC_AT_S, STRESS_MIN_PA, force_of_stress, read_force
+from .estimate import (
+    FORCE_QUANTILES,
+    STATIC_AT_S,
+    STRESS_MIN_PA,
+    fit_attrs,
+    force_of_stress,
+    read_force,
+)
 from .online import OnlineForce
 from .segments import find_segments
 
@@ -90,7 +96,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
     tests, loading = [], None
     for part in logs:
         source = sources[part.specimen]
-        attrs = _fit_attrs(source)
+        attrs = fit_attrs(source)
         if attrs["sensor"] != part.sensor:
             raise ValueError(
                 f"specimen {part.specimen!r} was fitted as a {attrs['sensor']} sensor, the log "
@@ -118,7 +124,10 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
                 "static": force_of_stress(read["static_Pa"], area, unit),
                 "unloaded": np.mean(read["stress_draws"] > 0, axis=0) < 0.5,
                 "segments": [
-                    {**s, "median": float(force_of_stress(s.pop("median_Pa"), area, unit))}
+                    {
+                        **{k: v for k, v in s.items() if k != "median_Pa"},
+                        "median": float(force_of_stress(s["median_Pa"], area, unit)),
+                    }
                     for s in read["segments"]
                 ],
                 "fit": str(source[1]),
@@ -137,34 +146,6 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
         "loading": loading,
         "tests": tests,
     }
-
-
-def _fit_attrs(source):
-    """Return the attributes of the fit (or population) a specimen's draws come from.
-
-    Raises ValueError where a fit the draws come from sampled each placement's own level: a
-    placement's level and the force are one unknown in a log of an unknown load, so a fit
-    whose placements absorbed part of its weights' readings cannot read a force.
-    """
-    name = "posterior.nc" if source[0] == "fitted" else "population.nc"
-    with open_fit_tree(Path(source[1]) / name) as tree:
-        attrs = dict(tree.attrs)
-    if source[0] == "population" and source[2] is not None:  # its calibration's convergence
-        with open_fit_tree(Path(source[2]) / "posterior.nc") as tree:
-            attrs["converged"] = tree.attrs.get("converged", 0)
-    fits = [Path(source[1])] if source[0] == "fitted" else sorted(
-        p.parent for p in Path(source[1]).glob("*/posterior.nc")
-    )  # fmt: skip
-    for folder in fits:
-        with open_fit_tree(folder / "posterior.nc") as tree:
-            placed = any(is_placement(str(n)) for n in tree.posterior.data_vars)
-        if placed:
-            raise ValueError(
-                f"{folder} was fitted with each placement's own level (placement[k]): a level "
-                "and a force are one unknown in a log whose load is unknown; fit the "
-                "calibration again with 'fsrbayes fit --no-placement' to read forces with it"
-            )
-    return attrs
 
 
 def force_schema():

@@ -32,7 +32,7 @@ import numpy as np
 from ...data.creep import CreepTest
 from ...data.readouts import STANDARD_GRAVITY
 from ...data.sensors import load_sensor
-from ..nuisance import is_landing, is_per_test, is_ramp
+from ..nuisance import is_landing, is_per_test, is_placement, is_ramp
 from ..output import open_fit_tree
 from ..predict import evaluation_packing
 from ..predictive_draws import population_draws, specimen_draws
@@ -46,6 +46,7 @@ __all__ = [
     "ModelDraws",
     "candidate_test",
     "force_of_stress",
+    "fit_attrs",
     "fsr_log_r",
     "match_log_stress",
     "read_force",
@@ -60,8 +61,9 @@ STRESS_MIN_PA = 1.0e3
 """The lightest load read as a load (1 kPa: 19 g on an FSR 402); a lighter reading is an
 unloaded sensor's residual conduction or flicker."""
 
-STRESS_GRID = np.geomspace(3.0e2, 3.0e6, 41)
-"""Candidate stresses each segment's force is interpolated between (Pa, 10 per decade)."""
+STRESS_GRID = np.geomspace(3.0e2, 3.0e7, 51)
+"""Candidate stresses each segment's force is interpolated between (Pa, 10 per decade; 5.5 kN
+on an FSR 402, 1.3 kN on an A201). A force beyond them reads the grid's end."""
 
 BINS = 24
 """Time bins (log-spaced since the segment's start) a segment's readings are averaged in."""
@@ -107,6 +109,38 @@ class ModelDraws:
             if len(cols) > 1:
                 draws[:, cols] = draws[:, cols[:1]]
         return posterior.log_model_current(draws) + (self.misfit * self.z)[:, None, None]
+
+
+def fit_attrs(source, sensor=None):
+    """Return the attributes of the fit (or population) a specimen's draws come from.
+
+    Raises ValueError where a fit the draws come from sampled each placement's own level: a
+    placement's level and the force are one unknown in a log of an unknown load, so a fit
+    whose placements absorbed part of its weights' readings cannot read a force.
+    """
+    name = "posterior.nc" if source[0] == "fitted" else "population.nc"
+    with open_fit_tree(Path(source[1]) / name) as tree:
+        attrs = dict(tree.attrs)
+    if source[0] == "population" and source[2] is not None:  # its calibration's convergence
+        with open_fit_tree(Path(source[2]) / "posterior.nc") as tree:
+            attrs["converged"] = tree.attrs.get("converged", 0)
+    fits = [Path(source[1])] if source[0] == "fitted" else sorted(
+        p.parent for p in Path(source[1]).glob("*/posterior.nc")
+    )  # fmt: skip
+    for folder in fits:
+        with open_fit_tree(folder / "posterior.nc") as tree:
+            placed = any(is_placement(str(n)) for n in tree.posterior.data_vars)
+        if placed:
+            raise ValueError(
+                f"{folder} was fitted with each placement's own level (placement[k]): a level "
+                "and a force are one unknown in a log whose load is unknown; fit the "
+                "calibration again with 'fsrbayes fit --no-placement' to read forces with it"
+            )
+    if sensor is not None and attrs["sensor"] != sensor:
+        raise ValueError(
+            f"{source[1]} was fitted as a {attrs['sensor']} sensor, the log says {sensor}"
+        )
+    return attrs
 
 
 def _misfit(folder):
@@ -231,7 +265,8 @@ def match_log_stress(residual):
     r0, r1 = residual[rows, k - 1], residual[rows, k]
     x0, x1 = np.log(STRESS_GRID[k - 1]), np.log(STRESS_GRID[k])
     with np.errstate(invalid="ignore", divide="ignore"):
-        frac = np.clip(np.where(np.isfinite(r1) & (r1 != r0), -r0 / (r1 - r0), 0.5), 0.0, 1.0)
+        frac = np.where(np.isfinite(r0) & np.isfinite(r1) & (r1 != r0), -r0 / (r1 - r0), 0.5)
+        frac = np.clip(np.nan_to_num(frac, nan=0.5), 0.0, 1.0)
         slope = np.where(np.isfinite(r1), (r1 - r0) / (x1 - x0), np.inf)
     return x0 + frac * (x1 - x0), slope, k
 
@@ -269,7 +304,7 @@ def read_force(source, log, *, n_draws=200, seed=0, settle_s=1.0):
         ``predict`` resolves a specimen.
     log : fsrbayes.data.logs.ReadingLog
     n_draws : int
-        Posterior draws (and placements) the band is made of.
+        Posterior draws the band is made of.
     seed : int
     settle_s : float
         Seconds after each change whose readings are left out of its segment's match (a hand-

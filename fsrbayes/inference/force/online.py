@@ -13,8 +13,11 @@ constant force is read as a load **from rest** — the creep a previous load lef
 (the offline reading superposes the whole history) — and a change is found half a second after
 it happened (the medians of the last two half-seconds differ by more than
 :data:`~.segments.JUMP_MIN` in log R, and three steps of the reading). The first ``settle_s``
-seconds of a stretch are not used; until a reading past them arrives, the force is the reading
-of the stretch's first samples through the static curve.
+seconds of a stretch are not used; until a reading past them arrives, the force is the current
+reading through the table's first time bin (0.1 s after a load). A stretch reads 0 where the
+sensor is open, where the reading has fallen by more than :data:`~.segments.RECOVERY_FALL` since
+the stretch's first sample, or where it lies beyond the draws' median log R at 1 kPa about 2 s
+after a load.
 """
 
 from collections import deque
@@ -29,6 +32,7 @@ from .estimate import (
     STRESS_MIN_PA,
     ModelDraws,
     candidate_test,
+    fit_attrs,
     force_of_stress,
     fsr_log_r,
     match_log_stress,
@@ -76,7 +80,10 @@ class OnlineForce:
 
     def __init__(self, fit_dir, specimen, sensor, readout, *, n_draws=200, unit="N",
                  settle_s=1.0, rate_hz=10.0, seed=0):  # fmt: skip
+        if unit not in ("N", "g"):
+            raise ValueError(f"unit must be 'N' or 'g', got {unit!r}")
         source = draw_sources(fit_dir, [(specimen, sensor)], what="the reader")[specimen]
+        attrs = fit_attrs(source, sensor)  # refuses another sensor type and placement levels
         draws = ModelDraws(source, n_draws, seed)
         log = _Log(specimen, sensor, readout)
         tests = [
@@ -85,7 +92,7 @@ class OnlineForce:
         table = fsr_log_r(draws.log_current(tests), readout)  # (S, G, B)
         self.table = np.where(np.isfinite(table), table, -np.inf)
         self.readout, self.unit = readout, unit
-        self.area = load_sensor(sensor).area_m2
+        self.area = float(attrs.get("area_m2", load_sensor(sensor).area_m2))
         self.settle_s = float(settle_s)
         self.window = max(2, int(round(WINDOW_S * rate_hz)))
         self.ceiling = float(

@@ -14,8 +14,7 @@ falls through the segment by more than :data:`RECOVERY_FALL` in log conductance 
 or falls faster than :data:`RECOVERY_RATE` per second, which no constant load does: under a
 constant load creep only raises the current, and the creep recovery after a partial unloading
 lowers it by a few percent; the residual conduction of a released FSR decays to nothing within
-minutes — or **loaded**, with one unknown force of a
-log-uniform prior over the sensor's range (:mod:`.estimate`).
+minutes — or **loaded**, with one unknown force, matched per posterior draw (:mod:`.estimate`).
 
 Why this prior: an FSR log is held loads, staircases, load–unload cycles and presses; a prior
 that lets the force change at every sample (a random walk, a shrinkage prior on the changes)
@@ -95,7 +94,7 @@ def _jumps(y, w, resolution):
     size = np.abs(step)
     floor = RESOLUTION_STEPS * resolution[w : n - w + 1]
     found = []
-    for k in np.argsort(size)[::-1]:
+    for k in np.argsort(-size, kind="stable"):
         if size[k] < threshold:
             break
         i = int(k) + w
