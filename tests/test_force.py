@@ -318,3 +318,15 @@ def test_a_log_whose_circuit_cannot_be_is_refused_in_one_line(tmp_path, header, 
     with pytest.raises(DataError) as err:
         read_log(path)
     assert says in str(err.value) and "\n" not in str(err.value)
+
+
+def test_check_reads_a_log_without_its_load_and_lists_its_parts(tmp_path, capsys):
+    good = _counts_log(tmp_path, [0, 1, 300, 310, 320, 0])
+    assert main(["check", str(good)]) == 0
+    said = capsys.readouterr().out
+    assert "a log without its load (1 part(s)), for 'fsrbayes force'" in said
+    assert "s1: fsr402, 6 samples over 0.5 s, adc_counts (divider), 50 % of them" in said
+    bad = _counts_log(tmp_path, [0, 1, 3000, 310])
+    assert main(["check", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "whole ADC counts in 0..1023" in err and "\n" not in err

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
-from ..data import csvio, embedded, paperlike, synthetic
+from ..data import DataError, csvio, embedded, paperlike, synthetic
 from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
@@ -334,6 +334,8 @@ def cmd_check(args):
     :data:`~fsrbayes.data.csvio.MAX_PROBLEMS`).
     """
     problems, data = csvio.list_problems(args.data, sep=args.sep, shift_time=args.shift_time)
+    if len(problems) == 1 and "missing column(s) stress_Pa (or force_N" in str(problems[0]):
+        return _check_log(args)  # a log whose load is unknown: what 'fsrbayes force' reads
     if problems:
         for problem in problems:
             print(f"fsrbayes check: error: {problem}", file=sys.stderr)
@@ -345,4 +347,24 @@ def cmd_check(args):
     print(data.summary())
     for note in calibration_notes(data):
         print(f"  note: {note}")
+    return 0
+
+
+def _check_log(args):
+    """Read a log without its load (``fsrbayes force``'s input); say what it holds."""
+    from ..data.logs import read_log
+
+    try:
+        logs = read_log(args.data, sep=args.sep)
+    except DataError as exc:
+        print(f"fsrbayes check: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{args.data}: a log without its load ({len(logs)} part(s)), for 'fsrbayes force'")
+    for part in logs:
+        label = f"{part.specimen} {part.test}".strip()
+        print(
+            f"  {label}: {part.sensor}, {part.time_s.size} samples over {part.time_s[-1]:g} s, "
+            f"{part.readout.reading} ({part.readout.circuit}), "
+            f"{100 * part.open_circuit.mean():.0f} % of them an open circuit"
+        )
     return 0
