@@ -6,6 +6,7 @@ fit, compare, diagnose, calibrate, drift, predict, force.
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
 from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS
+from ..inference.force.estimate import FORCE_UNITS
 from ..inference.nuisance import RAMPS
 from ..physics.effects import EFFECTS
 from .analysis import cmd_calibrate, cmd_compare, cmd_diagnose
@@ -470,7 +471,7 @@ def _add_force(sub):
     )
     option(frc, "--json", help="write the force's quantiles per sample here, atomically")
     option(frc, "--plot", help="figure of the force and its bands (PNG/PDF/SVG)")
-    option(frc, "--unit", choices=("N", "g"), default="N", help="unit of the force")
+    option(frc, "--unit", choices=FORCE_UNITS, default="N", help="unit of the force")
     option(frc, "--draws", type=int, default=200, help="posterior draws the band is made of")
     option(
         frc,

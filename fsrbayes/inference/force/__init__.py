@@ -30,6 +30,7 @@ from ...data.logs import read_log
 from ..predictive_draws import draw_sources
 from .estimate import (
     FORCE_QUANTILES,
+    FORCE_UNITS,
     STATIC_AT_S,
     STRESS_MIN_PA,
     fit_attrs,
@@ -47,8 +48,6 @@ __all__ = [
     "force",
     "force_schema",
 ]
-
-FORCE_UNITS = ("N", "g")
 
 QUANTILE_KEYS = tuple(f"q{round(100 * q):02d}" for q in FORCE_QUANTILES)
 
@@ -96,12 +95,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
     tests, loading = [], None
     for part in logs:
         source = sources[part.specimen]
-        attrs = fit_attrs(source)
-        if attrs["sensor"] != part.sensor:
-            raise ValueError(
-                f"specimen {part.specimen!r} was fitted as a {attrs['sensor']} sensor, the log "
-                f"says {part.sensor}"
-            )
+        attrs = fit_attrs(source, part.sensor)
         settle = float(attrs.get("settle_s", 1.0)) if settle_s is None else float(settle_s)
         read = read_force(source, part, n_draws=n_draws, seed=seed, settle_s=settle)
         area = float(attrs.get("area_m2", read["area_m2"]))  # the area the fit's loads were on

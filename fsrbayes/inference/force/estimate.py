@@ -25,6 +25,7 @@ a load lands on a rested sensor (:data:`STATIC_AT_S`, when a static calibration 
 read), median over draws, inverted at every sample.
 """
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +41,7 @@ from .segments import find_segments
 
 __all__ = [
     "FORCE_QUANTILES",
+    "FORCE_UNITS",
     "STATIC_AT_S",
     "STRESS_GRID",
     "STRESS_MIN_PA",
@@ -53,6 +55,9 @@ __all__ = [
 ]
 
 FORCE_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+
+FORCE_UNITS = ("N", "g")
+"""Units a force is given in: newtons, or grams (the mass whose weight presses so)."""
 
 STATIC_AT_S = 5.0
 """Seconds after landing at which ``static`` reads the model's R(F)."""
@@ -91,17 +96,16 @@ class ModelDraws:
         rng = np.random.default_rng(self.seed)
         kind, folder = self.source[:2]
         if kind == "fitted":
-            posterior, draws, attrs = specimen_draws(folder, packed, rng)
+            posterior, draws, _ = specimen_draws(folder, packed, rng)
             if self.rows is None:
                 pick = np.random.default_rng(self.seed + 1)
                 replace = len(draws) < self.n_draws
                 self.rows = np.sort(pick.choice(len(draws), self.n_draws, replace=replace))
             draws = draws[self.rows]
         else:
-            posterior, draws, attrs = population_draws(
+            posterior, draws, _ = population_draws(
                 folder, packed, self.n_draws, rng, self.source[2]
             )
-        self.attrs = attrs
         self.model = posterior.model
         names = list(posterior.names)
         for family in FAMILIES:  # every candidate shares test 0's ramp and landing
@@ -205,14 +209,9 @@ def _static_curve(draws, log):
         candidate_test(log, [], s, 0.0, [STATIC_AT_S], f"s{i}") for i, s in enumerate(STRESS_GRID)
     ]
     log_r = fsr_log_r(draws.log_current(tests)[:, :, 0], log.readout)
-    valid = np.isfinite(log_r)
-    # where no draw gives a reading (the gap closed), the curve is NaN and never inverted
-    ranked = np.sort(np.where(valid, log_r, np.inf), axis=0)
-    count = valid.sum(axis=0)
-    middle = np.clip((count - 1) / 2.0, 0, None)
-    lo = np.take_along_axis(ranked, np.floor(middle).astype(int)[None], axis=0)[0]
-    hi = np.take_along_axis(ranked, np.ceil(middle).astype(int)[None], axis=0)[0]
-    return np.where(count > 0, 0.5 * (lo + hi), np.nan)
+    with warnings.catch_warnings():  # a stress where every draw's gap closed: NaN, never read
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmedian(np.where(np.isfinite(log_r), log_r, np.nan), axis=0)
 
 
 def _invert(curve_log_r, log_r):
@@ -314,8 +313,8 @@ def read_force(source, log, *, n_draws=200, seed=0, settle_s=1.0):
     -------
     dict
         ``time_s``; ``stress_draws`` (S, n) in Pa, 0 where unloaded; ``static_Pa`` (n,);
-        ``segments`` (start_s, end_s, loaded, why, median stress); ``model``; ``attrs`` (the
-        fit's).
+        ``segments`` (start_s, end_s, loaded, why, median stress); ``area_m2`` (the sensor
+        file's); ``model``.
     """
     sensor = load_sensor(log.sensor)
     draws = ModelDraws(source, n_draws, seed)
@@ -357,7 +356,6 @@ def read_force(source, log, *, n_draws=200, seed=0, settle_s=1.0):
         "segments": segments,
         "area_m2": sensor.area_m2,
         "model": draws.model,
-        "attrs": draws.attrs,
     }
 
 

@@ -28,6 +28,7 @@ from ...data.readouts import current_of
 from ...data.sensors import load_sensor
 from ..predictive_draws import draw_sources
 from .estimate import (
+    FORCE_UNITS,
     STRESS_GRID,
     STRESS_MIN_PA,
     ModelDraws,
@@ -80,8 +81,8 @@ class OnlineForce:
 
     def __init__(self, fit_dir, specimen, sensor, readout, *, n_draws=200, unit="N",
                  settle_s=1.0, rate_hz=10.0, seed=0):  # fmt: skip
-        if unit not in ("N", "g"):
-            raise ValueError(f"unit must be 'N' or 'g', got {unit!r}")
+        if unit not in FORCE_UNITS:
+            raise ValueError(f"unit must be one of {FORCE_UNITS}, got {unit!r}")
         source = draw_sources(fit_dir, [(specimen, sensor)], what="the reader")[specimen]
         attrs = fit_attrs(source, sensor)  # refuses another sensor type and placement levels
         draws = ModelDraws(source, n_draws, seed)
