@@ -105,7 +105,8 @@ def test_outside_the_menu():
     """Causes no catalogue effect is (artefacts, another creep law, another tunneling law,
     correlated noise), simulated by code outside the package's effects: never called adequate,
     any effect named closes the gap with its checks passing (the verdict's definition), and
-    multiplicative artefacts are named — if at all — as the rig's (VALIDATION.md §6)."""
+    multiplicative artefacts are named — if at all — as the rig's (VALIDATION.md,
+    `outside_menu`)."""
     from validation.outside_menu import format_rows, run
 
     rows = run(n_sets=5)
@@ -118,7 +119,8 @@ def test_outside_the_menu():
             band, before, after = r["band"], r["gap_before"], r["gap_after"]
             assert after <= band or after - band <= 0.5 * (before - band), r
     # a gain that settles and a temperature cycle are never named as the sensor's physics; an
-    # additive offset has no readout counterpart in the catalogue yet and is (VALIDATION.md §6)
+    # additive offset has no readout counterpart in the catalogue yet and is named area-growth
+    # (VALIDATION.md, `outside_menu`)
     multiplicative = ("temperature-cycle", "gain-warm-up")
     assert not [r for r in rows if r["kind"] in multiplicative and r["false_name"]], rows
     assert sum(r["right_name"] for r in rows if r["kind"] == "gain-warm-up") >= 4, rows
@@ -130,7 +132,7 @@ def test_catalogue_mechanisms_with_their_own_time_courses():
     named first is the right kind, a named extension closes the gap, and whenever the base
     model's gap lies out of the band the diagnosis names or refuses — it never calls such data
     adequate (a weak Findley creep the Burgers element absorbs inside the band is below
-    detection, VALIDATION.md §6)."""
+    detection, VALIDATION.md, `diagnose-matrix`)."""
     from validation.foreign_forms import format_rows, run
 
     rows = run(n_sets=5)

@@ -504,8 +504,8 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     below the Binomial(10, 0.9)'s 1 % quantile. (One parameter's share over ten rigs cannot be
     held to 80–98 %: a calibrated interval holds the truth in all ten for 35 % of parameters.)
     Truths drawn from the sensor's population instead sit in the middle of prior-wide posteriors
-    and over-cover by design (VALIDATION.md §11: 119 of 120). The run and its numbers:
-    VALIDATION.md §13."""
+    and over-cover by design (119 of 120 on population truths). The run and its numbers:
+    VALIDATION.md, `rig_coverage`."""
     from dataclasses import replace
 
     from fsrbayes.inference import FIT_SETTINGS

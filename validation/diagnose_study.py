@@ -78,7 +78,7 @@ LAW_TWINS = {
 power-law creep effect), creep linear in log time (the box spectrum's laws and the log-creep
 effect). Named in Burgers' place they are the right answer to that effect hidden in Burgers
 data: on the bench's power-law creep, Nutting's law alone wins by 28 and 143 nats over Burgers
-plus the effect (fewer parameters for the same time course; VALIDATION.md §33)."""
+plus the effect (fewer parameters for the same time course; VALIDATION.md, `diagnose-real402`)."""
 
 PAPER_MISMATCH = Case(
     "a201", "area-creep=area_creep=-9", label="a201:paper-mismatch(area_creep=-9)", gap_check=False

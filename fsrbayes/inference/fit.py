@@ -13,7 +13,7 @@ Why several regions: the creep posterior's s0–Va ridge can bend into two arms 
 crosses Va/e Simmons' law has a slope kink) or hold separate local maxima. Ensembles started in
 one region neither leave it nor notice the other, while each reports R-hat 1.00 on its own, so
 every region found gets an ensemble and the mixture proposal carries walkers between them. The
-far ends of a bent ridge's arms stay under-sampled (VALIDATION.md, "bent ridges").
+far ends of a bent ridge's arms stay under-sampled (VALIDATION.md, `bent-ridge`).
 
 Nested-model tails: a half-normal parameter (inv_b1; an effect's amplitude) can have a long
 tail toward 0 that holds no maximum (:func:`nested_starts`); a profile optimum with it held
@@ -81,7 +81,7 @@ PINNED_TRANSPORT_ROUNDS = 1
 """Warm-up rounds of a fit in pinned coordinates of plain data (one reading per sample at a
 constant sourcing voltage) whose settings leave ``transport_rounds`` None: there the posterior is
 close to Gaussian and one round's transport map does as well as three. A divider rig's posterior
-is not, so rig data keep three (BENCHMARKS.md, "Pinned coordinates by default")."""
+is not, so rig data keep three (measured 2026-11-26; the history of BENCHMARKS.md)."""
 
 
 class DesignWarning(UserWarning):
@@ -92,7 +92,7 @@ AREA_COEFFICIENTS = ("A0", "A1", "A2")
 
 ADC_MIN_COUNTS = 100
 """Below this highest count, one count is over 1 % of every reading: the rounding, not the
-noise, sets what the readings say, and the posterior mixes slowly (VALIDATION.md §12).
+noise, sets what the readings say, and the posterior mixes slowly (VALIDATION.md, `rig_coverage`).
 :func:`design_warnings` says so."""
 
 

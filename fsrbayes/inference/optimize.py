@@ -45,7 +45,7 @@ MAP_ITERATIONS = 200
 :func:`~.evidence.laplace.laplace_fit`.
 
 In prior-scaled coordinates L-BFGS-B crawls along the creep posterior's ridges and the polish
-walks them, so a short first phase finds the same optima sooner (BENCHMARKS.md, "MAP search")."""
+walks them, so a short first phase finds the same optima sooner (BENCHMARKS.md, `map-search`)."""
 
 
 MAP_FTOL = 1e-6

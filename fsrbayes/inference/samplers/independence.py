@@ -136,7 +136,7 @@ class MixtureProposal:
     proposes into another with probability (K − 1)/K and is accepted with the usual ratio p(x')·g(x)
     / (p(x)·g(x')), so the regions exchange walkers and every ensemble settles on their true
     proportions — the ensemble moves alone do not get from one arm of a bent ridge to the other,
-    and runs confined to one arm each report R-hat 1.00 (VALIDATION.md, "bent ridges"). When all
+    and runs confined to one arm each report R-hat 1.00 (VALIDATION.md, `bent-ridge`). When all
     ensembles share one region the components nearly coincide and the mixture is
     the single fit. Exact for any fixed components (Tierney 1994).
     """
