@@ -132,7 +132,7 @@ def test_catalogue_mechanisms_with_their_own_time_courses():
     named first is the right kind, a named extension closes the gap, and whenever the base
     model's gap lies out of the band the diagnosis names or refuses — it never calls such data
     adequate (a weak Findley creep the Burgers element absorbs inside the band is below
-    detection, VALIDATION.md, `diagnose-matrix`)."""
+    detection, VALIDATION.md, `diagnose_study`)."""
     from validation.foreign_forms import format_rows, run
 
     rows = run(n_sets=5)

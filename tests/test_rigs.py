@@ -316,12 +316,13 @@ def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drif
     converted by hand to constant voltages, the fit reads the divider's damping as a sensor that
     creeps less, and misplaces its contact law and Kelvin element (Laplace approximations at the
     MAP; validation/divider_bias.py). Slow: two Laplace fits of a 10-minute rig, ~1–3 min."""
-    from validation.divider_bias import PROBE_V, format_parameters, run
+    from validation.divider_bias import PROBE_V, format_parameters, probe_key, run
 
     rows = run(seed=0, n_draws=200, n_starts=4)
+    (row,) = rows
     for v in PROBE_V:
-        truth = np.array(rows["truth"][v])
-        exact, approx = rows["divider"][v], rows["constant voltage"][v]
+        truth = np.array(row["truth"][probe_key(v)])
+        exact, approx = row["divider"][probe_key(v)], row["constant voltage"][probe_key(v)]
         # the truth within 3 posterior sd of the divider fit's median at every probe (the 90 %
         # interval spans 3.29 sd); the eight probes share one posterior, so one of them at the
         # interval's edge is no evidence of bias
@@ -332,10 +333,10 @@ def test_the_circuit_matters_a_constant_voltage_fit_under_reads_the_sensors_drif
         assert np.all(ratio < 0.9) and np.all(np.diff(ratio) < 0), ratio
     # and it moves the contact law and the Kelvin element off the truth
     for name in ("alpha", "Rc0", "k2", "b2"):
-        truth = rows["truth_parameters"][name]
+        truth = row["truth_parameters"][name]
         exact, approx = (
-            rows["divider"]["parameters"][name],
-            rows["constant voltage"]["parameters"][name],
+            row["divider"]["parameters"][name],
+            row["constant voltage"]["parameters"][name],
         )
         assert exact["q05"] < truth < exact["q95"], (name, truth, exact)
         assert not approx["q05"] < truth < approx["q95"], (name, truth, approx)

@@ -56,36 +56,3 @@ def test_the_repository_tables_exist():
     root = Path(__file__).resolve().parents[1]
     header, _ = read_table(root / "BENCHMARKS.md", "benchmarks")
     assert header == ["benchmark", "result", "measured", "commit", "machine"]
-
-
-def test_the_validation_runner_summarises_a_studys_rows_into_its_table(tmp_path, capsys):
-    import json
-
-    from validation.__main__ import main
-
-    table = tmp_path / "V.md"
-    table.write_text(
-        "<!-- table:studies begin -->\n| study | how | result | measured | commit | machine |\n"
-        "|---|---|---|---|---|---|\n<!-- table:studies end -->\n"
-    )
-    row = {"tau_s": 90.0, "sd": 0.01, "residual_lag1": 0.4, "best_log_bf": 0.3}
-    row |= {"gap_before": 0.8, "gap_after": 0.8, "band": 1.0, "seconds": 100.0}
-    rows = [
-        dict(row, seed=1, verdict="adequate", effects=[], noise_model="ar1"),
-        dict(row, seed=2, verdict="unexplained", effects=[], noise_model="gaussian"),
-        dict(
-            row,
-            seed=3,
-            verdict="partially-explained",
-            effects=["law:nutting"],
-            noise_model="gaussian",
-        ),
-    ]
-    (tmp_path / "rows.json").write_text(json.dumps(rows))
-    assert main(["--markdown", str(table), f"noise_first={tmp_path / 'rows.json'}"]) == 0
-    assert "Nothing named on 2 of 3 seeds" in capsys.readouterr().out
-    _, written = read_table(table, "studies")
-    assert written[0][0] == "noise_first"
-    assert written[0][2].startswith("nothing named on 2 of 3 seeds")
-    assert "1 under AR(1) noise, 2 under white" in written[0][2]
-    assert main(["no-such-study"]) == 2

@@ -8,10 +8,12 @@ The matrix :data:`MATRIX` holds two magnitudes per effect and sensor, the effect
 paper's own mismatch (:data:`PAPER_MISMATCH`: a negative area creep that makes drift(3600 s) nearly
 independent of stress at low voltage, as the paper measured on A201 sensors).
 
-Run ``python -m validation.diagnose_study`` for the table (``--scan`` for the detection limits);
-the slow test ``tests/test_diagnose_matrix.py`` runs the matrix.
+Run ``python -m validation.diagnose_study [ROWS.json]`` for the table and, with ROWS.json, its
+rows (``--scan`` for the detection limits); the slow test ``tests/test_diagnose_matrix.py`` runs
+the matrix.
 """
 
+import json
 import sys
 import time
 from dataclasses import dataclass
@@ -23,6 +25,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.discrepancy.diagnose import diagnose
 from fsrbayes.inference.parallel import map_jobs
 from fsrbayes.physics.sensor import drift as model_drift
+from validation.tables import json_ready
 
 __all__ = [
     "Case",
@@ -30,6 +33,7 @@ __all__ = [
     "PAPER_MISMATCH",
     "SCAN",
     "STUDY_VOLTAGES",
+    "run",
     "run_case",
     "diagnose_study",
     "format_study",
@@ -231,6 +235,11 @@ def diagnose_study(cases=MATRIX, *, n_specimens=2, samples=31, seed=0, processes
     return map_jobs(_run, [(case, options) for case in cases], processes=processes)
 
 
+def run(cases=MATRIX, processes=2):
+    """Diagnose ``cases`` side by side; one JSON-ready row per case (:func:`run_case`)."""
+    return json_ready(diagnose_study(cases, processes=processes))
+
+
 def format_study(rows):
     """A Markdown table of study results."""
     lines = [
@@ -251,5 +260,9 @@ def format_study(rows):
 
 
 if __name__ == "__main__":
-    chosen = SCAN if "--scan" in sys.argv else MATRIX
-    print(format_study(diagnose_study(chosen)))
+    paths = [arg for arg in sys.argv[1:] if not arg.startswith("--")]
+    rows = run(SCAN if "--scan" in sys.argv else MATRIX)
+    print(format_study(rows))
+    if paths:
+        with open(paths[0], "w") as f:
+            json.dump(rows, f, indent=1)

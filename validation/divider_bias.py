@@ -10,9 +10,11 @@ that creeps less. This study simulates the default rig (FSR 402, 4.9 V,
 approximation at the MAP, labelled as such) and compares what each says about the sensor: its
 drift at a constant V_FSR, the paper's protocol, and its parameters, against the truth.
 
-Run ``python -m validation.divider_bias [seed]``.
+Run ``python -m validation.divider_bias [seed] [ROWS.json]`` (ROWS.json keeps the run's record,
+:func:`run`).
 """
 
+import json
 import sys
 import tempfile
 import time
@@ -28,8 +30,9 @@ from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.sensor import drift
+from validation.tables import json_ready
 
-__all__ = ["constant_voltage_tests", "run", "format_rows", "format_parameters"]
+__all__ = ["constant_voltage_tests", "probe_key", "run", "format_rows", "format_parameters"]
 
 PROBE_V = (1.0, 2.0)
 """Constant V_FSR at which the fitted sensors' drifts are compared with the truth."""
@@ -46,12 +49,24 @@ def constant_voltage_tests(data):
     return out
 
 
-def run(seed=0, n_draws=400, n_starts=8):
-    """Fit the rig both ways; return the sensor's drift at constant V_FSR from each, and truth.
+def probe_key(v):
+    """The key of a probe voltage in a row (``"1 V"``): a JSON object's keys are strings."""
+    return f"{v:g} V"
 
-    Each fit is a Laplace approximation at the best of ``n_starts`` MAP searches. Each fit's
-    entry also holds its parameters' 5–50–95 % quantiles (``"parameters"``), and
-    ``"truth_parameters"`` the simulated specimen's (``sigma_rel``: the rig's noise level).
+
+def run(seed=0, n_draws=400, n_starts=8):
+    """Fit the rig both ways; the sensor's drift at constant V_FSR from each, and the truth.
+
+    Each fit is a Laplace approximation at the best of ``n_starts`` MAP searches.
+
+    Returns
+    -------
+    list of dict
+        One JSON-ready row: ``"truth"`` ({:func:`probe_key`: drift(600 s) in % per weight}),
+        ``"divider"`` and ``"constant voltage"`` (each fit's ``{probe key: {q05, q50, q95}}``,
+        its parameters' 5–50–95 % quantiles under ``"parameters"`` and its ``"seconds"``),
+        ``"truth_parameters"`` (the simulated specimen's; ``sigma_rel``: the rig's noise level),
+        ``"v_fsr_start"``, ``"observed_drift_pct"`` (per test) and ``"seed"``.
     """
     text, truth = simulate_rig(1, seed=seed)
     with tempfile.TemporaryDirectory() as folder:
@@ -59,10 +74,8 @@ def run(seed=0, n_draws=400, n_starts=8):
     params = truth["specimens"]["fsr402-01"]["params"]
     sensor = load_sensor("fsr402")
     stresses = np.array([t.stress_Pa for t in data.tests])
-    rows = {"truth": {v: drift(params, v, stresses, PROBE_TIME_S).tolist() for v in PROBE_V}}
-    rows["truth_parameters"] = {key: float(value) for key, value in params.items()}
-    rows["truth_parameters"]["sigma_rel"] = float(truth["rig"]["noise_rel"])
     rng = np.random.default_rng(seed)
+    fits = {}
     for name, tests in (
         ("divider", data.tests),
         ("constant voltage", constant_voltage_tests(data)),
@@ -80,12 +93,19 @@ def run(seed=0, n_draws=400, n_starts=8):
                     for i in range(n_draws)
                 ]
             )
-            entry[v] = _quantiles(values)
+            entry[probe_key(v)] = _quantiles(values)
         entry["parameters"] = {key: _quantiles(physical[key]) for key in posterior.names}
-        rows[name] = entry
-    rows["v_fsr_start"] = [t.voltage_V - t.current_A[0] * t.rm_ohm for t in data.tests]
-    rows["observed_drift_pct"] = [t.observed_drift(PROBE_TIME_S - 2.0) for t in data.tests]
-    return rows
+        fits[name] = entry
+    row = {
+        "seed": seed,
+        "truth": {probe_key(v): drift(params, v, stresses, PROBE_TIME_S) for v in PROBE_V},
+        "truth_parameters": params | {"sigma_rel": truth["rig"]["noise_rel"]},
+        "divider": fits["divider"],
+        "constant voltage": fits["constant voltage"],
+        "v_fsr_start": [t.voltage_V - t.current_A[0] * t.rm_ohm for t in data.tests],
+        "observed_drift_pct": [t.observed_drift(PROBE_TIME_S - 2.0) for t in data.tests],
+    }
+    return [json_ready(row)]
 
 
 def _quantiles(values):
@@ -100,13 +120,12 @@ def format_rows(rows):
         "| V_FSR | weight | truth | divider fit (5–50–95 %) | constant-voltage fit (5–50–95 %) |",
         "|---|---|---|---|---|",
     ]
-    for v in PROBE_V:
-        for j, true in enumerate(rows["truth"][v]):
-            cells = []
-            for name in ("divider", "constant voltage"):
-                e = rows[name][v]
-                cells.append(f"{e['q05'][j]:.2f} – {e['q50'][j]:.2f} – {e['q95'][j]:.2f}")
-            lines.append(f"| {v:g} V | {j + 1} | {true:.2f} | {cells[0]} | {cells[1]} |")
+    for row in rows:
+        for v in PROBE_V:
+            fits = [row[name][probe_key(v)] for name in ("divider", "constant voltage")]
+            for j, true in enumerate(row["truth"][probe_key(v)]):
+                cells = [f"{e['q05'][j]:.2f} – {e['q50'][j]:.2f} – {e['q95'][j]:.2f}" for e in fits]
+                lines.append(f"| {v:g} V | {j + 1} | {true:.2f} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines)
 
 
@@ -116,20 +135,25 @@ def format_parameters(rows):
         "| parameter | truth | divider fit (5–50–95 %) | constant-voltage fit (5–50–95 %) |",
         "|---|---|---|---|",
     ]
-    for key, true in rows["truth_parameters"].items():
-        if key not in rows["divider"]["parameters"]:
-            continue
-        cells = []
-        for name in ("divider", "constant voltage"):
-            q = rows[name]["parameters"][key]
-            cells.append(f"{q['q05']:.3g} – {q['q50']:.3g} – {q['q95']:.3g}")
-        lines.append(f"| {key} | {true:.3g} | {cells[0]} | {cells[1]} |")
+    for row in rows:
+        for key, true in row["truth_parameters"].items():
+            if key not in row["divider"]["parameters"]:
+                continue
+            cells = []
+            for name in ("divider", "constant voltage"):
+                q = row[name]["parameters"][key]
+                cells.append(f"{q['q05']:.3g} – {q['q50']:.3g} – {q['q95']:.3g}")
+            lines.append(f"| {key} | {true:.3g} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
-    result = run(int(sys.argv[1]) if len(sys.argv) > 1 else 0)
-    print(format_rows(result))
-    print(format_parameters(result))
-    print("V_FSR at the start:", [f"{v:.2f}" for v in result["v_fsr_start"]])
-    print("observed drift of the rig's current (%):", result["observed_drift_pct"])
+    rows = run(int(sys.argv[1]) if len(sys.argv) > 1 else 0)
+    print(format_rows(rows))
+    print(format_parameters(rows))
+    for row in rows:
+        print("V_FSR at the start:", [f"{v:.2f}" for v in row["v_fsr_start"]])
+        print("observed drift of the rig's current (%):", row["observed_drift_pct"])
+    if len(sys.argv) > 2:
+        with open(sys.argv[2], "w") as f:
+            json.dump(rows, f, indent=1)

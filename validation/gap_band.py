@@ -10,7 +10,8 @@ G0 = √(mean + 1.645·sd) holds the null gap, and how often a check fails (each
 refuse to call the data adequate). The designs run from 3 voltages × 3 forces per specimen to the
 paper's whole protocol of one specimen (11 voltages × 3 forces, 25 log-spaced samples).
 
-Run: ``python -m validation.gap_band [n_sets]`` (about 25 minutes, 16 sets per design, 2 cores);
+Run: ``python -m validation.gap_band [n_sets] [ROWS.json]`` (about 25 minutes, 16 sets per
+design, 2 cores; ROWS.json keeps the rows, in every mode);
 ``python -m validation.gap_band n_sets --candidates`` diagnoses the null sets with the whole
 catalogue and reports how often an effect is named (about a minute per set and specimen).
 ``python -m validation.gap_band n_sets --rig`` does the same for the default bench rig read by a
@@ -23,6 +24,7 @@ per rig, one core).
 """
 
 import dataclasses
+import json
 import sys
 import time
 
@@ -30,6 +32,7 @@ import numpy as np
 
 from fsrbayes.data.synthetic import PAPER_VOLTAGES, simulate
 from fsrbayes.discrepancy import diagnose, gap, gap_band
+from validation.tables import json_ready
 
 DESIGNS = (
     {"sensor": "a201", "n_specimens": 1, "voltages": (0.5, 2.0, 4.5), "samples": 31},
@@ -168,30 +171,65 @@ def summarise(per_design):
     return (a, b, c), "\n".join(lines)
 
 
-def main(n_sets=20, candidates=False, rig=False):
-    started = time.perf_counter()
-    if rig:
-        print(summarise_rigs(rig_null_gaps(n_sets)))
-        print(f"{time.perf_counter() - started:.0f} s")
-        return
-    per_design = {}
-    for design in DESIGNS:
-        name = (
-            f"{design['sensor']} {design['n_specimens']} specimen(s) x {len(design['voltages'])} V"
-            f" x {design['samples']} samples"
-        )
-        per_design[name] = null_gaps(design, n_sets, effects=None if candidates else ())
-        print(name, [round(r["gap"], 3) for r in per_design[name]], flush=True)
-        if candidates:
-            named = [r["effects"] for r in per_design[name] if r["effects"]]
-            best = [r["best_log_bf"] for r in per_design[name]]
-            print(f"  named: {len(named)}/{n_sets} {named}; best ln B max {max(best):.1f}")
-    _, text = summarise(per_design)
-    print(text)
-    print(
-        f"current band at 9 tests: {gap_band(9):.3f}, at 33: {gap_band(33):.3f}; "
-        f"{time.perf_counter() - started:.0f} s"
+def design_name(design):
+    """A design's label in the tables (sensor, specimens, voltages, samples)."""
+    return (
+        f"{design['sensor']} {design['n_specimens']} specimen(s) x {len(design['voltages'])} V"
+        f" x {design['samples']} samples"
     )
+
+
+def by_design(rows):
+    """The rows of :func:`null_gaps` grouped by design, {label: rows}, in the order run."""
+    per_design = {}
+    for row in rows:
+        per_design.setdefault(design_name(row["design"]), []).append(row)
+    return per_design
+
+
+def run(n_sets=20, candidates=False, rig=False):
+    """Null rows of every design (:func:`null_gaps`), or of ``n_sets`` rigs (:func:`rig_null_gaps`).
+
+    Prints each design's gaps (and, with ``candidates``, what was named) as it ends; returns
+    JSON-ready rows.
+    """
+    if rig:
+        return json_ready(rig_null_gaps(n_sets))
+    rows = []
+    for design in DESIGNS:
+        mine = null_gaps(design, n_sets, effects=None if candidates else ())
+        print(design_name(design), [round(r["gap"], 3) for r in mine], flush=True)
+        if candidates:
+            named = [r["effects"] for r in mine if r["effects"]]
+            best = [r["best_log_bf"] for r in mine]
+            print(f"  named: {len(named)}/{n_sets} {named}; best ln B max {max(best):.1f}")
+        rows += mine
+    return json_ready(rows)
+
+
+def format_rows(rows):
+    """The text of :func:`summarise` for null data sets' rows, of :func:`summarise_rigs` for
+    rigs'."""
+    if "design" not in rows[0]:
+        return summarise_rigs(rows)
+    return summarise(by_design(rows))[1]
+
+
+def main(n_sets=20, candidates=False, rig=False, path=None):
+    started = time.perf_counter()
+    rows = run(n_sets, candidates=candidates, rig=rig)
+    print(format_rows(rows))
+    if rig:
+        print(f"{time.perf_counter() - started:.0f} s")
+    else:
+        print(
+            f"current band at 9 tests: {gap_band(9):.3f}, at 33: {gap_band(33):.3f}; "
+            f"{time.perf_counter() - started:.0f} s"
+        )
+    if path:
+        with open(path, "w") as f:
+            json.dump(rows, f, indent=1)
+    return rows
 
 
 if __name__ == "__main__":
@@ -200,4 +238,5 @@ if __name__ == "__main__":
         int(numbers[0]) if numbers else 20,
         candidates="--candidates" in sys.argv,
         rig="--rig" in sys.argv,
+        path=numbers[1] if len(numbers) > 1 else None,
     )

@@ -12,10 +12,12 @@ observed specimens (the share of observed drifts inside the predictive 5–95 % 
 specimen's drift *as measured*, i.e. with the fitted measurement noise on both readings; 90 %
 expected), and whether the noise-free predictive covers each specimen's noiseless true drift.
 
-Run ``python -m validation.population_study [16] [--joint]`` for the table; the slow test
-runs it with the joint route, which must agree with the two-stage one.
+Run ``python -m validation.population_study [16] [ROWS.json] [--joint]`` for the table (ROWS.json
+keeps the study's record, :func:`run`); the slow test runs it with the joint route, which must
+agree with the two-stage one.
 """
 
+import json
 import sys
 import time
 import warnings
@@ -29,10 +31,13 @@ from fsrbayes.inference.population.predictive import ForwardTemplate, drift_grou
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
+from validation.tables import json_ready
 
 __all__ = [
     "population_study",
     "format_population_study",
+    "run",
+    "format_rows",
     "STUDY_FIT_SETTINGS",
     "STUDY_HYPER_SETTINGS",
 ]
@@ -259,10 +264,21 @@ def format_population_study(study):
     return "\n".join(lines)
 
 
+def run(n_specimens=16, joint_route=False):
+    """:func:`population_study` of ``n_specimens``; its record as the one JSON-ready row."""
+    return [json_ready(population_study(n_specimens, joint_route=joint_route))]
+
+
+def format_rows(rows):
+    """:func:`format_population_study` of each row of :func:`run`."""
+    return "\n\n".join(format_population_study(row) for row in rows)
+
+
 if __name__ == "__main__":
     counts = [int(a) for a in sys.argv[1:] if a.isdigit()]
-    print(
-        format_population_study(
-            population_study(counts[0] if counts else 16, joint_route="--joint" in sys.argv)
-        )
-    )
+    paths = [a for a in sys.argv[1:] if not a.isdigit() and not a.startswith("--")]
+    rows = run(counts[0] if counts else 16, joint_route="--joint" in sys.argv)
+    print(format_rows(rows))
+    if paths:
+        with open(paths[0], "w") as f:
+            json.dump(rows, f, indent=1)

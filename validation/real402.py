@@ -18,7 +18,8 @@ command line with its defaults:
 
 Run ``python -m validation.real402 OUT fit A-spread B-hold-12min`` or ``python -m
 validation.real402 OUT forecast A-hold-60min``; each fit takes minutes on 2 cores, and a fit
-already in OUT is reused (its seconds are then not known).
+already in OUT is reused (its seconds are then not known). The rows are written to
+``OUT/fit.json`` or ``OUT/forecast.json``.
 """
 
 import csv
@@ -186,26 +187,35 @@ def format_rows(rows):
     return "\n".join(lines)
 
 
+def run(out, mode, names, protocol=None):
+    """Fit (``mode="fit"``) or forecast (``"forecast"``) the frozen logs ``names`` into ``out``.
+
+    The table so far is printed after each log, and the rows are written to ``out/MODE.json``;
+    returns them (:func:`fit_log`'s or :func:`forecast`'s).
+    """
+    out = Path(out)
+    frozen = frozen_set(out / "frozen")
+    rows = []
+    for name in names:
+        if mode == "fit":
+            rows += fit_log(frozen, name, out)
+        else:
+            rows += forecast(frozen, name, out, protocol)
+        print(format_rows(rows), flush=True)
+    (out / f"{mode}.json").write_text(json.dumps(rows, indent=1))
+    return rows
+
+
 def main(argv):
     if len(argv) < 3 or argv[1] not in ("fit", "forecast"):
         print(__doc__)
         return 2
-    out = Path(argv[0])
-    frozen = frozen_set(out / "frozen")
-    rows = []
     protocol = None
     names = list(argv[2:])
     if "--protocol" in names:
         at = names.index("--protocol")
         protocol, names = names[at + 1], names[:at] + names[at + 2 :]
-    for name in names:
-        rows += (
-            fit_log(frozen, name, out)
-            if argv[1] == "fit"
-            else forecast(frozen, name, out, protocol)
-        )
-        print(format_rows(rows), flush=True)
-    (out / f"{argv[1]}.json").write_text(json.dumps(rows, indent=1))
+    run(argv[0], argv[1], names, protocol)
     return 0
 
 

@@ -8,9 +8,11 @@ when its posterior sd is below half its prior sd (in the sampler's prior-scaled 
 one whose posterior sd is above 0.8 of the prior's is reported as not identified (posterior ≈
 prior).
 
-Run ``python -m validation.recovery [N]`` for the table; the slow test runs 20.
+Run ``python -m validation.recovery [N] [ROWS.json]`` for the table (ROWS.json keeps the study's
+record, :func:`run`); the slow test runs 20.
 """
 
+import json
 import sys
 import time
 import warnings
@@ -22,8 +24,16 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
+from validation.tables import json_ready
 
-__all__ = ["recovery_study", "RECOVERY_SETTINGS", "format_recovery", "coverage_at"]
+__all__ = [
+    "recovery_study",
+    "RECOVERY_SETTINGS",
+    "format_recovery",
+    "coverage_at",
+    "run",
+    "format_rows",
+]
 
 RECOVERY_SETTINGS = SamplerSettings(
     n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2
@@ -99,7 +109,7 @@ def recovery_study(
 def coverage_at(study, levels=(0.5, 0.8, 0.9)):
     """Share of specimens whose central ``level`` interval holds the truth, per level and parameter
     (from the share of draws below the truth)."""
-    q = study["truth_quantile"]
+    q = np.asarray(study["truth_quantile"])
     return {
         level: np.mean((q >= (1 - level) / 2) & (q <= (1 + level) / 2), axis=0) for level in levels
     }
@@ -109,14 +119,15 @@ def format_recovery(study):
     """A table: coverage at 50/80/90 % and posterior/prior sd ratio per parameter, drift coverage,
     timing."""
     coverage = coverage_at(study)
+    sd_ratio, truth_quantile = np.asarray(study["sd_ratio"]), np.asarray(study["truth_quantile"])
     lines = [
         f"{'parameter':10s} {'cov 50%':>8s} {'cov 80%':>8s} {'cov 90%':>8s} "
         f"{'misses low/high':>16s} {'sd post/prior':>14s}  identified"
     ]
     for i, name in enumerate(study["names"]):
-        ratio = float(np.median(study["sd_ratio"][:, i]))
+        ratio = float(np.median(sd_ratio[:, i]))
         verdict = "yes" if ratio < 0.5 else ("no (posterior ~ prior)" if ratio > 0.8 else "weakly")
-        q = study["truth_quantile"][:, i]
+        q = truth_quantile[:, i]
         misses = f"{int(np.sum(q < 0.05))}/{int(np.sum(q > 0.95))}"
         cover = " ".join(f"{coverage[level][i]:8.2f}" for level in (0.5, 0.8, 0.9))
         lines.append(f"{name:10s} {cover} {misses:>16s} {ratio:14.3f}  {verdict}")
@@ -132,5 +143,19 @@ def format_recovery(study):
     return "\n".join(lines)
 
 
+def run(n_specimens=20):
+    """:func:`recovery_study` of ``n_specimens``; its record as the one JSON-ready row."""
+    return [json_ready(recovery_study(n_specimens))]
+
+
+def format_rows(rows):
+    """:func:`format_recovery` of each row of :func:`run`."""
+    return "\n\n".join(format_recovery(row) for row in rows)
+
+
 if __name__ == "__main__":
-    print(format_recovery(recovery_study(int(sys.argv[1]) if len(sys.argv) > 1 else 20)))
+    rows = run(int(sys.argv[1]) if len(sys.argv) > 1 else 20)
+    print(format_rows(rows))
+    if len(sys.argv) > 2:
+        with open(sys.argv[2], "w") as f:
+            json.dump(rows, f, indent=1)

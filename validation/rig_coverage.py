@@ -52,8 +52,10 @@ from fsrbayes.inference import SpecimenData
 from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
 from validation.importance import importance_quantiles
+from validation.tables import json_ready
 
 __all__ = [
+    "run",
     "rig_replication",
     "simulate_truth",
     "coverage_summary",
@@ -382,6 +384,24 @@ def _write_rows(rows, path):
     os.replace(tmp, path)
 
 
+def run(n=10, first=100, *, truth="population", max_steps=None, importance=0, json_path=None):
+    """Fit rigs of seeds ``first`` … ``first + n − 1``; one JSON-ready row each
+    (:func:`rig_replication`).
+
+    ``max_steps`` bounds each fit (default: the fit's budget); each rig's line is printed as it
+    ends and, with ``json_path``, the rows so far are written there.
+    """
+    settings = replace(FIT_SETTINGS, processes=2, max_steps=max_steps or FIT_SETTINGS.max_steps)
+    rows = []
+    for seed in range(first, first + n):
+        row = rig_replication(seed, settings=settings, truth=truth, importance=importance)
+        rows.append(json_ready(row))
+        print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
+        if json_path:
+            _write_rows(rows, json_path)
+    return rows
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m validation.rig_coverage")
     parser.add_argument("n", type=int, nargs="?", default=10, help="rigs (default 10)")
@@ -402,13 +422,12 @@ if __name__ == "__main__":
         help="also re-estimate the truth's quantiles from N importance-sampling draws",
     )
     args = parser.parse_args()
-    settings = replace(FIT_SETTINGS, processes=2, max_steps=args.max_steps)
-    rows = []
-    for seed in range(args.first, args.first + args.n):
-        rows.append(
-            rig_replication(seed, settings=settings, truth=args.truth, importance=args.importance)
-        )
-        print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
-        if args.json:
-            _write_rows(rows, args.json)
+    rows = run(
+        args.n,
+        args.first,
+        truth=args.truth,
+        max_steps=args.max_steps,
+        importance=args.importance,
+        json_path=args.json,
+    )
     print(format_coverage(rows))

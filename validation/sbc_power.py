@@ -8,9 +8,11 @@ replications of Q quantities (``n_bad`` of them miscalibrated, the rest calibrat
 independent) and returns how often :meth:`fsrbayes.inference.calibration.SBCResult.verdict`
 rejects: the false-alarm rate for c = 1, b = 0, the power otherwise.
 
-Run ``python -m validation.sbc_power N [ALPHA]`` for a table.
+Run ``python -m validation.sbc_power N [ALPHA] [ROWS.json]`` for a table (ROWS.json keeps its
+rows).
 """
 
+import json
 import sys
 
 import numpy as np
@@ -18,7 +20,19 @@ from scipy import stats
 
 from fsrbayes.inference.calibration import SBCResult
 
-__all__ = ["rejection_rate"]
+__all__ = ["CASES", "rejection_rate", "run", "format_rows"]
+
+CASES = (
+    ("calibrated (false alarms)", {}),
+    ("every sd 0.6x", {"scale": 0.6}),
+    ("every sd 0.7x", {"scale": 0.7}),
+    ("every sd 1.5x", {"scale": 1.5}),
+    ("every mean +0.5 sd", {"shift": 0.5}),
+    ("one quantity's sd 0.5x", {"scale": 0.5, "n_bad": 1}),
+    ("one quantity's mean +1 sd", {"shift": 1.0, "n_bad": 1}),
+)
+"""(label, keyword arguments of :func:`rejection_rate`): no miscalibration, then the kinds whose
+power is asked."""
 
 
 def rejection_rate(
@@ -67,22 +81,39 @@ def rejection_rate(
     return rejected / n_sims
 
 
+def run(n_reps=40, alpha=0.01):
+    """The rejection rate of every case of :data:`CASES` for N = ``n_reps``; one row each."""
+    return [
+        {
+            "case": label,
+            "n_reps": n_reps,
+            "alpha": alpha,
+            "scale": options.get("scale", 1.0),
+            "shift": options.get("shift", 0.0),
+            "n_bad": options.get("n_bad"),
+            "rejected": rejection_rate(n_reps, alpha=alpha, **options),
+        }
+        for label, options in CASES
+    ]
+
+
+def format_rows(rows):
+    """The share of studies rejected per case, under a line with N and alpha."""
+    lines = [
+        f"SBC verdict, N = {rows[0]['n_reps']}, alpha = {rows[0]['alpha']}: share of studies "
+        "rejected"
+    ]
+    lines += [f"  {r['case']:28s} {r['rejected']:.3f}" for r in rows]
+    return "\n".join(lines)
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    n_reps = int(argv[0]) if argv else 40
-    alpha = float(argv[1]) if len(argv) > 1 else 0.01
-    cases = [
-        ("calibrated (false alarms)", {}),
-        ("every sd 0.6x", {"scale": 0.6}),
-        ("every sd 0.7x", {"scale": 0.7}),
-        ("every sd 1.5x", {"scale": 1.5}),
-        ("every mean +0.5 sd", {"shift": 0.5}),
-        ("one quantity's sd 0.5x", {"scale": 0.5, "n_bad": 1}),
-        ("one quantity's mean +1 sd", {"shift": 1.0, "n_bad": 1}),
-    ]
-    print(f"SBC verdict, N = {n_reps}, alpha = {alpha}: share of studies rejected")
-    for label, kwargs in cases:
-        print(f"  {label:28s} {rejection_rate(n_reps, alpha=alpha, **kwargs):.3f}")
+    rows = run(int(argv[0]) if argv else 40, float(argv[1]) if len(argv) > 1 else 0.01)
+    print(format_rows(rows))
+    if len(argv) > 2:
+        with open(argv[2], "w") as f:
+            json.dump(rows, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -25,13 +25,15 @@ components of t have mean 0 and the variance their draws' information gives (1 f
 draw's packing). :func:`score_check` reports their means (in standard errors) and variance
 ratios, the same for the noise level's score, and the pooled ratio Σ Var(g_p)/Σ F_p.
 
-Run: ``python -m validation.score_check`` (the default bench rig, the 10-bit ADC, 200 noise
-draws of a specimen from the population; about ten minutes on one core) — ``--help`` for
-other readouts, protocols and truths drawn from the prior.
+Run: ``python -m validation.score_check [ROWS.json]`` (the default bench rig, the 10-bit ADC, 200
+noise draws of a specimen from the population; about ten minutes on one core; ROWS.json keeps
+the check's row, :func:`run`) — ``--help`` for other readouts, protocols and truths drawn from
+the prior.
 """
 
 import argparse
 import dataclasses
+import json
 import tempfile
 from pathlib import Path
 
@@ -46,8 +48,9 @@ from fsrbayes.inference.nuisance import is_landing, is_ramp, landing_names, ramp
 from fsrbayes.inference.posterior import LogPosterior
 
 from .rig_coverage import simulate_truth
+from .tables import json_ready
 
-__all__ = ["ScoreCheck", "score_check"]
+__all__ = ["ScoreCheck", "score_check", "run", "format_rows"]
 
 STEP_U = 1e-5
 """Central-difference step of the Jacobian, in prior widths."""
@@ -268,9 +271,91 @@ def score_check(
     )
 
 
+def run(
+    n_draws=200,
+    *,
+    seed=0,
+    truth="population",
+    first_noise_seed=10_000,
+    fitted_ramp=False,
+    onset_column=False,
+    reading="adc_counts",
+    protocol="from-rest",
+    rest_s=0.0,
+    ramp_s=0.0,
+    duration_s=600.0,
+):
+    """The score check of the bench rig of ``seed``, its truth drawn from ``truth``.
+
+    Parameters
+    ----------
+    n_draws, first_noise_seed : int
+        Noise draws and the first draw's seed (:func:`score_check`).
+    seed : int
+        The truth's seed (:func:`~validation.rig_coverage.simulate_truth`).
+    truth : {"population", "prior"}
+    fitted_ramp : bool
+        Leave the ramp out of the file and check the likelihood of ``ramp="fitted"`` at it.
+    onset_column : bool
+        Write the true landing in an ``onset_s`` column.
+    reading, protocol, rest_s, ramp_s, duration_s
+        The bench rig's readout (``adc_counts``, ``vout_V``, ``resistance_ohm`` or …_kohm), its
+        protocol (``from-rest`` or ``staircase``), a staircase's unloaded seconds, the loading
+        ramp (a ``ramp_s`` column) and the seconds per weight.
+
+    Returns
+    -------
+    list of dict
+        One JSON-ready row: the :class:`ScoreCheck`'s fields, ``p_means`` and ``p_variances``
+        (:meth:`ScoreCheck.p_values`), and the rig's ``seed``, ``truth`` and ``rig`` options.
+    """
+    rig = {
+        "reading": reading,
+        "protocol": protocol,
+        "rest_s": rest_s,
+        "ramp_s": ramp_s,
+        "duration_s": duration_s,
+    }
+    _, params = simulate_truth(seed, truth, **rig)
+    bench = dict(rig)
+    if onset_column:
+        bench["onset_column"] = True
+    if fitted_ramp:
+        bench["ramp_column"] = False
+    check = score_check(
+        params,
+        params["sigma_rel"],
+        n_draws,
+        first_seed=first_noise_seed,
+        ramp="fitted" if fitted_ramp else "given",
+        **bench,
+    )
+    mean_p, variance_p = check.p_values()
+    row = {
+        **dataclasses.asdict(check),
+        "p_means": mean_p,
+        "p_variances": variance_p,
+        "seed": seed,
+        "truth": truth,
+        "rig": bench,
+    }
+    return [json_ready(row)]
+
+
+def format_rows(rows):
+    """:meth:`ScoreCheck.summary` of each row of :func:`run`."""
+    names = [field.name for field in dataclasses.fields(ScoreCheck)]
+    checks = [
+        ScoreCheck(**{n: np.asarray(row[n]) if isinstance(row[n], list) else row[n] for n in names})
+        for row in rows
+    ]
+    return "\n\n".join(check.summary() for check in checks)
+
+
 def main(argv=None):
-    """Command line: ``python -m validation.score_check [options]``."""
+    """Command line: ``python -m validation.score_check [options] [ROWS.json]``."""
     parser = argparse.ArgumentParser(prog="python -m validation.score_check")
+    parser.add_argument("rows", nargs="?", help="write the check's row here as JSON")
     parser.add_argument("--draws", type=int, default=200, help="noise draws (200)")
     parser.add_argument("--seed", type=int, default=0, help="the truth's seed (0)")
     parser.add_argument("--first-noise-seed", type=int, default=10_000, help="(10000)")
@@ -291,28 +376,23 @@ def main(argv=None):
         help="leave the ramp out of the file and check the likelihood of ramp='fitted' at it",
     )
     args = parser.parse_args(argv)
-    bench = {
-        "reading": args.reading,
-        "protocol": args.protocol,
-        "rest_s": args.rest_s,
-        "ramp_s": args.ramp_s,
-        "duration_s": args.duration_s,
-    }
-    if args.onset_column:
-        bench["onset_column"] = True
-    if args.fitted_ramp:
-        bench["ramp_column"] = False
-    drawn = {k: v for k, v in bench.items() if k not in ("onset_column", "ramp_column")}
-    _, params = simulate_truth(args.seed, args.truth, **drawn)
-    check = score_check(
-        params,
-        params["sigma_rel"],
+    rows = run(
         args.draws,
-        first_seed=args.first_noise_seed,
-        ramp="fitted" if args.fitted_ramp else "given",
-        **bench,
+        seed=args.seed,
+        truth=args.truth,
+        first_noise_seed=args.first_noise_seed,
+        fitted_ramp=args.fitted_ramp,
+        onset_column=args.onset_column,
+        reading=args.reading,
+        protocol=args.protocol,
+        rest_s=args.rest_s,
+        ramp_s=args.ramp_s,
+        duration_s=args.duration_s,
     )
-    print(check.summary())
+    print(format_rows(rows))
+    if args.rows:
+        with open(args.rows, "w") as f:
+            json.dump(rows, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ effect as a candidate:
   that noise, correlated in time, is not the data's (correlated from sample to sample on a
   log-spaced grid), and the gap stays outside the band: ``unexplained``, under AR(1) noise.
 
-The seeds are not those of the slow studies (VALIDATION.md, `gap_band` and `diagnose-matrix`).
+The seeds are not those of the slow studies (VALIDATION.md, `gap_band` and `diagnose_study`).
 """
 
 import pytest
