@@ -101,9 +101,15 @@ def test_diagnose_names_a_hidden_area_creep_and_closes_the_gap():
 def test_diagnose_calls_burgers_data_adequate():
     sim = simulate("a201", n_specimens=1, voltages=A201_VOLTAGES, samples=31, seed=4)
     result = diagnose(
-        sim.data, effects=("area-creep", "power-law-creep"), laws=(), n_draws=200, processes=2
+        sim.data,
+        effects=("area-creep", "power-law-creep", "contact-memory"),
+        laws=(),
+        n_draws=200,
+        processes=2,
     )
     assert result.verdict == "adequate" and result.effect is None and result.effects == []
+    # no load falls in these tests: a load's memory is not even a candidate
+    assert {c["effect"] for c in result.candidates} == {"area-creep", "power-law-creep"}
     # adequate means: no check fails, and the gap lies inside the band (not set equal by fiat)
     assert not result.findings["failed"] and result.gap_before <= result.band
     assert result.gap_after == result.gap_before

@@ -83,6 +83,7 @@ EFFECT_DEFAULTS = {
     "log-creep": {"lc_comp": None, "lc_tau": 1.0},  # None: 0.03/k1
     "contact-growth": {"cg_amp": 0.2, "cg_tau": 300.0},
     "gain-drift": {"gd_amp": -0.03, "gd_tau": 1e5},
+    "contact-memory": {"mem_frac": 0.15, "mem_tau": 300.0},
 }
 """Strength of each hidden effect when named without values (None: from the sensor file)."""
 

@@ -39,12 +39,14 @@ one law per diagnosis, and effects may be added to it in the next step.
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..data.creep import CreepData
 from ..inference.likelihood import SpecimenData
 from ..inference.nuisance import loading_treatment
 from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
-from ..physics.effects import EFFECTS, check_effects
+from ..physics.effects import EFFECTS, check_effects, remembers_loads
 from ..physics.models import PEER_MODELS, model_components, parse_model
 from ..physics.rheology import CREEP_LAWS
 from ..utils import json_ready
@@ -286,7 +288,8 @@ def diagnose(
     base : str
         The base model (``"burgers"``, ``"zener"``, ``"nutting"``, possibly with effects already).
     effects : sequence of str, optional
-        Candidate effects (default: every catalogue effect the base model does not have).
+        Candidate effects (default: every catalogue effect the base model does not have). An
+        effect that remembers loads (``contact-memory``) is tried only where a test's load falls.
     laws : sequence of str, optional
         Creep laws tried in place of the base model's, its effects kept (default: every
         registered creep law but the base's). With ``effects=()`` and ``laws=()`` only the base
@@ -353,6 +356,9 @@ def diagnose(
         tuple(t.settled(loading[t.specimen][0]) for t in data.tests if t.specimen in loading),
         data.source,
     )
+    if not any(np.any(np.asarray(t.load_steps[1]) < 0) for t in data.tests if t.load_steps):
+        # a load's memory shows only where a load falls: elsewhere its fit is the base model's
+        effects = tuple(e for e in effects if law_of(e) or not remembers_loads(EFFECTS[e]))
     simulate_band = null_sets > 0 and not formula_band_applies(
         [t for t in data.tests if t.specimen in specimens]
     )

@@ -40,6 +40,10 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     (``kind = "readout"``): it describes the rig, not the sensor, so when it is what explains
     the data the diagnosis says so.
 
+``contact-memory`` — ``mem_frac`` (null 0), ``mem_tau``
+    Eqs. (5), (6) see σ(t) + mem_frac·E(t), E the recent past's excess load over σ(t), fading
+    with mem_tau: a load that falls reads heavier (hysteresis).
+
 ``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
 bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
 whole current is scaled. It is phenomenological — the paper gives no mechanism — and tied to
@@ -57,6 +61,7 @@ import numpy as np
 from .constants import DRIFT_TIME_S
 from .parameters import PARAMETERS, Parameter, register_parameter
 from .rheology import NUTTING, CreepLaw, kelvin_ramp
+from .superposition import remembered_excess
 
 __all__ = [
     "EFFECTS",
@@ -64,7 +69,9 @@ __all__ = [
     "Effect",
     "check_effects",
     "register_effect",
+    "remembers_loads",
     "resolve_effects",
+    "static_stress_of",
 ]
 
 
@@ -113,6 +120,15 @@ class Effect:
 
     def current_factor(self, params, voltage, time):
         """Factor on the bulk conduction at sourcing voltage V_FSR and time t (None: none)."""
+        return None
+
+    def static_stress(self, params, stress, load_steps, time):
+        """Stress the contact and area laws (eqs. 5, 6) see under a load that changes in steps.
+
+        ``stress`` is the momentary load (C, T) or (W, C, T), ``load_steps`` (step_time,
+        step_size) as :func:`~fsrbayes.physics.sensor.solve_current` takes them. None: the
+        momentary load itself.
+        """
         return None
 
 
@@ -218,6 +234,24 @@ class ContactGrowth(Effect):
 
     def adjust_state(self, params, area, series, creep_strain, time):
         return area, series * np.exp(-params["cg_amp"] * _log_growth(time, params["cg_tau"]))
+
+
+class ContactMemory(Effect):
+    """The contacts remember heavier loads: eqs. (5), (6) see σ(t) + mem_frac·E(t).
+
+    E(t) is the excess of the loads held earlier in the test over the momentary one, fading
+    with ``mem_tau`` from the moment the load fell
+    (:func:`~fsrbayes.physics.superposition.remembered_excess`). A polymer composite unloaded
+    from a heavier weight springs back with a lag, so its contact spots and tunneling area stay
+    for a while as if a share ``mem_frac`` of the removed load were still applied: a load that
+    falls reads heavier than the same load reached from below (hysteresis). On a load that only
+    rises, or a test with one load, the effect does nothing.
+    """
+
+    def static_stress(self, params, stress, load_steps, time):
+        step_time, step_size = load_steps
+        excess = remembered_excess(step_time, step_size, time, stress, params["mem_tau"])
+        return stress + params["mem_frac"] * excess
 
 
 def _kelvin(t, params):
@@ -344,6 +378,8 @@ for _parameter in (
     Parameter("cg_tau", "s", "effect", None, "time scale of contact-path formation"),
     Parameter("gd_amp", "–", "effect", None, "log-change of the readout's gain over an hour"),
     Parameter("gd_tau", "s", "effect", None, "time scale of the readout's gain drift"),
+    Parameter("mem_frac", "–", "effect", None, "share of a removed load the contacts still feel"),
+    Parameter("mem_tau", "s", "effect", None, "time scale over which the contacts forget"),
 ):
     register_parameter(_parameter)
 
@@ -399,6 +435,12 @@ for _effect in (
         {"lc_comp": 0.0},
         "creep linear in ln t over decades of time",
     ),
+    ContactMemory(
+        "contact-memory",
+        ("mem_frac", "mem_tau"),
+        {"mem_frac": 0.0},
+        "the contacts remember heavier loads: a load that falls reads heavier (hysteresis)",
+    ),
     GainDrift(
         "gain-drift",
         ("gd_amp", "gd_tau"),
@@ -434,6 +476,21 @@ def resolve_effects(effects):
     if len(set(names)) != len(names):
         raise ValueError(f"effect listed twice in {names}")
     return tuple(resolved)
+
+
+def remembers_loads(effect):
+    """Return whether ``effect`` changes the stress the contact and area laws see (memory)."""
+    return type(effect).static_stress is not Effect.static_stress
+
+
+def static_stress_of(effects, params, stress, load_steps, time):
+    """Return the stress eqs. (5), (6) see under ``load_steps``; None: the momentary ``stress``."""
+    static = None
+    for effect in effects:
+        seen = effect.static_stress(params, stress, load_steps, time)
+        if seen is not None:
+            static = seen if static is None else static + seen - stress
+    return static
 
 
 def check_effects(effects):

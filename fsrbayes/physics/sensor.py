@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 
 from .contact import contact_resistance, effective_area, gap
-from .effects import resolve_effects
+from .effects import remembers_loads, resolve_effects, static_stress_of
 from .models import PeerModel, model_family
 from .scattered import solve_scattered
 from .solver import solve_bulk as solve_exactly
@@ -142,10 +142,13 @@ def _solve(
     effects=(),
     time=0.0,
     near_first=False,
+    static_stress=None,
 ):
     """Solve the paper's circuit with the effects' hooks.
 
-    ``effects`` are :class:`~.effects.Effect` objects. A physical effect's current factor f
+    ``effects`` are :class:`~.effects.Effect` objects. ``static_stress`` is the stress the contact
+    and area laws see where an effect changes it (:meth:`~.effects.Effect.static_stress`);
+    None: ``stress``. A physical effect's current factor f
     (conduction paths lost) scales every conduction path of the sensor, I = f·g(V_FSR); in
     series with a resistance R (a divider), V_s = V_FSR + R·f·g(V_FSR) is the undegraded sensor
     in series with R·f, solved as such with f taken at V_FSR of the undegraded solution (one
@@ -154,7 +157,9 @@ def _solve(
     """
     _check_choice("tunneling", tunneling, TUNNELING_LAWS)
     solve_bulk = solve_bulk_near_first if near_first else solve_exactly
-    s, area, series = sensor_state(params, stress, strain)
+    s, area, series = sensor_state(
+        params, stress if static_stress is None else static_stress, strain
+    )
     if effects:
         creep = strain - np.asarray(stress, dtype=float) / params["k1"]
         for effect in effects:
@@ -192,6 +197,7 @@ def _solve_model(
     time=0.0,
     extra_series=0.0,
     near_first=False,
+    static_stress=None,
 ):
     """Solve the circuit of the model family: a peer model's own, or the paper's implicit one."""
     if isinstance(family, PeerModel):
@@ -204,8 +210,9 @@ def _solve_model(
             )
         return family.solve(params, voltage, stress, strain, extra_series)
     return _solve(
-        params, voltage, stress, strain, tunneling, extra_series, effects, time, near_first
-    )
+        params, voltage, stress, strain, tunneling, extra_series, effects, time, near_first,
+        static_stress,
+    )  # fmt: skip
 
 
 def _check_effect_params(params, effects):
@@ -314,7 +321,7 @@ def _solve_current(
         first_ramp=first_ramp,
     )  # fmt: skip
     if load_steps is not None:
-        step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
+        steps = step_time, step_size = tuple(np.asarray(a, dtype=float) for a in load_steps)
         time = np.broadcast_to(
             np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1])
         )
@@ -323,9 +330,11 @@ def _solve_current(
             if first_ramp is not None:
                 weight = step_size[..., :1]
                 stress = ramped_load(stress, weight, first_ramp, time - step_time[..., :1])
+    static = None if load_steps is None else static_stress_of(effects, params, stress, steps, time)
     return _solve_model(
-        params, voltage, stress, strain, family, tunneling, effects, time, extra_series, near_first
-    )
+        params, voltage, stress, strain, family, tunneling, effects, time, extra_series,
+        near_first, static,
+    )  # fmt: skip
 
 
 def _apply_policy(solution, on_invalid, voltage, stress, time):
@@ -424,26 +433,10 @@ def drift(
     ----------
     Paper eq. (22).
     """
-    now = current(
-        params,
-        voltage,
-        stress,
-        time,
-        rheology=rheology,
-        tunneling=tunneling,
-        on_invalid=on_invalid,
-        effects=effects,
-    )
-    start = current(
-        params,
-        voltage,
-        stress,
-        np.zeros_like(np.asarray(time, dtype=float)),
-        rheology=rheology,
-        tunneling=tunneling,
-        on_invalid=on_invalid,
-        effects=effects,
-    )
+    options = {"rheology": rheology, "tunneling": tunneling, "on_invalid": on_invalid}
+    now = current(params, voltage, stress, time, effects=effects, **options)
+    at_step = np.zeros_like(np.asarray(time, dtype=float))
+    start = current(params, voltage, stress, at_step, effects=effects, **options)
     return 100.0 * (now - start) / start
 
 
@@ -489,6 +482,12 @@ def current_history(
         raise ValueError(
             f"the stress history must be > 0 Pa at every requested time, got min {stress.min():g} "
             "Pa"
+        )
+    remembering = [e.name for e in effects if remembers_loads(e)]
+    if remembering:
+        raise ValueError(
+            f"effect(s) {remembering} remember the loads of steps; current_history takes a smooth "
+            "history: use solve_current with load_steps"
         )
     strain = _creep_law(family).strain_history(history, time, params)
     for effect in effects:

@@ -12,7 +12,14 @@ Paper eq. (15) (the linear constitutive law whose solution superposition is).
 
 import numpy as np
 
-__all__ = ["RAMP_FLOOR", "load_of_steps", "ramped_load", "step_strain", "strain_of_steps"]
+__all__ = [
+    "RAMP_FLOOR",
+    "load_of_steps",
+    "ramped_load",
+    "remembered_excess",
+    "step_strain",
+    "strain_of_steps",
+]
 
 RAMP_FLOOR = 1e-3
 """The momentary load of a ramp is held at this share of the weight at least: at the very onset
@@ -122,3 +129,38 @@ def ramped_load(load, weight, ramp_s, time_s):
     ramp_s = np.asarray(ramp_s, dtype=float)
     share = np.clip(time_s / np.where(ramp_s > 0, ramp_s, 1.0), RAMP_FLOOR, 1.0)
     return np.where(time_s < ramp_s, weight * share, load)
+
+
+def remembered_excess(step_time, step_size, time, stress, tau):
+    """Return E(t): how far the loads of the recent past stood above the momentary one, fading.
+
+    E(t) = max_j (σ_j − σ(t))⁺·exp(−(t − e_j)/τ) over the load levels σ_j the steps held until
+    e_j ≤ t (a level still held counts once it ends), σ(t) the momentary ``stress``. E is 0 on
+    a load that only rises, and after a load falls it starts at the fall and fades with τ.
+
+    Parameters
+    ----------
+    step_time, step_size : ndarray, shape (C, K) or (W, C, K)
+        Each test's load steps (padding steps have size 0), in any order.
+    time : ndarray, shape (C, T)
+    stress : ndarray, broadcasting with (W, C, T)
+        The momentary load (Pa), e.g. :func:`load_of_steps` with a first ramp.
+    tau : float or ndarray broadcasting with (W, 1, 1)
+        The memory's time scale (s).
+
+    Returns
+    -------
+    ndarray, shape broadcast of (W, C, T)
+    """
+    step_time = np.asarray(step_time, dtype=float)
+    order = np.argsort(step_time, axis=-1, kind="stable")
+    start = np.take_along_axis(step_time, order, axis=-1)
+    level = np.cumsum(np.take_along_axis(np.asarray(step_size, dtype=float), order, -1), -1)
+    end = np.concatenate([start[..., 1:], np.full_like(start[..., :1], np.inf)], axis=-1)
+    since_end = np.asarray(time, dtype=float)[..., None] - end[..., None, :]  # (..., C, T, K)
+    above = level[..., None, :] - np.asarray(stress, dtype=float)[..., None]
+    tau = np.asarray(tau, dtype=float)[..., None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        fading = np.exp(-np.maximum(since_end, 0.0) / tau)
+    excess = np.where((since_end >= 0) & (above > 0), above * fading, 0.0)
+    return excess.max(axis=-1)
