@@ -7,12 +7,12 @@ from fsrbayes import load_sensor
 from fsrbayes.physics import loading
 from fsrbayes.physics.effects import EFFECTS, remembers_loads
 from fsrbayes.physics.sensor import current_history, solve_current
-from fsrbayes.physics.superposition import load_of_steps, remembered_excess
+from fsrbayes.physics.superposition import load_of_steps, ramped_load, remembered_excess
 
 
 def _excess_by_loops(step_time, step_size, t, tau):
     """E(t) written out from its definition, one time and one earlier load level at a time."""
-    steps = sorted(zip(step_time, step_size, strict=True), key=lambda s: s[0])
+    steps = sorted((s for s in zip(step_time, step_size, strict=True) if s[1]), key=lambda s: s[0])
     out = []
     for now in t:
         current = sum(size for at, size in steps if at <= now)
@@ -51,6 +51,38 @@ def test_memory_vectorises_over_walkers_with_their_own_time_scales():
     for w in range(3):
         one = remembered_excess(*steps, t, stress, float(tau[w, 0, 0]))
         np.testing.assert_array_equal(got[w], one)
+
+
+def test_a_sampled_landing_moves_each_walkers_first_step():
+    t = np.linspace(0, 1000, 40)[None]
+    step_size = np.array([[30e3, -20e3, 0.0]])
+    step_time = np.array([[[-0.5, 400.0, 0.0]], [[-0.1, 400.0, 0.0]]])  # (W, C, K)
+    stress = load_of_steps(step_time, step_size, t)
+    got = remembered_excess(step_time, step_size, t, stress, 100.0)
+    for w in range(2):
+        one = remembered_excess(step_time[w], step_size, t, stress[w], 100.0)
+        np.testing.assert_array_equal(got[w], one)
+    assert 15e3 < got.max() <= 20e3  # the 20 kPa fall, faded over the 10 s to the next time
+
+
+def test_a_first_ramp_beside_padding_steps_remembers_nothing(sensor):
+    """A batch of tests with different step counts pads them; a ramping first load is rising."""
+    t = np.concatenate([np.linspace(0.01, 1.0, 50), np.linspace(2, 1200, 50)])[None]
+    t = np.repeat(t, 2, axis=0)
+    step_time = np.array([[0.0, 600.0, 0.0], [0.0, 0.0, 0.0]])
+    step_size = np.array([[40e3, -20e3, 0.0], [40e3, 0.0, 0.0]])
+    ramp = np.array([[1.0], [1.0]])
+    stress = ramped_load(load_of_steps(step_time, step_size, t), step_size[:, :1], ramp, t)
+    excess = remembered_excess(step_time, step_size, t, stress, 100.0)
+    assert excess[:, t[0] < 600].max() == 0.0 and excess[0, t[0] > 600].max() > 0
+    options = {"rheology": "log-spectrum-sat", "load_steps": (step_time, step_size)}
+    on = solve_current(
+        {**sensor, "mem_frac": 0.3, "mem_tau": 100.0}, np.full((2, 1), 1.0), None, t,
+        effects=("contact-memory",), first_ramp=ramp, **options,
+    ).current  # fmt: skip
+    off = solve_current(sensor, np.full((2, 1), 1.0), None, t, first_ramp=ramp, **options).current
+    np.testing.assert_array_equal(on[1], off[1])  # one load: unchanged
+    np.testing.assert_array_equal(on[0, t[0] < 600], off[0, t[0] < 600])
 
 
 def _currents(params, steps, t, effects=("contact-memory",)):

@@ -275,6 +275,8 @@ def _real402_fit_summary(rows):
 
 def _real402_forecast_summary(rows):
     scored = [r["coverage_after"] for r in rows if r["coverage_after"] is not None]
+    if not scored:
+        return f"none of {len(rows)} tests had readings past its fitted first 10 min to forecast"
     return (
         f"the later readings inside the 90 % band: {min(scored):.3f}–{max(scored):.3f} over "
         f"{len(scored)} tests of {', '.join(dict.fromkeys(r['log'] for r in rows))} (target "
@@ -312,7 +314,7 @@ STUDIES = {
     ),
     "diagnose_study": Study(
         module="diagnose_study",
-        how="the acceptance matrix: every catalogue effect hidden at two magnitudes, effect-free "
+        how="the acceptance matrix: the catalogue effects hidden at two magnitudes, effect-free "
         "Burgers and Zener truths and the paper's mismatch, 2 specimens × 9 tests × 31 samples a "
         "case (`python -m validation.diagnose_study ROWS.json`; the slow test "
         "`tests/test_diagnose_matrix.py`)",

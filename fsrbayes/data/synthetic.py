@@ -313,6 +313,12 @@ def simulate(
         if np.any(volts <= 0) or np.any(loads <= 0):
             raise ValueError("voltages and stresses (forces) must be > 0")
         resolved = effect_parameters(sensor, effects)
+        remembering = [n for n in resolved if fx.remembers_loads(fx.EFFECTS[n])]
+        if remembering:
+            raise ValueError(
+                f"effect(s) {remembering} show only where a load falls within a test, and simulate "
+                "holds one load per test: use simulate-rig with a protocol whose load falls"
+            )
         effect_names = tuple(resolved)
         effect_params[sensor.name] = resolved
         protocol[sensor.name] = {"voltages_V": volts.tolist(), "stresses_Pa": loads.tolist()}

@@ -280,7 +280,8 @@ def solve_current(
     ``load_steps`` = (step_time, step_size), each (C, K), replaces the single step by a load
     that changes in steps (a staircase, an unloading): the strain follows by superposition
     (:mod:`~.superposition`) and the contact and area laws see the momentary load ``stress``
-    (C, T), by default the steps' own; ``time`` must then be (C, T). ``first_ramp`` (s,
+    (C, T), by default the steps' own — or more after a fall, with an effect that remembers
+    loads (``contact-memory``); ``time`` must then be (C, T). ``first_ramp`` (s,
     broadcasting with ``step_time[..., :1]``) lets each test's first step rise linearly over
     that time, exactly, in the strain and in the default momentary load. ``near_first=True``
     declares the parameter sets (the rows of ``params``' arrays) to be one point and its

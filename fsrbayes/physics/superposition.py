@@ -3,7 +3,8 @@
 A rig's load changes within a test in steps (a staircase, an unloading, a reloading) and its
 first weight may settle over a fraction of a second: the creep strain is the superposition of
 the creep law's step responses J(t − τ_k), with the first loading's exactly integrated over its
-linear rise (the ramp compliance Ĵ = ∫J), and the contact and area laws see the momentary load.
+linear rise (the ramp compliance Ĵ = ∫J), and the contact and area laws see the momentary load
+(or, with the ``contact-memory`` effect, more after a fall: :func:`remembered_excess`).
 
 References
 ----------
@@ -135,13 +136,16 @@ def remembered_excess(step_time, step_size, time, stress, tau):
     """Return E(t): how far the loads of the recent past stood above the momentary one, fading.
 
     E(t) = max_j (σ_j − σ(t))⁺·exp(−(t − e_j)/τ) over the load levels σ_j the steps held until
-    e_j ≤ t (a level still held counts once it ends), σ(t) the momentary ``stress``. E is 0 on
-    a load that only rises, and after a load falls it starts at the fall and fades with τ.
+    e_j ≤ t, σ(t) the momentary ``stress``. A level that ends in a rise is always outweighed by
+    the higher, later one, so only levels that end in a fall enter: E is 0 on a load that only
+    rises (a first loading ramp included), and after a fall it starts at the fall and fades
+    with τ.
 
     Parameters
     ----------
     step_time, step_size : ndarray, shape (C, K) or (W, C, K)
-        Each test's load steps (padding steps have size 0), in any order.
+        Each test's load steps in any order; padding steps have size 0 (their times are
+        ignored). The two broadcast (a sampled landing moves each walker's first step).
     time : ndarray, shape (C, T)
     stress : ndarray, broadcasting with (W, C, T)
         The momentary load (Pa), e.g. :func:`load_of_steps` with a first ramp.
@@ -152,15 +156,24 @@ def remembered_excess(step_time, step_size, time, stress, tau):
     -------
     ndarray, shape broadcast of (W, C, T)
     """
-    step_time = np.asarray(step_time, dtype=float)
+    step_time, step_size = np.broadcast_arrays(
+        np.asarray(step_time, dtype=float), np.asarray(step_size, dtype=float)
+    )
+    step_time = np.where(step_size == 0, np.inf, step_time)  # padding: after every real step
     order = np.argsort(step_time, axis=-1, kind="stable")
     start = np.take_along_axis(step_time, order, axis=-1)
-    level = np.cumsum(np.take_along_axis(np.asarray(step_size, dtype=float), order, -1), -1)
-    end = np.concatenate([start[..., 1:], np.full_like(start[..., :1], np.inf)], axis=-1)
-    since_end = np.asarray(time, dtype=float)[..., None] - end[..., None, :]  # (..., C, T, K)
-    above = level[..., None, :] - np.asarray(stress, dtype=float)[..., None]
-    tau = np.asarray(tau, dtype=float)[..., None]
-    with np.errstate(over="ignore", invalid="ignore"):
-        fading = np.exp(-np.maximum(since_end, 0.0) / tau)
-    excess = np.where((since_end >= 0) & (above > 0), above * fading, 0.0)
-    return excess.max(axis=-1)
+    size = np.take_along_axis(step_size, order, axis=-1)
+    level = np.cumsum(size, axis=-1)
+    time = np.asarray(time, dtype=float)
+    stress = np.asarray(stress, dtype=float)
+    excess = np.zeros(
+        np.broadcast_shapes(time.shape, stress.shape, np.shape(tau), level.shape[:-1] + (1,))
+    )
+    for k in np.flatnonzero(np.any(size[..., 1:] < 0, axis=tuple(range(size.ndim - 1)))):
+        falls = size[..., k + 1 : k + 2] < 0  # level k ends in a fall at start[k + 1]
+        since = time - start[..., k + 1 : k + 2]
+        above = level[..., k : k + 1] - stress
+        with np.errstate(over="ignore"):
+            term = above * np.exp(-np.maximum(since, 0.0) / tau)
+        excess = np.maximum(excess, np.where(falls & (since >= 0) & (above > 0), term, 0.0))
+    return excess
