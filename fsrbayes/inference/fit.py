@@ -81,7 +81,7 @@ PINNED_TRANSPORT_ROUNDS = 1
 """Warm-up rounds of a fit in pinned coordinates of plain data (one reading per sample at a
 constant sourcing voltage) whose settings leave ``transport_rounds`` None: there the posterior is
 close to Gaussian and one round's transport map does as well as three. A divider rig's posterior
-is not, so rig data keep three (measured 2026-11-26; the history of BENCHMARKS.md)."""
+is not, so rig data keep three."""
 
 
 class DesignWarning(UserWarning):

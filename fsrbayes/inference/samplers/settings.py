@@ -65,8 +65,8 @@ class SamplerSettings:
     extra_transport_rounds : int
         Warm-up chunks that may be added, one at a time, while the map fails its test on the
         draws it produced (module docstring); warm-up never takes more than half of
-        ``max_steps``. Off by default: it speeds up some creep posteriors and kept another from
-        converging (measured 2026-11-25; the history of BENCHMARKS.md).
+        ``max_steps``. Off by default: it speeds up some creep posteriors and keeps another from
+        converging.
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
         :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
