@@ -98,22 +98,32 @@ def write_json_atomic(path, payload):
         tmp.write_text(json.dumps(payload, indent=2, allow_nan=False) + "\n")
 
 
-def json_ready(value):
-    """Return a JSON-ready copy of nested dicts and lists.
+def json_ready(value, *, keep_nan=False):
+    """Return a JSON-ready copy of nested dicts, lists and tuples.
 
-    Return a copy of nested dicts/lists with NaN and inf as None, numpy scalars as Python numbers
-    and arrays as lists (JSON has no NaN).
+    Parameters
+    ----------
+    value : object
+        Dicts, lists and tuples of numbers, strings, booleans and None, with numpy arrays and
+        scalars among them.
+    keep_nan : bool, optional
+        Keep NaN and ±inf as floats (``json.dump`` writes them as ``NaN``/``Infinity``, which
+        Python's ``json.load`` reads back) instead of None (strict JSON has neither).
+
+    Returns
+    -------
+    object
+        The same data in the form ``json.load`` gives back after ``json.dump``: arrays and tuples
+        as lists, numpy scalars as Python numbers and booleans, dict keys as strings.
     """
     import math
 
     if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
+        return {str(k): json_ready(v, keep_nan=keep_nan) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [json_ready(v) for v in value]
-    if getattr(value, "ndim", 0) > 0 and hasattr(value, "tolist"):  # an array
-        return json_ready(value.tolist())
-    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
-        value = value.item()
-    if isinstance(value, float):
+        return [json_ready(v, keep_nan=keep_nan) for v in value]
+    if hasattr(value, "tolist"):  # a numpy array or scalar
+        return json_ready(value.tolist(), keep_nan=keep_nan)
+    if isinstance(value, float) and not keep_nan:
         return value if math.isfinite(value) else None
     return value

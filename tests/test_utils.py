@@ -85,3 +85,17 @@ def test_the_compiled_logsumexp_is_scipy_s_to_rounding():
     assert np.array_equal(got[~finite & ~np.isnan(got)], expected[~finite & ~np.isnan(expected)])
     np.testing.assert_allclose(got[finite], expected[finite], rtol=1e-15, atol=1e-13)
     assert logsumexp_last(np.array([0.0, 0.0])) == pytest.approx(np.log(2.0), rel=1e-15)
+
+
+def test_json_ready_gives_what_json_load_reads_back():
+    import json
+
+    from fsrbayes.utils import json_ready
+
+    rows = {1: (np.float64(0.5), np.arange(2)), "b": [np.nan, np.inf, np.bool_(True)]}
+    strict = json_ready(rows)
+    assert strict == {"1": [0.5, [0, 1]], "b": [None, None, True]}
+    assert json.loads(json.dumps(strict, allow_nan=False)) == strict
+    kept = json_ready(rows, keep_nan=True)
+    assert np.isnan(kept["b"][0]) and kept["b"][1] == np.inf
+    assert type(kept["1"][0]) is float and type(kept["b"][2]) is bool

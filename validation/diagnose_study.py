@@ -25,7 +25,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.discrepancy.diagnose import diagnose
 from fsrbayes.inference.parallel import map_jobs
 from fsrbayes.physics.sensor import drift as model_drift
-from validation.tables import json_ready
+from fsrbayes.utils import json_ready
 
 __all__ = [
     "Case",
@@ -237,7 +237,7 @@ def diagnose_study(cases=MATRIX, *, n_specimens=2, samples=31, seed=0, processes
 
 def run(cases=MATRIX, processes=2):
     """Diagnose ``cases`` side by side; one JSON-ready row per case (:func:`run_case`)."""
-    return json_ready(diagnose_study(cases, processes=processes))
+    return json_ready(diagnose_study(cases, processes=processes), keep_nan=True)
 
 
 def format_study(rows):

@@ -30,7 +30,7 @@ from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.sensor import drift
-from validation.tables import json_ready
+from fsrbayes.utils import json_ready
 
 __all__ = ["constant_voltage_tests", "probe_key", "run", "format_rows", "format_parameters"]
 
@@ -105,7 +105,7 @@ def run(seed=0, n_draws=400, n_starts=8):
         "v_fsr_start": [t.voltage_V - t.current_A[0] * t.rm_ohm for t in data.tests],
         "observed_drift_pct": [t.observed_drift(PROBE_TIME_S - 2.0) for t in data.tests],
     }
-    return [json_ready(row)]
+    return [json_ready(row, keep_nan=True)]
 
 
 def _quantiles(values):

@@ -32,7 +32,7 @@ import numpy as np
 
 from fsrbayes.data.synthetic import PAPER_VOLTAGES, simulate
 from fsrbayes.discrepancy import diagnose, gap, gap_band
-from validation.tables import json_ready
+from fsrbayes.utils import json_ready
 
 DESIGNS = (
     {"sensor": "a201", "n_specimens": 1, "voltages": (0.5, 2.0, 4.5), "samples": 31},
@@ -194,7 +194,7 @@ def run(n_sets=20, candidates=False, rig=False):
     JSON-ready rows.
     """
     if rig:
-        return json_ready(rig_null_gaps(n_sets))
+        return json_ready(rig_null_gaps(n_sets), keep_nan=True)
     rows = []
     for design in DESIGNS:
         mine = null_gaps(design, n_sets, effects=None if candidates else ())
@@ -204,7 +204,7 @@ def run(n_sets=20, candidates=False, rig=False):
             best = [r["best_log_bf"] for r in mine]
             print(f"  named: {len(named)}/{n_sets} {named}; best ln B max {max(best):.1f}")
         rows += mine
-    return json_ready(rows)
+    return json_ready(rows, keep_nan=True)
 
 
 def format_rows(rows):

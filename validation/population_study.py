@@ -31,7 +31,7 @@ from fsrbayes.inference.population.predictive import ForwardTemplate, drift_grou
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
-from validation.tables import json_ready
+from fsrbayes.utils import json_ready
 
 __all__ = [
     "population_study",
@@ -266,7 +266,7 @@ def format_population_study(study):
 
 def run(n_specimens=16, joint_route=False):
     """:func:`population_study` of ``n_specimens``; its record as the one JSON-ready row."""
-    return [json_ready(population_study(n_specimens, joint_route=joint_route))]
+    return [json_ready(population_study(n_specimens, joint_route=joint_route), keep_nan=True)]
 
 
 def format_rows(rows):

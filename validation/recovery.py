@@ -24,7 +24,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
-from validation.tables import json_ready
+from fsrbayes.utils import json_ready
 
 __all__ = [
     "recovery_study",
@@ -145,7 +145,7 @@ def format_recovery(study):
 
 def run(n_specimens=20):
     """:func:`recovery_study` of ``n_specimens``; its record as the one JSON-ready row."""
-    return [json_ready(recovery_study(n_specimens))]
+    return [json_ready(recovery_study(n_specimens), keep_nan=True)]
 
 
 def format_rows(rows):

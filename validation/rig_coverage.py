@@ -51,8 +51,8 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import SpecimenData
 from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
+from fsrbayes.utils import json_ready
 from validation.importance import importance_quantiles
-from validation.tables import json_ready
 
 __all__ = [
     "run",
@@ -395,7 +395,7 @@ def run(n=10, first=100, *, truth="population", max_steps=None, importance=0, js
     rows = []
     for seed in range(first, first + n):
         row = rig_replication(seed, settings=settings, truth=truth, importance=importance)
-        rows.append(json_ready(row))
+        rows.append(json_ready(row, keep_nan=True))
         print(format_coverage(rows[-1:]).splitlines()[0], flush=True)
         if json_path:
             _write_rows(rows, json_path)

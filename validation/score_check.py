@@ -46,9 +46,9 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
 from fsrbayes.inference.nuisance import is_landing, is_ramp, landing_names, ramp_names
 from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.utils import json_ready
 
 from .rig_coverage import simulate_truth
-from .tables import json_ready
 
 __all__ = ["ScoreCheck", "score_check", "run", "format_rows"]
 
@@ -339,7 +339,7 @@ def run(
         "truth": truth,
         "rig": bench,
     }
-    return [json_ready(row)]
+    return [json_ready(row, keep_nan=True)]
 
 
 def format_rows(rows):

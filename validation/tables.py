@@ -15,8 +15,8 @@ measured on. The history of a row is git's. ``python -m benchmarks --markdown`` 
 BENCHMARKS.md's table this way.
 
 A study's rows are saved as JSON (``python -m validation.NAME ... ROWS.json``) and summarised
-later (``python -m validation NAME=ROWS.json``); :func:`json_ready` gives rows the form they read
-back in.
+later (``python -m validation NAME=ROWS.json``); ``fsrbayes.utils.json_ready(rows,
+keep_nan=True)`` gives rows the form they read back in.
 """
 
 import datetime
@@ -28,7 +28,6 @@ from pathlib import Path
 
 __all__ = [
     "cpu_name",
-    "json_ready",
     "markdown_option",
     "measured_on",
     "read_table",
@@ -143,27 +142,3 @@ def write_rows(path, name, header, rows):
     """:func:`update_table`, then say on stdout how many rows of ``path`` were written."""
     update_table(path, name, header, rows)
     print(f"{len(rows)} row(s) of {path}'s current table written", flush=True)
-
-
-def json_ready(value):
-    """Return ``value`` in the form ``json.load`` gives back after ``json.dump``.
-
-    Parameters
-    ----------
-    value : object
-        Rows of a study: dicts, lists and tuples of numbers, strings, booleans and None, with
-        numpy arrays and scalars among them.
-
-    Returns
-    -------
-    object
-        The same data with numpy arrays and tuples as lists, numpy scalars as Python numbers and
-        booleans, and dict keys as strings.
-    """
-    if isinstance(value, dict):
-        return {str(key): json_ready(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_ready(item) for item in value]
-    if hasattr(value, "tolist"):  # a numpy array or scalar
-        return json_ready(value.tolist())
-    return value
