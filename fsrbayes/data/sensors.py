@@ -296,7 +296,18 @@ def _bundled():
 
 
 def available_sensors():
-    """Canonical names of the bundled sensors."""
+    """Canonical names of the bundled sensors.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> import fsrbayes
+    >>> fsrbayes.available_sensors()
+    ['a201', 'fsr402']
+    """
     return sorted(sensor.name for sensor in _bundled().values())
 
 
@@ -317,6 +328,15 @@ def load_sensor(name):
     ------
     ValueError
         For an unknown name (listing the known ones) or an invalid file.
+
+    Examples
+    --------
+    >>> import fsrbayes
+    >>> sensor = fsrbayes.load_sensor("FSR 402")
+    >>> sensor.name, sensor.default_model
+    ('fsr402', 'log-spectrum-sat')
+    >>> sorted(sensor.params)[:3]
+    ['A0', 'A1', 'A2']
     """
     path = Path(name)
     is_file = _is_file(path)

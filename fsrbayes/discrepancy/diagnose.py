@@ -327,6 +327,23 @@ def diagnose(
     Returns
     -------
     Diagnosis
+
+    Examples
+    --------
+    Data from the base model's own family: nothing is missing, and ``diagnose`` says so (a small
+    null band and one effect as the only candidate keep the example short):
+
+    >>> import warnings
+    >>> import fsrbayes
+    >>> from fsrbayes.data.synthetic import simulate
+    >>> data = simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8],
+    ...                 samples=11, seed=2).data
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     diagnosis = fsrbayes.diagnose(data, effects=["area-creep"], laws=[], null_sets=2,
+    ...                                   n_draws=100, n_starts=1)
+    >>> diagnosis.verdict
+    'adequate'
     """
     import time
 

@@ -330,6 +330,26 @@ def fit(
     Returns
     -------
     FitResult
+
+    Examples
+    --------
+    One simulated A201 specimen, two voltages × two forces; the run is cut short for the example
+    (the defaults run until the chains converge, and a short run warns that it did not):
+
+    >>> import warnings
+    >>> import fsrbayes
+    >>> from fsrbayes.data.synthetic import simulate
+    >>> from fsrbayes.inference.samplers import SamplerSettings
+    >>> data = simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8],
+    ...                 samples=11, seed=2).data
+    >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     result = fsrbayes.fit(data, model="burgers", settings=short, rng=1)
+    >>> result.posterior.names[:4]
+    ('A0', 'A1', 'A2', 'Va')
+    >>> result.draws().shape[-1] == len(result.posterior.names)
+    True
     """
     coordinates = _coordinates(coordinates)
     settle_s, placement = loading_treatment(data, specimen, settle_s, placement)

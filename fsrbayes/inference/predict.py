@@ -318,6 +318,32 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
     ValueError
         A specimen of the protocol has neither a fit nor a population in ``fit_dir``, was fitted
         as another sensor, or the protocol mixes reading columns.
+
+    Examples
+    --------
+    Fit a simulated specimen (cut short), write its fit folder as ``fsrbayes fit`` does, and
+    predict its own tests:
+
+    >>> import tempfile, warnings
+    >>> from pathlib import Path
+    >>> import fsrbayes
+    >>> from fsrbayes.data.synthetic import simulate
+    >>> from fsrbayes.inference.output import save_fit
+    >>> from fsrbayes.inference.samplers import SamplerSettings
+    >>> data = simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8],
+    ...                 samples=11, seed=2).data
+    >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     result = fsrbayes.fit(data, model="burgers", settings=short, rng=1)
+    >>> fits = Path(tempfile.mkdtemp())
+    >>> (fits / "a201-01").mkdir()
+    >>> _ = save_fit(result, fits / "a201-01")
+    >>> prediction = fsrbayes.predict(fits, data, n_draws=200)
+    >>> prediction["tests"][0]["specimen_source"], len(prediction["tests"])
+    ('fitted', 4)
+    >>> 0.5 < prediction["coverage_90"] <= 1.0
+    True
     """
     pairs = [(sp, protocol.select(specimen=sp).tests[0].sensor) for sp in protocol.specimens]
     sources = draw_sources(fit_dir, pairs, calibration, what="the protocol")

@@ -84,6 +84,34 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
     ValueError
         A specimen of the log has no fit and no population, was fitted as another sensor or
         with placement levels, or ``unit``/``n_draws`` are out of range.
+
+    Examples
+    --------
+    Calibrate an FSR 402 on a divider rig with 100 g and 300 g (a simulated log, cut short),
+    then read the force behind the same log as if its load column were unknown:
+
+    >>> import tempfile, warnings
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> import fsrbayes
+    >>> from fsrbayes.data import read_csv
+    >>> from fsrbayes.data.rigsim import simulate_rig
+    >>> from fsrbayes.inference.output import save_fit
+    >>> from fsrbayes.inference.samplers import SamplerSettings
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> log_text, truth = simulate_rig(1, seed=3, duration_s=30, rate_hz=1,
+    ...                                weights_g=(100.0, 300.0))
+    >>> _ = (folder / "rig.csv").write_text(log_text)
+    >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     result = fsrbayes.fit(read_csv(folder / "rig.csv"), model="burgers",
+    ...                           placement=False, settings=short, rng=1)
+    >>> (folder / "fsr402-01").mkdir()
+    >>> _ = save_fit(result, folder / "fsr402-01")
+    >>> reading = fsrbayes.force(folder, folder / "rig.csv", unit="g", n_draws=50)
+    >>> [round(float(np.median(test["q50"][-10:])), -1) for test in reading["tests"]]
+    [100.0, 300.0]
     """
     if unit not in FORCE_UNITS:
         raise ValueError(f"unit must be one of {FORCE_UNITS}, got {unit!r}")
