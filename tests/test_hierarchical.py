@@ -263,13 +263,12 @@ def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
 
 
-@pytest.mark.validation  # known answers from two Gibbs runs: the tier's (~15 s)
-@pytest.mark.parametrize("collapsed", [True, False])
-def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
+@pytest.mark.validation  # known answers from a Gibbs run: the tier's (~5 s)
+def test_gibbs_joint_matches_the_analytic_hyper_posterior():
     """All 8 specimens (the ensemble route above needs a minute for 5): blocked Gibbs sweeps with
-    the default proposals, fitted to each specimen's own posterior draws, with the specimens
-    moved jointly with Λ (collapsed) or given it. Two ensembles of 250 sweeps: with τ ≈ 2 sweeps
-    they keep a bulk ESS of ~4,000, and the tolerances are the run's own Monte-Carlo errors."""
+    the default proposals, fitted to each specimen's own posterior draws. Two ensembles of 250
+    sweeps: with τ ≈ 2 sweeps they keep a bulk ESS of ~4,000, and the tolerances are the run's
+    own Monte-Carlo errors."""
     population = Population(INTERIM)
     specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
     result = joint(
@@ -278,7 +277,6 @@ def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
         settings=replace(SETTINGS, n_ensembles=2, chunk=125, min_steps=250),
         seed=4,
         proposal_draws=exact_specimen_draws(1000, np.random.default_rng(1)),
-        gibbs={"collapsed": collapsed},
     )
     assert (
         isinstance(result.target, GibbsJointTarget) and result.run.chain.shape[2] == GIBBS_WALKERS
@@ -305,8 +303,7 @@ def test_gibbs_joint_started_from_two_stage_discards_only_its_tau_warmup_and_mat
     assert_matches(result, analytic_moments())
 
 
-@pytest.mark.parametrize("collapsed", [True, False])
-def test_gibbs_move_returns_the_joint_log_density_of_its_state(collapsed):
+def test_gibbs_move_returns_the_joint_log_density_of_its_state():
     """The log-density emcee stores is assembled from cached blocks: it must equal the joint
     target's, also after the state was changed behind the move's back (cache rebuilt)."""
     population = Population(INTERIM)
@@ -316,7 +313,6 @@ def test_gibbs_move_returns_the_joint_log_density_of_its_state(collapsed):
         specimens,
         exact_specimen_draws(200, np.random.default_rng(2)),
         weak_ratio=0.0,  # the shift-and-scale move too
-        collapsed=collapsed,
     )
     assert target.weak == (0,)
     u = target.sample_prior(np.random.default_rng(0), 6)

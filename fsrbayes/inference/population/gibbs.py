@@ -21,20 +21,6 @@ those blocks for every walker:
      one), red–blue split over the ensemble's walkers (each walker's target depends on its own
      Λ; the proposal uses only the other half's current positions, so it is symmetric given
      them, as in emcee's own moves).
-
-   With ``collapsed`` the independence step is instead
-
-   1′. a joint move of (u_j, Λ), after every block's DE steps: u_j from the same fitted
-       proposal moved towards the predictive of a specimen's z given the specimens (Λ
-       integrated out), then Λ from its conditional given the specimens' z with the proposed
-       z_j, drawn on a grid in log ω (:mod:`~.hyper_grid`; μ | ω exactly). The
-       Metropolis–Hastings ratio carries both proposal densities and their reverses, so the move
-       is exact; with Λ drawn close to its conditional, the ratio is close to that of the
-       specimen's marginal given the other specimens, and a specimen is no longer held inside
-       the walker's present spread ω. On the 16-specimen bench it shortens the autocorrelation
-       of ω_A0 by about as much as it lengthens a sweep (the grids and a second conditioned
-       proposal per block), so it is off by default (BENCHMARKS.md); with few specimens, where
-       ω given the others is wide, it has more to gain.
 2. the hyper-parameters: for each p, μ_p | ω_p, z drawn exactly (normal prior, normal
    likelihood) and log ω_p | μ_p, z by random-walk Metropolis (half-normal prior), a few rounds;
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
@@ -42,8 +28,8 @@ those blocks for every walker:
 
 The slowest direction is ω of the area law's coefficient A0: given the specimens' A0, which
 the data pin only along each specimen's A0–A1–A2 ridge (eq. 6), the spread is nearly fixed, and
-the specimens' A0 given ω move only within it (the centred funnel) — what the collapsed move
-1′ loosens. Costs and autocorrelation times on the 16-specimen bench are in BENCHMARKS.md.
+the specimens' A0 given ω move only within it (the centred funnel). Costs and autocorrelation
+times on the 16-specimen bench are in BENCHMARKS.md.
 
 Each sweep costs two likelihood evaluations per specimen and walker (the same as two steps of a
 single-specimen fit of every specimen); the joint log-density emcee stores is assembled from the
@@ -54,7 +40,6 @@ import emcee
 import numpy as np
 
 from ...data.prior import JointPrior
-from .hyper_grid import HyperConditional
 from .model import JointTarget
 from .proposals import PROPOSALS
 
@@ -87,9 +72,6 @@ class GibbsJointTarget(JointTarget):
         map's coordinates), the same map's Student-t fitted to the draws alone
         (:class:`~.proposals.MapProposal`), or a kernel mixture over the draws
         (:class:`~.proposals.KernelProposal`).
-    collapsed : bool
-        Propose each specimen block jointly with Λ (the module docstring's step 1′) instead of
-        given the walker's Λ (step 1's independence step).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
@@ -111,10 +93,8 @@ class GibbsJointTarget(JointTarget):
         weak_ratio=None,
         shift_scale=1.0,
         proposal="conditional",
-        collapsed=False,
     ):
         super().__init__(population, specimens)
-        self.collapsed = bool(collapsed)
         if proposal not in PROPOSALS:
             raise ValueError(f"proposal must be one of {sorted(PROPOSALS)}, got {proposal!r}")
         if len(proposal_draws) != len(self.specimens):
@@ -162,7 +142,7 @@ class GibbsJointTarget(JointTarget):
 
     def fingerprint(self):
         """Return a string that changes with the target (checkpoints)."""
-        return ("gibbs-collapsed-" if self.collapsed else "gibbs-") + super().fingerprint()
+        return "gibbs-" + super().fingerprint()
 
 
 class BlockGibbsMove(emcee.moves.Move):
@@ -262,11 +242,9 @@ class BlockGibbsMove(emcee.moves.Move):
         independence = self._accept(j, rows, u_new, log_extra, random, current)
         return independence.mean(), self._differential_evolution(j, random, current)
 
-    def _differential_evolution(self, j, random, current=None):
+    def _differential_evolution(self, j, random, current):
         """DE steps of block j given Λ, red–blue over the walkers; their acceptance rate."""
         n = len(self.u[j])
-        if current is None:
-            current = self._conditional(j, self.block_lp[:, j], self.x[:, j], np.arange(n))
         d = self.u[j].shape[1]
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
@@ -283,72 +261,6 @@ class BlockGibbsMove(emcee.moves.Move):
                 u_new = new if chart is None else chart.forward(new)
             moved.append(self._accept(j, active, u_new, 0.0, random, current))
         return np.concatenate(moved).mean()
-
-    def _log_hyper_and_population(self, x, mu, omega):
-        """Log p(μ, log ω) + Σ_j log p(x_j | μ, ω)/π(x_j) for x (W, J, P): Λ's part of the joint."""
-        pop = self.population
-        with np.errstate(invalid="ignore", divide="ignore"):
-            value = (
-                pop.hyper_prior.log_prob(np.concatenate([mu, omega], axis=1))
-                + np.sum(np.log(omega), axis=1)
-                + np.sum(pop.log_ratio(x, mu[:, None, :], omega[:, None, :]), axis=1)
-            )
-        return np.where(np.isnan(value), -np.inf, value)
-
-    def _collapsed(self, random):
-        """Each specimen block jointly with Λ (module docstring, step 1′); acceptance rates (J,).
-
-        Block j is proposed from its fitted proposal moved towards the predictive of a specimen's
-        z given all the specimens' (Λ integrated out, :meth:`.HyperConditional.predictive`), and Λ
-        from its conditional given the specimens' z with the proposed z_j
-        (:class:`.HyperConditional`); the reverse move's densities come from the grid of the
-        proposed state. The Metropolis–Hastings ratio is then close to that of the specimen's
-        marginal given the others: ω no longer holds the specimens in its funnel. Every density
-        is exact, so the step is exact whatever the grid's error.
-        """
-        pop = self.population
-        z = pop.to_z(self.x)[0]  # (W, J, P)
-        grid = HyperConditional(z, pop.centre, pop.scale)
-        log_hyper = self._log_hyper_and_population(self.x, self.mu, self.omega)  # kept current
-        n, n_spec = z.shape[0], z.shape[1]
-        rates = np.zeros(n_spec)
-        for j in range(n_spec):
-            fitted = self.target.proposals[j]
-            given = getattr(fitted, "given", None)
-            proposal = fitted if given is None else given(*grid.predictive())
-            u_new = proposal.sample(random, n)
-            log_q = -proposal.log_density(u_new)
-            lp_new, like_new, x_new = self._evaluate_block(j, u_new)
-            z_new = z.copy()
-            with np.errstate(divide="ignore", invalid="ignore"):
-                z_new[:, j] = pop.to_z(x_new)[0]
-                z_new[:, j] = np.where(np.isfinite(z_new[:, j]), z_new[:, j], z[:, j])
-                grid_new = HyperConditional(z_new, pop.centre, pop.scale)
-                mu_new, omega_new, log_q_new = grid_new.sample(random)
-                reverse = fitted if given is None else given(*grid_new.predictive())
-                log_q = log_q + reverse.log_density(self.u[j])
-                x_all = self.x.copy()
-                x_all[:, j] = x_new
-                log_hyper_new = self._log_hyper_and_population(x_all, mu_new, omega_new)
-                log_alpha = (
-                    lp_new
-                    + log_hyper_new
-                    - self.block_lp[:, j]
-                    - log_hyper
-                    + log_q
-                    + grid.log_density(self.mu, self.omega)
-                    - log_q_new
-                )
-            take = np.isfinite(lp_new) & (
-                np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf)
-            )
-            self._store(j, take, take, u_new, lp_new, like_new, x_new)
-            self.mu[take], self.omega[take] = mu_new[take], omega_new[take]
-            log_hyper[take] = log_hyper_new[take]
-            z[take, j] = z_new[take, j]
-            grid = grid.where(take, grid_new)
-            rates[j] = take.mean()
-        return rates
 
     def _hyper(self, random):
         pop = self.population
@@ -451,12 +363,7 @@ class BlockGibbsMove(emcee.moves.Move):
         random = model.random
         rates = np.zeros((len(self.u), 2))
         for j in range(len(self.u)):
-            if self.target.collapsed:
-                rates[j, 1] = self._differential_evolution(j, random)
-            else:
-                rates[j] = self._specimen(j, random)
-        if self.target.collapsed:
-            rates[:, 0] = self._collapsed(random)
+            rates[j] = self._specimen(j, random)
         self._hyper(random)
         for p in self.target.weak:
             self._shift_and_scale(p, random)
