@@ -14,7 +14,6 @@ from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.coordinates import NonCentredCoordinates
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget
 from fsrbayes.inference.population.model import Population, TwoStageTarget
-from fsrbayes.inference.population.proposals import KernelProposal
 from fsrbayes.inference.population.routes import (
     JOINT_WARMUP_TAU,
     ReweightingWarning,
@@ -362,26 +361,22 @@ def test_gibbs_joint_with_weakly_identified_specimens_matches_the_analytic_hyper
     assert_matches(result, analytic_moments(y, sigma))
 
 
-def test_kernel_proposal_draws_and_density_agree_and_are_normalised():
-    """E_q[f/q] = 1 (the draws follow the density) and E_f[q/f] = 1 (the density integrates to 1)
-    for a normalised broad Gaussian f, within 4 standard errors."""
-    rng = np.random.default_rng(5)
-    x = rng.standard_normal((2000, 3))
-    draws = np.column_stack([x[:, 0], x[:, 1] + 0.5 * x[:, 0] ** 2, 0.3 * x[:, 2]])  # a banana
-    proposal = KernelProposal(draws, n_centres=128)
-    broad = stats.multivariate_normal(draws.mean(axis=0), 4 * np.cov(draws, rowvar=False))
-    from_q = proposal.sample(np.random.RandomState(1), 40000)
-    ratio = np.exp(broad.logpdf(from_q) - proposal.log_density(from_q))
-    from_f = broad.rvs(40000, random_state=2)
-    inverse = np.exp(proposal.log_density(from_f) - broad.logpdf(from_f))
-    for w in (ratio, inverse):
-        assert abs(w.mean() - 1) < 4 * w.std() / np.sqrt(len(w)), (w.mean(), w.std())
-
-
 def test_gibbs_route_without_draws_is_refused():
     population = Population(INTERIM)
     with pytest.raises(ValueError, match="posterior draws"):
         joint([GaussianSpecimen(1.0, 1.0)] * 2, population, settings=SETTINGS, method="gibbs")
+
+
+@pytest.mark.parametrize(
+    "option", [{"collapsed": True}, {"proposal": "map"}, {"n_centres": 128}, {"hyper_round": 5}]
+)
+def test_gibbs_options_that_do_not_exist_are_refused(option):
+    population = Population(INTERIM)
+    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
+    draws = exact_specimen_draws(200, np.random.default_rng(2))
+    error = TypeError if "hyper_round" in option else ValueError
+    with pytest.raises(error, match=next(iter(option))):
+        joint(specimens, population, settings=SETTINGS, proposal_draws=draws, gibbs=option)
 
 
 def test_two_stage_warns_when_a_specimen_keeps_few_draws():

@@ -12,15 +12,15 @@ those blocks for every walker:
    p(u_j | Λ, y_j) ∝ π(u_j) L_j(u_j) p(θ_j | Λ) / π(θ_j) (u_j in the specimen's prior-scaled
    coordinates, :class:`~fsrbayes.inference.population.model.JointTarget`), updated by
    * an independence Metropolis–Hastings step from a density fitted to the specimen's own
-     posterior draws (the two-stage route's fits), exact for any proposal
-     (:mod:`~.proposals`): a Student-t pushed through a transport map fitted to the draws,
-     which straightens the curved s0–Va and A0–A1–A2 ridges that defeat Gaussian proposals,
-     its centre and scale moved towards the conditional given the walker's Λ (by default), or
-     fitted to the draws alone, or a Gaussian kernel mixture over the draws; and
-   * a differential-evolution step within the block (in the map's coordinates where there is
-     one), red–blue split over the ensemble's walkers (each walker's target depends on its own
-     Λ; the proposal uses only the other half's current positions, so it is symmetric given
-     them, as in emcee's own moves).
+     posterior draws (the two-stage route's fits), exact whatever the fit's error
+     (:class:`~.proposals.ConditionalMapProposal`): a Student-t pushed through a transport map
+     fitted to the draws, which straightens the curved s0–Va and A0–A1–A2 ridges that defeat
+     Gaussian proposals, its centre and scale moved towards the conditional given the walker's
+     Λ; and
+   * a differential-evolution step within the block in the map's coordinates, red–blue split
+     over the ensemble's walkers (each walker's target depends on its own Λ; the proposal uses
+     only the other half's current positions, so it is symmetric given them, as in emcee's own
+     moves).
 2. the hyper-parameters: for each p, μ_p | ω_p, z drawn exactly (normal prior, normal
    likelihood) and log ω_p | μ_p, z by random-walk Metropolis (half-normal prior), a few rounds;
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
@@ -41,7 +41,7 @@ import numpy as np
 
 from ...data.prior import JointPrior
 from .model import JointTarget
-from .proposals import PROPOSALS
+from .proposals import ConditionalMapProposal
 
 __all__ = ["GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
@@ -50,6 +50,23 @@ GIBBS_WALKERS = 16
 only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply. A sweep of 16
 costs half of 32's, and on the 16-specimen bench the slowest autocorrelation time did not grow
 with fewer walkers (BENCHMARKS.md)."""
+
+
+_REMOVED_OPTIONS = ("collapsed", "n_centres", "proposal")
+"""Options of :class:`GibbsJointTarget` that are refused with a one-line error: every specimen
+block is proposed by :class:`~.proposals.ConditionalMapProposal` given its walker's Λ."""
+
+
+def _refuse_removed(options):
+    """Raise for keywords :class:`GibbsJointTarget` does not take (ValueError for those removed)."""
+    gone = sorted(set(options) & set(_REMOVED_OPTIONS))
+    if gone:
+        raise ValueError(
+            f"Gibbs option(s) {', '.join(gone)} removed: every specimen block is proposed by the "
+            "conditional map given its walker's population (ConditionalMapProposal); drop them"
+        )
+    if options:
+        raise TypeError(f"GibbsJointTarget got unexpected keyword argument(s) {sorted(options)}")
 
 
 class GibbsJointTarget(JointTarget):
@@ -65,21 +82,14 @@ class GibbsJointTarget(JointTarget):
         or ``HierarchicalResult.specimen_draws`` of a two-stage result).
     hyper_rounds : int
         Rounds of (exact μ draw, Metropolis log ω step) per sweep.
-    proposal : {"conditional", "map", "kernel"}
-        The specimen blocks' independence proposal (:data:`PROPOSALS`): a Student-t through a
-        transport map fitted to the draws, moved towards each walker's conditional given its Λ
-        (:class:`~.proposals.ConditionalMapProposal`, default; the blocks' DE steps move in the
-        map's coordinates), the same map's Student-t fitted to the draws alone
-        (:class:`~.proposals.MapProposal`), or a kernel mixture over the draws
-        (:class:`~.proposals.KernelProposal`).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
         shift-and-scale move of (μ_p, ω_p, all z_jp) per sweep (one likelihood evaluation of every
-        specimen each; where the proposal has a transport map, the specimen's other parameters
-        follow along it). Off by default (None): on the 16-specimen bench the move on A0 alone
-        shortened the autocorrelation of ω_A0 only a little more than it lengthened a sweep
-        (BENCHMARKS.md), and which parameters it selects depends on the data.
+        specimen each; the specimen's other parameters follow along its proposal's transport
+        map). Off by default (None): on the 16-specimen bench the move on A0 alone shortened the
+        autocorrelation of ω_A0 only a little more than it lengthened a sweep (BENCHMARKS.md),
+        and which parameters it selects depends on the data.
     """
 
     def __init__(
@@ -89,14 +99,12 @@ class GibbsJointTarget(JointTarget):
         proposal_draws,
         *,
         hyper_rounds=5,
-        n_centres=256,
         weak_ratio=None,
         shift_scale=1.0,
-        proposal="conditional",
+        **removed,
     ):
+        _refuse_removed(removed)
         super().__init__(population, specimens)
-        if proposal not in PROPOSALS:
-            raise ValueError(f"proposal must be one of {sorted(PROPOSALS)}, got {proposal!r}")
         if len(proposal_draws) != len(self.specimens):
             raise ValueError(
                 f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
@@ -105,14 +113,15 @@ class GibbsJointTarget(JointTarget):
         draws = [np.asarray(d, dtype=float) for d in proposal_draws]
         pooled = [d[:, population.index] for d in draws]
         z, log_jacobians = zip(*(population.to_z(x) for x in pooled), strict=True)
-        self.proposals = []
-        for spec, d, x, z_j, log_jacobian in zip(
-            self.specimens, draws, pooled, z, log_jacobians, strict=False
-        ):
-            options = {"n_centres": n_centres} if proposal == "kernel" else {}
-            if proposal == "conditional":
-                options["pooled"] = (z_j, log_jacobian - population.interim.log_prob(x))
-            self.proposals.append(PROPOSALS[proposal](spec.prior.to_unconstrained(d), **options))
+        self.proposals = [
+            ConditionalMapProposal(
+                spec.prior.to_unconstrained(d),
+                (z_j, log_jacobian - population.interim.log_prob(x)),
+            )
+            for spec, d, x, z_j, log_jacobian in zip(
+                self.specimens, draws, pooled, z, log_jacobians, strict=False
+            )
+        ]
         self.hyper_rounds = int(hyper_rounds)
         within = np.median([np.std(v, axis=0) for v in z], axis=0)
         between = np.std([np.median(v, axis=0) for v in z], axis=0) + 1e-12
@@ -232,9 +241,7 @@ class BlockGibbsMove(emcee.moves.Move):
     def _specimen(self, j, random):
         """Block j given Λ: an independence step, then DE steps; their acceptance rates."""
         n = len(self.u[j])
-        fitted = self.target.proposals[j]
-        given = getattr(fitted, "given", None)  # a proposal that depends on the walker's Λ
-        proposal = fitted if given is None else given(self.mu, self.omega)
+        proposal = self.target.proposals[j].given(self.mu, self.omega)
         rows = np.arange(n)
         current = self._conditional(j, self.block_lp[:, j], self.x[:, j], rows)
         u_new = proposal.sample(random, n)
@@ -249,16 +256,16 @@ class BlockGibbsMove(emcee.moves.Move):
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
         moved = []
-        chart = getattr(self.target.proposals[j], "map", None)  # DE in the map's coordinates
+        chart = self.target.proposals[j].map  # DE in the map's coordinates
         for active, other in ((half[: n // 2], half[n // 2 :]), (half[n // 2 :], half[: n // 2])):
             first = random.randint(len(other), size=len(active))
             second = random.randint(len(other) - 1, size=len(active))
             second += second >= first  # two distinct walkers of the other half
             step = gamma * (1.0 + 1e-5 * random.standard_normal(len(active)))[:, None]
-            at = self.u[j] if chart is None else chart.inverse(self.u[j])
+            at = chart.inverse(self.u[j])
             new = at[active] + step * (at[other[first]] - at[other[second]])
             with np.errstate(over="ignore", invalid="ignore"):
-                u_new = new if chart is None else chart.forward(new)
+                u_new = chart.forward(new)
             moved.append(self._accept(j, active, u_new, 0.0, random, current))
         return np.concatenate(moved).mean()
 
@@ -294,12 +301,11 @@ class BlockGibbsMove(emcee.moves.Move):
         Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε, z'_j = μ' + e^ε
         (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take when the data
         barely identify p per specimen (ω_p then mixes over hundreds of sweeps). A specimen's
-        other parameters stay where they are — or, where its proposal has a transport map
-        (:class:`~.proposals.MapProposal`), they keep their map coordinates v and follow z_jp
-        along the ridge the map straightened (a parameter on the A0–A1–A2 ridge of eq. 6 cannot
-        move alone).
+        other parameters keep their coordinates v in its proposal's transport map
+        (:class:`~.proposals.ConditionalMapProposal`) and follow z_jp along the ridge the map
+        straightened (a parameter on the A0–A1–A2 ridge of eq. 6 cannot move alone).
 
-        The Metropolis ratio is taken in the coordinates (μ, log ω, z_jp, the rest's u or v), in
+        The Metropolis ratio is taken in the coordinates (μ, log ω, z_jp, the rest's v), in
         which the move has Jacobian e^{Jε} (the map's diagonal is constant): the change of each
         specimen's conditional log-density in u, less the change of log|dx/du| of p's column,
         plus that of log|dx/dz|, plus Δ log p(μ) + Δ log p(ω) + ε + Jε.
@@ -328,12 +334,8 @@ class BlockGibbsMove(emcee.moves.Move):
         for j in range(len(t.specimens)):
             with np.errstate(all="ignore"):
                 u_column = column_prior.to_unconstrained(value_new[:, j, None])[:, 0]
-                chart = getattr(t.proposals[j], "map", None)
-                if chart is None:
-                    u_new = self.u[j].copy()
-                    u_new[:, column] = u_column
-                else:
-                    u_new = chart.forward(chart.inverse(self.u[j]), fixed=(column, u_column))
+                chart = t.proposals[j].map
+                u_new = chart.forward(chart.inverse(self.u[j]), fixed=(column, u_column))
             bad = ~np.all(np.isfinite(u_new), axis=1)
             u_new[bad] = self.u[j][bad]
             lp, like, x = self._evaluate_block(j, u_new)
