@@ -1,5 +1,5 @@
-"""The Gibbs route's specimen-block proposals: exact densities, and sweeps that keep a curved
-block's conditional posterior (known by quadrature) for either proposal."""
+"""The Gibbs route's specimen-block proposal: exact densities, and sweeps that keep a curved
+block's conditional posterior (known by quadrature)."""
 
 import emcee
 import numpy as np
@@ -10,7 +10,7 @@ from fsrbayes.data.distributions import Distribution
 from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.gibbs import GibbsJointTarget
 from fsrbayes.inference.population.model import Population
-from fsrbayes.inference.population.proposals import ConditionalMapProposal, MapProposal
+from fsrbayes.inference.population.proposals import ConditionalMapProposal
 
 WIDE = Distribution("normal", {"mu": 0.0, "sigma": 10.0})
 PRIOR = JointPrior(("theta", "phi"), (WIDE, WIDE))
@@ -52,12 +52,13 @@ def conditional_moments(y):
     return np.array([m_theta, m_phi]), np.array([sd_theta, sd_phi])
 
 
-def test_the_map_proposal_is_a_normalised_density_of_its_own_draws():
+def test_the_own_posterior_part_is_a_normalised_density_of_its_own_draws():
     rng = np.random.default_rng(0)
     x = rng.standard_normal((600, 2))
     x[:, 1] = 0.3 * x[:, 1] + x[:, 0] ** 2
+    pooled = (x[:, :1], -stats.norm.logpdf(x[:, 0], 0.0, 10.0))
     for defensive in (0.0, 0.1):
-        q = MapProposal(x, defensive=defensive)
+        q = ConditionalMapProposal(x, pooled, defensive=defensive)
         assert q.map.quadratic
         a, b = np.linspace(-60, 60, 1201), np.linspace(-60, 200, 2601)
         grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
@@ -73,8 +74,8 @@ def test_the_map_proposal_is_a_normalised_density_of_its_own_draws():
         density = np.exp(q.log_density(grid)).reshape(len(a), len(b))
         mass = integrate.trapezoid(integrate.trapezoid(density, b, axis=1), a)
         assert box.mean() == pytest.approx(mass, abs=4 * np.sqrt(mass / len(draws)) + 5e-3)
-    with pytest.raises(ValueError, match="MapProposal needs finite draws"):
-        MapProposal(x[:5])
+    with pytest.raises(ValueError, match="ConditionalMapProposal needs finite draws"):
+        ConditionalMapProposal(x[:5], (pooled[0][:5], pooled[1][:5]))
 
 
 def banana_draws(rng, n=600):
@@ -123,10 +124,9 @@ def test_the_conditioned_proposal_is_normalised_and_leans_to_each_walkers_popula
         assert abs(got - exact) < 0.1 * omega < abs(x[:, 0].mean() - exact), (got, exact)
 
 
-@pytest.mark.parametrize("proposal", ["kernel", "map", "conditional"])
-def test_sweeps_keep_the_conditional_of_a_curved_block(proposal):
+def test_sweeps_keep_the_conditional_of_a_curved_block():
     """Hyper-parameters held (no hyper rounds): every specimen block must sample its conditional
-    given them — the independence step and the DE step (in the map's coordinates for "map")."""
+    given them — the independence step and the DE step (in the map's coordinates)."""
     population = Population(PRIOR, names=("theta",))
     specimens = [BananaSpecimen(y) for y in Y]
     rng = np.random.default_rng(2)
@@ -134,7 +134,7 @@ def test_sweeps_keep_the_conditional_of_a_curved_block(proposal):
     for y in Y:  # rough posterior draws: the proposals need not be exact
         theta = y + SIGMA * rng.standard_normal(1000)
         draws.append(np.column_stack([theta, theta**2 + CURVE * rng.standard_normal(1000)]))
-    target = GibbsJointTarget(population, specimens, draws, hyper_rounds=0, proposal=proposal)
+    target = GibbsJointTarget(population, specimens, draws, hyper_rounds=0)
     n_walk = 32
     hyper_u = population.hyper_prior.to_unconstrained(np.array([[MU, OMEGA]]))
     start = np.concatenate(
@@ -184,11 +184,10 @@ def hyper_moments(ys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("proposal", ["kernel", "map"])
-def test_the_shift_and_scale_move_keeps_the_hyper_posterior(proposal):
-    """Every sweep also shifts and scales (μ, ω, every θ_j) together (``weak_ratio`` 0): with a
-    transport map, each specimen's φ follows its θ along the curve — the ratio must still be exact.
-    Slow (~3 min each): the move is off by default."""
+def test_the_shift_and_scale_move_keeps_the_hyper_posterior():
+    """Every sweep also shifts and scales (μ, ω, every θ_j) together (``weak_ratio`` 0): each
+    specimen's φ follows its θ along the curve of its proposal's transport map — the ratio must
+    still be exact. Slow (~3 min): the move is off by default."""
     from fsrbayes.inference.population.routes import joint
     from fsrbayes.inference.samplers import SamplerSettings
 
@@ -205,7 +204,7 @@ def test_the_shift_and_scale_move_keeps_the_hyper_posterior(proposal):
         settings=SamplerSettings(n_ensembles=4, chunk=250, max_steps=8000, min_steps=500),
         seed=5,
         proposal_draws=draws,
-        gibbs={"proposal": proposal, "weak_ratio": 0.0},
+        gibbs={"weak_ratio": 0.0},
     )
     assert result.target.weak == (0,)
     assert result.converged, result.run.report.worst()

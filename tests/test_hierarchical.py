@@ -14,7 +14,6 @@ from fsrbayes.data.prior import JointPrior
 from fsrbayes.inference.population.coordinates import NonCentredCoordinates
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget
 from fsrbayes.inference.population.model import Population, TwoStageTarget
-from fsrbayes.inference.population.proposals import KernelProposal
 from fsrbayes.inference.population.routes import (
     JOINT_WARMUP_TAU,
     ReweightingWarning,
@@ -263,13 +262,12 @@ def test_two_stage_draw_error_matches_the_scatter_over_independent_draw_sets():
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
 
 
-@pytest.mark.validation  # known answers from two Gibbs runs: the tier's (~15 s)
-@pytest.mark.parametrize("collapsed", [True, False])
-def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
+@pytest.mark.validation  # known answers from a Gibbs run: the tier's (~5 s)
+def test_gibbs_joint_matches_the_analytic_hyper_posterior():
     """All 8 specimens (the ensemble route above needs a minute for 5): blocked Gibbs sweeps with
-    the default proposals, fitted to each specimen's own posterior draws, with the specimens
-    moved jointly with Λ (collapsed) or given it. Two ensembles of 250 sweeps: with τ ≈ 2 sweeps
-    they keep a bulk ESS of ~4,000, and the tolerances are the run's own Monte-Carlo errors."""
+    the default proposals, fitted to each specimen's own posterior draws. Two ensembles of 250
+    sweeps: with τ ≈ 2 sweeps they keep a bulk ESS of ~4,000, and the tolerances are the run's
+    own Monte-Carlo errors."""
     population = Population(INTERIM)
     specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
     result = joint(
@@ -278,7 +276,6 @@ def test_gibbs_joint_matches_the_analytic_hyper_posterior(collapsed):
         settings=replace(SETTINGS, n_ensembles=2, chunk=125, min_steps=250),
         seed=4,
         proposal_draws=exact_specimen_draws(1000, np.random.default_rng(1)),
-        gibbs={"collapsed": collapsed},
     )
     assert (
         isinstance(result.target, GibbsJointTarget) and result.run.chain.shape[2] == GIBBS_WALKERS
@@ -305,8 +302,7 @@ def test_gibbs_joint_started_from_two_stage_discards_only_its_tau_warmup_and_mat
     assert_matches(result, analytic_moments())
 
 
-@pytest.mark.parametrize("collapsed", [True, False])
-def test_gibbs_move_returns_the_joint_log_density_of_its_state(collapsed):
+def test_gibbs_move_returns_the_joint_log_density_of_its_state():
     """The log-density emcee stores is assembled from cached blocks: it must equal the joint
     target's, also after the state was changed behind the move's back (cache rebuilt)."""
     population = Population(INTERIM)
@@ -316,7 +312,6 @@ def test_gibbs_move_returns_the_joint_log_density_of_its_state(collapsed):
         specimens,
         exact_specimen_draws(200, np.random.default_rng(2)),
         weak_ratio=0.0,  # the shift-and-scale move too
-        collapsed=collapsed,
     )
     assert target.weak == (0,)
     u = target.sample_prior(np.random.default_rng(0), 6)
@@ -366,26 +361,22 @@ def test_gibbs_joint_with_weakly_identified_specimens_matches_the_analytic_hyper
     assert_matches(result, analytic_moments(y, sigma))
 
 
-def test_kernel_proposal_draws_and_density_agree_and_are_normalised():
-    """E_q[f/q] = 1 (the draws follow the density) and E_f[q/f] = 1 (the density integrates to 1)
-    for a normalised broad Gaussian f, within 4 standard errors."""
-    rng = np.random.default_rng(5)
-    x = rng.standard_normal((2000, 3))
-    draws = np.column_stack([x[:, 0], x[:, 1] + 0.5 * x[:, 0] ** 2, 0.3 * x[:, 2]])  # a banana
-    proposal = KernelProposal(draws, n_centres=128)
-    broad = stats.multivariate_normal(draws.mean(axis=0), 4 * np.cov(draws, rowvar=False))
-    from_q = proposal.sample(np.random.RandomState(1), 40000)
-    ratio = np.exp(broad.logpdf(from_q) - proposal.log_density(from_q))
-    from_f = broad.rvs(40000, random_state=2)
-    inverse = np.exp(proposal.log_density(from_f) - broad.logpdf(from_f))
-    for w in (ratio, inverse):
-        assert abs(w.mean() - 1) < 4 * w.std() / np.sqrt(len(w)), (w.mean(), w.std())
-
-
 def test_gibbs_route_without_draws_is_refused():
     population = Population(INTERIM)
     with pytest.raises(ValueError, match="posterior draws"):
         joint([GaussianSpecimen(1.0, 1.0)] * 2, population, settings=SETTINGS, method="gibbs")
+
+
+@pytest.mark.parametrize(
+    "option", [{"collapsed": True}, {"proposal": "map"}, {"n_centres": 128}, {"hyper_round": 5}]
+)
+def test_gibbs_options_that_do_not_exist_are_refused(option):
+    population = Population(INTERIM)
+    specimens = [GaussianSpecimen(a, b) for a, b in zip(Y, SIGMA, strict=False)]
+    draws = exact_specimen_draws(200, np.random.default_rng(2))
+    error = TypeError if "hyper_round" in option else ValueError
+    with pytest.raises(error, match=next(iter(option))):
+        joint(specimens, population, settings=SETTINGS, proposal_draws=draws, gibbs=option)
 
 
 def test_two_stage_warns_when_a_specimen_keeps_few_draws():

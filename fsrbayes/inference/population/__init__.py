@@ -7,8 +7,7 @@
   dask), then :func:`two_stage` or :func:`joint`.
 - :mod:`.coordinates` — the non-centred coordinates the two-stage hyper-posterior is sampled in.
 - :mod:`.gibbs` — blocked Gibbs sweeps for the joint route; :mod:`.proposals` — the independence
-  proposals of its specimen blocks; :mod:`.hyper_grid` — the hyper-parameters' conditional given
-  the specimens on a grid (its optional collapsed moves).
+  proposals of its specimen blocks.
 - :mod:`.predictive` — new specimens drawn from the population: drift(3600 s) box plots per
   group and the sourcing voltage that minimises drift.
 """

@@ -12,29 +12,15 @@ those blocks for every walker:
    p(u_j | Λ, y_j) ∝ π(u_j) L_j(u_j) p(θ_j | Λ) / π(θ_j) (u_j in the specimen's prior-scaled
    coordinates, :class:`~fsrbayes.inference.population.model.JointTarget`), updated by
    * an independence Metropolis–Hastings step from a density fitted to the specimen's own
-     posterior draws (the two-stage route's fits), exact for any proposal
-     (:mod:`~.proposals`): a Student-t pushed through a transport map fitted to the draws,
-     which straightens the curved s0–Va and A0–A1–A2 ridges that defeat Gaussian proposals,
-     its centre and scale moved towards the conditional given the walker's Λ (by default), or
-     fitted to the draws alone, or a Gaussian kernel mixture over the draws; and
-   * a differential-evolution step within the block (in the map's coordinates where there is
-     one), red–blue split over the ensemble's walkers (each walker's target depends on its own
-     Λ; the proposal uses only the other half's current positions, so it is symmetric given
-     them, as in emcee's own moves).
-
-   With ``collapsed`` the independence step is instead
-
-   1′. a joint move of (u_j, Λ), after every block's DE steps: u_j from the same fitted
-       proposal moved towards the predictive of a specimen's z given the specimens (Λ
-       integrated out), then Λ from its conditional given the specimens' z with the proposed
-       z_j, drawn on a grid in log ω (:mod:`~.hyper_grid`; μ | ω exactly). The
-       Metropolis–Hastings ratio carries both proposal densities and their reverses, so the move
-       is exact; with Λ drawn close to its conditional, the ratio is close to that of the
-       specimen's marginal given the other specimens, and a specimen is no longer held inside
-       the walker's present spread ω. On the 16-specimen bench it shortens the autocorrelation
-       of ω_A0 by about as much as it lengthens a sweep (the grids and a second conditioned
-       proposal per block), so it is off by default (BENCHMARKS.md); with few specimens, where
-       ω given the others is wide, it has more to gain.
+     posterior draws (the two-stage route's fits), exact whatever the fit's error
+     (:class:`~.proposals.ConditionalMapProposal`): a Student-t pushed through a transport map
+     fitted to the draws, which straightens the curved s0–Va and A0–A1–A2 ridges that defeat
+     Gaussian proposals, its centre and scale moved towards the conditional given the walker's
+     Λ; and
+   * a differential-evolution step within the block in the map's coordinates, red–blue split
+     over the ensemble's walkers (each walker's target depends on its own Λ; the proposal uses
+     only the other half's current positions, so it is symmetric given them, as in emcee's own
+     moves).
 2. the hyper-parameters: for each p, μ_p | ω_p, z drawn exactly (normal prior, normal
    likelihood) and log ω_p | μ_p, z by random-walk Metropolis (half-normal prior), a few rounds;
 3. optionally (``weak_ratio``), for parameters the specimens barely identify, a joint
@@ -42,8 +28,8 @@ those blocks for every walker:
 
 The slowest direction is ω of the area law's coefficient A0: given the specimens' A0, which
 the data pin only along each specimen's A0–A1–A2 ridge (eq. 6), the spread is nearly fixed, and
-the specimens' A0 given ω move only within it (the centred funnel) — what the collapsed move
-1′ loosens. Costs and autocorrelation times on the 16-specimen bench are in BENCHMARKS.md.
+the specimens' A0 given ω move only within it (the centred funnel). Costs and autocorrelation
+times on the 16-specimen bench are in BENCHMARKS.md.
 
 Each sweep costs two likelihood evaluations per specimen and walker (the same as two steps of a
 single-specimen fit of every specimen); the joint log-density emcee stores is assembled from the
@@ -54,9 +40,8 @@ import emcee
 import numpy as np
 
 from ...data.prior import JointPrior
-from .hyper_grid import HyperConditional
 from .model import JointTarget
-from .proposals import PROPOSALS
+from .proposals import ConditionalMapProposal
 
 __all__ = ["GibbsJointTarget", "BlockGibbsMove", "GIBBS_WALKERS"]
 
@@ -65,6 +50,23 @@ GIBBS_WALKERS = 16
 only feeds the DE step), so the 4·ndim rule of the ensemble moves does not apply. A sweep of 16
 costs half of 32's, and on the 16-specimen bench the slowest autocorrelation time did not grow
 with fewer walkers (BENCHMARKS.md)."""
+
+
+_REMOVED_OPTIONS = ("collapsed", "n_centres", "proposal")
+"""Options of :class:`GibbsJointTarget` that are refused with a one-line error: every specimen
+block is proposed by :class:`~.proposals.ConditionalMapProposal` given its walker's Λ."""
+
+
+def _refuse_removed(options):
+    """Raise for keywords :class:`GibbsJointTarget` does not take (ValueError for those removed)."""
+    gone = sorted(set(options) & set(_REMOVED_OPTIONS))
+    if gone:
+        raise ValueError(
+            f"Gibbs option(s) {', '.join(gone)} removed: every specimen block is proposed by the "
+            "conditional map given its walker's population (ConditionalMapProposal); drop them"
+        )
+    if options:
+        raise TypeError(f"GibbsJointTarget got unexpected keyword argument(s) {sorted(options)}")
 
 
 class GibbsJointTarget(JointTarget):
@@ -80,24 +82,14 @@ class GibbsJointTarget(JointTarget):
         or ``HierarchicalResult.specimen_draws`` of a two-stage result).
     hyper_rounds : int
         Rounds of (exact μ draw, Metropolis log ω step) per sweep.
-    proposal : {"conditional", "map", "kernel"}
-        The specimen blocks' independence proposal (:data:`PROPOSALS`): a Student-t through a
-        transport map fitted to the draws, moved towards each walker's conditional given its Λ
-        (:class:`~.proposals.ConditionalMapProposal`, default; the blocks' DE steps move in the
-        map's coordinates), the same map's Student-t fitted to the draws alone
-        (:class:`~.proposals.MapProposal`), or a kernel mixture over the draws
-        (:class:`~.proposals.KernelProposal`).
-    collapsed : bool
-        Propose each specimen block jointly with Λ (the module docstring's step 1′) instead of
-        given the walker's Λ (step 1's independence step).
     weak_ratio : float or None
         Population parameters whose per-specimen posterior sd (median over specimens, in z)
         exceeds this share of the spread of the specimens' posterior medians also get a
         shift-and-scale move of (μ_p, ω_p, all z_jp) per sweep (one likelihood evaluation of every
-        specimen each; where the proposal has a transport map, the specimen's other parameters
-        follow along it). Off by default (None): on the 16-specimen bench the move on A0 alone
-        shortened the autocorrelation of ω_A0 only a little more than it lengthened a sweep
-        (BENCHMARKS.md), and which parameters it selects depends on the data.
+        specimen each; the specimen's other parameters follow along its proposal's transport
+        map). Off by default (None): on the 16-specimen bench the move on A0 alone shortened the
+        autocorrelation of ω_A0 only a little more than it lengthened a sweep (BENCHMARKS.md),
+        and which parameters it selects depends on the data.
     """
 
     def __init__(
@@ -107,16 +99,12 @@ class GibbsJointTarget(JointTarget):
         proposal_draws,
         *,
         hyper_rounds=5,
-        n_centres=256,
         weak_ratio=None,
         shift_scale=1.0,
-        proposal="conditional",
-        collapsed=False,
+        **removed,
     ):
+        _refuse_removed(removed)
         super().__init__(population, specimens)
-        self.collapsed = bool(collapsed)
-        if proposal not in PROPOSALS:
-            raise ValueError(f"proposal must be one of {sorted(PROPOSALS)}, got {proposal!r}")
         if len(proposal_draws) != len(self.specimens):
             raise ValueError(
                 f"proposal_draws: need one array per specimen ({len(self.specimens)}), got "
@@ -125,14 +113,15 @@ class GibbsJointTarget(JointTarget):
         draws = [np.asarray(d, dtype=float) for d in proposal_draws]
         pooled = [d[:, population.index] for d in draws]
         z, log_jacobians = zip(*(population.to_z(x) for x in pooled), strict=True)
-        self.proposals = []
-        for spec, d, x, z_j, log_jacobian in zip(
-            self.specimens, draws, pooled, z, log_jacobians, strict=False
-        ):
-            options = {"n_centres": n_centres} if proposal == "kernel" else {}
-            if proposal == "conditional":
-                options["pooled"] = (z_j, log_jacobian - population.interim.log_prob(x))
-            self.proposals.append(PROPOSALS[proposal](spec.prior.to_unconstrained(d), **options))
+        self.proposals = [
+            ConditionalMapProposal(
+                spec.prior.to_unconstrained(d),
+                (z_j, log_jacobian - population.interim.log_prob(x)),
+            )
+            for spec, d, x, z_j, log_jacobian in zip(
+                self.specimens, draws, pooled, z, log_jacobians, strict=False
+            )
+        ]
         self.hyper_rounds = int(hyper_rounds)
         within = np.median([np.std(v, axis=0) for v in z], axis=0)
         between = np.std([np.median(v, axis=0) for v in z], axis=0) + 1e-12
@@ -162,7 +151,7 @@ class GibbsJointTarget(JointTarget):
 
     def fingerprint(self):
         """Return a string that changes with the target (checkpoints)."""
-        return ("gibbs-collapsed-" if self.collapsed else "gibbs-") + super().fingerprint()
+        return "gibbs-" + super().fingerprint()
 
 
 class BlockGibbsMove(emcee.moves.Move):
@@ -252,9 +241,7 @@ class BlockGibbsMove(emcee.moves.Move):
     def _specimen(self, j, random):
         """Block j given Λ: an independence step, then DE steps; their acceptance rates."""
         n = len(self.u[j])
-        fitted = self.target.proposals[j]
-        given = getattr(fitted, "given", None)  # a proposal that depends on the walker's Λ
-        proposal = fitted if given is None else given(self.mu, self.omega)
+        proposal = self.target.proposals[j].given(self.mu, self.omega)
         rows = np.arange(n)
         current = self._conditional(j, self.block_lp[:, j], self.x[:, j], rows)
         u_new = proposal.sample(random, n)
@@ -262,93 +249,25 @@ class BlockGibbsMove(emcee.moves.Move):
         independence = self._accept(j, rows, u_new, log_extra, random, current)
         return independence.mean(), self._differential_evolution(j, random, current)
 
-    def _differential_evolution(self, j, random, current=None):
+    def _differential_evolution(self, j, random, current):
         """DE steps of block j given Λ, red–blue over the walkers; their acceptance rate."""
         n = len(self.u[j])
-        if current is None:
-            current = self._conditional(j, self.block_lp[:, j], self.x[:, j], np.arange(n))
         d = self.u[j].shape[1]
         gamma = 2.38 / np.sqrt(2.0 * d)
         half = random.permutation(n)
         moved = []
-        chart = getattr(self.target.proposals[j], "map", None)  # DE in the map's coordinates
+        chart = self.target.proposals[j].map  # DE in the map's coordinates
         for active, other in ((half[: n // 2], half[n // 2 :]), (half[n // 2 :], half[: n // 2])):
             first = random.randint(len(other), size=len(active))
             second = random.randint(len(other) - 1, size=len(active))
             second += second >= first  # two distinct walkers of the other half
             step = gamma * (1.0 + 1e-5 * random.standard_normal(len(active)))[:, None]
-            at = self.u[j] if chart is None else chart.inverse(self.u[j])
+            at = chart.inverse(self.u[j])
             new = at[active] + step * (at[other[first]] - at[other[second]])
             with np.errstate(over="ignore", invalid="ignore"):
-                u_new = new if chart is None else chart.forward(new)
+                u_new = chart.forward(new)
             moved.append(self._accept(j, active, u_new, 0.0, random, current))
         return np.concatenate(moved).mean()
-
-    def _log_hyper_and_population(self, x, mu, omega):
-        """Log p(μ, log ω) + Σ_j log p(x_j | μ, ω)/π(x_j) for x (W, J, P): Λ's part of the joint."""
-        pop = self.population
-        with np.errstate(invalid="ignore", divide="ignore"):
-            value = (
-                pop.hyper_prior.log_prob(np.concatenate([mu, omega], axis=1))
-                + np.sum(np.log(omega), axis=1)
-                + np.sum(pop.log_ratio(x, mu[:, None, :], omega[:, None, :]), axis=1)
-            )
-        return np.where(np.isnan(value), -np.inf, value)
-
-    def _collapsed(self, random):
-        """Each specimen block jointly with Λ (module docstring, step 1′); acceptance rates (J,).
-
-        Block j is proposed from its fitted proposal moved towards the predictive of a specimen's
-        z given all the specimens' (Λ integrated out, :meth:`.HyperConditional.predictive`), and Λ
-        from its conditional given the specimens' z with the proposed z_j
-        (:class:`.HyperConditional`); the reverse move's densities come from the grid of the
-        proposed state. The Metropolis–Hastings ratio is then close to that of the specimen's
-        marginal given the others: ω no longer holds the specimens in its funnel. Every density
-        is exact, so the step is exact whatever the grid's error.
-        """
-        pop = self.population
-        z = pop.to_z(self.x)[0]  # (W, J, P)
-        grid = HyperConditional(z, pop.centre, pop.scale)
-        log_hyper = self._log_hyper_and_population(self.x, self.mu, self.omega)  # kept current
-        n, n_spec = z.shape[0], z.shape[1]
-        rates = np.zeros(n_spec)
-        for j in range(n_spec):
-            fitted = self.target.proposals[j]
-            given = getattr(fitted, "given", None)
-            proposal = fitted if given is None else given(*grid.predictive())
-            u_new = proposal.sample(random, n)
-            log_q = -proposal.log_density(u_new)
-            lp_new, like_new, x_new = self._evaluate_block(j, u_new)
-            z_new = z.copy()
-            with np.errstate(divide="ignore", invalid="ignore"):
-                z_new[:, j] = pop.to_z(x_new)[0]
-                z_new[:, j] = np.where(np.isfinite(z_new[:, j]), z_new[:, j], z[:, j])
-                grid_new = HyperConditional(z_new, pop.centre, pop.scale)
-                mu_new, omega_new, log_q_new = grid_new.sample(random)
-                reverse = fitted if given is None else given(*grid_new.predictive())
-                log_q = log_q + reverse.log_density(self.u[j])
-                x_all = self.x.copy()
-                x_all[:, j] = x_new
-                log_hyper_new = self._log_hyper_and_population(x_all, mu_new, omega_new)
-                log_alpha = (
-                    lp_new
-                    + log_hyper_new
-                    - self.block_lp[:, j]
-                    - log_hyper
-                    + log_q
-                    + grid.log_density(self.mu, self.omega)
-                    - log_q_new
-                )
-            take = np.isfinite(lp_new) & (
-                np.log(random.uniform(size=n)) < np.nan_to_num(log_alpha, nan=-np.inf)
-            )
-            self._store(j, take, take, u_new, lp_new, like_new, x_new)
-            self.mu[take], self.omega[take] = mu_new[take], omega_new[take]
-            log_hyper[take] = log_hyper_new[take]
-            z[take, j] = z_new[take, j]
-            grid = grid.where(take, grid_new)
-            rates[j] = take.mean()
-        return rates
 
     def _hyper(self, random):
         pop = self.population
@@ -382,12 +301,11 @@ class BlockGibbsMove(emcee.moves.Move):
         Move (μ_p, ω_p) and every specimen's z_jp together: μ' = μ + δ, ω' = ω·e^ε, z'_j = μ' + e^ε
         (z_j − μ) — the non-centred direction the centred Gibbs blocks cannot take when the data
         barely identify p per specimen (ω_p then mixes over hundreds of sweeps). A specimen's
-        other parameters stay where they are — or, where its proposal has a transport map
-        (:class:`~.proposals.MapProposal`), they keep their map coordinates v and follow z_jp
-        along the ridge the map straightened (a parameter on the A0–A1–A2 ridge of eq. 6 cannot
-        move alone).
+        other parameters keep their coordinates v in its proposal's transport map
+        (:class:`~.proposals.ConditionalMapProposal`) and follow z_jp along the ridge the map
+        straightened (a parameter on the A0–A1–A2 ridge of eq. 6 cannot move alone).
 
-        The Metropolis ratio is taken in the coordinates (μ, log ω, z_jp, the rest's u or v), in
+        The Metropolis ratio is taken in the coordinates (μ, log ω, z_jp, the rest's v), in
         which the move has Jacobian e^{Jε} (the map's diagonal is constant): the change of each
         specimen's conditional log-density in u, less the change of log|dx/du| of p's column,
         plus that of log|dx/dz|, plus Δ log p(μ) + Δ log p(ω) + ε + Jε.
@@ -416,12 +334,8 @@ class BlockGibbsMove(emcee.moves.Move):
         for j in range(len(t.specimens)):
             with np.errstate(all="ignore"):
                 u_column = column_prior.to_unconstrained(value_new[:, j, None])[:, 0]
-                chart = getattr(t.proposals[j], "map", None)
-                if chart is None:
-                    u_new = self.u[j].copy()
-                    u_new[:, column] = u_column
-                else:
-                    u_new = chart.forward(chart.inverse(self.u[j]), fixed=(column, u_column))
+                chart = t.proposals[j].map
+                u_new = chart.forward(chart.inverse(self.u[j]), fixed=(column, u_column))
             bad = ~np.all(np.isfinite(u_new), axis=1)
             u_new[bad] = self.u[j][bad]
             lp, like, x = self._evaluate_block(j, u_new)
@@ -451,12 +365,7 @@ class BlockGibbsMove(emcee.moves.Move):
         random = model.random
         rates = np.zeros((len(self.u), 2))
         for j in range(len(self.u)):
-            if self.target.collapsed:
-                rates[j, 1] = self._differential_evolution(j, random)
-            else:
-                rates[j] = self._specimen(j, random)
-        if self.target.collapsed:
-            rates[:, 0] = self._collapsed(random)
+            rates[j] = self._specimen(j, random)
         self._hyper(random)
         for p in self.target.weak:
             self._shift_and_scale(p, random)

@@ -1,22 +1,22 @@
-"""Independence proposals for the specimen blocks of the Gibbs route (:mod:`.gibbs`).
+"""The independence proposal of the Gibbs route's specimen blocks (:mod:`.gibbs`).
 
 Each specimen's conditional given the population is proposed from a density fitted to that
-specimen's own posterior draws; the Metropolis–Hastings ratio carries q, so any proposal is exact.
+specimen's own posterior draws (:class:`ConditionalMapProposal`); the Metropolis–Hastings ratio
+carries q, so the step is exact whatever the fit's error.
 """
 
 import numpy as np
 
-from ...utils import logsumexp
 from ..samplers.independence import student_t_draws, student_t_log_density
 from ..samplers.transport import TriangularMap
 
-__all__ = ["ConditionalMapProposal", "KernelProposal", "MapProposal", "PROPOSALS"]
+__all__ = ["ConditionalMapProposal"]
 
 
 class _DefensiveStudentT:
     """A multivariate Student-t in u with twice the draws' covariance.
 
-    The part of either proposal that keeps its tails heavier than any conditional of the block.
+    The part of the proposal that keeps its tails heavier than any conditional of the block.
     """
 
     def __init__(self, draws, dof):
@@ -33,94 +33,60 @@ class _DefensiveStudentT:
         return student_t_log_density(y, self.dof) - self.log_det
 
 
-class KernelProposal:
-    """Independence proposal for one block of the Gibbs sweep.
-
-    Independence proposal for one block: a Gaussian kernel mixture over draws, plus a defensive
-    multivariate Student-t.
-
-    Parameters
-    ----------
-    draws : ndarray (N, d)
-        Draws of the block (e.g. a per-specimen posterior in its u coordinates).
-    n_centres : int
-        Kernel centres, evenly thinned from ``draws``.
-    defensive : float
-        Weight of the Student-t (``dof`` degrees of freedom, twice the draws' covariance): it
-        keeps the proposal's tails heavier than any conditional of the block.
-    """
-
-    def __init__(self, draws, n_centres=256, defensive=0.1, dof=5.0):
-        draws = np.asarray(draws, dtype=float)
-        if draws.ndim != 2 or len(draws) < draws.shape[1] + 2 or not np.all(np.isfinite(draws)):
-            raise ValueError(
-                f"KernelProposal needs finite draws of shape (N > d + 1, d), got {draws.shape}"
-            )
-        n, d = draws.shape
-        self.centres = draws[np.linspace(0, n - 1, min(n, n_centres)).astype(int)]
-        self.heavy = _DefensiveStudentT(draws, float(dof))
-        m = len(self.centres)
-        bandwidth = (4.0 / ((d + 2.0) * m)) ** (1.0 / (d + 4.0))  # Silverman's rule
-        self.kernel_chol = np.linalg.cholesky(bandwidth**2 * self.heavy.cov)
-        self.white_centres = np.linalg.solve(self.kernel_chol, self.centres.T).T
-        self.defensive, self.dof, self.d = float(defensive), float(dof), d
-
-    def sample(self, random, n):
-        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
-        pick = random.randint(len(self.centres), size=n)
-        kernel = self.centres[pick] + random.standard_normal((n, self.d)) @ self.kernel_chol.T
-        chi = random.chisquare(self.dof, size=n) / self.dof
-        heavy = (
-            self.heavy.mean
-            + (random.standard_normal((n, self.d)) @ self.heavy.chol.T) / np.sqrt(chi)[:, None]
-        )
-        return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, kernel)
-
-    def log_density(self, u):
-        """Log q(u) for u (n, d)."""
-        u = np.atleast_2d(u)
-        white = np.linalg.solve(self.kernel_chol, u.T).T
-        dist2 = (
-            np.sum(white**2, axis=1)[:, None]
-            + np.sum(self.white_centres**2, axis=1)[None, :]
-            - 2.0 * white @ self.white_centres.T
-        )
-        log_kernel = (
-            logsumexp(-0.5 * np.maximum(dist2, 0.0), axis=1)
-            - np.log(len(self.centres))
-            - np.sum(np.log(np.diag(self.kernel_chol)))
-            - 0.5 * self.d * np.log(2 * np.pi)
-        )
-        log_t = self.heavy.log_density(u)
-        return np.logaddexp(np.log1p(-self.defensive) + log_kernel, np.log(self.defensive) + log_t)
-
-
-class MapProposal:
-    """Independence proposal for one block: a Student-t pushed through a transport map.
+class ConditionalMapProposal:
+    """Independence proposal for a specimen block, moved per walker towards its conditional.
 
     A :class:`~fsrbayes.inference.samplers.transport.TriangularMap` fitted to the block's draws
     straightens their curved ridges (the A0–A1–A2 ridge of the area law, eq. 6; the s0–Va ridge
-    of the tunneling block): in its coordinates v the draws are close to a Gaussian, so
-    u = T(v), v ~ Student-t (scale fitted to the draws' v), proposes along the ridge with an exact
-    density, q(u) = t(v(u)) / |du/dv| (the map's Jacobian is constant). A defensive Student-t in u
-    (twice the draws' covariance), as in :class:`KernelProposal`, keeps the tails heavier than any
-    conditional of the block. The map is quadratic where the draws suffice for it (4 per feature),
-    linear otherwise.
+    of the tunneling block): in its coordinates v the draws are close to a Gaussian, and in the
+    standardised coordinates w (v = C w, C the draws' Cholesky factor in v) the specimen's own
+    posterior is close to N(0, I). The map is quadratic where the draws suffice for it (4 per
+    feature), linear otherwise; its Jacobian is constant, so a density in w pushed through it is
+    exact in u.
+
+    The conditional given the population multiplies the own posterior by
+    r(u) = p(x | μ, ω) / π(x), where π is the interim prior the draws were taken under. Each
+    population coordinate z_p is linear in w to a good approximation (a least-squares fit over
+    the draws, z ≈ c + B (w − w̄), w̄ the draws' mean), and the φ-free part
+    log|dz/dx| − log π(x) is fitted by a quadratic a + b·z − ½ k·z² in each z_p; then r is
+    Gaussian in w and the conditional is close to
+
+        N(w̄ + m, P⁻¹),   P = I + Bᵀ (Ω⁻¹ + K) B,   P m = Bᵀ (Ω⁻¹ (μ − c) + b − K c),
+
+    with Ω = diag(ω²), K = diag(k) (Ω⁻¹ + K is floored at 0 in P, so the proposal is never wider
+    than the own-posterior one). :meth:`given` returns the proposal for each walker's (μ, ω): a
+    mixture of the Student-t with this mean and precision, pushed through the map, and the
+    own-posterior part — :meth:`sample` and :meth:`log_density`: a Student-t in v (scale fitted
+    to the draws' v) pushed through the map, q(u) = t(v(u)) / |du/dv|, mixed with a defensive
+    Student-t in u (twice the draws' covariance) that keeps the tails heavier than any
+    conditional of the block. The density is exact for every walker's φ, so the
+    Metropolis–Hastings step of a block, which holds φ, stays exact.
 
     Parameters
     ----------
     draws : ndarray (N, d)
+        The block's draws in u.
+    pooled : tuple of ndarray
+        (z, h): the draws' population coordinates (N, P) and log|dz/dx| − log π(x) at them (N,).
+    conditioned : float
+        Weight of the conditioned Student-t; the rest is the own-posterior part.
+    conditioned_dof : float
+        Degrees of freedom of the conditioned Student-t (lighter-tailed than the defensive one:
+        it proposes close to the conditional).
     defensive : float
-        Weight of the defensive Student-t.
+        Weight of the defensive Student-t within the own-posterior part.
     dof : float
-        Degrees of freedom of both Student-t's.
+        Degrees of freedom of the own-posterior part's two Student-t's.
     """
 
-    def __init__(self, draws, defensive=0.1, dof=5.0):
+    def __init__(
+        self, draws, pooled, conditioned=0.9, conditioned_dof=15.0, defensive=0.1, dof=5.0
+    ):
         draws = np.asarray(draws, dtype=float)
         if draws.ndim != 2 or len(draws) < 4 * draws.shape[1] or not np.all(np.isfinite(draws)):
             raise ValueError(
-                f"MapProposal needs finite draws of shape (N >= 4 d, d), got {draws.shape}"
+                "ConditionalMapProposal needs finite draws of shape (N >= 4 d, d), got "
+                f"{draws.shape}"
             )
         n, d = draws.shape
         quadratic = n >= 4 * (d + d * (d + 1) // 2)
@@ -130,9 +96,19 @@ class MapProposal:
         self.log_det = self.map.log_det_jacobian + np.sum(np.log(np.diag(self.v_chol)))
         self.heavy = _DefensiveStudentT(draws, float(dof))
         self.defensive, self.dof, self.d = float(defensive), float(dof), d
+        z, h = (np.asarray(a, dtype=float) for a in pooled)
+        w = self.white(draws)
+        self.w_mean = w.mean(axis=0)
+        design = np.column_stack([np.ones(len(w)), w - self.w_mean])
+        coef = np.linalg.lstsq(design, z, rcond=None)[0]  # z ≈ c + B (w − w̄)
+        self.c, self.b_matrix = coef[0], coef[1:].T  # (P,), (P, d)
+        quadratic = np.column_stack([np.ones(len(z)), z, -0.5 * z**2])
+        fit = np.linalg.lstsq(quadratic, h, rcond=None)[0]  # h ≈ a + b·z − ½ k·z²
+        self.slope, self.curvature = fit[1 : 1 + z.shape[1]], fit[1 + z.shape[1] :]
+        self.conditioned, self.conditioned_dof = float(conditioned), float(conditioned_dof)
 
     def sample(self, random, n):
-        """Draw n samples, (n, d), with a numpy RandomState (emcee's ``model.random``)."""
+        """Draw n samples, (n, d), of the own-posterior part with a numpy RandomState."""
         mapped = self.map.forward(student_t_draws(random, n, self.d, self.dof) @ self.v_chol.T)
         heavy = self.heavy.mean + student_t_draws(random, n, self.d, self.dof) @ self.heavy.chol.T
         return np.where((random.uniform(size=n) < self.defensive)[:, None], heavy, mapped)
@@ -143,7 +119,7 @@ class MapProposal:
             return np.linalg.solve(self.v_chol, self.map.inverse(u).T).T
 
     def log_density(self, u, white=None):
-        """Log q(u) for u (n, d); ``white``: :meth:`white` of u, if already at hand."""
+        """Log q(u) of the own-posterior part at u (n, d); ``white``: its :meth:`white` if known."""
         u = np.atleast_2d(u)
         white = self.white(u) if white is None else white
         with np.errstate(over="ignore", invalid="ignore"):
@@ -152,58 +128,6 @@ class MapProposal:
         log_t = self.heavy.log_density(u)
         with np.errstate(divide="ignore"):  # defensive = 0: the map's Student-t alone
             return np.logaddexp(np.log1p(-self.defensive) + log_map, np.log(self.defensive) + log_t)
-
-
-class ConditionalMapProposal(MapProposal):
-    """:class:`MapProposal` moved, walker by walker, towards the conditional given the population.
-
-    In the map's standardised coordinates w (u = T(v), v = C w, C the draws' Cholesky factor in
-    v) the specimen's own posterior is close to N(0, I). The conditional given the population
-    multiplies it by r(u) = p(x | μ, ω) / π(x), where π is the interim prior the draws were taken
-    under. Each population coordinate z_p is linear in w to a good approximation (a least-squares
-    fit over the draws, z ≈ c + B (w − w̄), w̄ the draws' mean), and the φ-free part
-    log|dz/dx| − log π(x) is fitted by a quadratic a + b·z − ½ k·z² in each z_p; then r is
-    Gaussian in w and the conditional is close to
-
-        N(w̄ + m, P⁻¹),   P = I + Bᵀ (Ω⁻¹ + K) B,   P m = Bᵀ (Ω⁻¹ (μ − c) + b − K c),
-
-    with Ω = diag(ω²), K = diag(k) (Ω⁻¹ + K is floored at 0 in P, so the proposal is never wider
-    than the own-posterior one). :meth:`given` returns
-    the proposal for each walker's (μ, ω): a mixture of the Student-t with this mean and
-    precision, pushed through the map, the own-posterior :class:`MapProposal` and its defensive
-    Student-t. The density is exact for every walker's φ, so the Metropolis–Hastings step of a
-    block, which holds φ, stays exact.
-
-    Parameters
-    ----------
-    draws : ndarray (N, d)
-        The block's draws in u.
-    pooled : tuple of ndarray
-        (z, h): the draws' population coordinates (N, P) and log|dz/dx| − log π(x) at them (N,).
-    conditioned : float
-        Weight of the conditioned Student-t; the rest is shared by the own-posterior proposal
-        and the defensive Student-t in the proportions of :class:`MapProposal`.
-    conditioned_dof : float
-        Degrees of freedom of the conditioned Student-t (lighter-tailed than the defensive one:
-        it proposes close to the conditional).
-    defensive, dof
-        As :class:`MapProposal`.
-    """
-
-    def __init__(
-        self, draws, pooled, conditioned=0.9, conditioned_dof=15.0, defensive=0.1, dof=5.0
-    ):
-        super().__init__(draws, defensive=defensive, dof=dof)
-        z, h = (np.asarray(a, dtype=float) for a in pooled)
-        w = self.white(np.asarray(draws, dtype=float))
-        self.w_mean = w.mean(axis=0)
-        design = np.column_stack([np.ones(len(w)), w - self.w_mean])
-        coef = np.linalg.lstsq(design, z, rcond=None)[0]  # z ≈ c + B (w − w̄)
-        self.c, self.b_matrix = coef[0], coef[1:].T  # (P,), (P, d)
-        quadratic = np.column_stack([np.ones(len(z)), z, -0.5 * z**2])
-        fit = np.linalg.lstsq(quadratic, h, rcond=None)[0]  # h ≈ a + b·z − ½ k·z²
-        self.slope, self.curvature = fit[1 : 1 + z.shape[1]], fit[1 + z.shape[1] :]
-        self.conditioned, self.conditioned_dof = float(conditioned), float(conditioned_dof)
 
     def given(self, mu, omega):
         """Return the proposal for walkers with population parameters μ, ω (each (n, P))."""
@@ -253,7 +177,3 @@ class _Conditioned:
                 np.log(base.conditioned) + log_conditioned,
                 np.log1p(-base.conditioned) + base.log_density(u, white=w),
             )
-
-
-PROPOSALS = {"kernel": KernelProposal, "map": MapProposal, "conditional": ConditionalMapProposal}
-"""The specimen blocks' independence proposals, by the name :class:`GibbsJointTarget` takes."""

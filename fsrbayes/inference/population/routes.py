@@ -333,8 +333,8 @@ def joint(
     proposal_draws : sequence of ndarray (N_j, D), optional
         Each specimen's posterior draws under its own prior, physical units (Gibbs proposals).
     gibbs : dict, optional
-        Options of :class:`~fsrbayes.inference.population.gibbs.GibbsJointTarget` (``proposal``,
-        ``hyper_rounds``, ``n_centres``, ``weak_ratio``, ``shift_scale``).
+        Options of :class:`~fsrbayes.inference.population.gibbs.GibbsJointTarget`
+        (``hyper_rounds``, ``weak_ratio``, ``shift_scale``).
 
     Returns
     -------
