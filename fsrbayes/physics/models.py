@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from .effects import EFFECTS, Effect, register_effect, resolve_effects
 from .parameters import PARAMETERS, Parameter, register_parameter
 from .peers import kalantari_solution
-from .rheology import CREEP_LAWS, ZENER, CreepLaw, creep_law, register_creep_law
+from .rheology import CREEP_LAWS, ZENER, CreepLaw, creep_law, nesting, register_creep_law
 
 __all__ = [
     "BASE_PARAMETERS",
@@ -24,6 +24,7 @@ __all__ = [
     "model_components",
     "model_families",
     "model_family",
+    "model_nesting",
     "model_parameters",
     "parse_model",
     "register_components",
@@ -145,6 +146,32 @@ def creep_amplitude(model="burgers"):
     """
     family = model_family(parse_model(model)[0])
     return getattr(family, "amplitude", ())
+
+
+def model_nesting(full, nested):
+    """Return where the model ``full`` reduces to the model ``nested``, or None.
+
+    Two models are nested when both are paper-circuit models with the same effects and the
+    creep law of ``full`` declares that it is the law of ``nested`` at one parameter's value
+    (:attr:`~fsrbayes.physics.rheology.CreepLaw.nests`; Burgers is Zener at ``inv_b1 = 0``).
+    Peer models have circuits of their own and nest nothing.
+
+    Parameters
+    ----------
+    full, nested : str
+        Model names (:func:`parse_model`).
+
+    Returns
+    -------
+    tuple of (str, float) or None
+        ``(parameter, value)``: ``nested`` is ``full`` with ``parameter`` held at ``value``.
+    """
+    (full_family, full_effects), (nested_family, nested_effects) = map(parse_model, (full, nested))
+    if full_family in PEER_MODELS or nested_family in PEER_MODELS:
+        return None
+    if sorted(full_effects) != sorted(nested_effects):
+        return None
+    return nesting(full_family, nested_family)
 
 
 def model_parameters(model="burgers"):

@@ -50,6 +50,7 @@ __all__ = [
     "CREEP_LAWS",
     "CreepLaw",
     "creep_law",
+    "nesting",
     "register_creep_law",
     "burgers_compliance",
     "burgers_ramp_compliance",
@@ -175,6 +176,13 @@ class CreepLaw:
         (Burgers: ``(("k2", -1), ("b2", -1), ("inv_b1", 1))``). Empty (the default): the law
         names no amplitude, and a fit cannot give each placement its own creep
         (:meth:`scale_creep`).
+    nests : tuple of (str, str, float)
+        The laws this one reduces to with one of its parameters held at a value: each
+        ``(law, parameter, value)`` says that the law named ``law`` is this law at
+        ``parameter = value``, with every other parameter the same (Burgers:
+        ``(("zener", "inv_b1", 0.0),)``). :func:`nesting` reads it, and
+        :func:`fsrbayes.compare` cross-checks such a pair by Savage–Dickey from this law's
+        posterior draws.
     """
 
     name: str
@@ -184,6 +192,7 @@ class CreepLaw:
     summary: str = ""
     drive: Callable | None = None
     amplitude: tuple = ()
+    nests: tuple = ()
 
     def scale_creep(self, params, factor):
         """Return ``params`` with the delayed strain scaled by ``factor`` (:attr:`amplitude`).
@@ -335,8 +344,48 @@ def register_creep_law(law, *, replace=False):
             f"creep law {law.name!r}: parameter(s) {unknown} are not in the parameter table; "
             "register them first with fsrbayes.physics.parameters.register_parameter"
         )
+    for entry in law.nests:
+        if len(entry) != 3 or entry[1] not in law.parameters:
+            raise ValueError(
+                f"creep law {law.name!r}: each nests entry is (law, parameter, value) with one "
+                f"of its parameters {law.parameters}, got {entry!r}"
+            )
     CREEP_LAWS[law.name] = law
     return law
+
+
+def nesting(full, nested):
+    """Return where the creep law ``full`` reduces to ``nested``, or None.
+
+    Parameters
+    ----------
+    full, nested : str or CreepLaw
+        Registered creep laws.
+
+    Returns
+    -------
+    tuple of (str, float) or None
+        ``(parameter, value)`` when ``full`` declares that it is ``nested`` at
+        ``parameter = value`` (:attr:`CreepLaw.nests`); None when it declares no such nesting.
+
+    Raises
+    ------
+    ValueError
+        If the declared nesting does not match the two laws' parameters: ``nested`` must have
+        exactly ``full``'s parameters less the one held.
+    """
+    full, nested = creep_law(full), creep_law(nested)
+    for name, parameter, value in full.nests:
+        if name != nested.name:
+            continue
+        if set(nested.parameters) != set(full.parameters) - {parameter}:
+            raise ValueError(
+                f"creep law {full.name!r} declares {nested.name!r} at {parameter} = {value:g}, "
+                f"but {nested.name!r} has the parameters {nested.parameters}, not "
+                f"{tuple(p for p in full.parameters if p != parameter)}"
+            )
+        return parameter, float(value)
+    return None
 
 
 BURGERS = register_creep_law(
@@ -347,6 +396,7 @@ BURGERS = register_creep_law(
         _burgers_ramp,
         "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)",
         amplitude=(("k2", -1.0), ("b2", -1.0), ("inv_b1", 1.0)),
+        nests=(("zener", "inv_b1", 0.0),),
     )
 )
 ZENER = register_creep_law(
