@@ -346,3 +346,16 @@ def test_the_prior_ladder_is_no_path_of_compare(small):
     assert "'bridge'" in message and "'reference'" in message and "\n" not in message
     r = cli("compare", "nowhere.csv", "--path", "prior")
     assert r.returncode == 2 and "invalid choice: 'prior'" in r.stderr
+
+
+def test_the_evidence_benchmark_runs_compares_default_path():
+    import inspect
+
+    from benchmarks import evidence
+    from fsrbayes.inference.compare import PATHS
+
+    default = inspect.signature(fsrbayes.compare).parameters["path"].default
+    assert default == PATHS[0] == "bridge"
+    assert inspect.signature(evidence.run).parameters["path"].default == default
+    with pytest.raises(ValueError, match="path must be one of"):
+        evidence.run(path="prior")
