@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from .effects import EFFECTS, Effect, register_effect, resolve_effects
 from .parameters import PARAMETERS, Parameter, register_parameter
 from .peers import kalantari_solution
-from .rheology import CREEP_LAWS, ZENER, CreepLaw, creep_law, nesting, register_creep_law
+from .rheology import CREEP_LAWS, ZENER, CreepLaw, creep_law, register_creep_law
 
 __all__ = [
     "BASE_PARAMETERS",
@@ -165,13 +165,30 @@ def model_nesting(full, nested):
     -------
     tuple of (str, float) or None
         ``(parameter, value)``: ``nested`` is ``full`` with ``parameter`` held at ``value``.
+
+    Raises
+    ------
+    ValueError
+        If a declared nesting does not match the two laws' parameters: the nested law must have
+        exactly the full law's parameters less the one held.
     """
     (full_family, full_effects), (nested_family, nested_effects) = map(parse_model, (full, nested))
     if full_family in PEER_MODELS or nested_family in PEER_MODELS:
         return None
     if sorted(full_effects) != sorted(nested_effects):
         return None
-    return nesting(full_family, nested_family)
+    outer, inner = CREEP_LAWS[full_family], CREEP_LAWS[nested_family]
+    for name, parameter, value in outer.nests:
+        if name != inner.name:
+            continue
+        if set(inner.parameters) != set(outer.parameters) - {parameter}:
+            raise ValueError(
+                f"creep law {outer.name!r} declares {inner.name!r} at {parameter} = {value:g}, "
+                f"but {inner.name!r} has the parameters {inner.parameters}, not "
+                f"{tuple(p for p in outer.parameters if p != parameter)}"
+            )
+        return parameter, float(value)
+    return None
 
 
 def model_parameters(model="burgers"):

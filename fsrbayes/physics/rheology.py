@@ -50,7 +50,6 @@ __all__ = [
     "CREEP_LAWS",
     "CreepLaw",
     "creep_law",
-    "nesting",
     "register_creep_law",
     "burgers_compliance",
     "burgers_ramp_compliance",
@@ -180,9 +179,9 @@ class CreepLaw:
         The laws this one reduces to with one of its parameters held at a value: each
         ``(law, parameter, value)`` says that the law named ``law`` is this law at
         ``parameter = value``, with every other parameter the same (Burgers:
-        ``(("zener", "inv_b1", 0.0),)``). :func:`nesting` reads it, and
-        :func:`fsrbayes.compare` cross-checks such a pair by Savage–Dickey from this law's
-        posterior draws.
+        ``(("zener", "inv_b1", 0.0),)``). :func:`~fsrbayes.physics.models.model_nesting` reads
+        it, and :func:`fsrbayes.compare` cross-checks such a pair by Savage–Dickey from this
+        law's posterior draws.
     """
 
     name: str
@@ -352,40 +351,6 @@ def register_creep_law(law, *, replace=False):
             )
     CREEP_LAWS[law.name] = law
     return law
-
-
-def nesting(full, nested):
-    """Return where the creep law ``full`` reduces to ``nested``, or None.
-
-    Parameters
-    ----------
-    full, nested : str or CreepLaw
-        Registered creep laws.
-
-    Returns
-    -------
-    tuple of (str, float) or None
-        ``(parameter, value)`` when ``full`` declares that it is ``nested`` at
-        ``parameter = value`` (:attr:`CreepLaw.nests`); None when it declares no such nesting.
-
-    Raises
-    ------
-    ValueError
-        If the declared nesting does not match the two laws' parameters: ``nested`` must have
-        exactly ``full``'s parameters less the one held.
-    """
-    full, nested = creep_law(full), creep_law(nested)
-    for name, parameter, value in full.nests:
-        if name != nested.name:
-            continue
-        if set(nested.parameters) != set(full.parameters) - {parameter}:
-            raise ValueError(
-                f"creep law {full.name!r} declares {nested.name!r} at {parameter} = {value:g}, "
-                f"but {nested.name!r} has the parameters {nested.parameters}, not "
-                f"{tuple(p for p in full.parameters if p != parameter)}"
-            )
-        return parameter, float(value)
-    return None
 
 
 BURGERS = register_creep_law(
