@@ -5,7 +5,7 @@ The specimen: one A201 made like ``fsrbayes simulate --sensor a201 --n-specimens
 0.2,0.5,2 --stresses-pa 42100,105400,210800 --samples 61`` (9 tests; its Burgers posterior bends).
 ``compare(data, ["zener", "burgers"])`` with its defaults — a fit per model, bridge sampling
 from its draws, the ladder only as a fallback — runs for five seeds, fits included in the wall
-time; the referenced ladder (``path="reference"``, the former default) runs once beside it. Each
+time; the referenced ladder (``path="reference"``) runs once beside it. Each
 default log Z is compared with the ladder's in combined standard errors, and the five seeds'
 scatter with their reported errors: Σ (log Z_i − mean)²/σ_i² against χ²(4).
 """
@@ -48,7 +48,7 @@ def _compare(data, **kwargs):
         warnings.simplefilter("ignore", DesignWarning)
         out = fsrbayes.compare(data, list(MODELS), with_loo=False, **kwargs)
     seconds = time.perf_counter() - start
-    per = {m: next(iter(out["models"][m]["per_specimen"].values())) for m in MODELS}
+    per = {m: next(iter(out.models[m].per_specimen.values())) for m in MODELS}
     return {
         "seconds": seconds,
         **{

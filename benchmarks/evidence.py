@@ -1,11 +1,11 @@
 """Wall time and accuracy of log Z for one specimen's Burgers and Zener models (target: ≤ 60 s
 with an error ≤ 0.1 nats, the fit included).
 
-Default: ``path="bridge"`` — a converged fit (:func:`fsrbayes.inference.fit.fit`) and bridge
+The paths are :func:`fsrbayes.compare`'s (:data:`~fsrbayes.inference.compare.PATHS`), and so is
+the default: ``path="bridge"`` — a converged fit (:func:`fsrbayes.inference.fit.fit`) and bridge
 sampling from its draws (:mod:`fsrbayes.inference.evidence.bridge`); the reported time includes
 the fit. ``path="reference"`` runs the referenced ladder (pilot run, Student-t reference in
-transport-map coordinates, 8 evenly spaced rungs; :mod:`fsrbayes.inference.evidence.referenced`),
-``path="prior"`` the old prior-to-posterior ladder, for comparison.
+transport-map coordinates, 8 evenly spaced rungs; :mod:`fsrbayes.inference.evidence.referenced`).
 """
 
 import os
@@ -16,8 +16,8 @@ from dataclasses import replace
 import numpy as np
 
 from benchmarks.likelihood import benchmark_specimen
+from fsrbayes.inference.compare import PATHS
 from fsrbayes.inference.evidence.bridge import bridge_from_fit
-from fsrbayes.inference.evidence.ladder import LadderSettings, log_evidence
 from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER, referenced_log_evidence
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
@@ -46,23 +46,24 @@ def fit_and_bridge(model, samples=21, seed=1, processes=2):
 
 
 def run(path="bridge", samples=21, seed=1, models=("burgers", "zener")):
-    """log Z of the benchmark specimen under Burgers and Zener, on up to 2 processes."""
+    """log Z of the benchmark specimen under Burgers and Zener, on up to 2 processes.
+
+    ``path`` is one of compare's :data:`~fsrbayes.inference.compare.PATHS`; the default is
+    compare's default, the bridge from a converged fit.
+    """
+    if path not in PATHS:
+        raise ValueError(f"path must be one of {PATHS}, got {path!r}")
     processes = min(2, os.cpu_count() or 1)
     out = {}
     for model in models:
         if path == "bridge":
             out[model] = fit_and_bridge(model, samples, seed, processes)
-            continue
-        posterior = specimen_posterior(model, samples)
-        if path == "reference":
-            out[model] = referenced_log_evidence(
-                posterior, replace(REFERENCED_LADDER, processes=processes), seed=seed
-            )
         else:
-            settings = LadderSettings(
-                n_temps=16, burn=300, steps=1000, replicates=2, processes=processes
+            out[model] = referenced_log_evidence(
+                specimen_posterior(model, samples),
+                replace(REFERENCED_LADDER, processes=processes),
+                seed=seed,
             )
-            out[model] = log_evidence(posterior, settings, seed=seed)
     return out
 
 

@@ -14,6 +14,7 @@ __all__ = [
     "drift",
     "fit",
     "compare",
+    "Comparison",
     "diagnose",
     "predict",
     "force",
@@ -36,6 +37,10 @@ def __getattr__(name):
         from .inference.compare import compare
 
         return compare
+    if name == "Comparison":
+        from .inference.comparison import Comparison
+
+        return Comparison
     if name == "predict":
         from .inference.predict import predict
 

@@ -1,4 +1,5 @@
-"""fsrbayes.compare and 'fsrbayes compare': keys, Bayes factors, LOO, bad input (tiny settings)."""
+"""fsrbayes.compare and 'fsrbayes compare': its Comparison, Bayes factors, LOO, the JSON, bad input
+(tiny settings)."""
 
 import json
 
@@ -37,56 +38,73 @@ def test_compare_sums_specimens_and_states_a_preference(small):
         pilot=TINY_PILOT,
         search=FEW_STARTS,
     )
-    assert set(out["models"]) == {"zener", "burgers", "kalantari"}
+    assert list(out.models) == ["zener", "burgers", "kalantari"]
     # The fixture simulates the Burgers law through the tunneling circuit at 1 and 3 V. Zener is
     # Burgers with inv_b1 = 0, and these specimens' fluidity (inv_b1 ~ 3e-12 /Pa/s) moves five
     # samples over an hour by less than their noise: between the two the data cannot choose. The
     # ohmic peer law (eq. 14, I proportional to V) cannot follow the tunneling circuit's 1 V -> 3 V
     # ratio: it must lose to the law that made the data, beyond its error bar.
-    assert out["preferred"] in ("zener", "burgers")
-    ohmic = out["bayes_factors"]["kalantari"]
-    assert ohmic["log_bf_preferred_over"] > 3 * ohmic["err"], ohmic
-    assert ohmic["strength"] == "very strong", ohmic
-    truth = out["models"]["burgers"]
-    assert truth["log_evidence"] - out["models"]["kalantari"]["log_evidence"] > 3 * np.hypot(
-        truth["log_evidence_err"], out["models"]["kalantari"]["log_evidence_err"]
-    )
-    assert out["settings"]["path"] == "reference"
-    assert set(out["savage_dickey"]["per_specimen"]) == set(small.data.specimens)
-    for specimen, check in out["savage_dickey"]["per_specimen"].items():
+    assert out.preferred in ("zener", "burgers")
+    ohmic = out.bayes_factors["kalantari"]
+    assert ohmic.log_bf > 3 * ohmic.error, ohmic
+    assert ohmic.strength == "very strong", ohmic
+    truth, peer = out.models["burgers"], out.models["kalantari"]
+    assert truth.log_z - peer.log_z > 3 * np.hypot(truth.error, peer.error)
+    assert out.path == "reference" and out.settings == TINY
+    assert set(out.savage_dickey["per_specimen"]) == set(small.data.specimens)
+    for specimen, check in out.savage_dickey["per_specimen"].items():
         assert np.isfinite(check["log_b_zener_over_burgers"]) and check["err"] > 0
-        z, b = (
-            out["models"][m]["per_specimen"][specimen]["log_evidence"] for m in ("zener", "burgers")
-        )
+        z, b = (out.models[m].per_specimen[specimen]["log_evidence"] for m in ("zener", "burgers"))
         assert check["evidence_difference"] == pytest.approx(z - b)
-    for entry in out["models"].values():
-        per = [v["log_evidence"] for v in entry["per_specimen"].values()]
-        assert len(per) == 2 and entry["log_evidence"] == pytest.approx(sum(per))
-        errs = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
-        assert entry["log_evidence_err"] == pytest.approx(np.sqrt(np.sum(np.square(errs))))
-        assert all(np.isfinite(v["elpd"]) and "max_pareto_k" in v for v in entry["loo"].values())
-        for v in entry[
-            "per_specimen"
-        ].values():  # one ladder per search and pilot: their spread is the replicates'
+    for entry in out.models.values():
+        per = [v["log_evidence"] for v in entry.per_specimen.values()]
+        assert len(per) == 2 and entry.log_z == pytest.approx(sum(per))
+        errs = [v["log_evidence_err"] for v in entry.per_specimen.values()]
+        assert entry.error == pytest.approx(np.sqrt(np.sum(np.square(errs))))
+        assert all(np.isfinite(v["elpd"]) and "max_pareto_k" in v for v in entry.loo.values())
+        for v in entry.per_specimen.values():  # one ladder per search and pilot
             assert v["sigma_pilot"] == pytest.approx(v["sigma_replicates"]) and v["sigma_pilot"] > 0
             assert len(v["reference_regions"]) == TINY.replicates
-    best = out["models"][out["preferred"]]
-    assert set(out["bayes_factors"]) == set(out["models"]) - {out["preferred"]}
-    for other, bf in out["bayes_factors"].items():
-        rival = out["models"][other]
+    best = out.models[out.preferred]
+    assert set(out.bayes_factors) == set(out.models) - {out.preferred}
+    for other, bf in out.bayes_factors.items():
+        rival = out.models[other]
         # the Bayes factor is recomputed here from the totals, not read back from where it was set
-        assert bf["log_bf_preferred_over"] == pytest.approx(
-            best["log_evidence"] - rival["log_evidence"]
-        )
-        assert bf["err"] == pytest.approx(
-            np.hypot(best["log_evidence_err"], rival["log_evidence_err"])
-        )
-        assert bf["strength"] == strength(bf["log_bf_preferred_over"], bf["err"])
-    assert best["log_evidence"] == max(m["log_evidence"] for m in out["models"].values())
+        assert bf.log_bf == pytest.approx(best.log_z - rival.log_z)
+        assert bf.error == pytest.approx(np.hypot(best.error, rival.error))
+        assert bf.strength == strength(bf.log_bf, bf.error)
+    assert best.log_z == max(m.log_z for m in out.models.values())
     # the weakest comparison speaks: the nested pair's, not the ohmic law's
-    nested = next(m for m in ("zener", "burgers") if m != out["preferred"])
-    assert out["strength"] == out["bayes_factors"][nested]["strength"]
-    json.dumps(out)
+    nested = next(m for m in ("zener", "burgers") if m != out.preferred)
+    assert out.strength == out.bayes_factors[nested].strength
+    # the JSON record: the same numbers under the keys docs/outputs.md names, in that order
+    record = json.loads(json.dumps(out.to_dict()))
+    assert list(record) == [
+        "models",
+        "specimens",
+        "scale",
+        "settings",
+        "preferred",
+        "bayes_factors",
+        "strength",
+        "savage_dickey",
+    ]
+    assert list(record["models"]["zener"]) == [
+        "per_specimen",
+        "loo",
+        "log_evidence",
+        "log_evidence_err",
+    ]
+    assert record["settings"]["path"] == "reference" and record["preferred"] == out.preferred
+    assert record["models"]["burgers"]["log_evidence"] == truth.log_z
+    assert record["bayes_factors"]["kalantari"] == {
+        "log_bf_preferred_over": ohmic.log_bf,
+        "err": ohmic.error,
+        "strength": ohmic.strength,
+    }
+    assert record["savage_dickey"] == json.loads(json.dumps(out.savage_dickey))
+    assert str(out).splitlines()[0].startswith("zener      log Z = ")
+    assert f"{out.preferred} over kalantari: ln B = " in out.summary()
 
 
 def test_strength_words():
@@ -174,13 +192,13 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
             search=FEW_STARTS,
             with_loo=False,
         )
-        assert "savage_dickey" not in out or not out["savage_dickey"].get("per_specimen")
-        loser = next(m for m in out["models"] if m != out["preferred"])
-        verdicts[truth] = (out["preferred"], out["bayes_factors"][loser])
+        assert out.savage_dickey is None  # the peer model nests nothing
+        loser = next(m for m in out.models if m != out.preferred)
+        verdicts[truth] = (out.preferred, out.bayes_factors[loser])
     print(verdicts)
     for truth, (preferred, bf) in verdicts.items():
         assert preferred == truth, verdicts
-        assert bf["log_bf_preferred_over"] > 20 and bf["strength"] == "very strong", verdicts
+        assert bf.log_bf > 20 and bf.strength == "very strong", verdicts
 
 
 def test_compare_takes_any_evidence_estimator(small):
@@ -199,13 +217,14 @@ def test_compare_takes_any_evidence_estimator(small):
     out = fsrbayes.compare(small.data, ["zener", "burgers"], estimator=laplace, seed=1)
     assert len(calls) == 4 and all(isinstance(e, EvidenceEstimate) for _, e in calls)
     assert all(e.method == "laplace" and np.isnan(e.error) for _, e in calls)
-    for model, entry in out["models"].items():
+    for model, entry in out.models.items():
         mine = [e.log_z for m, e in calls if m == model]
-        assert [v["log_evidence"] for v in entry["per_specimen"].values()] == mine
-        assert entry["log_evidence"] == pytest.approx(sum(mine))
-        assert entry["log_evidence_err"] is None and entry["loo"] == {}  # NaN: no error bar
-    assert "savage_dickey" not in out
-    assert out["preferred"] == max(out["models"], key=lambda m: out["models"][m]["log_evidence"])
+        assert [v["log_evidence"] for v in entry.per_specimen.values()] == mine
+        assert entry.log_z == pytest.approx(sum(mine))
+        assert np.isnan(entry.error) and entry.loo == {}  # no error bar
+        assert out.to_dict()["models"][model]["log_evidence_err"] is None  # JSON has no NaN
+    assert out.savage_dickey is None and "savage_dickey" not in out.to_dict()
+    assert out.preferred == max(out.models, key=lambda m: out.models[m].log_z)
 
 
 @pytest.mark.slow
@@ -219,12 +238,12 @@ def test_the_bridge_path_fits_each_model_and_agrees_with_savage_dickey():
     )
     out = fsrbayes.compare(one.data, ["zener", "burgers"], seed=2, with_loo=False)  # bridge path
     specimen = one.data.specimens[0]
-    for entry in out["models"].values():
-        per = entry["per_specimen"][specimen]
+    for entry in out.models.values():
+        per = entry.per_specimen[specimen]
         assert per["method"] == "bridge (fit draws)", per.get("fallback")
         assert 0 < per["log_evidence_err"] < 0.1
         assert per["likelihood_evaluations"] == 16000
-    check = out["savage_dickey"]["per_specimen"][specimen]
+    check = out.savage_dickey["per_specimen"][specimen]
     combined = np.hypot(check["err"], check["evidence_difference_err"])
     assert (
         abs(check["evidence_difference"] - check["log_b_zener_over_burgers"]) < 4 * combined + 0.05
@@ -243,8 +262,8 @@ def test_the_bridge_path_falls_back_on_the_ladder_when_the_fit_does_not_converge
         fit_settings=budget,
         with_loo=False,
     )
-    for entry in out["models"].values():
-        (per,) = entry["per_specimen"].values()
+    for entry in out.models.values():
+        (per,) = entry.per_specimen.values()
         assert per["method"] == "referenced stepping-stone (fallback)"
         assert per["fallback"].startswith("fit did not converge (after 100 steps")
         assert np.isfinite(per["log_evidence"]) and per["log_evidence_err"] > 0
@@ -279,10 +298,64 @@ def test_the_bridge_path_is_the_default_and_falls_back_when_its_halves_disagree(
         lambda result, ladder, seed: EvidenceEstimate(19.9, 0.2, "referenced stepping-stone"),
     )
     out = fsrbayes.compare(small.data, ["zener", "burgers"], [small.data.specimens[0]])
-    assert out["settings"]["path"] == "bridge"
-    (zener,) = out["models"]["zener"]["per_specimen"].values()
-    (burgers,) = out["models"]["burgers"]["per_specimen"].values()
+    assert out.path == "bridge"
+    (zener,) = out.models["zener"].per_specimen.values()
+    (burgers,) = out.models["burgers"].per_specimen.values()
     assert zener["method"] == "bridge (fit draws)" and zener["log_evidence"] == 10.05
     assert burgers["method"] == "referenced stepping-stone (fallback)"
     assert burgers["log_evidence"] == 19.9
     assert burgers["fallback"].startswith("bridge halves disagree (20.000 vs 20.500: 5.0 combined")
+
+
+def test_the_cli_writes_what_to_dict_returns(small, tmp_path, monkeypatch):
+    """``fsrbayes compare --json`` writes Comparison.to_dict(): the same keys in the same order
+    and the same values, NaN as null (here Laplace in place of the bridge, which gives no error
+    bar)."""
+    from fsrbayes.inference import compare as comparing
+    from fsrbayes.inference.evidence import laplace_fit
+
+    def laplace(posterior, seed):
+        return laplace_fit(posterior, np.random.default_rng(seed)).estimate()
+
+    real, returned = comparing.compare, []
+
+    def with_laplace(*args, **kwargs):
+        returned.append(real(*args, **{**kwargs, "estimator": laplace}))
+        return returned[-1]
+
+    monkeypatch.setattr(comparing, "compare", with_laplace)
+    data, out = tmp_path / "d.csv", tmp_path / "cmp.json"
+    syn.write_simulation(small, data)
+    result = cli("compare", str(data), "--models", "zener,burgers", "--json", str(out))
+    assert result.returncode == 0, result.stderr
+    (comparison,) = returned
+    written = json.loads(out.read_text())
+    expected = json.loads(json.dumps(comparison.to_dict()))
+    assert written == expected and list(written) == list(expected)
+    assert written["models"]["zener"]["log_evidence_err"] is None
+    assert result.stdout.strip() == comparison.summary()
+
+
+def test_the_prior_ladder_is_no_path_of_compare(small):
+    """The ladder from the prior stays an estimator of its own
+    (:func:`~fsrbayes.inference.evidence.ladder.log_evidence`, checked on closed forms); compare
+    and its command offer only the bridge and the referenced ladder."""
+    with pytest.raises(ValueError) as raised:
+        fsrbayes.compare(small.data, ["zener", "burgers"], path="prior")
+    message = str(raised.value)
+    assert "'bridge'" in message and "'reference'" in message and "\n" not in message
+    r = cli("compare", "nowhere.csv", "--path", "prior")
+    assert r.returncode == 2 and "invalid choice: 'prior'" in r.stderr
+
+
+def test_the_evidence_benchmark_runs_compares_default_path():
+    import inspect
+
+    from benchmarks import evidence
+    from fsrbayes.inference.compare import PATHS
+
+    default = inspect.signature(fsrbayes.compare).parameters["path"].default
+    assert default == PATHS[0] == "bridge"
+    assert inspect.signature(evidence.run).parameters["path"].default == default
+    with pytest.raises(ValueError, match="path must be one of"):
+        evidence.run(path="prior")

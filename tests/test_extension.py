@@ -175,3 +175,71 @@ def test_a_worker_without_the_registration_gets_it_from_the_job(registered):
 
 def test_source_is_outside_the_package():
     assert not Path(__file__).resolve().is_relative_to(Path(fsrbayes.__file__).resolve().parent)
+
+
+def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor, monkeypatch):
+    """A law registered from outside declares that it is another at one parameter's value; the
+    registry reports the pair (with the same effects on both sides), and compare cross-checks
+    it by Savage–Dickey from the full model's draws at that parameter and value. The estimator
+    and the Savage–Dickey estimate are stand-ins: this checks the dispatch."""
+    from dataclasses import replace
+
+    from fsrbayes.inference import compare as comparing
+    from fsrbayes.inference.evidence import EvidenceEstimate, SavageDickey
+
+    elastic = rheology.CreepLaw("toy-elastic", ("k1",), lambda t, p: 1.0 / p["k1"], None)
+    rheology.register_creep_law(elastic)
+    rheology.register_creep_law(
+        replace(TOY_LAW, nests=(("toy-elastic", "logc_rate", 0.0),)), replace=True
+    )
+    try:
+        assert models.model_nesting(LAW, "toy-elastic") == ("logc_rate", 0.0)
+        assert models.model_nesting(f"{LAW}+{EFFECT}", f"toy-elastic+{EFFECT}") == (
+            "logc_rate",
+            0.0,
+        )
+        assert models.model_nesting(f"{LAW}+{EFFECT}", "toy-elastic") is None
+        assert models.model_nesting("toy-elastic", LAW) is None
+        assert comparing.nested_pair(["toy-elastic", "zener", LAW]) == (
+            LAW,
+            "toy-elastic",
+            "logc_rate",
+            0.0,
+        )
+        assert comparing.nested_pair(["zener", "burgers"]) == ("burgers", "zener", "inv_b1", 0.0)
+        assert comparing.nested_pair(["zener", "nutting", "kalantari"]) is None
+
+        calls = []
+
+        def stand_in(posterior, draws, parameter, null):
+            calls.append((posterior.model, parameter, null, draws.shape))
+            return SavageDickey(0.5, 0.1, len(draws), 900.0)
+
+        def estimator(posterior, seed):
+            draws = np.random.default_rng(seed).normal(size=(2, 200, posterior.ndim))
+            return EvidenceEstimate(-float(posterior.ndim), 0.1, "stand-in", {}, draws)
+
+        monkeypatch.setattr(comparing, "savage_dickey_posterior", stand_in)
+        sim = _toy_data(toy_sensor, n_specimens=1, samples=5, seed=3)
+        out = fsrbayes.compare(
+            sim.data,
+            ["toy-elastic", LAW],
+            sensor=toy_sensor,
+            estimator=estimator,
+            with_loo=False,
+        )
+        ((model, parameter, null, shape),) = calls
+        assert (model, parameter, null) == (LAW, "logc_rate", 0.0) and shape[0] == 400
+        (check,) = out.savage_dickey["per_specimen"].values()
+        assert check[f"log_b_toy-elastic_over_{LAW}"] == 0.5 and check["err"] == 0.1
+        assert "logc_rate at 0" in out.savage_dickey["method"]
+
+        with pytest.raises(ValueError, match="each nests entry"):
+            rheology.register_creep_law(replace(elastic, name="toy-bad", nests=(("x", "y", 0),)))
+        rheology.register_creep_law(
+            replace(TOY_LAW, nests=(("toy-elastic", "k1", 0.0),)), replace=True
+        )
+        with pytest.raises(ValueError, match="has the parameters"):
+            models.model_nesting(LAW, "toy-elastic")
+    finally:
+        del rheology.CREEP_LAWS["toy-elastic"]

@@ -32,14 +32,14 @@ def test_zener_data_prefer_zener_and_savage_dickey_agrees():
         sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False, path="reference"
     )
     print(
-        out["models"]["zener"]["per_specimen"],
-        out["models"]["burgers"]["per_specimen"],
-        out["savage_dickey"],
+        out.models["zener"].per_specimen,
+        out.models["burgers"].per_specimen,
+        out.savage_dickey,
     )
-    assert out["preferred"] == "zener"
-    bf = out["bayes_factors"]["burgers"]
-    assert bf["log_bf_preferred_over"] > 2 * bf["err"]
-    (check,) = out["savage_dickey"]["per_specimen"].values()
+    assert out.preferred == "zener"
+    bf = out.bayes_factors["burgers"]
+    assert bf.log_bf > 2 * bf.error
+    (check,) = out.savage_dickey["per_specimen"].values()
     assert check["reliable"]
     combined = np.hypot(check["err"], check["evidence_difference_err"])
     assert abs(check["log_b_zener_over_burgers"] - check["evidence_difference"]) < 3 * combined, (
@@ -64,11 +64,11 @@ def test_data_with_the_papers_burgers_parameters_prefer_burgers_decisively():
         sim.data, ["zener", "burgers"], settings=LADDER, seed=0, with_loo=False, path="reference"
     )
     print(
-        out["models"]["zener"]["per_specimen"],
-        out["models"]["burgers"]["per_specimen"],
-        out["savage_dickey"],
+        out.models["zener"].per_specimen,
+        out.models["burgers"].per_specimen,
+        out.savage_dickey,
     )
-    assert out["preferred"] == "burgers"
-    bf = out["bayes_factors"]["zener"]
-    assert bf["log_bf_preferred_over"] > 5.0 + 3 * bf["err"]  # 2 ln B > 10: "very strong"
-    assert bf["strength"] == "very strong"
+    assert out.preferred == "burgers"
+    bf = out.bayes_factors["zener"]
+    assert bf.log_bf > 5.0 + 3 * bf.error  # 2 ln B > 10: "very strong"
+    assert bf.strength == "very strong"

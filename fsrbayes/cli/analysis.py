@@ -16,7 +16,6 @@ from .common import UsageError, chosen_specimens, loading_notes, writable
 def cmd_compare(args):
     """Compare models by log-evidence per specimen, Bayes factors and PSIS-LOO (JSON)."""
     from ..inference.compare import compare
-    from ..inference.evidence.ladder import LadderSettings
     from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
     from ..inference.fit import FIT_SETTINGS
     from ..inference.samplers import SamplerSettings
@@ -28,11 +27,10 @@ def cmd_compare(args):
     for model in models:
         parse_model(model)
     specimens = chosen_specimens(args, data)
-    base = LadderSettings() if args.path == "prior" else REFERENCED_LADDER
     chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
     try:
         settings = replace(
-            base,
+            REFERENCED_LADDER,
             **{k: v for k, v in chosen.items() if v is not None},
             replicates=args.replicates,
             processes=args.processes or min(args.replicates, os.cpu_count() or 1),
@@ -63,15 +61,9 @@ def cmd_compare(args):
         search=replace(MODE_SEARCH, n_starts=args.starts),
         fit_settings=replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
     )
-    for name, entry in result["models"].items():
-        print(f"{name:10s} log Z = {entry['log_evidence']:.3f} ± {entry['log_evidence_err']:.3f}")
-    for name, bf in result["bayes_factors"].items():
-        print(
-            f"{result['preferred']} over {name}: ln B = {bf['log_bf_preferred_over']:.2f} ± "
-            f"{bf['err']:.2f} ({bf['strength']})"
-        )
+    print(result.summary())
     if args.json:
-        write_json_atomic(Path(args.json), result)
+        write_json_atomic(Path(args.json), result.to_dict())
     return 0
 
 

@@ -186,22 +186,16 @@ def _add_compare(sub):
     option(
         cmp_,
         "--path",
-        choices=("bridge", "reference", "prior"),
+        choices=("bridge", "reference"),
         default="bridge",
         help="how log Z is estimated: 'bridge' (default) fits each model and specimen and bridge-"
         "samples its draws, falling back on the reference ladder below when a fit does not "
         "converge or the bridge's halves disagree; 'reference': a beta ladder from a reference "
-        "density fitted to a pilot run; 'prior': a ladder from the prior (needs a far denser "
-        "ladder on creep data)",
+        "density fitted to a pilot run",
     )
-    option(
-        cmp_,
-        "--temps",
-        type=int,
-        help="rungs of the beta ladder (default 8 from the reference, 32 from the prior)",
-    )
-    option(cmp_, "--burn", type=int, help="burn-in steps per rung (default 100 / 500)")
-    option(cmp_, "--steps", type=int, help="production steps (default 600 / 2000)")
+    option(cmp_, "--temps", type=int, help="rungs of the beta ladder (default 8)")
+    option(cmp_, "--burn", type=int, help="burn-in steps per rung (default 100)")
+    option(cmp_, "--steps", type=int, help="production steps (default 600)")
     option(
         cmp_,
         "--pilot-steps",

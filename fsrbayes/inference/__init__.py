@@ -3,8 +3,9 @@
 What a fit of one specimen is made of sits at this level — the data packed for the likelihood
 (:mod:`.likelihood`), the target (:mod:`.posterior`), the optimisers that find its modes
 (:mod:`.optimize`), the fit that orchestrates them (:mod:`.fit`), model comparison
-(:mod:`.compare`), ArviZ output (:mod:`.output`), parallel jobs (:mod:`.parallel`) and the
-user-facing simulation-based calibration (:mod:`.calibration`). Three rooms hold the rest:
+(:mod:`.compare`, its result in :mod:`.comparison`), ArviZ output (:mod:`.output`), parallel
+jobs (:mod:`.parallel`) and the user-facing simulation-based calibration
+(:mod:`.calibration`). Three rooms hold the rest:
 
 - :mod:`.samplers` — emcee ensembles run to shown convergence, moves, transport maps;
 - :mod:`.evidence` — log Z estimators, each returning an :class:`EvidenceEstimate`;
@@ -18,7 +19,7 @@ Inside this layer imports flow one way: parallel, likelihood, posterior → samp
 optimize → evidence → fit → population, compare, output, calibration.
 """
 
-from .compare import KASS_RAFTERY, strength
+from .compare import KASS_RAFTERY, Comparison, strength
 from .evidence import EvidenceEstimate
 from .fit import FIT_SETTINGS, DesignWarning, FitResult
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
@@ -30,6 +31,7 @@ __all__ = [
     "FIT_SETTINGS",
     "KASS_RAFTERY",
     "LIKELIHOODS",
+    "Comparison",
     "ConvergenceWarning",
     "DesignWarning",
     "EvidenceEstimate",

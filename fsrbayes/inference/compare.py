@@ -2,23 +2,24 @@
 
 Specimens share no parameters in the per-specimen model and have independent priors, so
 log Z_total = Σ_specimens log Z_j with the errors added in quadrature (docs/evidence.md).
-The strength of a preference is stated on Kass & Raftery's (1995) scale of 2·ln B:
-< 2 "not worth more than a bare mention", 2–6 "positive", 6–10 "strong", > 10 "very strong" —
-and called "inconclusive" when |ln B| is within two of its own error bars. PSIS-LOO (ArviZ)
-from the β = 1 rung is a second opinion on predictive accuracy.
+:func:`compare` returns a :class:`~fsrbayes.inference.comparison.Comparison`: the preference
+stated on Kass & Raftery's (1995) scale of 2·ln B, and called "inconclusive" when |ln B| is
+within two of its own error bars. PSIS-LOO (ArviZ) from the β = 1 draws is a second opinion on
+predictive accuracy, and a nested pair of models (declared where the creep laws are registered,
+:func:`~fsrbayes.physics.models.model_nesting`) is cross-checked by Savage–Dickey.
 """
 
 import os
 import warnings
-from dataclasses import asdict, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ..data.sensors import load_sensor
-from ..utils import json_ready
+from ..physics.models import model_nesting
 from . import fit as fitting
+from .comparison import KASS_RAFTERY, Comparison, ModelEvidence, strength
 from .evidence.bridge import bridge_from_fit
-from .evidence.ladder import LadderSettings, log_evidence
 from .evidence.referenced import (
     MODE_SEARCH,
     PILOT_SETTINGS,
@@ -31,22 +32,15 @@ from .likelihood import SpecimenData
 from .posterior import LogPosterior
 from .samplers import ConvergenceWarning
 
-__all__ = ["BRIDGE_SPLIT_TOLERANCE", "KASS_RAFTERY", "PATHS", "compare", "strength"]
-
-KASS_RAFTERY = (
-    (2.0, "not worth more than a bare mention"),
-    (6.0, "positive"),
-    (10.0, "strong"),
-    (np.inf, "very strong"),
-)
-"""Upper bounds on 2·ln B and their words (Kass & Raftery, JASA 90, 773, 1995)."""
-
-
-def strength(log_bf, error):
-    """Words for a log Bayes factor ≥ 0 with its error, on the Kass–Raftery scale."""
-    if log_bf < 2.0 * error:
-        return f"inconclusive (ln B = {log_bf:.2f} is within 2 σ = {2 * error:.2f})"
-    return next(words for bound, words in KASS_RAFTERY if 2.0 * log_bf < bound)
+__all__ = [
+    "BRIDGE_SPLIT_TOLERANCE",
+    "KASS_RAFTERY",
+    "PATHS",
+    "Comparison",
+    "compare",
+    "nested_pair",
+    "strength",
+]
 
 
 def _loo(posterior, draws_u):
@@ -78,17 +72,38 @@ def _loo(posterior, draws_u):
     }
 
 
-PATHS = ("bridge", "reference", "prior")
+PATHS = ("bridge", "reference")
 """How each log Z is estimated: bridge sampling from a converged fit's draws (default; seconds
 beyond the fit), or a stepping-stone ladder from a reference density fitted to a pilot run (few
-nats to cross) or from the prior (thousands of nats on creep data; kept for the closed-form
-validation)."""
+nats to cross)."""
 
 BRIDGE_SPLIT_TOLERANCE = 3.0
 """The bridge path's two halves (the reference fitted to one half of the draws, the other half
 in the bridge, then swapped) must agree within this many combined standard errors
 √(σ₁² + σ₂²); a larger split means the reference or the draws miss part of the posterior, and
 the ladder runs instead."""
+
+
+def nested_pair(models):
+    """Return the first pair of ``models`` where one nests the other, or None.
+
+    Parameters
+    ----------
+    models : sequence of str
+        Model names.
+
+    Returns
+    -------
+    tuple or None
+        ``(full, nested, parameter, value)``: ``nested`` is ``full`` with ``parameter`` held at
+        ``value``, as the creep laws' registry declares
+        (:func:`~fsrbayes.physics.models.model_nesting`).
+    """
+    for full in models:
+        for nested in models:
+            if nested != full and (where := model_nesting(full, nested)) is not None:
+                return (full, nested, *where)
+    return None
 
 
 def compare(
@@ -120,10 +135,9 @@ def compare(
         Default: all specimens in the data.
     settings : LadderSettings, optional
         The ladder of the reference path and of the bridge path's fallback (default
-        :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER`), or of the prior path
-        (default ``LadderSettings()``).
+        :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER`).
     seed : int
-    path : {"bridge", "reference", "prior"}
+    path : {"bridge", "reference"}
         ``"bridge"`` (default): a converged :func:`~fsrbayes.inference.fit.fit` of each model
         and specimen, then bridge sampling from its draws
         (:mod:`~fsrbayes.inference.evidence.bridge`). Where the fit does not converge within its
@@ -131,8 +145,7 @@ def compare(
         :data:`BRIDGE_SPLIT_TOLERANCE` combined errors, the referenced ladder (``settings``)
         runs from the fit's draws instead, and ``method`` says so (``fallback`` says why).
         ``"reference"``: a stepping-stone ladder from a Student-t reference in transport-map
-        coordinates fitted to a pilot run (:mod:`~fsrbayes.inference.evidence.referenced`);
-        ``"prior"``: a ladder from the prior.
+        coordinates fitted to a pilot run (:mod:`~fsrbayes.inference.evidence.referenced`).
     pilot : SamplerSettings, optional
         The reference path's pilot run (default
         :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
@@ -141,42 +154,37 @@ def compare(
         (default :data:`~fsrbayes.inference.evidence.referenced.MODE_SEARCH`, 12 optimiser starts).
     estimator : callable, optional
         ``estimator(posterior, seed)`` → :class:`~fsrbayes.inference.evidence.EvidenceEstimate`,
-        any evidence estimator; replaces the ladder chosen by ``path``/``settings``. LOO and the
-        Savage–Dickey check need the estimate's ``posterior_draws`` and are left out without them.
+        any evidence estimator; replaces the one chosen by ``path``. LOO and the Savage–Dickey
+        check need the estimate's ``posterior_draws`` and are left out without them.
     fit_settings : SamplerSettings, optional
         The fits of the ``"bridge"`` path (default :data:`~fsrbayes.inference.fit.FIT_SETTINGS`
         with its ensembles side by side, one process per core).
 
     Returns
     -------
-    dict
-        JSON-ready (non-finite numbers as None): ``models.<name>`` with ``log_evidence``,
-        ``log_evidence_err`` (summed over specimens), ``per_specimen`` and ``loo``; ``preferred``;
-        ``bayes_factors`` (ln B of the preferred model over each other, with error); ``strength``;
-        ``scale``.
+    Comparison
+        Each model's log Z and error (summed over specimens, with ``per_specimen`` and ``loo``),
+        the ``preferred`` model, its ``bayes_factors`` over the others and their ``strength``,
+        and for a nested pair (:func:`nested_pair`) the ``savage_dickey`` cross-check;
+        :meth:`~fsrbayes.inference.comparison.Comparison.to_dict` gives the JSON.
     """
     models = list(dict.fromkeys(models))
     if len(models) < 2:
         raise ValueError(f"compare needs at least two models, got {models}")
     if path not in PATHS:
         raise ValueError(f"path must be one of {PATHS}, got {path!r}")
-    settings = settings or (LadderSettings() if path == "prior" else REFERENCED_LADDER)
+    settings = settings or REFERENCED_LADDER
     if fit_settings is None:
         fit_settings = replace(
             fitting.FIT_SETTINGS,
             processes=min(fitting.FIT_SETTINGS.n_ensembles, os.cpu_count() or 1),
         )
     specimens = list(specimens) if specimens is not None else list(data.specimens)
-    out = {
-        "models": {},
-        "specimens": specimens,
-        "scale": "Kass & Raftery 1995 on 2 ln B: <2 bare mention, "
-        "2-6 positive, 6-10 strong, >10 very strong; inconclusive when ln B < 2 sigma",
-        "settings": {**asdict(settings), "path": path},
-    }
-    burgers_draws = {}
+    pair = nested_pair(models)
+    full_draws = {}
+    entries = {}
     for m_index, model in enumerate(models):
-        entry = {"per_specimen": {}, "loo": {}}
+        per_specimen, loo = {}, {}
         for s_index, specimen in enumerate(specimens):
             packed = SpecimenData.select(data, specimen)
             chosen = (
@@ -192,7 +200,7 @@ def compare(
                 result = _fit_and_bridge(
                     packed, chosen, model, (tunneling, likelihood), settings, fit_settings, job_seed
                 )
-            elif path == "reference":
+            else:
                 result = referenced_log_evidence(
                     posterior,
                     settings,
@@ -200,9 +208,7 @@ def compare(
                     pilot=pilot or PILOT_SETTINGS,
                     search=search or MODE_SEARCH,
                 ).estimate()
-            else:
-                result = log_evidence(posterior, settings, seed=job_seed).estimate()
-            entry["per_specimen"][specimen] = {
+            per_specimen[specimen] = {
                 "log_evidence": result.log_z,
                 "log_evidence_err": result.error,
                 "method": result.method,
@@ -211,36 +217,12 @@ def compare(
             if result.posterior_draws is None:
                 continue
             if with_loo:
-                entry["loo"][specimen] = _loo(posterior, result.posterior_draws)
-            if model == "burgers" and "zener" in models:
-                burgers_draws[specimen] = (posterior, result.posterior_draws)
-        values = [v["log_evidence"] for v in entry["per_specimen"].values()]
-        errors = [v["log_evidence_err"] for v in entry["per_specimen"].values()]
-        entry["log_evidence"] = float(np.sum(values))
-        entry["log_evidence_err"] = float(np.sqrt(np.sum(np.square(errors))))
-        out["models"][model] = entry
-    preferred = max(models, key=lambda m: out["models"][m]["log_evidence"])
-    best = out["models"][preferred]
-    out["preferred"] = preferred
-    out["bayes_factors"] = {}
-    for model in models:
-        if model == preferred:
-            continue
-        other = out["models"][model]
-        log_bf = best["log_evidence"] - other["log_evidence"]
-        error = float(np.hypot(best["log_evidence_err"], other["log_evidence_err"]))
-        out["bayes_factors"][model] = {
-            "log_bf_preferred_over": log_bf,
-            "err": error,
-            "strength": strength(log_bf, error),
-        }
-    rank = {words: i for i, (_, words) in enumerate(KASS_RAFTERY)}  # the weakest comparison speaks
-    out["strength"] = min(
-        (v["strength"] for v in out["bayes_factors"].values()), key=lambda w: rank.get(w, -1)
-    )
-    if burgers_draws:
-        out["savage_dickey"] = _savage_dickey_check(out, burgers_draws)
-    return json_ready(out)
+                loo[specimen] = _loo(posterior, result.posterior_draws)
+            if pair is not None and model == pair[0]:
+                full_draws[specimen] = (posterior, result.posterior_draws)
+        entries[model] = ModelEvidence.from_specimens(per_specimen, loo)
+    check = _savage_dickey_check(entries, full_draws, pair) if full_draws else None
+    return Comparison.of(entries, specimens, path=path, settings=settings, savage_dickey=check)
 
 
 def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
@@ -286,33 +268,35 @@ def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
     )
 
 
-def _savage_dickey_check(out, burgers_draws, max_draws=8000):
-    """Cross-check Zener against Burgers by Savage–Dickey.
+def _savage_dickey_check(entries, full_draws, pair, max_draws=8000):
+    """Cross-check a nested pair of models by Savage–Dickey.
 
-    Savage–Dickey ln B(zener over burgers) per specimen from the Burgers β = 1 draws, beside the
-    evidence difference (both ± error); ``reliable`` is False when the posterior of the fluidity
-    lies so far from 0 (mean > 3.5 sd) that the density at 0 is a far-tail estimate, or when fewer
-    than 200 effective draws carry the estimate.
+    ``pair`` is ``(full, nested, parameter, value)`` (:func:`nested_pair`). Savage–Dickey ln B
+    (nested over full) per specimen from the full model's β = 1 draws, beside the evidence
+    difference (both ± error); ``reliable`` is False when the posterior of ``parameter`` lies so
+    far from ``value`` (mean distance > 3.5 sd) that the density there is a far-tail estimate,
+    or when fewer than 200 effective draws carry the estimate.
     """
+    full, nested, parameter, value = pair
     per = {}
-    for specimen, (posterior, draws_u) in burgers_draws.items():
+    for specimen, (posterior, draws_u) in full_draws.items():
         flat = draws_u.reshape(-1, posterior.ndim)
         flat = flat[np.linspace(0, len(flat) - 1, min(len(flat), max_draws)).astype(int)]
         x, _ = posterior.prior.from_unconstrained(flat)
-        result = savage_dickey_posterior(posterior, x)
-        phi = x[:, posterior.names.index("inv_b1")]
-        z, b = (out["models"][m]["per_specimen"][specimen] for m in ("zener", "burgers"))
+        result = savage_dickey_posterior(posterior, x, parameter, null=value)
+        phi = x[:, posterior.names.index(parameter)] - value
+        z, b = (entries[m].per_specimen[specimen] for m in (nested, full))
         per[specimen] = {
-            "log_b_zener_over_burgers": result.log_b01,
+            f"log_b_{nested}_over_{full}": result.log_b01,
             "err": result.error,
             "evidence_difference": z["log_evidence"] - b["log_evidence"],
             "evidence_difference_err": float(
                 np.hypot(z["log_evidence_err"], b["log_evidence_err"])
             ),
             "ess": result.ess,
-            "reliable": bool(phi.mean() < 3.5 * phi.std() and result.ess >= 200),
+            "reliable": bool(abs(phi.mean()) < 3.5 * phi.std() and result.ess >= 200),
         }
     return {
         "per_specimen": per,
-        "method": "Chen's importance-weighted density of inv_b1 at 0 (Savage-Dickey)",
+        "method": f"Chen's importance-weighted density of {parameter} at {value:g} (Savage-Dickey)",
     }

@@ -24,6 +24,7 @@ __all__ = [
     "model_components",
     "model_families",
     "model_family",
+    "model_nesting",
     "model_parameters",
     "parse_model",
     "register_components",
@@ -145,6 +146,49 @@ def creep_amplitude(model="burgers"):
     """
     family = model_family(parse_model(model)[0])
     return getattr(family, "amplitude", ())
+
+
+def model_nesting(full, nested):
+    """Return where the model ``full`` reduces to the model ``nested``, or None.
+
+    Two models are nested when both are paper-circuit models with the same effects and the
+    creep law of ``full`` declares that it is the law of ``nested`` at one parameter's value
+    (:attr:`~fsrbayes.physics.rheology.CreepLaw.nests`; Burgers is Zener at ``inv_b1 = 0``).
+    Peer models have circuits of their own and nest nothing.
+
+    Parameters
+    ----------
+    full, nested : str
+        Model names (:func:`parse_model`).
+
+    Returns
+    -------
+    tuple of (str, float) or None
+        ``(parameter, value)``: ``nested`` is ``full`` with ``parameter`` held at ``value``.
+
+    Raises
+    ------
+    ValueError
+        If a declared nesting does not match the two laws' parameters: the nested law must have
+        exactly the full law's parameters less the one held.
+    """
+    (full_family, full_effects), (nested_family, nested_effects) = map(parse_model, (full, nested))
+    if full_family in PEER_MODELS or nested_family in PEER_MODELS:
+        return None
+    if sorted(full_effects) != sorted(nested_effects):
+        return None
+    outer, inner = CREEP_LAWS[full_family], CREEP_LAWS[nested_family]
+    for name, parameter, value in outer.nests:
+        if name != inner.name:
+            continue
+        if set(inner.parameters) != set(outer.parameters) - {parameter}:
+            raise ValueError(
+                f"creep law {outer.name!r} declares {inner.name!r} at {parameter} = {value:g}, "
+                f"but {inner.name!r} has the parameters {inner.parameters}, not "
+                f"{tuple(p for p in outer.parameters if p != parameter)}"
+            )
+        return parameter, float(value)
+    return None
 
 
 def model_parameters(model="burgers"):

@@ -175,6 +175,13 @@ class CreepLaw:
         (Burgers: ``(("k2", -1), ("b2", -1), ("inv_b1", 1))``). Empty (the default): the law
         names no amplitude, and a fit cannot give each placement its own creep
         (:meth:`scale_creep`).
+    nests : tuple of (str, str, float)
+        The laws this one reduces to with one of its parameters held at a value: each
+        ``(law, parameter, value)`` says that the law named ``law`` is this law at
+        ``parameter = value``, with every other parameter the same (Burgers:
+        ``(("zener", "inv_b1", 0.0),)``). :func:`~fsrbayes.physics.models.model_nesting` reads
+        it, and :func:`fsrbayes.compare` cross-checks such a pair by Savage–Dickey from this
+        law's posterior draws.
     """
 
     name: str
@@ -184,6 +191,7 @@ class CreepLaw:
     summary: str = ""
     drive: Callable | None = None
     amplitude: tuple = ()
+    nests: tuple = ()
 
     def scale_creep(self, params, factor):
         """Return ``params`` with the delayed strain scaled by ``factor`` (:attr:`amplitude`).
@@ -335,6 +343,12 @@ def register_creep_law(law, *, replace=False):
             f"creep law {law.name!r}: parameter(s) {unknown} are not in the parameter table; "
             "register them first with fsrbayes.physics.parameters.register_parameter"
         )
+    for entry in law.nests:
+        if len(entry) != 3 or entry[1] not in law.parameters:
+            raise ValueError(
+                f"creep law {law.name!r}: each nests entry is (law, parameter, value) with one "
+                f"of its parameters {law.parameters}, got {entry!r}"
+            )
     CREEP_LAWS[law.name] = law
     return law
 
@@ -347,6 +361,7 @@ BURGERS = register_creep_law(
         _burgers_ramp,
         "Burgers: spring, Kelvin-Voigt element and linear flow (eq. 17)",
         amplitude=(("k2", -1.0), ("b2", -1.0), ("inv_b1", 1.0)),
+        nests=(("zener", "inv_b1", 0.0),),
     )
 )
 ZENER = register_creep_law(

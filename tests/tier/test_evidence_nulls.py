@@ -40,11 +40,11 @@ def test_zener_data_prefer_zener():
         seed=29,
     )
     out = _compare(sim)
-    print(out["models"]["zener"]["per_specimen"], out["models"]["burgers"]["per_specimen"])
-    assert out["preferred"] == "zener", out["bayes_factors"]
-    bf = out["bayes_factors"]["burgers"]
-    assert 0 < bf["err"] < 0.5
-    assert bf["log_bf_preferred_over"] > 2 * bf["err"]
+    print(out.models["zener"].per_specimen, out.models["burgers"].per_specimen)
+    assert out.preferred == "zener", out.bayes_factors
+    bf = out.bayes_factors["burgers"]
+    assert 0 < bf.error < 0.5
+    assert bf.log_bf > 2 * bf.error
 
 
 def test_burgers_data_prefer_burgers_very_strongly():
@@ -59,9 +59,9 @@ def test_burgers_data_prefer_burgers_very_strongly():
         seed=29,
     )
     out = _compare(sim)
-    print(out["models"]["zener"]["per_specimen"], out["models"]["burgers"]["per_specimen"])
-    assert out["preferred"] == "burgers", out["bayes_factors"]
-    bf = out["bayes_factors"]["zener"]
-    assert np.isfinite(bf["err"]) and 0 < bf["err"] < 0.5
-    assert bf["log_bf_preferred_over"] > 5.0 + 3 * bf["err"]
-    assert bf["strength"] == "very strong"
+    print(out.models["zener"].per_specimen, out.models["burgers"].per_specimen)
+    assert out.preferred == "burgers", out.bayes_factors
+    bf = out.bayes_factors["zener"]
+    assert np.isfinite(bf.error) and 0 < bf.error < 0.5
+    assert bf.log_bf > 5.0 + 3 * bf.error
+    assert bf.strength == "very strong"

@@ -116,11 +116,24 @@ def savage_dickey(
     return SavageDickey(log_b01, error, int(terms.size), ess)
 
 
-def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):
-    """Return the Savage–Dickey log B01 from posterior draws of a LogPosterior.
+def savage_dickey_posterior(posterior, draws, parameter, null=0.0):
+    """Return the Savage–Dickey log B01 of ``parameter = null`` from posterior draws.
 
-    Savage–Dickey log B01 from physical-unit posterior draws (N, ndim) of a LogPosterior, in time
-    order.
+    Parameters
+    ----------
+    posterior : LogPosterior
+        The full model's target.
+    draws : ndarray, shape (N, ndim)
+        Its posterior draws in physical units, in time order.
+    parameter : str
+        The sampled parameter held at ``null`` by the nested model (Burgers → Zener:
+        ``"inv_b1"`` at 0; :func:`~fsrbayes.physics.models.model_nesting`).
+    null : float
+        Its value in the nested model.
+
+    Returns
+    -------
+    SavageDickey
     """
     if parameter not in posterior.names:
         raise ValueError(
@@ -139,6 +152,6 @@ def savage_dickey_posterior(posterior, draws, parameter="inv_b1"):
         draws,
         index,
         lambda v: np.asarray(dist.logpdf(v), dtype=float),
-        null=0.0,
+        null=float(null),
         lower=dist.support[0],
     )
