@@ -167,6 +167,24 @@ def compare(
         the ``preferred`` model, its ``bayes_factors`` over the others and their ``strength``,
         and for a nested pair (:func:`nested_pair`) the ``savage_dickey`` cross-check;
         :meth:`~fsrbayes.inference.comparison.Comparison.to_dict` gives the JSON.
+
+    Examples
+    --------
+    Zener against Burgers on one simulated A201 specimen whose data are Burgers', two voltages ×
+    two forces (``print(comparison)`` shows each log Z and the Bayes factor with its error):
+
+    >>> import warnings
+    >>> import fsrbayes
+    >>> from fsrbayes.data.synthetic import simulate
+    >>> data = simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8],
+    ...                 samples=11, seed=2).data
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     comparison = fsrbayes.compare(data, ("zener", "burgers"), with_loo=False)
+    >>> comparison.preferred, list(comparison.models)
+    ('burgers', ['zener', 'burgers'])
+    >>> comparison.bayes_factors["zener"].log_bf > 0
+    True
     """
     models = list(dict.fromkeys(models))
     if len(models) < 2:
