@@ -225,6 +225,8 @@ def test_compare_takes_any_evidence_estimator(small):
         assert out.to_dict()["models"][model]["log_evidence_err"] is None  # JSON has no NaN
     assert out.savage_dickey is None and "savage_dickey" not in out.to_dict()
     assert out.preferred == max(out.models, key=lambda m: out.models[m].log_z)
+    with pytest.warns(FutureWarning, match="deprecated since 0.3.0 and goes in 0.4.0"):
+        assert out["preferred"] == out.preferred  # the dict compare returned before 0.3.0
 
 
 @pytest.mark.slow

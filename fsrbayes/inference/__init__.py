@@ -5,7 +5,7 @@ What a fit of one specimen is made of sits at this level — the data packed for
 (:mod:`.optimize`), the fit that orchestrates them (:mod:`.fit`), model comparison
 (:mod:`.compare`, its result in :mod:`.comparison`), ArviZ output (:mod:`.output`), parallel
 jobs (:mod:`.parallel`) and the user-facing simulation-based calibration
-(:mod:`.calibration`). Three rooms hold the rest:
+(:mod:`.calibration`). Four rooms hold the rest:
 
 - :mod:`.samplers` — emcee ensembles run to shown convergence, moves, transport maps;
 - :mod:`.evidence` — log Z estimators, each returning an :class:`EvidenceEstimate`;

@@ -7,6 +7,7 @@ the scale of 2·ln B — < 2 "not worth more than a bare mention", 2–6 "positi
 :meth:`Comparison.to_dict`, the JSON that ``fsrbayes compare --json`` writes.
 """
 
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -202,6 +203,19 @@ class Comparison:
         if self.savage_dickey is not None:
             out["savage_dickey"] = self.savage_dickey
         return json_ready(out)
+
+    def __getitem__(self, key):
+        """``comparison[key]`` is ``comparison.to_dict()[key]``, with a FutureWarning.
+
+        ``compare`` returned the dict before 0.3.0; indexing its result goes in 0.4.0.
+        """
+        warnings.warn(
+            f"indexing compare's result (comparison[{key!r}]) is deprecated since 0.3.0 and goes "
+            "in 0.4.0: read its attributes or comparison.to_dict()",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return self.to_dict()[key]
 
     def summary(self):
         """Return log Z ± error per model and ln B ± error of the preferred model over the rest."""
