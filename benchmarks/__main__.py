@@ -13,8 +13,8 @@ so numbers from different days can be read against their machine. Without names 
 ``evidence-seeds`` and ``compare`` (the default compare path against the ladder, ~15 min); ``fit``
 (converged Burgers fits of one specimen, five seeds, in both coordinates), ``rig-fit`` (the divider
 rig in both coordinates), ``evidence``, ``hierarchical``, ``population-sizes`` (3, 6, 16 specimens'
-hyper-posteriors in both coordinates), ``map-search`` (the MAP search before and after its
-tangent gradients and compact Hessians), ``diagnose``, ``demo`` and ``force`` (a calibration fit
+hyper-posteriors in both coordinates), ``map-search`` (the MAP search's wall time on three
+posteriors), ``diagnose``, ``demo`` and ``force`` (a calibration fit
 before the timed reading) take minutes.
 """
 

@@ -1,14 +1,11 @@
-"""The MAP search's wall time as it was (gradients from the model solved at every
-finite-difference neighbour, the whitening's Hessians from 2·ndim·(ndim + 1) points) and with the
-circuit's tangent, the compact Hessians and the whitening's first steps shrunk where they leave
-the support, alternated on three posteriors.
+"""The MAP search's wall time on three posteriors.
 
 ``laplace_fit`` (the search a fit, ``diagnose`` and the demo's Bayes factors run) on the fit
 benchmark's constant-voltage specimen (9 tests × 61 samples, the smooth law), a 2-minute
 20 Hz divider rig with a gain drift (the slowest default test's data) and the default 10-minute
-100 Hz bench rig (ADC counts, four weights); one process, each seed with every configuration
-back to back. A search's wall time depends on where its starts land, so the log-posterior it
-reached is reported beside the time.
+100 Hz bench rig (ADC counts, four weights); one process, each seed in turn. A search's wall
+time depends on where its starts land, so the log-posterior it reached is reported beside the
+time.
 """
 
 import tempfile
@@ -18,26 +15,11 @@ from pathlib import Path
 from fsrbayes.data import read_csv, synthetic
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference import optimize
 from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 
 SEEDS = (1, 2)
-CONFIGURATIONS = {
-    "before": {"TANGENT_GRADIENT": False, "COMPACT_WHITENING": False, "STEP_SHRINKS": 0},
-    "tangent": {"TANGENT_GRADIENT": True, "COMPACT_WHITENING": False, "STEP_SHRINKS": 0},
-    "tangent + compact Hessians": {
-        "TANGENT_GRADIENT": True,
-        "COMPACT_WHITENING": True,
-        "STEP_SHRINKS": 0,
-    },
-    "+ first steps shrunk off the support": {
-        "TANGENT_GRADIENT": True,
-        "COMPACT_WHITENING": True,
-        "STEP_SHRINKS": 4,
-    },
-}
 
 
 def _posteriors():
@@ -66,30 +48,21 @@ def _posteriors():
 
 
 def run(seeds=SEEDS):
-    """Each posterior, each seed: laplace_fit in each of :data:`CONFIGURATIONS`."""
-    defaults = {name: getattr(optimize, name) for name in CONFIGURATIONS["before"]}
+    """Each posterior, each seed: the wall time and log-posterior of ``laplace_fit``."""
     rows = []
-    try:
-        for label, data, sensor in _posteriors():
-            posterior = LogPosterior.for_sensor(data, load_sensor(sensor))
-            for seed in seeds:
-                for configuration, values in CONFIGURATIONS.items():
-                    for name, value in values.items():
-                        setattr(optimize, name, value)
-                    start = time.perf_counter()
-                    result = laplace_fit(posterior, rng=seed)
-                    rows.append(
-                        {
-                            "posterior": label,
-                            "seed": seed,
-                            "configuration": configuration,
-                            "seconds": time.perf_counter() - start,
-                            "log_post": float(result.log_post_map),
-                        }
-                    )
-    finally:
-        for name, value in defaults.items():
-            setattr(optimize, name, value)
+    for label, data, sensor in _posteriors():
+        posterior = LogPosterior.for_sensor(data, load_sensor(sensor))
+        for seed in seeds:
+            start = time.perf_counter()
+            result = laplace_fit(posterior, rng=seed)
+            rows.append(
+                {
+                    "posterior": label,
+                    "seed": seed,
+                    "seconds": time.perf_counter() - start,
+                    "log_post": float(result.log_post_map),
+                }
+            )
     return rows
 
 
@@ -97,7 +70,7 @@ def report(rows):
     lines = ["MAP search (laplace_fit, one process)"]
     for row in rows:
         lines.append(
-            f"  {row['posterior']}, seed {row['seed']}, {row['configuration']}: "
+            f"  {row['posterior']}, seed {row['seed']}: "
             f"log-posterior {row['log_post']:.4f} in {row['seconds']:.1f} s"
         )
     return "\n".join(lines)

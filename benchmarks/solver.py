@@ -1,8 +1,6 @@
 """Vectorised current solver versus a per-point ``scipy.optimize.brentq`` loop.
 
-Both laws are timed with both engines (compiled, numpy) in the same run, the compiled one also
-with Newton started from the previous root of each row (``ROW_PREDICTION`` 0) instead of the
-default extrapolation from the row's last roots.
+Both laws are timed with both engines (compiled, numpy) in the same run.
 
 The per-point loop is how a Matlab ``fzero`` script solves the implicit equation
 V = V_bulk + 2·Rc·I(V_bulk): one scalar root-find per (voltage, stress, time) point, calling
@@ -16,17 +14,15 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from fsrbayes.physics import compiled, rheology, sensor, solver, tunneling
+from fsrbayes.physics import rheology, sensor, solver, tunneling
 
 CONFIGURATIONS = (
-    ("smooth", "compiled", None),
-    ("smooth", "compiled", 0),
-    ("smooth", "numpy", None),
-    ("paper", "compiled", None),
-    ("paper", "compiled", 0),
-    ("paper", "numpy", None),
+    ("smooth", "compiled"),
+    ("smooth", "numpy"),
+    ("paper", "compiled"),
+    ("paper", "numpy"),
 )
-"""(law, engine, ROW_PREDICTION or None for the default)."""
+"""(law, engine)."""
 
 
 def _workload(params, n_walkers, rng):
@@ -67,17 +63,10 @@ def run(params, *, n_walkers=64, n_loop=300, repeats=5, seed=0):
     """Time both solvers; return a list of result rows (dicts)."""
     rng = np.random.default_rng(seed)
     v, rs, s, phi, a, vth = _workload(params, n_walkers, rng)
-    rows = []
-    default = compiled.ROW_PREDICTION
-    for law, engine, prediction in CONFIGURATIONS:
-        compiled.ROW_PREDICTION = default if prediction is None else prediction
-        try:
-            rows.append(_row(v, rs, s, phi, a, vth, law, engine, n_loop, repeats, rng))
-        finally:
-            compiled.ROW_PREDICTION = default
-        if prediction is not None:
-            rows[-1]["law"] += f" (start: {['previous root', 'secant', 'parabola'][prediction]})"
-    return rows
+    return [
+        _row(v, rs, s, phi, a, vth, law, engine, n_loop, repeats, rng)
+        for law, engine in CONFIGURATIONS
+    ]
 
 
 def _row(v, rs, s, phi, a, vth, law, engine, n_loop, repeats, rng):

@@ -38,7 +38,6 @@ LONG_MODULES = (
     "test_calibration.py",  # 15
     "test_load_histories.py",  # 15
     "test_population_cli.py",  # 15
-    "test_same_numbers.py",  # 15
     "test_convergence.py",  # 14
     "test_tempered.py",  # 14
     "test_sampling.py",  # 12

@@ -9,7 +9,6 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.pinned import PinnedCoordinates
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.physics.compiled import ROW_PREDICTION
 from fsrbayes.physics.compiled_creep import STEP_PARAMETERS, step_log_current
 from fsrbayes.physics.sensor import solve_current
 from fsrbayes.physics.solver import FINISH
@@ -52,7 +51,6 @@ def test_the_compiled_step_is_solve_current_to_rounding(model, tunneling, load_o
         tunneling == "paper",
         FINISH,
         100,
-        ROW_PREDICTION,
     )
     assert np.array_equal(np.isnan(got), np.isnan(log_expected))
     assert np.isnan(got[:, 3]).all()  # a negative voltage: the current is negative, log undefined
@@ -77,7 +75,6 @@ def test_a_closed_gap_is_invalid():
         False,
         FINISH,
         100,
-        ROW_PREDICTION,
     )
     assert np.isnan(got[0, 2]) and np.isfinite(got[0, 0])
 

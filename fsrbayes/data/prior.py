@@ -15,8 +15,8 @@ loguniform on [a, b]
     x = exp(log a + (log b − log a)·p); log |dx/du| = log x + log(log b − log a) + log p +
     log(1 − p).
 
-so the density of u is p(x(u))·|dx/du|, proper whenever p is. The samplers' calls run the
-transforms and densities through compiled row kernels (:mod:`.prior_kernels`, :data:`COMPILED`).
+so the density of u is p(x(u))·|dx/du|, proper whenever p is. The transforms and densities run
+through compiled row kernels (:mod:`.prior_kernels`), one pass per row of parameters.
 """
 
 from dataclasses import dataclass
@@ -24,16 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from .distributions import density_constants, log_density
+from .distributions import density_constants
 from .prior_kernels import log_prob_rows, prior_tables, transform_rows
 
-__all__ = ["COMPILED", "JointPrior"]
-
-COMPILED = True
-"""Evaluate :meth:`JointPrior.from_unconstrained` and :meth:`JointPrior.log_prob` with the compiled
-row kernels of :mod:`.prior_kernels` (the same arithmetic in one pass per row). The same numbers
-to rounding; False gives the numpy evaluation by kind and transform, bit for bit (the regression
-pins of ``tests/test_same_numbers.py`` were recorded with it)."""
+__all__ = ["JointPrior"]
 
 _LOG_KINDS = ("lognormal", "halfnormal", "gamma")
 _BOUNDED = ("uniform", "truncnormal", "loguniform")
@@ -62,40 +56,24 @@ class _Transforms:
     lower: np.ndarray
     width: np.ndarray
     log_bounded: np.ndarray
-    log_jac_constants: np.ndarray
-    log_jac_columns: dict
 
 
 def _transforms(prior):
     """Group the parameters of ``prior`` by their transform to u (module docstring)."""
     groups = {"affine": [], "log": [], "bounded": []}
-    terms = []  # log|dx/du| term by term: ("const", value) or (column, index)
     for i, d in enumerate(prior.dists):
         a = d.args
         if d.kind == "normal":
             groups["affine"].append((i, a["mu"], a["sigma"]))
-            terms.append(("const", np.log(a["sigma"])))
         elif d.kind in _LOG_KINDS:
-            centre, scale = _log_scale(d)
-            terms += [("log", len(groups["log"])), ("const", np.log(scale))]
-            groups["log"].append((i, centre, scale))
+            groups["log"].append((i, *_log_scale(d)))
         else:
             lo, hi, log = a["lower"], a["upper"], d.kind == "loguniform"
             lower, width = (np.log(lo), np.log(hi) - np.log(lo)) if log else (lo, hi - lo)
-            j = len(groups["bounded"])
-            terms += [("inner", j)] if log else []
-            terms += [("const", np.log(width)), ("p", j), ("q", j)]
             groups["bounded"].append((i, lower, width, log))
 
     def column(name, k, dtype=float):
         return np.array([row[k] for row in groups[name]], dtype=dtype)
-
-    varying = {}  # column name → (positions among the terms, indices into the column)
-    for position, (name, value) in enumerate(terms):
-        if name != "const":
-            varying.setdefault(name, ([], []))
-            varying[name][0].append(position)
-            varying[name][1].append(value)
 
     return _Transforms(
         affine=column("affine", 0, int),
@@ -108,8 +86,6 @@ def _transforms(prior):
         lower=column("bounded", 1),
         width=column("bounded", 2),
         log_bounded=column("bounded", 3, bool),
-        log_jac_constants=np.array([value if name == "const" else 0.0 for name, value in terms]),
-        log_jac_columns={k: (np.array(p), np.array(i)) for k, (p, i) in varying.items()},
     )
 
 
@@ -181,75 +157,35 @@ class JointPrior:
     def log_prob(self, x):
         """Log prior density at x (…, ndim) → (…); −inf outside the support.
 
-        Each distribution kind is evaluated in one call over its parameters; the terms are then
-        added parameter by parameter, in order (the sum does not depend on the grouping).
+        The marginals' log-densities are added parameter by parameter, in order, by the row
+        kernel :func:`~.prior_kernels.log_prob_rows`.
         """
         x = np.asarray(x, dtype=float)
         if not self.ndim:
             return np.zeros(x.shape[:-1])
-        if COMPILED:
-            rows = np.ascontiguousarray(x).reshape(-1, self.ndim)
-            out = np.empty(len(rows))
-            log_prob_rows(rows, self._tables[2], self._tables[3], out)
-            return out.reshape(x.shape[:-1])
-        terms = np.empty(x.shape)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            for kind, columns, constants in self._densities:
-                terms[..., columns] = log_density(kind, x[..., columns], constants)
-            total = np.add.accumulate(terms, axis=-1)[..., -1]  # sequential, in parameter order
-        return np.where(np.isnan(total), -np.inf, total)
+        rows = np.ascontiguousarray(x).reshape(-1, self.ndim)
+        out = np.empty(len(rows))
+        log_prob_rows(rows, self._tables[2], self._tables[3], out)
+        return out.reshape(x.shape[:-1])
 
     def from_unconstrained(self, u):
         """x(u) and log|dx/du| summed over parameters; u (…, ndim).
 
-        Vectorised by transform (affine, log-affine, logistic, log-logistic); log|dx/du| adds the
-        parameters' terms one by one in the order of the module docstring's formulas (a
-        sequential ``np.add.accumulate``), so the sum does not depend on how the parameters are
-        grouped.
+        By the row kernel :func:`~.prior_kernels.transform_rows`: the transforms of the module
+        docstring, log|dx/du| adding the parameters' terms one by one in the order of their
+        formulas.
         """
-        if COMPILED and self.ndim:
-            u = np.asarray(u, dtype=float)
-            rows = np.ascontiguousarray(u).reshape(-1, self.ndim)
-            x, log_jac = np.empty(rows.shape), np.empty(len(rows))
-            transform_rows(rows, self._tables[0], self._tables[1], x, log_jac)
-            return x.reshape(u.shape), log_jac.reshape(u.shape[:-1])
-        x, columns = self._constrained(u)
-        t = self._transforms
-        terms = np.empty(x.shape[:-1] + t.log_jac_constants.shape)
-        terms[...] = t.log_jac_constants
-        for name, (positions, index) in t.log_jac_columns.items():
-            terms[..., positions] = columns[name][..., index]
-        if not terms.shape[-1]:
-            return x, np.zeros(x.shape[:-1])
-        with np.errstate(all="ignore"):
-            return x, np.add.accumulate(terms, axis=-1)[..., -1]
+        u = np.asarray(u, dtype=float)
+        if not self.ndim:
+            return u.copy(), np.zeros(u.shape[:-1])
+        rows = np.ascontiguousarray(u).reshape(-1, self.ndim)
+        x, log_jac = np.empty(rows.shape), np.empty(len(rows))
+        transform_rows(rows, self._tables[0], self._tables[1], x, log_jac)
+        return x.reshape(u.shape), log_jac.reshape(u.shape[:-1])
 
     def to_constrained(self, u):
         """x(u) alone, for callers that do not need :meth:`from_unconstrained`'s log|dx/du|."""
-        if COMPILED and self.ndim:
-            return self.from_unconstrained(u)[0]
-        return self._constrained(u)[0]
-
-    def _constrained(self, u):
-        """x(u) and the transforms' intermediate columns the log-Jacobian is made of."""
-        u = np.asarray(u, dtype=float)
-        t = self._transforms
-        x = np.empty_like(u)
-        with np.errstate(all="ignore"):  # inf/NaN coordinates map to inf/NaN, caught as −inf later
-            if t.affine.size:
-                x[..., t.affine] = t.mu + t.sigma * u[..., t.affine]
-            columns = {}
-            if t.log.size:
-                columns["log"] = t.centre + t.scale * u[..., t.log]
-                x[..., t.log] = np.exp(columns["log"])
-            if t.bounded.size:
-                ub = u[..., t.bounded]
-                columns["p"] = -np.logaddexp(0.0, -ub)
-                columns["q"] = -np.logaddexp(0.0, ub)
-                inner = t.lower + t.width * np.exp(columns["p"])
-                x[..., t.bounded] = np.where(t.log_bounded, np.exp(inner), inner)
-                columns["inner"] = inner
-        return x, columns
+        return self.from_unconstrained(u)[0]
 
     def to_unconstrained(self, x):
         """u(x), the inverse of :meth:`from_unconstrained`; x must lie inside the support."""

@@ -157,18 +157,13 @@ def log_normal_interval(lower, upper):
     return log_high + tail
 
 
-COMPILED = True
-"""Whether :func:`count_log_likelihood` runs :func:`~.count_kernels.count_terms` (its normal
-tails formed in vector registers; the same values to ~1e-15 relative) instead of numpy and
-scipy's ``ndtr``."""
-
-
 def count_log_likelihood(log_model, sigma, counts, first):
     """Log-likelihood of the whole-count readings at each point that holds them.
 
     A count's probability Φ(b) − Φ(a) is formed from the smaller tail ndtr(−|z|) at each
-    rounding edge, which keeps it precise on either side of the model; where it underflows (a
-    parameter set far from the data) :func:`log_normal_interval` takes over.
+    rounding edge, which keeps it precise on either side of the model, by the compiled kernel
+    :func:`~.count_kernels.count_terms` (its normal tails formed in vector registers); where it
+    underflows (a parameter set far from the data) :func:`log_normal_interval` takes over.
 
     Parameters
     ----------
@@ -185,27 +180,6 @@ def count_log_likelihood(log_model, sigma, counts, first):
     ndarray, shape (W, P)
         Σ n_k·(log P(k) − log q) over the counts read at each point.
     """
-    if COMPILED:
-        return _compiled_count_log_likelihood(log_model, sigma, counts, first)
-    z = (counts.log_edge - log_model[:, counts.edge_point]) / sigma
-    tail = special.ndtr(-np.abs(z))
-    z_low, z_high = z[:, counts.lower], z[:, counts.upper]
-    tail_low, tail_high = tail[:, counts.lower], tail[:, counts.upper]
-    probability = np.where(
-        z_low > 0,
-        tail_low - tail_high,
-        np.where(z_high <= 0, tail_high - tail_low, 1.0 - tail_high - tail_low),
-    )
-    with np.errstate(divide="ignore", invalid="ignore"):
-        log_p = np.log(probability)
-    far = ~(probability > 1e-250)
-    if far.any():
-        log_p[far] = log_normal_interval(z_low[far], z_high[far])
-    return np.add.reduceat(counts.multiplicity * (log_p - counts.log_step), first, axis=1)
-
-
-def _compiled_count_log_likelihood(log_model, sigma, counts, first):
-    """:func:`count_log_likelihood` by :func:`~.count_kernels.count_terms` (far counts: here)."""
     log_model = np.ascontiguousarray(log_model, dtype=float)
     sigma = np.ascontiguousarray(np.broadcast_to(sigma, (len(log_model), 1)), dtype=float)
     column = counts.columns

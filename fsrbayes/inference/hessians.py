@@ -71,8 +71,8 @@ def compact_root_covariance(posterior, u, step=1e-3):
     H_ii = [f(+e_i) + f(−e_i) − 2 f(0)] / h², and for i ≠ j
     H_ij = [f(+e_i+e_j) + f(−e_i−e_j) − f(±e_i) − f(±e_j) + 2 f(0)] / (2 h²) (steps of h),
     both O(h²) like the corners' stencil, in half the model evaluations. For the whitening of
-    the MAP search (:func:`~.optimize.whitening`, :data:`~.optimize.COMPACT_WHITENING`); the
-    Laplace approximation keeps :func:`root_covariance`.
+    the MAP search (:func:`~.optimize.whitening`); the Laplace approximation keeps
+    :func:`root_covariance`.
     """
     return covariance_root(compact_hessian(posterior, u, step))
 

@@ -16,7 +16,6 @@ from scipy import optimize
 from .hessians import (
     compact_hessian,
     compact_root_covariance,
-    corner_hessian,
     covariance_root,
     root_covariance,
 )
@@ -27,7 +26,6 @@ __all__ = [
     "MAP_ITERATIONS",
     "NESTED_DEPTH",
     "NegativeLogPosterior",
-    "TANGENT_GRADIENT",
     "compact_root_covariance",
     "ensemble_start",
     "find_map",
@@ -56,27 +54,19 @@ times the search's time, SciPy's default (2.2e-9) under a nat more again at up t
 (BENCHMARKS.md)."""
 
 
-POLISH_FTOL = 1e-4
+_POLISH_FTOL = 1e-4
 """The stopping share of :func:`polish`'s L-BFGS-B runs. Whitened (:func:`whitening`), the
 objective is counted in nats from the round's start (|objective| ≲ 1 near the optimum), so a run
 stops where an iteration gains less than ~1e-4 nats, and the rounds go on while a round gains
 more than the polish's ``tol``; the first phase, in the ill-conditioned prior-scaled
 coordinates, keeps :data:`MAP_FTOL`."""
 
-POLISH_PASSES = 4
-"""At most this many Hessians :func:`whitening` takes, each in the coordinates the one before
-whitened."""
-
 WHITENED_STEP = 1e-2
 """The finite-difference step of :func:`whitening`'s later passes, in whitened units."""
 
-COMPACT_WHITENING = True
-"""Whether :func:`whitening` takes its Hessians with :func:`compact_root_covariance` (half the
-points of :func:`root_covariance`'s)."""
-
-STEP_SHRINKS = 4
+_STEP_SHRINKS = 4
 """At most this many times :func:`whitening`'s first pass shrinks its steps (by
-:data:`STEP_SHRINK`) where its stencil leaves the posterior's support; 0 never."""
+:data:`STEP_SHRINK`) where its stencil leaves the posterior's support."""
 
 STEP_SHRINK = 30.0
 """The factor each of those shrinks divides the steps by (1e-3 down to ~1.2e-9 in four)."""
@@ -88,12 +78,6 @@ L-BFGS-B's line search fails; 0 never runs it."""
 ROUND_ENOUGH = (0.5, 2.0)
 """:func:`whitening` stops once a pass's Hessian, taken in the current whitened coordinates, has
 every eigenvalue in this range: those coordinates are nearly round."""
-
-
-TANGENT_GRADIENT = True
-"""Whether :class:`NegativeLogPosterior` evaluates a target's finite-difference neighbours
-through its ``log_posterior_near_first`` (where it has one: the circuit solved once and carried
-to the neighbours along its tangent) instead of solving the model at each of them."""
 
 
 class NegativeLogPosterior:
@@ -109,8 +93,9 @@ class NegativeLogPosterior:
     iteration gains less than ~0.007 nats, which on a ridge is tens of nats short of the optimum.
 
     A target with a ``log_posterior_near_first(u)`` method (:class:`~.posterior.LogPosterior`)
-    is called through it (:data:`TANGENT_GRADIENT`): the 2·ndim neighbours then cost the model's
-    explicit parts but not its circuit solves.
+    is called through it: the circuit is solved once, at the first point, and carried to the
+    2·ndim neighbours along its tangent, so they cost the model's explicit parts but not its
+    circuit solves. Any other target is called on all 2·ndim + 1 points.
     """
 
     def __init__(self, posterior, step=1e-5, basis=None, origin=None):
@@ -129,9 +114,7 @@ class NegativeLogPosterior:
 
     def __call__(self, w):
         """Return −log p and its gradient at whitened coordinates ``w``."""
-        evaluate = self.posterior
-        if TANGENT_GRADIENT:
-            evaluate = getattr(self.posterior, "log_posterior_near_first", evaluate)
+        evaluate = getattr(self.posterior, "log_posterior_near_first", self.posterior)
         values = evaluate(self.origin + (w[None, :] + self.offsets) @ self.basis.T)
         if self.reference is None and np.isfinite(values[0]):
             self.reference = values[0]
@@ -324,30 +307,30 @@ class _Whitened:
         return self.posterior(self.u + np.asarray(w) @ self.root.T)
 
 
-def whitening(posterior, u, passes=None):
+def whitening(posterior, u, passes=4):
     """Return a square root R of the local covariance whose w = R⁻¹(u' − u) make log p round.
 
-    The first pass is :func:`root_covariance` (steps of 1e-3 in u). On a rig's sheet, pinned
-    to ~1e-5 of the prior widths across and curved along, those steps straddle the sheet and
-    its Hessian is off by orders of magnitude in some directions: an L-BFGS-B run in its
-    coordinates crawls, hundreds of iterations gaining ~1e-5 nats each, and stops short. Each
-    further pass takes the Hessian again in the coordinates the last one whitened, with steps of
-    :data:`WHITENED_STEP` there — a hundredth of the local posterior width in every direction —
-    and composes the two; passes stop once that Hessian is close to the identity
-    (:data:`ROUND_ENOUGH`), or after ``passes`` (default :data:`POLISH_PASSES`).
+    Every pass takes its Hessian from ndim² + ndim + 1 points (:func:`compact_root_covariance`),
+    the first with steps of 1e-3 in u. On a rig's sheet, pinned to ~1e-5 of the prior widths
+    across and curved along, those steps straddle the sheet and its Hessian is off by orders of
+    magnitude in some directions: an L-BFGS-B run in its coordinates crawls, hundreds of
+    iterations gaining ~1e-5 nats each, and stops short. Each further pass takes the Hessian
+    again in the coordinates the last one whitened, with steps of :data:`WHITENED_STEP` there —
+    a hundredth of the local posterior width in every direction — and composes the two; passes
+    stop once that Hessian is close to the identity (:data:`ROUND_ENOUGH`), or after ``passes``
+    Hessians in all.
 
     Where the first pass's stencil leaves the posterior's support (a point at −inf: in pinned
     coordinates a step of 1e-3 can leave the sheet the root search finds), its steps shrink by
-    :data:`STEP_SHRINK` until every point is finite (:data:`STEP_SHRINKS` times at most):
-    a direction the stencil could not measure would otherwise get the prior's scale, and the
-    later passes, stepping a hundredth of that, would leave the support there too.
+    :data:`STEP_SHRINK` until every point is finite (four times at most): a direction the
+    stencil could not measure would otherwise get the prior's scale, and the later passes,
+    stepping a hundredth of that, would leave the support there too.
     """
-    hessian_of = compact_hessian if COMPACT_WHITENING else corner_hessian
-    root = covariance_root(_first_hessian(hessian_of, posterior, u))
+    root = covariance_root(_first_hessian(posterior, u))
     low, high = ROUND_ENOUGH
-    for _ in range(1, POLISH_PASSES if passes is None else passes):
+    for _ in range(1, passes):
         refined = covariance_root(
-            hessian_of(_Whitened(posterior, u, root), np.zeros(posterior.ndim), WHITENED_STEP)
+            compact_hessian(_Whitened(posterior, u, root), np.zeros(posterior.ndim), WHITENED_STEP)
         )
         root = root @ refined
         precision = 1.0 / np.sum(refined**2, axis=0)  # its columns: eigenvectors / sqrt(λ)
@@ -356,14 +339,14 @@ def whitening(posterior, u, passes=None):
     return root
 
 
-def _first_hessian(hessian_of, posterior, u, step=1e-3):
+def _first_hessian(posterior, u, step=1e-3):
     """Return :func:`whitening`'s first Hessian, its steps shrunk until its stencil is finite."""
-    hessian = hessian_of(posterior, u, step)
-    for _ in range(STEP_SHRINKS):
+    hessian = compact_hessian(posterior, u, step)
+    for _ in range(_STEP_SHRINKS):
         if np.isfinite(hessian).all():
             break
         step /= STEP_SHRINK
-        hessian = hessian_of(posterior, u, step)
+        hessian = compact_hessian(posterior, u, step)
     return hessian
 
 
@@ -477,7 +460,7 @@ def polish(posterior, u, value, rounds=4, tol=1e-3):
         root = whitening(posterior, u)
         objective = NegativeLogPosterior(posterior, basis=root, origin=u)
         step, found, stalled = _lbfgs(
-            objective, np.zeros(posterior.ndim), 2000, POLISH_FTOL, status=True
+            objective, np.zeros(posterior.ndim), 2000, _POLISH_FTOL, status=True
         )
         if np.isfinite(found) and found > value:
             u, value, gain = u + root @ step, found, found - value

@@ -49,14 +49,6 @@ from .constants import KAPPA
 
 __all__ = ["solve_compiled", "solve_points"]
 
-ROW_PREDICTION = 2
-"""How Newton's start at a point is predicted from the roots before it on its row (a creep test
-of one walker, along which only the gap s changes): 0 the previous root ℓ itself, 1 the secant
-through the last two roots' (s, ℓ), 2 the parabola through the last three. ℓ(s) is smooth
-along a row, so the parabola starts Newton within O(Δs³) of the root and saves it about one
-evaluation a point (BENCHMARKS.md). The root is the same to rounding whatever the start;
-``tests/test_same_numbers.py`` pins the currents recorded with 0."""
-
 
 @numba.njit(**JIT)
 def _solve_row_point(
@@ -172,16 +164,16 @@ def solve_points(
     current,
     v_bulk,
     regime,
-    prediction,
 ):
     """Fill ``current``, ``v_bulk``, ``regime`` point by point; returns the most iterations.
 
     A *row* is a run of consecutive points sharing V, R_s, Va, A (and Vth for the paper law):
     one creep test of one walker, along which only the gap s creeps. Row constants are computed
     once, and where a point lies on the same branch as the row's previous roots, Newton starts
-    from their extrapolation to its gap (``prediction``, :data:`ROW_PREDICTION`): the gap moves
-    little between samples, so Newton needs one or two evaluations instead of four. The start
-    changes the result only at rounding level (Newton's last step leaves ~finish²).
+    from their extrapolation to its gap (:func:`~.compiled_kernels.predicted_start`: the parabola
+    through the last three): the gap moves little between samples, so Newton needs one or two
+    evaluations instead of four. The start changes the result only at rounding level (Newton's
+    last step leaves ~finish²).
     """
     iterations = 0
     n = voltage.size
@@ -233,7 +225,7 @@ def solve_points(
             log_g9 = log_ohmic_conductance(KAPPA * s * sqrt_va, log_prefactor_10(log_a, s))
             current[i], v_bulk[i], regime[i] = sign * (0.0 * math.exp(log_g9)), 0.0, OHMIC
             continue
-        start = predicted_start(s, prediction, s_1, ell_1, s_2, ell_2, s_3, ell_3)
+        start = predicted_start(s, s_1, ell_1, s_2, ell_2, s_3, ell_3)
         if paper:
             magnitude, x, point_regime, ell, its = solve_paper_point(
                 v,
@@ -298,7 +290,8 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
 
     ``threshold`` (Vth, V) selects the paper law; None the smooth law. Returns (current, v_bulk,
     regime, iterations) as :func:`~fsrbayes.physics.solver.solve_bulk` fills them: NaN current
-    and V_bulk where the regime is invalid (0). Newton's starts follow :data:`ROW_PREDICTION`.
+    and V_bulk where the regime is invalid (0). Newton starts from the row's previous roots
+    (:func:`solve_points`).
     """
     n = voltage.size
     current = np.empty(n)
@@ -319,6 +312,5 @@ def solve_compiled(voltage, series_resistance, gap, barrier, area, threshold, fi
         current,
         v_bulk,
         regime,
-        ROW_PREDICTION,
     )
     return current, v_bulk, regime, int(iterations)

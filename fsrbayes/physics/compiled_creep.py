@@ -20,7 +20,6 @@ import math
 import numba
 import numpy as np
 
-from . import compiled
 from .compiled import solve_points
 from .compiled_kernels import INVALID, JIT, PEAK_TABLE
 
@@ -45,9 +44,7 @@ STEP_PARAMETERS = (
 """The parameters :func:`step_log_current` reads, in the order of its ``source`` and ``fixed``."""
 
 
-def step_log_current(
-    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction=None
-):
+def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter):
     """Return log I at every point for every parameter set, NaN outside the validity domain.
 
     Parameters
@@ -66,9 +63,6 @@ def step_log_current(
         The paper's tunneling law (threshold ``Vth``), else the smooth law.
     finish, max_iter
         As in :func:`~fsrbayes.physics.solver.solve_bulk`.
-    prediction : int, optional
-        Newton's starts along a row; by default :data:`~.compiled.ROW_PREDICTION`, as
-        :func:`~.compiled.solve_compiled` takes them.
 
     Returns
     -------
@@ -85,14 +79,13 @@ def step_log_current(
         paper,
         finish,
         max_iter,
-        compiled.ROW_PREDICTION if prediction is None else prediction,
         PEAK_TABLE,
     )
 
 
 @numba.njit(**JIT)
 def _step_log_current(
-    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, prediction, peak_table
+    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, peak_table
 ):
     """:func:`step_log_current` compiled, with eq. 11's peak table an argument.
 
@@ -157,7 +150,6 @@ def _step_log_current(
         current,
         v_bulk,
         regime,
-        prediction,
     )
     out = np.empty((n, k))
     for i in range(n):

@@ -56,15 +56,6 @@ def _features(z, quadratic=True):
     return np.concatenate([z, z[..., j] * z[..., k]], axis=-1)
 
 
-STACKED_FEATURES = True
-"""Evaluate a quadratic map's passes compiled, from one stacked feature array per row
-(:mod:`.transport_kernels`): each stage appends its coordinate's features instead of rebuilding
-those of all earlier ones; and a linear map's as the one affine map they compose to
-(:meth:`TriangularMap.affine`), one matrix product per call. The same numbers to rounding;
-False gives the stage-by-stage numpy evaluation, bit for bit (the regression pins of
-``tests/test_same_numbers.py`` were recorded with it)."""
-
-
 def _stacked_layout(ndim):
     """Positions of stage i's features [z_j, z_j·z_k (j ≤ k)] in the stacked array.
 
@@ -183,18 +174,23 @@ class TriangularMap:
         mean + c_i·v_i: the later coordinates then follow it along the map at their own v (the
         ridge the map straightened moves with u_i; the Jacobian of the later coordinates
         with respect to their v stays the constant diagonal).
+
+        A quadratic map runs compiled (:func:`~.transport_kernels.map_rows`) from one stacked
+        feature array per row, each stage appending its coordinate's features to those of the
+        stages before; a linear map as the one affine map it composes to (:attr:`affine`), one
+        matrix product per call, and stage by stage where a coordinate is held.
         """
         v = np.asarray(v, dtype=float)
-        if STACKED_FEATURES and self.quadratic:
+        if self.quadratic:
             return self._forward_stacked(v, fixed)
-        if STACKED_FEATURES and fixed is None:
+        if fixed is None:
             (offset, matrix), _ = self.affine
             with np.errstate(over="ignore", invalid="ignore"):
                 return offset + v @ matrix
         return self._forward_stages(v, fixed)
 
     def _forward_stages(self, v, fixed=None):
-        """:meth:`forward` stage by stage."""
+        """:meth:`forward` stage by stage (linear maps: a held coordinate, :attr:`affine`)."""
         u = np.empty_like(v)
         z = np.empty_like(v)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -232,7 +228,7 @@ class TriangularMap:
 
     @cached_property
     def _stacked(self):
-        """(column offsets, stacked weights (features, ndim)) of :data:`STACKED_FEATURES`."""
+        """(column offsets, stacked weights (features, ndim)) of the compiled passes."""
         offset, layout = _stacked_layout(self.ndim)
         stacked = np.zeros((offset[-1], self.ndim))
         for stage, i in enumerate(self.order):
@@ -264,20 +260,18 @@ class TriangularMap:
         return map_rows(rows, False, *arguments, index, values).reshape(v.shape)
 
     def inverse(self, u):
-        """v(u) for u (…, ndim)."""
+        """v(u) for u (…, ndim): compiled for a quadratic map, the affine map for a linear one."""
         u = np.asarray(u, dtype=float)
-        if STACKED_FEATURES and self.quadratic:
+        if self.quadratic:
             rows = np.ascontiguousarray(u.reshape(-1, self.ndim))
             arguments = self._compiled_arguments()
             return map_rows(rows, True, *arguments, -1, np.zeros(0)).reshape(u.shape)
-        if STACKED_FEATURES:
-            _, (offset, matrix) = self.affine
-            with np.errstate(over="ignore", invalid="ignore"):
-                return offset + u @ matrix
-        return self._inverse_stages(u)
+        _, (offset, matrix) = self.affine
+        with np.errstate(over="ignore", invalid="ignore"):
+            return offset + u @ matrix
 
     def _inverse_stages(self, u):
-        """:meth:`inverse` stage by stage."""
+        """:meth:`inverse` stage by stage (:attr:`affine`'s columns)."""
         z = (u - self.centre) / self.spread
         v = np.empty_like(u)
         for stage, i in enumerate(self.order):
