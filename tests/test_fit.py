@@ -16,6 +16,7 @@ import xarray as xr
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
+from fsrbayes.inference import design
 from fsrbayes.inference.output import FORMAT_VERSION, open_fit_tree, save_fit
 from fsrbayes.inference.samplers import (
     CheckpointMismatch,
@@ -318,7 +319,7 @@ def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, mon
         "a201", n_specimens=1, voltages=[1.0], forces=[1.96, 4.9, 9.8], samples=5, seed=1
     )
     assert fit_module.design_warnings(posterior_of(three)) == []
-    assert fit_module._distinct_levels([2e5, 1e5, 1.004e5]) == 2  # measured loads scatter a little
+    assert design._distinct_levels([2e5, 1e5, 1.004e5]) == 2  # measured loads scatter a little
 
     class Stop(Exception):
         pass

@@ -9,7 +9,7 @@ from fsrbayes.data import DataError, read_csv
 from fsrbayes.data.readouts import STANDARD_GRAVITY
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.fit import ADC_MIN_COUNTS, design_warnings
+from fsrbayes.inference.design import ADC_MIN_COUNTS, design_warnings
 from fsrbayes.inference.likelihood import SpecimenData, bin_log_time, log_likelihood_pointwise
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics.sensor import solve_current

@@ -49,7 +49,8 @@ from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import RIG_DEFAULTS, simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import SpecimenData
-from fsrbayes.inference.fit import ADC_MIN_COUNTS, FIT_SETTINGS, fit
+from fsrbayes.inference.design import ADC_MIN_COUNTS
+from fsrbayes.inference.fit import FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
 from fsrbayes.utils import json_ready
 from validation.importance import importance_quantiles
@@ -78,7 +79,7 @@ def simulate_truth(seed, truth="population", **rig):
     defaults) with the bench's noise. ``"prior"``: its parameters and noise level are drawn
     from the fit's prior, redrawn (up to 1000 times) while the log would be refused — an ADC
     reading outside 1 … 2^bits − 1, or no valid current — or while its readings stay below
-    :data:`~fsrbayes.inference.fit.ADC_MIN_COUNTS` counts (a fixed resistor no researcher would
+    :data:`~fsrbayes.inference.design.ADC_MIN_COUNTS` counts (a fixed resistor no researcher would
     keep for that sensor; the fit warns of it). Selecting on the data alone leaves the posterior
     of an accepted rig unchanged, so its 90 % intervals hold the truth in 90 % of rigs exactly
     when the fit is right.

@@ -11,13 +11,13 @@ References
 Paredes-Madrid et al. 2017, eqs. (1), (4)–(11), (17)–(24) and Figure 17.
 """
 
-import warnings
 from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
 
 from .contact import contact_resistance, effective_area, gap
+from .domain import DomainError, DomainWarning, apply_policy
 from .effects import remembers_loads, resolve_effects, static_stress_of
 from .models import PeerModel, model_family
 from .scattered import solve_scattered
@@ -36,29 +36,6 @@ __all__ = [
     "drift",
     "current_history",
 ]
-
-ON_INVALID = ("raise", "nan", "mask")
-
-
-class DomainError(ValueError):
-    """Raised where the requested points fall outside the model's validity domain.
-
-    Attributes
-    ----------
-    n_invalid : int
-        How many points are outside.
-    first : dict
-        Voltage, stress and time of the first such point.
-    """
-
-    def __init__(self, message, n_invalid, first):
-        super().__init__(message)
-        self.n_invalid = n_invalid
-        self.first = first
-
-
-class DomainWarning(UserWarning):
-    """Warned when invalid points are returned as NaN (``on_invalid="nan"``)."""
 
 
 def _parameters(params):
@@ -338,33 +315,6 @@ def _solve_current(
     )  # fmt: skip
 
 
-def _apply_policy(solution, on_invalid, voltage, stress, time):
-    _check_choice("on_invalid", on_invalid, ON_INVALID)
-    value = solution.current
-    bad = ~solution.valid
-    if not bad.any():
-        return value
-    n_bad = int(bad.sum())
-    first = np.unravel_index(np.argmax(bad), bad.shape)
-    where = {
-        name: float(np.broadcast_to(np.asarray(arr, dtype=float), bad.shape)[first])
-        for name, arr in (("voltage_V", voltage), ("stress_Pa", stress), ("time_s", time))
-    }
-    message = (
-        f"{n_bad} of {bad.size} points are outside the validity domain of the model (first at "
-        f"V_FSR={where['voltage_V']:g} V, stress={where['stress_Pa']:g} Pa, t={where['time_s']:g} "
-        "s): the paper law stops increasing above its eq.-11 peak (~3.6-3.9 V across the bulk for "
-        "A201) or the gap closed; use tunneling='smooth', lower voltages, or "
-        "on_invalid='mask'/'nan'"
-    )
-    if on_invalid == "raise":
-        raise DomainError(message, n_bad, where)
-    if on_invalid == "mask":
-        return np.ma.masked_array(value, mask=bad)
-    warnings.warn(DomainWarning(message), stacklevel=3)
-    return value
-
-
 def current(
     params,
     voltage,
@@ -424,7 +374,7 @@ def current(
     solution = solve_current(
         params, voltage, stress, time, rheology=rheology, tunneling=tunneling, effects=effects
     )
-    return _apply_policy(solution, on_invalid, voltage, stress, time)
+    return apply_policy(solution, on_invalid, voltage, stress, time)
 
 
 def drift(
@@ -518,4 +468,4 @@ def current_history(
         if extra is not None:
             strain = strain + extra
     solution = _solve_model(params, voltage, stress, strain, family, tunneling, effects, time)
-    return _apply_policy(solution, on_invalid, voltage, stress, time)
+    return apply_policy(solution, on_invalid, voltage, stress, time)
