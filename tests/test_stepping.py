@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from fsrbayes.inference.samplers.ensemble import ensemble_moves
-from fsrbayes.inference.samplers.independence import MixtureProposal
+from fsrbayes.inference.samplers.moves.independence import MixtureProposal
 from fsrbayes.inference.samplers.stepping import step_ensemble, steps_alone
 
 NDIM, N_WALK = 5, 12

@@ -7,7 +7,7 @@ import pytest
 from scipy import stats
 
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
-from fsrbayes.inference.samplers.independence import (
+from fsrbayes.inference.samplers.moves.independence import (
     IndependenceProposal,
     MixtureProposal,
     student_t_log_density,

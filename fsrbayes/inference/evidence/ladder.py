@@ -3,8 +3,9 @@
 The power posterior p_β(u) ∝ L(u)^β·π(u) is sampled on a ladder 0 = β_0 < … < β_{K−1} = 1, β_k =
 (k/(K−1))^5 (rungs crowd near β = 0, where E_β[log L] changes fastest; Calderhead & Girolami 2009;
 Xie et al. 2011). Rung 0 is the prior itself, drawn i.i.d. at every iteration; every other rung is
-an ensemble moved by the affine-invariant stretch move (emcee's ``StretchMove``), all rungs
-evaluated in one vectorised likelihood call per half-step. During burn-in the rungs are annealed in
+an ensemble moved by the affine-invariant stretch move
+(:mod:`~fsrbayes.inference.samplers.moves.stretch`), all rungs evaluated in one vectorised
+likelihood call per half-step. During burn-in the rungs are annealed in
 turn — rung k starts from rung k−1's final ensemble — and during production every step is followed
 by swaps between neighbouring rungs (parallel tempering, Vousden et al. 2016), which cost no
 likelihood calls and let mode weights mix.
@@ -25,6 +26,7 @@ import numpy as np
 
 from ..parallel import fork_pool, single_threaded_blas
 from ..samplers import walkers_for
+from ..samplers.moves import StretchMove, tempered_log_density
 from .stepping_stone import combine_ladder, summarise_ladders
 
 __all__ = [
@@ -148,24 +150,13 @@ def evaluate_target(target, u):
     return lp, np.where(np.isnan(ll), -np.inf, ll)
 
 
-def _tempered(lp, ll, beta):
-    """Return log π + β·log L, −inf off the support.
-
-    Log π + β·log L, −inf off the support (also at β = 0 when log L = −inf: the domain is part of
-    the model).
-    """
-    with np.errstate(invalid="ignore"):
-        value = lp + beta * ll  # beta broadcasts against lp (a scalar, or one per rung)
-    return np.where(np.isfinite(lp) & np.isfinite(ll), value, -np.inf)
-
-
 class _Rungs:
     """All tempered ensembles of one ladder, advanced together by the affine-invariant stretch move.
 
-    Each half-step is emcee's red–blue stretch update (``emcee.moves.StretchMove``, a = 2:
-    z ~ g(z) ∝ 1/sqrt(z) on [1/a, a], y = c + z·(x − c), accept with z^(d−1)·p(y)/p(x); Goodman &
-    Weare 2010) applied to every rung at once, so the proposals of all rungs go to the
-    likelihood in *one* vectorised call; acceptance is per rung at its own β.
+    Each step is :meth:`~fsrbayes.inference.samplers.moves.stretch.StretchMove.step` (a = 2:
+    z ~ g(z) ∝ 1/sqrt(z) on [1/a, a], y = c + z·(x − c), accept with z^(d−1)·p_β(y)/p_β(x);
+    Goodman & Weare 2010) applied to every rung at once, so the proposals of all rungs go to the
+    likelihood in *one* vectorised call; acceptance is per rung at its own β, p_β ∝ L^β·π.
 
     A state may carry columns beyond the target's ``ndim`` continuous ones (a chart label, see
     :class:`~fsrbayes.inference.evidence.referenced.ReferencedTarget`): the stretch move keeps them,
@@ -174,7 +165,8 @@ class _Rungs:
     """
 
     def __init__(self, target, betas, coords, random, a=2.0):
-        self.target, self.betas, self.random, self.a = target, np.asarray(betas), random, a
+        self.target, self.betas, self.random = target, np.asarray(betas), random
+        self.move = StretchMove(a)
         n_rungs, n_walk, width = coords.shape
         self.n_move = target.ndim
         lp, ll = evaluate_target(target, coords.reshape(-1, width))
@@ -185,38 +177,18 @@ class _Rungs:
         )
 
     def step(self):
-        n_rungs, n_walk, width = self.coords.shape
-        ndim = self.n_move
-        half_size = n_walk // 2
-        order = np.argsort(self.random.rand(n_rungs, n_walk), axis=1)  # a random split per rung
-        rows = np.arange(n_rungs)[:, None]
-        for moving, fixed in (
-            (order[:, :half_size], order[:, half_size:]),
-            (order[:, half_size:], order[:, :half_size]),
-        ):
-            x = self.coords[rows, moving]
-            z = ((self.a - 1.0) * self.random.rand(n_rungs, half_size) + 1.0) ** 2 / self.a
-            partners = self.coords[
-                rows, fixed[rows, self.random.randint(half_size, size=(n_rungs, half_size))]
-            ]
-            proposal = partners - (partners - x) * z[..., None]
-            proposal[..., ndim:] = x[..., ndim:]
-            lp, ll = evaluate_target(self.target, proposal.reshape(-1, width))
-            lp, ll = lp.reshape(n_rungs, half_size), ll.reshape(n_rungs, half_size)
-            beta = self.betas[:, None]
-            with np.errstate(invalid="ignore"):
-                diff = (
-                    (ndim - 1.0) * np.log(z)
-                    + _tempered(lp, ll, beta)
-                    - _tempered(self.lp[rows, moving], self.ll[rows, moving], beta)
-                )
-            accept = np.log(self.random.rand(n_rungs, half_size)) < np.where(
-                np.isnan(diff), -np.inf, diff
-            )
-            r, w = np.nonzero(accept)
-            self.coords[r, moving[r, w]] = proposal[r, w]
-            self.lp[r, moving[r, w]], self.ll[r, moving[r, w]] = lp[r, w], ll[r, w]
+        """One stretch step of every rung at its own β, then the target's relabelling if any."""
+        self.move.step(
+            self.coords,
+            self.lp,
+            self.ll,
+            self.betas,
+            lambda u: evaluate_target(self.target, u),
+            self.random,
+            self.n_move,
+        )
         if hasattr(self.target, "relabel"):
+            n_rungs, n_walk, width = self.coords.shape
             coords, lp = self.target.relabel(
                 self.coords.reshape(-1, width), self.lp.reshape(-1), self.random
             )
@@ -231,7 +203,7 @@ def _replace_dead_walkers(rung, rng):
     be offered one during a short burn-in, and its −inf would then reach the production rungs (the
     bridge's exp(−d/2·log L) became inf). Any start is valid for MCMC.
     """
-    dead = ~np.isfinite(_tempered(rung.lp[0], rung.ll[0], rung.betas[0]))
+    dead = ~np.isfinite(tempered_log_density(rung.lp[0], rung.ll[0], rung.betas[0]))
     live = np.flatnonzero(~dead)
     if dead.any() and live.size >= 2:
         donors = rng.choice(live, size=int(dead.sum()))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from ..samplers.independence import IndependenceProposal, student_t_draws, student_t_log_density
+from ..samplers.moves import IndependenceProposal, student_t_draws, student_t_log_density
 from ..samplers.transport import TriangularMap
 from .ladder import evaluate_target
 

@@ -57,7 +57,7 @@ class SamplerSettings:
     independence_fraction : float
         Share of independence Metropolis–Hastings moves (proposals from a mixture of Student-t's
         fitted to each ensemble's warm-up draws in the map's coordinates,
-        :class:`~fsrbayes.inference.samplers.independence.MixtureProposal`);
+        :class:`~fsrbayes.inference.samplers.moves.independence.MixtureProposal`);
         needs ``transport_rounds`` > 0. The other moves keep the ``de_fraction`` split. Too large
         a share slows mixing again: walkers that reach a region the proposal under-covers wait
         there for an accepted jump, and only the ensemble moves carry them on (the share was

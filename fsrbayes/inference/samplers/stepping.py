@@ -5,19 +5,21 @@ per step it draws the move with ``RandomState.choice``, copies the random state 
 ``get_state()``, converts the target's values walker by walker into Python floats and, in every
 red–blue half-step, draws each walker's acceptance uniform with its own ``rand()`` call.
 :func:`step_ensemble` runs the same moves with array operations in place of those loops:
-:class:`~emcee.moves.StretchMove` and :class:`~emcee.moves.DEMove`, whose proposals are restated
-here to emcee 3.1's arithmetic, and :class:`~emcee.moves.MHMove`, whose ``get_proposal`` it
-calls. It draws the same random numbers in the same order from the same ``RandomState``, so every
+:class:`~emcee.moves.StretchMove` and :class:`~emcee.moves.DEMove`, whose proposals are drawn by
+fsrbayes' own :class:`~.moves.stretch.StretchMove` and
+:class:`~.moves.differential.DifferentialMove` to emcee 3.1's arithmetic, and
+:class:`~emcee.moves.MHMove`, whose ``get_proposal`` it calls. It draws the same random numbers in
+the same order from the same ``RandomState``, so every
 stored position, log-density, blob and acceptance count equals emcee's bit for bit
 (``tests/test_stepping.py`` runs both), and the checkpoints keep emcee's random-state tuple. Any
 other move (a target's own, such as the population's blocked Gibbs sweep) is left to emcee:
 :func:`steps_alone` says which.
 """
 
-import functools
-
 import emcee
 import numpy as np
+
+from .moves import DifferentialMove, StretchMove
 
 __all__ = ["step_ensemble", "steps_alone"]
 
@@ -76,33 +78,11 @@ class _Walkers:
             self.blobs[moved] = blobs[kept]
 
 
-@functools.lru_cache(maxsize=4)
-def _pairs(n):
-    """Return the (first, second) walker indices of all ordered pairs of distinct walkers."""
-    rows, cols = np.tril_indices(n, -1)
-    return np.concatenate([rows, cols]), np.concatenate([cols, rows])
-
-
-def _stretch_proposal(move, own, others, random):
-    """Goodman & Weare's stretch of each walker towards a random other (emcee's, to its numbers)."""
-    n_own, ndim = own.shape
-    zz = ((move.a - 1.0) * random.rand(n_own) + 1) ** 2.0 / move.a
-    factors = (ndim - 1.0) * np.log(zz)
-    partners = others[random.randint(len(others), size=(n_own,))]
-    return partners - (partners - own) * zz[:, None], factors
-
-
-def _differential_proposal(move, own, others, random):
-    """Step along the difference of two other walkers (ter Braak's differential evolution).
-
-    The pair is drawn uniformly among ordered pairs of distinct walkers, the scale γ₀(1 + σ·N(0,
-    1)) with γ₀ = 2.38/√(2·ndim) unless given (Nelson et al. 2013; emcee's ``DEMove``, to its
-    numbers).
-    """
-    first, second = _pairs(len(others))
-    chosen = random.randint(0, len(first), size=len(own))
-    gamma = move.g0 * (1 + move.sigma * random.randn(len(own), 1))
-    return own + gamma * (others[second[chosen]] - others[first[chosen]]), np.zeros(len(own))
+def _proposer(move):
+    """Return the fsrbayes move that draws an emcee stretch or DE move's proposals."""
+    if type(move) is emcee.moves.StretchMove:
+        return StretchMove(move.a)
+    return DifferentialMove(move.g0, move.sigma)
 
 
 def _red_blue(move, target, walkers, random):
@@ -114,14 +94,16 @@ def _red_blue(move, target, walkers, random):
             " of dimensions."
         )
     move.setup(walkers.coords)
-    propose = _stretch_proposal if type(move) is emcee.moves.StretchMove else _differential_proposal
+    proposer = _proposer(move)
     accepted = np.zeros(n_walk, dtype=bool)
     halves = np.arange(n_walk) % 2
     if move.randomize_split:
         random.shuffle(halves)
     for half in (0, 1):
         chosen = halves == half
-        proposed, factors = propose(move, walkers.coords[chosen], walkers.coords[~chosen], random)
+        proposed, factors = proposer.propose(
+            walkers.coords[chosen], walkers.coords[~chosen], random
+        )
         log_prob, blobs = _log_prob(target, proposed)
         uniforms = random.rand(int(chosen.sum()))
         with np.errstate(invalid="ignore"):  # -inf against a walker at -inf: nan, rejected

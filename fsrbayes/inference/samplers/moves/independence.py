@@ -1,7 +1,8 @@
 """Independence Metropolis–Hastings proposals: Student-t's fitted to warm-up draws.
 
-A share of the ensemble's moves (:func:`~.ensemble.ensemble_moves`) proposes every walker afresh
-from a fixed density g fitted to the warm-up draws in the transport map's straightened
+A share of the ensemble's moves
+(:func:`~fsrbayes.inference.samplers.ensemble.ensemble_moves`) proposes every walker afresh from a
+fixed density g fitted to the warm-up draws in the transport map's straightened
 coordinates: one multivariate Student-t (:class:`IndependenceProposal`) or an equal mixture of
 one per ensemble (:class:`MixtureProposal`). The acceptance ratio p(x')·g(x) / (p(x)·g(x')) makes
 the move exact for any fixed g (Tierney, Ann. Statist. 22, 1701, 1994); where g describes the
@@ -15,7 +16,7 @@ import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.special import gammaln
 
-from ...utils import logsumexp
+from ....utils import logsumexp
 
 __all__ = [
     "IndependenceProposal",
