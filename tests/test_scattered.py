@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import fsrbayes
-from fsrbayes.physics import DomainError, scattered, solve_current
+from fsrbayes.physics import DomainError, scattered
 from fsrbayes.physics.compiled_order import group, row_breaks
+from fsrbayes.physics.sensor import solve_current
 
 VOLTAGES = (0.2, 0.5, 1.0, 2.0, 8.0)  # 8 V: past the paper law's eq.-11 peak
 STRESSES = (42100.0, 105400.0, 210800.0)

@@ -12,12 +12,13 @@ from scipy.optimize import brentq
 
 import fsrbayes
 from fsrbayes import load_sensor
-from fsrbayes.physics import DomainError, DomainWarning, compiled_paper, solve_bulk, solve_current
+from fsrbayes.physics import DomainError, DomainWarning, compiled_paper
 from fsrbayes.physics import compiled as compiled_solver
 from fsrbayes.physics import tunneling as tl
 from fsrbayes.physics.compiled_kernels import predicted_start
 from fsrbayes.physics.rheology import creep_strain
-from fsrbayes.physics.sensor import sensor_state
+from fsrbayes.physics.sensor import sensor_state, solve_current
+from fsrbayes.physics.solver import solve_bulk
 
 # docs/physics.md, "Reference numbers": paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())

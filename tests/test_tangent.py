@@ -17,9 +17,9 @@ from fsrbayes.inference.counts import count_log_likelihood, count_log_likelihood
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.optimize import NegativeLogPosterior
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.physics import solve_bulk
 from fsrbayes.physics.rheology import creep_strain
 from fsrbayes.physics.sensor import sensor_state
+from fsrbayes.physics.solver import solve_bulk
 from fsrbayes.physics.tangent import solve_bulk_near_first
 
 

@@ -8,24 +8,14 @@ numpy one; the whole model of a stress step on
 a Burgers or Zener sensor is compiled too, for many small evaluations (:mod:`.compiled_creep`); a
 finite-difference gradient's neighbours are carried from one solve along the root's tangent
 (:mod:`.tangent`).
+
+The package exports what a user calls: the current and drift of a stress step or history, the
+contact, creep and tunnelling laws one at a time, and the readout circuits. The solver and its
+compiled engines (:mod:`.solver`, :mod:`.compiled`), the registries a model is built from
+(:mod:`.rheology`, :mod:`.effects`, :mod:`.models`, :mod:`.parameters`) and the peer models
+(:mod:`.peers`) are imported from their modules, e.g. ``from fsrbayes.physics import rheology``.
 """
 
-from . import (
-    circuits,
-    compiled,
-    compiled_creep,
-    compiled_paper,
-    constants,
-    contact,
-    effects,
-    loading,
-    peers,
-    rheology,
-    solver,
-    superposition,
-    tangent,
-    tunneling,
-)
 from .circuits import (
     DividerResult,
     amplifier_output,
@@ -35,58 +25,32 @@ from .circuits import (
     voltage_divider,
 )
 from .contact import contact_resistance, effective_area, gap, stress_from_force
+from .domain import DomainError, DomainWarning
 from .loading import StressHistory
 from .rheology import creep_compliance, creep_strain, strain_history
-from .sensor import (
-    DomainError,
-    DomainWarning,
-    current,
-    current_history,
-    drift,
-    sensor_state,
-    solve_current,
-)
-from .solver import BulkSolution, solve_bulk
+from .sensor import current, current_history, drift
 from .tunneling import paper_peak_voltage, tunneling_current
 
 __all__ = [
-    "circuits",
-    "compiled",
-    "compiled_creep",
-    "compiled_paper",
-    "constants",
-    "contact",
-    "effects",
-    "loading",
-    "peers",
-    "rheology",
-    "solver",
-    "superposition",
-    "tangent",
-    "tunneling",
+    "current",
+    "drift",
+    "current_history",
+    "StressHistory",
+    "DomainError",
+    "DomainWarning",
     "contact_resistance",
     "effective_area",
     "gap",
     "stress_from_force",
-    "StressHistory",
     "creep_compliance",
     "creep_strain",
     "strain_history",
-    "DividerResult",
-    "DomainError",
-    "DomainWarning",
-    "amplifier_output",
-    "current",
-    "current_from_amplifier",
-    "current_history",
-    "drift",
-    "resistance_from_amplifier",
-    "resistances",
-    "sensor_state",
-    "solve_current",
-    "voltage_divider",
-    "BulkSolution",
-    "solve_bulk",
-    "paper_peak_voltage",
     "tunneling_current",
+    "paper_peak_voltage",
+    "DividerResult",
+    "voltage_divider",
+    "amplifier_output",
+    "resistances",
+    "current_from_amplifier",
+    "resistance_from_amplifier",
 ]
