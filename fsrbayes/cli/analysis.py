@@ -17,7 +17,6 @@ def cmd_compare(args):
     """Compare models by log-evidence per specimen, Bayes factors and PSIS-LOO (JSON)."""
     from ..inference.compare import compare
     from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
-    from ..inference.fit import FIT_SETTINGS
     from ..inference.samplers import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
@@ -45,6 +44,9 @@ def cmd_compare(args):
     pilot = SamplerSettings(
         n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3
     )
+    search = replace(MODE_SEARCH, n_starts=args.starts)
+    given = {k: v for k, v in chosen.items() if v is not None}
+    estimator = _estimator(args, settings, given, pilot, search)
     if args.json:
         writable(Path(args.json).parent)
     result = compare(
@@ -53,18 +55,46 @@ def cmd_compare(args):
         specimens,
         tunneling=args.tunneling,
         likelihood=args.likelihood,
-        settings=settings,
         seed=args.seed,
         with_loo=not args.no_loo,
-        path=args.path,
-        pilot=pilot,
-        search=replace(MODE_SEARCH, n_starts=args.starts),
-        fit_settings=replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
+        estimator=estimator,
     )
     print(result.summary())
     if args.json:
         write_json_atomic(Path(args.json), result.to_dict())
     return 0
+
+
+def _estimator(args, ladder, given, pilot, search):
+    """Return the registered estimator ``--path`` names, with the command's options it takes.
+
+    ``ladder``: the reference path's (and the bridge's fallback) ladder; ``given``: the rung,
+    burn-in and step options given, which the tempered estimator applies to its own ladder.
+    """
+    from ..inference.estimators import ESTIMATORS, Tempered
+    from ..inference.fit import FIT_SETTINGS
+
+    estimator = ESTIMATORS[args.path]
+    processes = args.processes or min(args.replicates, os.cpu_count() or 1)
+    if isinstance(estimator, Tempered):
+        settings = estimator.settings
+        rungs = replace(settings.ladder, **given, replicates=args.replicates)
+        return Tempered(
+            replace(
+                settings,
+                ladder=replace(rungs, top_draws=rungs.steps),
+                pilot=pilot,
+                search=search,
+                processes=processes,
+            )
+        )
+    options = {
+        "ladder": ladder,
+        "pilot": pilot,
+        "search": search,
+        "fit_settings": replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
+    }
+    return estimator.with_options(**{k: v for k, v in options.items() if hasattr(estimator, k)})
 
 
 def cmd_diagnose(args):

@@ -3,9 +3,12 @@
 fit, compare, diagnose, calibrate, drift, predict, force.
 """
 
+import argparse
+
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
-from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS
+from ..inference.estimators import ESTIMATORS
+from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS, SAMPLERS
 from ..inference.force.estimate import FORCE_UNITS
 from ..inference.nuisance import RAMPS
 from ..physics.effects import EFFECTS
@@ -23,6 +26,23 @@ from .grammar import (
 from .predicting import cmd_predict
 
 __all__ = ["add_analysis_commands"]
+
+
+_BUILT_IN_ESTIMATORS = ("bridge", "reference", "tempered", "laplace")
+
+
+def _sampler_name(name):
+    """Return ``name`` if it is a registered sampler; the one-line error says what else it is."""
+    if name in SAMPLERS:
+        return name
+    if name in ESTIMATORS:
+        raise argparse.ArgumentTypeError(
+            f"{name!r} is an evidence estimator, not a sampler: fsrbayes compare --path {name} "
+            f"(samplers: {', '.join(SAMPLERS)})"
+        )
+    raise argparse.ArgumentTypeError(
+        f"invalid choice: {name!r} (choose from {', '.join(SAMPLERS)})"
+    )
 
 
 def _command(sub, name, question, what):
@@ -113,17 +133,11 @@ def _add_fit(sub):
     option(
         fit_,
         "--sampler",
-        choices=("ensemble", "tempered"),
+        type=_sampler_name,
         default="ensemble",
-        help="emcee ensembles until convergence (default), or the top rung of tempered ladders "
-        "started from a fitted reference: mixes between the arms of a bent ridge and gives "
-        "log Z too",
-    )
-    option(
-        fit_,
-        "--ladder-steps",
-        type=int,
-        help="--sampler tempered: production steps per ladder (default 600)",
+        help=f"a registered sampler, one of: {', '.join(SAMPLERS)} (default: emcee ensembles "
+        "until convergence); the tempered ladders are an evidence estimator (compare --path "
+        "tempered)",
     )
     option(
         fit_,
@@ -186,12 +200,15 @@ def _add_compare(sub):
     option(
         cmp_,
         "--path",
-        choices=("bridge", "reference"),
+        choices=tuple(ESTIMATORS),
         default="bridge",
-        help="how log Z is estimated: 'bridge' (default) fits each model and specimen and bridge-"
-        "samples its draws, falling back on the reference ladder below when a fit does not "
-        "converge or the bridge's halves disagree; 'reference': a beta ladder from a reference "
-        "density fitted to a pilot run",
+        help="a registered evidence estimator: 'bridge' (default) fits each model and specimen "
+        "and bridge-samples its draws, falling back on the reference ladder below when a fit "
+        "does not converge or the bridge's halves disagree; 'reference': a beta ladder from a "
+        "reference density fitted to a pilot run; 'tempered': the same ladders with their top "
+        "rung's draws checked, from two independent searches and pilots; 'laplace': the "
+        "Laplace approximation (no error bar)"
+        + "".join(f"; '{n}'" for n in ESTIMATORS if n not in _BUILT_IN_ESTIMATORS),
     )
     option(cmp_, "--temps", type=int, help="rungs of the beta ladder (default 8)")
     option(cmp_, "--burn", type=int, help="burn-in steps per rung (default 100)")
@@ -305,7 +322,7 @@ def _add_calibrate(sub):
         "--sampler",
         choices=("ensemble", "tempered"),
         default="ensemble",
-        help="fit with emcee ensembles or the tempered ladders",
+        help="calibrate the ensemble fit or the tempered estimator's top-rung draws",
     )
     option(
         cal,
