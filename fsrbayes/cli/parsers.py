@@ -3,8 +3,6 @@
 fit, compare, diagnose, calibrate, drift, predict, force.
 """
 
-import argparse
-
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
 from ..inference.estimators import ESTIMATORS
@@ -22,27 +20,11 @@ from .grammar import (
     add_reading_options,
     add_specimen_option,
     option,
+    sampler_choice,
 )
 from .predicting import cmd_predict
 
 __all__ = ["add_analysis_commands"]
-
-
-_BUILT_IN_ESTIMATORS = ("bridge", "reference", "tempered", "laplace")
-
-
-def _sampler_name(name):
-    """Return ``name`` if it is a registered sampler; the one-line error says what else it is."""
-    if name in SAMPLERS:
-        return name
-    if name in ESTIMATORS:
-        raise argparse.ArgumentTypeError(
-            f"{name!r} is an evidence estimator, not a sampler: fsrbayes compare --path {name} "
-            f"(samplers: {', '.join(SAMPLERS)})"
-        )
-    raise argparse.ArgumentTypeError(
-        f"invalid choice: {name!r} (choose from {', '.join(SAMPLERS)})"
-    )
 
 
 def _command(sub, name, question, what):
@@ -133,7 +115,7 @@ def _add_fit(sub):
     option(
         fit_,
         "--sampler",
-        type=_sampler_name,
+        type=sampler_choice,
         default="ensemble",
         help=f"a registered sampler, one of: {', '.join(SAMPLERS)} (default: emcee ensembles "
         "until convergence); the tempered ladders are an evidence estimator (compare --path "
@@ -202,13 +184,13 @@ def _add_compare(sub):
         "--path",
         choices=tuple(ESTIMATORS),
         default="bridge",
-        help="a registered evidence estimator: 'bridge' (default) fits each model and specimen "
-        "and bridge-samples its draws, falling back on the reference ladder below when a fit "
-        "does not converge or the bridge's halves disagree; 'reference': a beta ladder from a "
-        "reference density fitted to a pilot run; 'tempered': the same ladders with their top "
-        "rung's draws checked, from two independent searches and pilots; 'laplace': the "
-        "Laplace approximation (no error bar)"
-        + "".join(f"; '{n}'" for n in ESTIMATORS if n not in _BUILT_IN_ESTIMATORS),
+        help=f"a registered evidence estimator ({', '.join(ESTIMATORS)}): 'bridge' (default) "
+        "fits each model and specimen and bridge-samples its draws, falling back on the "
+        "reference ladder below when a fit does not converge or the bridge's halves disagree; "
+        "'reference': a beta ladder from a reference density fitted to a pilot run; "
+        "'tempered': the same ladders with their top rung's draws checked, from two "
+        "independent searches and pilots; 'laplace': the "
+        "Laplace approximation (no error bar)",
     )
     option(cmp_, "--temps", type=int, help="rungs of the beta ladder (default 8)")
     option(cmp_, "--burn", type=int, help="burn-in steps per rung (default 100)")
@@ -218,8 +200,8 @@ def _add_compare(sub):
         "--pilot-steps",
         type=int,
         default=1250,
-        help="--path reference: steps of the pilot run the reference is fitted to (default "
-        "1250; 3 transport rounds take the first 60 %%)",
+        help="--path reference/tempered: steps of the pilot run the reference is fitted to "
+        "(default 1250; 3 transport rounds take the first 60 %%)",
     )
     option(
         cmp_,
@@ -233,7 +215,7 @@ def _add_compare(sub):
         "--starts",
         type=int,
         default=12,
-        help="--path reference: optimiser starts of each region search",
+        help="--path reference/tempered: optimiser starts of each region search",
     )
     option(
         cmp_,

@@ -226,8 +226,8 @@ def _chosen_estimator(estimator, path, options):
         raise ValueError(f"give compare an estimator or a path, not both (path={path!r})")
     if given:
         raise TypeError(
-            f"compare's {', '.join(given)} are shorthand for a path's estimator; give them to "
-            "the estimator object's constructor"
+            f"compare's {', '.join(given)}: shorthand for the options of a path's estimator; "
+            "with an estimator object, give them to its constructor"
         )
     if isinstance(estimator, Estimator):
         return estimator

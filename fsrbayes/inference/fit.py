@@ -187,17 +187,22 @@ def fit(
     return result
 
 
+_NOT_A_SAMPLER = (
+    "{name!r} is an evidence estimator, not a sampler of fit: compare(..., estimator={cls}()) "
+    "or fsrbayes compare --path {name}"
+)
+
+
 def _chosen_sampler(sampler, settings):
     """Return the sampler ``fit`` runs: ``sampler`` (name, object, None) with ``settings``."""
-    if isinstance(sampler, Estimator) or (
-        isinstance(sampler, str) and sampler in ESTIMATORS and sampler not in SAMPLERS
-    ):
-        name = sampler if isinstance(sampler, str) else sampler.name
-        raise ValueError(
-            f"{name!r} is an evidence estimator, not a sampler of fit: use "
-            f"compare(..., path={name!r}) (or fsrbayes compare --path {name}); samplers: "
-            f"{', '.join(SAMPLERS)}"
-        )
+    estimator = sampler if isinstance(sampler, Estimator) else None
+    if isinstance(sampler, str) and sampler not in SAMPLERS:
+        estimator = ESTIMATORS.get(sampler)
+    if sampler is None and settings is not None:  # TemperedSettings: the tempered estimator's
+        owners = (e for e in ESTIMATORS.values() if type(e.settings) is type(settings))
+        estimator = next(owners, None)
+    if estimator is not None:
+        raise ValueError(_NOT_A_SAMPLER.format(name=estimator.name, cls=type(estimator).__name__))
     chosen = sampler_named(sampler)
     return chosen if settings is None else chosen.with_settings(settings)
 
