@@ -24,6 +24,7 @@ from .posterior import LogPosterior
 
 __all__ = [
     "BRIDGE_SPLIT_TOLERANCE",
+    "DEFAULT_PATH",
     "ESTIMATORS",
     "KASS_RAFTERY",
     "Comparison",
@@ -60,6 +61,10 @@ def _loo(posterior, draws_u):
         "max_pareto_k": max_k,
         "reliable": bool(max_k < 0.7),
     }
+
+
+DEFAULT_PATH = "bridge"
+"""The estimator :func:`compare` runs when given neither ``estimator`` nor ``path``."""
 
 
 def nested_pair(models):
@@ -216,7 +221,7 @@ def _chosen_estimator(estimator, path, options):
     """Return the Estimator that ``compare`` runs (its docstring: ``estimator``, ``path``)."""
     given = {k: v for k, v in options.items() if v is not None}
     if estimator is None:
-        named = estimator_named("bridge" if path is None else path)
+        named = estimator_named(DEFAULT_PATH if path is None else path)
         attributes = {"ladder" if k == "settings" else k: v for k, v in given.items()}
         unknown = [k for k, a in zip(given, attributes, strict=True) if not hasattr(named, a)]
         if unknown:
