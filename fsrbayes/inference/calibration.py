@@ -80,7 +80,7 @@ SBC_TEMPERED_SETTINGS = TemperedSettings(
     search=ModeSearch(n_starts=8),
     pilot_groups=1,
 )
-"""The tempered sampler cut short for SBC: one mode search (8 optimiser starts), 750-step
+"""The tempered ladders cut short for SBC: one mode search (8 optimiser starts), 750-step
 pilots, two ladders of 6 rungs × 300 steps. Too short to converge on creep posteriors, so the
 SBC with it is further from calibrated than with the ensembles (VALIDATION.md)."""
 

@@ -1,6 +1,6 @@
 """The one result shape every evidence estimator returns to its callers.
 
-Stepping-stone ladders (prior or referenced), the tempered sampler and the Laplace
+Stepping-stone ladders (prior or referenced), the tempered ladders and the Laplace
 approximation differ in what they compute along the way, but a comparison needs the same few
 things from each: log Z, its error bar, which method produced it, the estimator's own numbers
 for the record and, where the estimator sampled the posterior, its draws (for LOO and

@@ -60,7 +60,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class TemperedSettings:
-    """How the tempered sampler runs.
+    """How the tempered estimator runs its ladders.
 
     Attributes
     ----------
