@@ -1,10 +1,10 @@
 """Wall time and accuracy of log Z for one specimen's Burgers and Zener models (target: ≤ 60 s
 with an error ≤ 0.1 nats, the fit included).
 
-The paths are :func:`fsrbayes.compare`'s (:data:`~fsrbayes.inference.compare.PATHS`), and so is
-the default: ``path="bridge"`` — a converged fit (:func:`fsrbayes.inference.fit.fit`) and bridge
-sampling from its draws (:mod:`fsrbayes.inference.evidence.bridge`); the reported time includes
-the fit. ``path="reference"`` runs the referenced ladder (pilot run, Student-t reference in
+The paths are two of :func:`fsrbayes.compare`'s estimators (:mod:`fsrbayes.inference.estimators`),
+and so is the default: ``path="bridge"`` — a converged fit (:func:`fsrbayes.inference.fit.fit`)
+and bridge sampling from its draws (:mod:`fsrbayes.inference.evidence.bridge`); the reported time
+includes the fit. ``path="reference"`` runs the referenced ladder (pilot run, Student-t reference in
 transport-map coordinates, 8 evenly spaced rungs; :mod:`fsrbayes.inference.evidence.referenced`).
 """
 
@@ -16,11 +16,13 @@ from dataclasses import replace
 import numpy as np
 
 from benchmarks.likelihood import benchmark_specimen
-from fsrbayes.inference.compare import PATHS
 from fsrbayes.inference.evidence.bridge import bridge_from_fit
 from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER, referenced_log_evidence
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
 from fsrbayes.inference.samplers import ConvergenceWarning
+
+PATHS = ("bridge", "reference")
+"""The estimators of :func:`fsrbayes.compare` (``path``) this benchmark times."""
 
 
 def specimen_posterior(model, samples=21):
@@ -48,7 +50,7 @@ def fit_and_bridge(model, samples=21, seed=1, processes=2):
 def run(path="bridge", samples=21, seed=1, models=("burgers", "zener")):
     """log Z of the benchmark specimen under Burgers and Zener, on up to 2 processes.
 
-    ``path`` is one of compare's :data:`~fsrbayes.inference.compare.PATHS`; the default is
+    ``path`` is one of :data:`PATHS`, compare's estimators of those names; the default is
     compare's default, the bridge from a converged fit.
     """
     if path not in PATHS:

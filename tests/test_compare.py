@@ -202,19 +202,24 @@ def test_kalantari_candidate_wins_on_its_own_data_and_loses_on_the_papers():
 
 
 def test_compare_takes_any_evidence_estimator(small):
-    """An estimator from outside the ladder code (here Laplace) plugs in through EvidenceEstimate:
-    per-specimen values are its log Z, the totals their sums, and LOO/Savage–Dickey are left out
-    because it draws no posterior samples."""
-    from fsrbayes.inference.evidence import EvidenceEstimate, laplace_fit
+    """An estimator object of one's own (here Laplace, counting its calls) plugs in through
+    EvidenceEstimate: per-specimen values are its log Z, the totals their sums, and
+    LOO/Savage–Dickey are left out because it draws no posterior samples. The comparison records
+    its name as the path; a plain function still works, with a FutureWarning."""
+    from fsrbayes.inference.estimators import Laplace
+    from fsrbayes.inference.evidence import EvidenceEstimate
 
     calls = []
 
-    def laplace(posterior, seed):
-        estimate = laplace_fit(posterior, np.random.default_rng(seed)).estimate()
-        calls.append((posterior.model, estimate))
-        return estimate
+    class Counted(Laplace):
+        name = "counted-laplace"
 
-    out = fsrbayes.compare(small.data, ["zener", "burgers"], estimator=laplace, seed=1)
+        def estimate(self, posterior, seed):
+            estimate = super().estimate(posterior, seed)
+            calls.append((posterior.model, estimate))
+            return estimate
+
+    out = fsrbayes.compare(small.data, ["zener", "burgers"], estimator=Counted(), seed=1)
     assert len(calls) == 4 and all(isinstance(e, EvidenceEstimate) for _, e in calls)
     assert all(e.method == "laplace" and np.isnan(e.error) for _, e in calls)
     for model, entry in out.models.items():
@@ -225,8 +230,38 @@ def test_compare_takes_any_evidence_estimator(small):
         assert out.to_dict()["models"][model]["log_evidence_err"] is None  # JSON has no NaN
     assert out.savage_dickey is None and "savage_dickey" not in out.to_dict()
     assert out.preferred == max(out.models, key=lambda m: out.models[m].log_z)
+    assert out.path == "counted-laplace" and out.settings is None
+    assert out.to_dict()["settings"] == {"path": "counted-laplace"}
     with pytest.warns(FutureWarning, match="deprecated since 0.3.0 and goes in 0.4.0"):
         assert out["preferred"] == out.preferred  # the dict compare returned before 0.3.0
+    by_name = fsrbayes.compare(small.data, ["zener", "burgers"], path="laplace", seed=1)
+    assert by_name.to_dict()["models"] == out.to_dict()["models"]
+    with pytest.warns(FutureWarning, match=r"compare\(estimator=function\) is deprecated"):
+        old = fsrbayes.compare(
+            small.data, ["zener", "burgers"], estimator=lambda p, s: calls[0][1], seed=1
+        )
+    assert old.models["zener"].per_specimen[small.data.specimens[0]]["method"] == "laplace"
+
+
+def test_compare_refuses_options_its_estimator_does_not_take(small):
+    from fsrbayes.inference.estimators import Laplace, Reference
+
+    for kwargs, message in [
+        ({"path": "laplace", "settings": TINY}, "path 'laplace' takes no settings"),
+        ({"path": "bridge", "pilot": TINY_PILOT}, "path 'bridge' takes no pilot"),
+        ({"estimator": Reference(), "settings": TINY}, "give them to its constructor"),
+    ]:
+        with pytest.raises(TypeError, match=message):
+            fsrbayes.compare(small.data, ["zener", "burgers"], **kwargs)
+    with pytest.raises(ValueError, match="an estimator or a path, not both"):
+        fsrbayes.compare(small.data, ["zener", "burgers"], estimator=Laplace(), path="laplace")
+    chosen = Reference(TINY, TINY_PILOT, FEW_STARTS)
+    assert (chosen.ladder, chosen.pilot, chosen.search, chosen.settings) == (
+        TINY,
+        TINY_PILOT,
+        FEW_STARTS,
+        TINY,
+    )
 
 
 @pytest.mark.slow
@@ -278,13 +313,14 @@ def test_the_bridge_path_is_the_default_and_falls_back_when_its_halves_disagree(
     this checks the choice, the tests above the estimators."""
     from types import SimpleNamespace
 
-    from fsrbayes.inference import compare as comparing
-    from fsrbayes.inference import fit as fitting
+    from fsrbayes.inference import estimators
     from fsrbayes.inference.evidence import EvidenceEstimate
 
     halves = {"zener": (10.0, 10.1), "burgers": (20.0, 20.5)}  # 0.1 and 0.5 apart
     monkeypatch.setattr(
-        fitting, "fit", lambda data, model, **_: SimpleNamespace(converged=True, model=model)
+        estimators.Ensemble,
+        "run",
+        lambda self, posterior, seed, **_: SimpleNamespace(converged=True, model=posterior.model),
     )
 
     def bridge(result, seed):
@@ -293,9 +329,9 @@ def test_the_bridge_path_is_the_default_and_falls_back_when_its_halves_disagree(
         details = {"splits": splits, "split_z": abs(z[0] - z[1]) / 0.1}
         return EvidenceEstimate(float(np.mean(z)), 0.05, "bridge (fit draws)", details)
 
-    monkeypatch.setattr(comparing, "bridge_from_fit", bridge)
+    monkeypatch.setattr(estimators, "bridge_from_fit", bridge)
     monkeypatch.setattr(
-        comparing,
+        estimators,
         "referenced_from_fit",
         lambda result, ladder, seed: EvidenceEstimate(19.9, 0.2, "referenced stepping-stone"),
     )
@@ -314,15 +350,12 @@ def test_the_cli_writes_what_to_dict_returns(small, tmp_path, monkeypatch):
     and the same values, NaN as null (here Laplace in place of the bridge, which gives no error
     bar)."""
     from fsrbayes.inference import compare as comparing
-    from fsrbayes.inference.evidence import laplace_fit
-
-    def laplace(posterior, seed):
-        return laplace_fit(posterior, np.random.default_rng(seed)).estimate()
+    from fsrbayes.inference.estimators import Laplace
 
     real, returned = comparing.compare, []
 
     def with_laplace(*args, **kwargs):
-        returned.append(real(*args, **{**kwargs, "estimator": laplace}))
+        returned.append(real(*args, **{**kwargs, "estimator": Laplace()}))
         return returned[-1]
 
     monkeypatch.setattr(comparing, "compare", with_laplace)
@@ -354,10 +387,10 @@ def test_the_evidence_benchmark_runs_compares_default_path():
     import inspect
 
     from benchmarks import evidence
-    from fsrbayes.inference.compare import PATHS
+    from fsrbayes.inference.compare import DEFAULT_PATH
 
-    default = inspect.signature(fsrbayes.compare).parameters["path"].default
-    assert default == PATHS[0] == "bridge"
-    assert inspect.signature(evidence.run).parameters["path"].default == default
+    assert inspect.signature(fsrbayes.compare).parameters["path"].default is None
+    assert DEFAULT_PATH == evidence.PATHS[0] == "bridge"
+    assert inspect.signature(evidence.run).parameters["path"].default == DEFAULT_PATH
     with pytest.raises(ValueError, match="path must be one of"):
         evidence.run(path="prior")

@@ -1,12 +1,14 @@
-"""A creep law and an effect registered from outside the package: simulated, fitted in worker
-processes and on a dask cluster whose workers never saw the registration.
+"""A creep law, an effect, a sampler and an evidence estimator registered from outside the
+package: simulated, fitted in worker processes and on a dask cluster whose workers never saw the
+registration, compared.
 
-The classes below are defined at import but registered only by the ``registered`` fixture, so a
-dask worker that imports this module to unpickle them still has registries without them: the
-fit works there only because the model's components travel with the job.
+The classes below are defined at import but registered only by the ``registered`` and
+``registered_sampling`` fixtures, so a worker that imports this module to unpickle them still has
+registries without them: the fit works there only because its components travel with the job.
 """
 
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +17,11 @@ import pytest
 import fsrbayes
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import models_directory
+from fsrbayes.inference import estimators, sampling
+from fsrbayes.inference.optimize import find_map
+from fsrbayes.inference.parallel import map_jobs
 from fsrbayes.inference.population import fit_specimens
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceReport, EnsembleRun, SamplerSettings
 from fsrbayes.physics import effects, models, parameters, rheology
 
 SHORT = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100, map_starts=2)
@@ -185,7 +190,7 @@ def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor,
     from dataclasses import replace
 
     from fsrbayes.inference import compare as comparing
-    from fsrbayes.inference.evidence import EvidenceEstimate, SavageDickey
+    from fsrbayes.inference.evidence import Estimator, EvidenceEstimate, SavageDickey
 
     elastic = rheology.CreepLaw("toy-elastic", ("k1",), lambda t, p: 1.0 / p["k1"], None)
     rheology.register_creep_law(elastic)
@@ -215,9 +220,12 @@ def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor,
             calls.append((posterior.model, parameter, null, draws.shape))
             return SavageDickey(0.5, 0.1, len(draws), 900.0)
 
-        def estimator(posterior, seed):
-            draws = np.random.default_rng(seed).normal(size=(2, 200, posterior.ndim))
-            return EvidenceEstimate(-float(posterior.ndim), 0.1, "stand-in", {}, draws)
+        class StandIn(Estimator):
+            name = "stand-in"
+
+            def estimate(self, posterior, seed):
+                draws = np.random.default_rng(seed).normal(size=(2, 200, posterior.ndim))
+                return EvidenceEstimate(-float(posterior.ndim), 0.1, "stand-in", {}, draws)
 
         monkeypatch.setattr(comparing, "savage_dickey_posterior", stand_in)
         sim = _toy_data(toy_sensor, n_specimens=1, samples=5, seed=3)
@@ -225,7 +233,7 @@ def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor,
             sim.data,
             ["toy-elastic", LAW],
             sensor=toy_sensor,
-            estimator=estimator,
+            estimator=StandIn(),
             with_loo=False,
         )
         ((model, parameter, null, shape),) = calls
@@ -243,3 +251,122 @@ def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor,
             models.model_nesting(LAW, "toy-elastic")
     finally:
         del rheology.CREEP_LAWS["toy-elastic"]
+
+
+@dataclass(frozen=True)
+class ToySettings:
+    """The toy sampler's options: chains (each a worker job), steps, walkers, step size."""
+
+    chains: int = 2
+    steps: int = 200
+    walkers: int = 8
+    scale: float = 0.005
+    processes: int = 1
+
+
+class ToyMetropolis(sampling.Sampler):
+    """Random-walk Metropolis around the best of two optimiser starts, one chain per worker job
+    (the sampler object itself travels to the worker with the job)."""
+
+    name = "toy-metropolis"
+    settings_type = ToySettings
+    default_settings = ToySettings()
+
+    def chain(self, posterior, centre, seed):
+        rng = np.random.default_rng(seed)
+        n_walk, scale = self.settings.walkers, self.settings.scale
+        u = centre + scale * rng.standard_normal((n_walk, posterior.ndim))
+        lp = posterior(u)
+        chain = np.empty((self.settings.steps, n_walk, posterior.ndim))
+        log_prob = np.empty((self.settings.steps, n_walk))
+        accepted = np.zeros(n_walk)
+        for step in range(self.settings.steps):
+            proposal = u + scale * rng.standard_normal(u.shape)
+            lp_new = posterior(proposal)
+            take = np.log(rng.uniform(size=n_walk)) < lp_new - lp
+            u[take], lp[take] = proposal[take], lp_new[take]
+            accepted += take
+            chain[step], log_prob[step] = u, lp
+        return chain, log_prob, accepted / self.settings.steps
+
+    def run(self, posterior, seed, **options):
+        rng = np.random.default_rng(seed)
+        centre = find_map(posterior, rng, n_starts=2)[0]
+        seeds = np.random.SeedSequence(seed).spawn(self.settings.chains)
+        jobs = [(self, posterior, centre, s) for s in seeds]
+        parts = map_jobs(_toy_chain, jobs, processes=self.settings.processes)
+        chain, log_prob, acceptance = (np.stack(p) for p in zip(*parts, strict=True))
+        nan = np.full(posterior.ndim, np.nan)
+        half = self.settings.steps // 2
+        report = ConvergenceReport(False, self.settings.steps, half, nan, nan, nan, posterior.names)
+        run = EnsembleRun(chain, log_prob, acceptance, report)
+        return sampling.FitResult(posterior, run, centre, seed, sampler=self.name)
+
+
+def _toy_chain(job):
+    sampler, posterior, centre, seed = job
+    return sampler.chain(posterior, centre, seed)
+
+
+class ToyLaplace(estimators.Laplace):
+    """The Laplace approximation under a name of its own."""
+
+    name = "toy-laplace"
+
+
+@pytest.fixture
+def registered_sampling():
+    sampling.register_sampler(ToyMetropolis)
+    estimators.register_estimator(ToyLaplace())
+    yield
+    del sampling.SAMPLERS[ToyMetropolis.name], estimators.ESTIMATORS[ToyLaplace.name]
+
+
+def test_a_registered_sampler_fits_in_two_worker_processes_and_an_estimator_compares(
+    registered_sampling, capsys
+):
+    from fsrbayes.cli import build_parser
+
+    data = synthetic.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=11, seed=2
+    ).data
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fsrbayes.inference.DesignWarning)  # two stresses only
+        here = fsrbayes.fit(data, model="burgers", sampler="toy-metropolis", rng=3)
+        forked = fsrbayes.fit(
+            data, model="burgers", sampler=ToyMetropolis(ToySettings(processes=2)), rng=3
+        )
+    assert forked.sampler == here.sampler == "toy-metropolis"
+    assert forked.run.chain.shape == (2, 200, 8, len(here.posterior.names))
+    np.testing.assert_array_equal(forked.run.chain, here.run.chain)  # same seed, same chains
+    assert np.isfinite(forked.run.log_prob).all() and forked.run.acceptance.mean() > 0
+    assert forked.draws().shape[-1] == len(here.posterior.names)
+    with pytest.raises(ValueError, match="checkpoint"):
+        fsrbayes.fit(data, sampler="toy-metropolis", checkpoint="c.npz")
+
+    out = fsrbayes.compare(data, ["zener", "burgers"], estimator=ToyLaplace(), with_loo=False)
+    by_name = fsrbayes.compare(data, ["zener", "burgers"], path="toy-laplace", with_loo=False)
+    assert out.path == by_name.path == "toy-laplace"
+    assert out.to_dict() == by_name.to_dict()
+    (per,) = out.models["burgers"].per_specimen.values()
+    assert per["method"] == "laplace" and np.isfinite(per["log_evidence"])
+
+    parser = build_parser()  # the command line offers what is registered
+    assert parser.parse_args(["fit", "d.csv", "--out", "o", "--sampler", "toy-metropolis"])
+    assert parser.parse_args(["compare", "d.csv", "--path", "toy-laplace"]).path == "toy-laplace"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["fit", "d.csv", "--out", "o", "--sampler", "toy-laplace"])
+    assert "'toy-laplace' is an evidence estimator, not a sampler" in capsys.readouterr().err
+
+
+def test_registries_refuse_duplicates_and_other_objects(registered_sampling):
+    with pytest.raises(ValueError, match="already registered"):
+        sampling.register_sampler(ToyMetropolis())
+    with pytest.raises(ValueError, match="already registered"):
+        estimators.register_estimator(ToyLaplace)
+    with pytest.raises(TypeError, match="takes a Sampler"):
+        sampling.register_sampler(ToyLaplace())
+    with pytest.raises(TypeError, match="takes an Estimator"):
+        estimators.register_estimator(ToyMetropolis())
+    with pytest.raises(TypeError, match="settings of type ToySettings"):
+        ToyMetropolis(SamplerSettings())

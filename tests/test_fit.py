@@ -239,7 +239,7 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
 
 
 def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_path, monkeypatch):
-    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
     from fsrbayes.inference.samplers.checkpoint import save_checkpoint
 
     path = tmp_path / "checkpoint.npz"
@@ -254,7 +254,7 @@ def test_a_mismatched_checkpoint_is_refused_before_the_map_search(small, tmp_pat
         FAST,
     )
     monkeypatch.setattr(
-        fit_module, "find_map", lambda *a, **k: pytest.fail("the MAP search ran first")
+        sampling, "find_map", lambda *a, **k: pytest.fail("the MAP search ran first")
     )
     with pytest.raises(CheckpointMismatch, match="was written for"):
         fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
@@ -265,7 +265,7 @@ def test_the_map_search_runs_the_settings_starts(
     small, monkeypatch, map_starts, ensembles, searched
 ):
     """``SamplerSettings.map_starts`` optimisations, and never fewer than the ensembles."""
-    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
 
     class Searched(Exception):
         pass
@@ -273,7 +273,7 @@ def test_the_map_search_runs_the_settings_starts(
     def search(posterior, rng, n_starts, **options):
         raise Searched(n_starts)
 
-    monkeypatch.setattr(fit_module, "find_map", search)
+    monkeypatch.setattr(sampling, "find_map", search)
     settings = replace(FAST, map_starts=map_starts, n_ensembles=ensembles)
     with pytest.raises(Searched) as ran:
         fsrbayes.fit(small.data, rng=7, settings=settings)
@@ -287,7 +287,7 @@ def test_a_resumed_fit_keeps_its_map_search_and_gives_the_uninterrupted_chain(
 ):
     """A fit stopped at 100 steps and resumed to 200 equals the 200-step fit bit for bit, and the
     resume does not search for the MAP again: the checkpoint kept its optima and random state."""
-    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
 
     path = tmp_path / "checkpoint.npz"
     with pytest.warns(ConvergenceWarning):
@@ -296,7 +296,7 @@ def test_a_resumed_fit_keeps_its_map_search_and_gives_the_uninterrupted_chain(
         )
     assert first.run.chain.shape[1] == 100
     monkeypatch.setattr(
-        fit_module, "find_map", lambda *a, **k: pytest.fail("the resumed fit searched again")
+        sampling, "find_map", lambda *a, **k: pytest.fail("the resumed fit searched again")
     )
     with pytest.warns(ConvergenceWarning):
         resumed = fsrbayes.fit(small.data, rng=7, settings=FAST, checkpoint=path, resume=True)
@@ -307,6 +307,7 @@ def test_a_resumed_fit_keeps_its_map_search_and_gives_the_uninterrupted_chain(
 def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, monkeypatch):
     from fsrbayes.data.sensors import load_sensor
     from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
     from fsrbayes.inference.likelihood import SpecimenData
     from fsrbayes.inference.posterior import LogPosterior
 
@@ -327,7 +328,7 @@ def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, mon
     def stop(*args, **kwargs):
         raise Stop
 
-    monkeypatch.setattr(fit_module, "find_map", stop)
+    monkeypatch.setattr(sampling, "find_map", stop)
     with (
         pytest.warns(fit_module.DesignWarning, match="test at >= 3 stresses or fix A2"),
         pytest.raises(Stop),

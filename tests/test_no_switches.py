@@ -40,7 +40,6 @@ STILL_SET = frozenset(
         ("fsrbayes.physics.scattered", "MIN_SCATTERED_POINTS"),
         ("fsrbayes.physics.scattered", "BLOCK_POINTS"),
         ("fsrbayes.data.csvio", "MAX_TEXT_BYTES"),
-        ("fsrbayes.inference.evidence.tempered", "TEMPERED_SETTINGS"),
     }
 )
 """The UPPERCASE module attributes the scripts still set, as (module, name)."""

@@ -273,7 +273,7 @@ def test_a_fit_in_pinned_coordinates_stores_the_posterior_in_its_own(tmp_path):
 
 
 def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_cannot(monkeypatch):
-    from fsrbayes.inference import fit as fit_module
+    from fsrbayes.inference import sampling
 
     small = syn.simulate(
         "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=5, seed=2
@@ -292,25 +292,25 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     posterior, anchor = result.posterior, result.map_u
     rng = np.random.default_rng(3)
     u_start = anchor + 0.01 * rng.standard_normal((2, 20, posterior.ndim))
-    pins, start = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, anchor], rng)
+    pins, start = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, anchor], rng)
     assert pins.solved == PinnedCoordinates(posterior, anchor).solved
     assert start.shape == u_start.shape and not np.allclose(start, u_start)
     assert all(round_trips(walkers, pins)[1].all() for walkers in start)
     # a second centre far from the anchor, where the root search with every pinned parameter
     # solved for fails, gets fewer solved parameters (the first in pivot order) ...
     far = anchor + 2.0 * rng.standard_normal(posterior.ndim)  # 0.5 fails to map on Intel only
-    fewer, start = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, far], rng)
+    fewer, start = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, far], rng)
     assert 0 < len(fewer.solved) < len(pins.solved)
     assert fewer.solved == pins.solved[: len(fewer.solved)]
     assert min(round_trips(walkers, fewer)[1].sum() for walkers in start) > posterior.ndim
     # ... and a centre no solved set maps falls back on the start drawn in u
     nowhere = np.full(posterior.ndim, np.nan)
-    none, kept = fit_module._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
+    none, kept = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
     assert none is None and kept is u_start
     with pytest.raises(ValueError, match="no set of pinned parameters maps"):
-        fit_module._pinned(posterior, anchor, "pinned", u_start, [anchor, nowhere], rng)
+        sampling._pinned(posterior, anchor, "pinned", u_start, [anchor, nowhere], rng)
 
-    monkeypatch.setattr(fit_module, "PinnedCoordinates", no_pins)
-    assert fit_module._pinned(posterior, anchor, "auto", u_start, [anchor], rng)[0] is None
+    monkeypatch.setattr(sampling, "PinnedCoordinates", no_pins)
+    assert sampling._pinned(posterior, anchor, "auto", u_start, [anchor], rng)[0] is None
     with pytest.raises(ValueError, match="pin no parameter"):
-        fit_module._pinned(posterior, anchor, "pinned", u_start, [anchor], rng)
+        sampling._pinned(posterior, anchor, "pinned", u_start, [anchor], rng)

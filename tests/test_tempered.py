@@ -1,5 +1,6 @@
-"""The tempered sampler (β = 1 rung of referenced ladders) against a closed-form bent ridge, and
-``fit(..., sampler="tempered")`` end to end."""
+"""The tempered estimator (β = 1 rung of referenced ladders) against a closed-form bent ridge, its
+draws as a fit (``Tempered(...).run``) end to end, ``compare --path tempered``, and ``fit``'s
+refusal of it."""
 
 import json
 import warnings
@@ -11,10 +12,12 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
+from fsrbayes.inference.estimators import Tempered
 from fsrbayes.inference.evidence.bridge import bridge_log_evidence
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
 from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
+from fsrbayes.inference.fit import specimen_posterior
 from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
 from validation.closed_form import BentRidge
@@ -94,21 +97,21 @@ def specimen():
 
 @pytest.fixture(scope="module")
 def tempered_fit(specimen):
-    """The tiny tempered fit of the specimen, and log Z by bridge sampling from its draws: an
+    """The tiny tempered draws of the specimen, and log Z by bridge sampling from them: an
     estimator that shares the draws with the ladders but nothing of the stepping stones."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fsrbayes.fit(specimen.data, rng=4, settings=TINY)
+        result = Tempered(TINY).run(specimen_posterior(specimen.data), 4)
     chain, log_prob = result.run.kept()
     bridge = bridge_log_evidence(result.posterior, chain, log_prob, 0)
     return result, bridge
 
 
-def test_fit_with_the_tempered_sampler_end_to_end(specimen, tempered_fit, tmp_path):
+def test_the_tempered_draws_as_a_fit_end_to_end(specimen, tempered_fit, tmp_path):
     result, bridge = tempered_fit
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        again = fsrbayes.fit(specimen.data, rng=4, sampler="tempered", settings=TINY)
+        again = Tempered(TINY).run(specimen_posterior(specimen.data), 4)
     assert result.sampler == "tempered"
     assert result.run.chain.shape[:2] == (2, 100)
     assert np.array_equal(result.run.chain, again.run.chain)  # same seed, same draws
@@ -128,76 +131,71 @@ def test_fit_with_the_tempered_sampler_end_to_end(specimen, tempered_fit, tmp_pa
     assert info["convergence"]["n_ensembles"] == 2
 
 
-def test_cli_fit_tempered_and_its_refusals(specimen, tempered_fit, tmp_path, capsys, monkeypatch):
-    from fsrbayes.cli import main
-    from fsrbayes.inference.evidence import tempered
-
-    monkeypatch.setattr(
-        tempered, "TEMPERED_SETTINGS", TINY
-    )  # the CLI's ladder, pilots and search, but tiny
-    csv = tmp_path / "data.csv"
-    syn.write_simulation(specimen, csv)
-    assert (
-        main(["fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered", "--resume"])
-        == 2
-    )
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "--resume works with --sampler ensemble only" in err[0]
-    assert (
-        main(
-            [
-                "fit",
-                str(csv),
-                "--out",
-                str(tmp_path / "b"),
-                "--sampler",
-                "tempered",
-                "--ladder-steps",
-                "20",
-            ]
-        )
-        == 2
-    )
-    assert "--ladder-steps must be >= 100, got 20" in capsys.readouterr().err
-    assert (
-        main(
-            [
-                "fit",
-                str(csv),
-                "--out",
-                str(tmp_path / "c"),
-                "--sampler",
-                "tempered",
-                "--ladder-steps",
-                "120",
-                "--seed",
-                "2",
-                "--no-plots",
-                "--processes",
-                "1",
-            ]
-        )
-        == 0
-    )
-    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
-    assert summary["sampler"] == "tempered" and summary["convergence"]["n_kept"] == 120
-    assert summary["convergence"]["n_ensembles"] == 2
-    # the command's log Z (its own seed and ladder length) against the bridge on the same data
+def test_the_tempered_estimator_in_compare_gives_the_runs_log_z(specimen, tempered_fit):
+    """``compare(estimator=Tempered(...))`` runs the same ladders (the seed compare passes): its
+    log Z per model, the β = 1 draws for LOO and Savage–Dickey, and the settings recorded."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = fsrbayes.compare(specimen.data, ["zener", "burgers"], estimator=Tempered(TINY))
+    assert out.path == "tempered" and out.settings == TINY
+    assert out.to_dict()["settings"]["pilot_groups"] == 1
     _, bridge = tempered_fit
-    evidence = summary["log_evidence"]
-    assert 0 < evidence["error"] < 1, evidence
-    combined = np.hypot(evidence["error"], bridge.error)
-    assert abs(evidence["log_z"] - bridge.log_z) < 4 * combined, (evidence, bridge)
-    assert not (tmp_path / "c" / "checkpoint.npz").exists()
+    (per,) = out.models["burgers"].per_specimen.values()
+    assert per["method"] == "referenced stepping-stone" and 0 < per["log_evidence_err"] < 1
+    combined = np.hypot(per["log_evidence_err"], bridge.error)
+    assert abs(per["log_evidence"] - bridge.log_z) < 4 * combined, (per, bridge)
+    assert out.models["burgers"].loo and out.savage_dickey is not None
 
 
-def test_tempered_sampler_refuses_what_it_cannot_do(specimen, tmp_path):
-    with pytest.raises(ValueError, match="checkpoint"):
-        fsrbayes.fit(
-            specimen.data, sampler="tempered", settings=TINY, checkpoint=tmp_path / "c.npz"
-        )
+def test_cli_compare_tempered_and_fit_refuses_it(specimen, tmp_path, capsys, monkeypatch):
+    from fsrbayes.cli import main
+    from fsrbayes.inference import estimators
+
+    monkeypatch.setitem(estimators.ESTIMATORS, "tempered", Tempered(TINY))  # tiny, for speed
+    csv, out = tmp_path / "data.csv", tmp_path / "cmp.json"
+    syn.write_simulation(specimen, csv)
+    with pytest.raises(SystemExit) as refused:
+        main(["fit", str(csv), "--out", str(tmp_path / "a"), "--sampler", "tempered"])
+    assert refused.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "'tempered' is an evidence estimator, not a sampler: fsrbayes compare --path" in err[-1]
+    code = main(
+        [
+            "compare",
+            str(csv),
+            "--models",
+            "zener,burgers",
+            "--path",
+            "tempered",
+            "--steps",
+            "100",
+            "--replicates",
+            "2",
+            "--pilot-steps",
+            "300",
+            "--starts",
+            "2",
+            "--processes",
+            "1",
+            "--no-loo",
+            "--json",
+            str(out),
+        ]
+    )
+    assert code == 0
+    record = json.loads(out.read_text())
+    assert record["settings"]["path"] == "tempered"
+    assert record["settings"]["ladder"]["steps"] == record["settings"]["ladder"]["top_draws"] == 100
+    assert record["settings"]["search"]["n_starts"] == 2
+    assert np.isfinite(record["models"]["burgers"]["log_evidence"])
+
+
+def test_fit_refuses_the_tempered_estimator(specimen):
+    for sampler, settings in (("tempered", None), (Tempered(TINY), None), (None, TINY)):
+        with pytest.raises(ValueError, match=r"compare\(\.\.\., estimator=Tempered\(\)\)"):
+            fsrbayes.fit(specimen.data, sampler=sampler, settings=settings)
     with pytest.raises(TypeError, match="TemperedSettings"):
-        fsrbayes.fit(specimen.data, sampler="tempered", settings=SamplerSettings())
+        Tempered(SamplerSettings())
     with pytest.raises(ValueError, match="sampler must be one of"):
         fsrbayes.fit(specimen.data, sampler="nuts")
 

@@ -16,8 +16,7 @@ from .common import UsageError, chosen_specimens, loading_notes, writable
 def cmd_compare(args):
     """Compare models by log-evidence per specimen, Bayes factors and PSIS-LOO (JSON)."""
     from ..inference.compare import compare
-    from ..inference.evidence.referenced import MODE_SEARCH, REFERENCED_LADDER
-    from ..inference.fit import FIT_SETTINGS
+    from ..inference.evidence.referenced import MODE_SEARCH
     from ..inference.samplers import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
@@ -27,16 +26,6 @@ def cmd_compare(args):
     for model in models:
         parse_model(model)
     specimens = chosen_specimens(args, data)
-    chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
-    try:
-        settings = replace(
-            REFERENCED_LADDER,
-            **{k: v for k, v in chosen.items() if v is not None},
-            replicates=args.replicates,
-            processes=args.processes or min(args.replicates, os.cpu_count() or 1),
-        )
-    except ValueError as exc:
-        raise UsageError(f"compare settings: {exc}") from None
     if args.pilot_steps < 100:
         raise UsageError(f"--pilot-steps must be >= 100, got {args.pilot_steps}")
     if args.starts < 1:
@@ -45,6 +34,11 @@ def cmd_compare(args):
     pilot = SamplerSettings(
         n_ensembles=2, chunk=chunk, min_steps=5 * chunk, max_steps=5 * chunk, transport_rounds=3
     )
+    search = replace(MODE_SEARCH, n_starts=args.starts)
+    try:
+        estimator = _estimator(args, pilot, search)
+    except ValueError as exc:
+        raise UsageError(f"compare settings: {exc}") from None
     if args.json:
         writable(Path(args.json).parent)
     result = compare(
@@ -53,18 +47,47 @@ def cmd_compare(args):
         specimens,
         tunneling=args.tunneling,
         likelihood=args.likelihood,
-        settings=settings,
         seed=args.seed,
         with_loo=not args.no_loo,
-        path=args.path,
-        pilot=pilot,
-        search=replace(MODE_SEARCH, n_starts=args.starts),
-        fit_settings=replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
+        estimator=estimator,
     )
     print(result.summary())
     if args.json:
         write_json_atomic(Path(args.json), result.to_dict())
     return 0
+
+
+def _estimator(args, pilot, search):
+    """Return the registered estimator ``--path`` names, with the command's options it takes.
+
+    The rung, burn-in, step, replicate and process options set the ladder of the reference path
+    and of the bridge's fallback (from the referenced ladder's defaults), or the tempered
+    estimator's own ladder.
+    """
+    from ..inference.estimators import ESTIMATORS, Tempered
+    from ..inference.evidence.referenced import REFERENCED_LADDER
+    from ..inference.fit import FIT_SETTINGS
+
+    estimator = ESTIMATORS[args.path]
+    chosen = {"n_temps": args.temps, "burn": args.burn, "steps": args.steps}
+    given = {k: v for k, v in chosen.items() if v is not None}
+    processes = args.processes or min(args.replicates, os.cpu_count() or 1)
+    if isinstance(estimator, Tempered):
+        settings = estimator.settings
+        rungs = replace(settings.ladder, **given, replicates=args.replicates)
+        ladder = replace(rungs, top_draws=rungs.steps)
+        return Tempered(
+            replace(settings, ladder=ladder, pilot=pilot, search=search, processes=processes)
+        )
+    options = {
+        "ladder": replace(
+            REFERENCED_LADDER, **given, replicates=args.replicates, processes=processes
+        ),
+        "pilot": pilot,
+        "search": search,
+        "fit_settings": replace(FIT_SETTINGS, processes=args.processes) if args.processes else None,
+    }
+    return estimator.with_options(**{k: v for k, v in options.items() if hasattr(estimator, k)})
 
 
 def cmd_diagnose(args):

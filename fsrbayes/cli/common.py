@@ -92,7 +92,7 @@ def fit_output_bytes(n_samples, n_tests, ndim, settings, *, max_draws=2000, n_gr
     the step budget; ``posterior.nc`` holds ``max_draws`` draws of the parameters, the pointwise
     log-likelihood and predictive current per sample, and drift(t) on ``n_grid`` times per test.
     """
-    checkpoint = 0  # the tempered sampler writes none
+    checkpoint = 0  # samplers other than the ensembles' write none
     if hasattr(settings, "max_steps"):
         checkpoint = (
             settings.n_ensembles * settings.max_steps * settings.walkers_for(ndim) * (ndim + 1) * 8

@@ -38,7 +38,7 @@ CHECKPOINT = "checkpoint.npz"
 
 def cmd_fit(args):
     """Fit each specimen (or the one named) with emcee: posterior.nc + summary.json for each."""
-    from ..inference.fit import CHECK_EVERY, DesignWarning, fit
+    from ..inference.fit import CHECK_EVERY, SAMPLERS, DesignWarning, fit
     from ..inference.output import save_fit
     from ..inference.samplers import ConvergenceWarning, SamplerSettings
 
@@ -65,9 +65,14 @@ def cmd_fit(args):
         map_starts=args.map_starts,
         check_every=args.check_every or min(CHECK_EVERY, args.chunk),
     )
-    if args.sampler == "tempered":
-        settings = _tempered_settings(args)
-    _check_space(args, data, specimens, settings, out)
+    sampler = SAMPLERS[args.sampler]
+    if isinstance(settings, sampler.settings_type):  # the options above are the ensembles'
+        sampler = sampler.with_settings(settings)
+    if args.hierarchical and args.sampler != "ensemble":
+        raise UsageError(f"--hierarchical fits with --sampler ensemble, got {args.sampler}")
+    if args.resume and not sampler.checkpoints:
+        raise UsageError(f"--resume needs a sampler with checkpoints; {args.sampler} has none")
+    _check_space(args, data, specimens, sampler.settings, out)
     notes = [f"warning: {n}" for n in calibration_notes(data, args.model)] + said
     if args.hierarchical:  # the population of the specimens chosen
         chosen = CreepData(tuple(t for t in data.tests if t.specimen in specimens), data.source)
@@ -80,7 +85,7 @@ def cmd_fit(args):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ConvergenceWarning)
             warnings.simplefilter("always", DesignWarning)
-            checkpoint = folder / CHECKPOINT if args.sampler == "ensemble" else None
+            checkpoint = folder / CHECKPOINT if sampler.checkpoints else None
             result = fit(
                 data,
                 specimen,
@@ -91,7 +96,7 @@ def cmd_fit(args):
                 settle_s=args.settle_s,
                 placement=args.placement,
                 rng=args.seed,
-                settings=settings,
+                sampler=sampler,
                 checkpoint=checkpoint,
                 resume=args.resume,
                 progress=args.progress,
@@ -123,30 +128,6 @@ def cmd_fit(args):
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
     return 0
-
-
-def _tempered_settings(args):
-    """TemperedSettings from the fit command's options (ladders run side by side in processes)."""
-    from dataclasses import replace
-
-    from ..inference.evidence.tempered import TEMPERED_SETTINGS
-
-    for flag, bad in (("--hierarchical", args.hierarchical), ("--resume", args.resume)):
-        if bad:
-            raise UsageError(
-                f"{flag} works with --sampler ensemble only; the tempered sampler runs "
-                "fixed-length ladders without checkpoints"
-            )
-    ladder = TEMPERED_SETTINGS.ladder
-    steps = args.ladder_steps if args.ladder_steps is not None else ladder.steps
-    if steps < 10 * ladder.n_batches:
-        raise UsageError(f"--ladder-steps must be >= {10 * ladder.n_batches}, got {steps}")
-    processes = args.processes or min(ladder.replicates, os.cpu_count() or 1)
-    return replace(
-        TEMPERED_SETTINGS,
-        ladder=replace(ladder, steps=steps, top_draws=steps, n_walkers=args.walkers),
-        processes=processes,
-    )
 
 
 def _check_space(args, data, specimens, settings, out):

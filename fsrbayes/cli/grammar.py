@@ -17,6 +17,7 @@ import argparse
 import sys
 
 __all__ = [
+    "sampler_choice",
     "DEPRECATED_IN",
     "REMOVED_IN",
     "HelpFormatter",
@@ -197,4 +198,21 @@ def add_loading_options(parser):
         "a dead weight put on again reads a few percent off and creeps by its own amount "
         "(default: on where the loads land while the log records and a specimen has two "
         "tests or more)",
+    )
+
+
+def sampler_choice(name):
+    """Return ``name`` if it is a registered sampler (``fit --sampler``); else a one-line error."""
+    from ..inference.estimators import ESTIMATORS
+    from ..inference.sampling import SAMPLERS
+
+    if name in SAMPLERS:
+        return name
+    if name in ESTIMATORS:
+        raise argparse.ArgumentTypeError(
+            f"{name!r} is an evidence estimator, not a sampler: fsrbayes compare --path {name} "
+            f"(samplers: {', '.join(SAMPLERS)})"
+        )
+    raise argparse.ArgumentTypeError(
+        f"invalid choice: {name!r} (choose from {', '.join(SAMPLERS)})"
     )

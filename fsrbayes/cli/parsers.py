@@ -5,7 +5,8 @@ fit, compare, diagnose, calibrate, drift, predict, force.
 
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
-from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS
+from ..inference.estimators import ESTIMATORS
+from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS, SAMPLERS
 from ..inference.force.estimate import FORCE_UNITS
 from ..inference.nuisance import RAMPS
 from ..physics.effects import EFFECTS
@@ -19,6 +20,7 @@ from .grammar import (
     add_reading_options,
     add_specimen_option,
     option,
+    sampler_choice,
 )
 from .predicting import cmd_predict
 
@@ -113,17 +115,11 @@ def _add_fit(sub):
     option(
         fit_,
         "--sampler",
-        choices=("ensemble", "tempered"),
+        type=sampler_choice,
         default="ensemble",
-        help="emcee ensembles until convergence (default), or the top rung of tempered ladders "
-        "started from a fitted reference: mixes between the arms of a bent ridge and gives "
-        "log Z too",
-    )
-    option(
-        fit_,
-        "--ladder-steps",
-        type=int,
-        help="--sampler tempered: production steps per ladder (default 600)",
+        help=f"a registered sampler, one of: {', '.join(SAMPLERS)} (default: emcee ensembles "
+        "until convergence); the tempered ladders are an evidence estimator (compare --path "
+        "tempered)",
     )
     option(
         fit_,
@@ -186,12 +182,15 @@ def _add_compare(sub):
     option(
         cmp_,
         "--path",
-        choices=("bridge", "reference"),
+        choices=tuple(ESTIMATORS),
         default="bridge",
-        help="how log Z is estimated: 'bridge' (default) fits each model and specimen and bridge-"
-        "samples its draws, falling back on the reference ladder below when a fit does not "
-        "converge or the bridge's halves disagree; 'reference': a beta ladder from a reference "
-        "density fitted to a pilot run",
+        help=f"a registered evidence estimator ({', '.join(ESTIMATORS)}): 'bridge' (default) "
+        "fits each model and specimen and bridge-samples its draws, falling back on the "
+        "reference ladder below when a fit does not converge or the bridge's halves disagree; "
+        "'reference': a beta ladder from a reference density fitted to a pilot run; "
+        "'tempered': the same ladders with their top rung's draws checked, from two "
+        "independent searches and pilots; 'laplace': the "
+        "Laplace approximation (no error bar)",
     )
     option(cmp_, "--temps", type=int, help="rungs of the beta ladder (default 8)")
     option(cmp_, "--burn", type=int, help="burn-in steps per rung (default 100)")
@@ -201,8 +200,8 @@ def _add_compare(sub):
         "--pilot-steps",
         type=int,
         default=1250,
-        help="--path reference: steps of the pilot run the reference is fitted to (default "
-        "1250; 3 transport rounds take the first 60 %%)",
+        help="--path reference/tempered: steps of the pilot run the reference is fitted to "
+        "(default 1250; 3 transport rounds take the first 60 %%)",
     )
     option(
         cmp_,
@@ -216,7 +215,7 @@ def _add_compare(sub):
         "--starts",
         type=int,
         default=12,
-        help="--path reference: optimiser starts of each region search",
+        help="--path reference/tempered: optimiser starts of each region search",
     )
     option(
         cmp_,
@@ -305,7 +304,7 @@ def _add_calibrate(sub):
         "--sampler",
         choices=("ensemble", "tempered"),
         default="ensemble",
-        help="fit with emcee ensembles or the tempered ladders",
+        help="calibrate the ensemble fit or the tempered estimator's top-rung draws",
     )
     option(
         cal,

@@ -2,7 +2,10 @@
 
 What a fit of one specimen is made of sits at this level — the data packed for the likelihood
 (:mod:`.likelihood`), the target (:mod:`.posterior`), the optimisers that find its modes
-(:mod:`.optimize`), the fit that orchestrates them (:mod:`.fit`), model comparison
+(:mod:`.optimize`), the samplers as registered objects (:mod:`.sampling`: :class:`Ensemble`),
+the evidence estimators as registered objects (:mod:`.estimators`: :class:`Bridge`,
+:class:`Reference`, :class:`Tempered`, :class:`Laplace`), the fit that orchestrates them
+(:mod:`.fit`), model comparison
 (:mod:`.compare`, its result in :mod:`.comparison`), ArviZ output (:mod:`.output`), parallel
 jobs (:mod:`.parallel`) and the user-facing simulation-based calibration
 (:mod:`.calibration`). Four rooms hold the rest:
@@ -16,30 +19,50 @@ The entry points themselves are :func:`fsrbayes.fit` and :func:`fsrbayes.compare
 modules :mod:`.fit` and :mod:`.compare` keep their names here, so they are not re-exported).
 
 Inside this layer imports flow one way: parallel, likelihood, posterior → samplers →
-optimize → evidence → fit → population, compare, output, calibration.
+optimize → sampling → evidence → estimators → fit → population, compare, output, calibration.
 """
 
 from .compare import KASS_RAFTERY, Comparison, strength
-from .evidence import EvidenceEstimate
+from .estimators import (
+    ESTIMATORS,
+    Bridge,
+    Laplace,
+    Reference,
+    Tempered,
+    register_estimator,
+)
+from .evidence import Estimator, EvidenceEstimate
 from .fit import FIT_SETTINGS, DesignWarning, FitResult
 from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
 from .output import save_fit, save_population, to_datatree
 from .posterior import LogPosterior
 from .samplers import ConvergenceWarning, SamplerSettings
+from .sampling import SAMPLERS, Ensemble, Sampler, register_sampler
 
 __all__ = [
+    "ESTIMATORS",
     "FIT_SETTINGS",
     "KASS_RAFTERY",
     "LIKELIHOODS",
+    "SAMPLERS",
+    "Bridge",
     "Comparison",
     "ConvergenceWarning",
     "DesignWarning",
+    "Ensemble",
+    "Estimator",
     "EvidenceEstimate",
     "FitResult",
+    "Laplace",
     "LogPosterior",
+    "Reference",
+    "Sampler",
     "SamplerSettings",
     "SpecimenData",
+    "Tempered",
     "log_likelihood_pointwise",
+    "register_estimator",
+    "register_sampler",
     "save_fit",
     "save_population",
     "strength",

@@ -40,14 +40,16 @@ from scipy import stats
 from ..data import synthetic
 from ..data.sensors import load_sensor
 from ..physics.constants import DRIFT_TIME_S
+from .estimators import Tempered
 from .evidence.ladder import LadderSettings
 from .evidence.referenced import PILOT_SETTINGS, ModeSearch
 from .evidence.tempered import TemperedSettings
-from .fit import fit
+from .fit import specimen_posterior
 from .likelihood import SpecimenData
 from .parallel import map_jobs, single_threaded_blas
 from .posterior import LogPosterior
 from .samplers import ConvergenceWarning, SamplerSettings
+from .sampling import Ensemble
 
 __all__ = [
     "SBCDesign",
@@ -78,7 +80,7 @@ SBC_TEMPERED_SETTINGS = TemperedSettings(
     search=ModeSearch(n_starts=8),
     pilot_groups=1,
 )
-"""The tempered sampler cut short for SBC: one mode search (8 optimiser starts), 750-step
+"""The tempered ladders cut short for SBC: one mode search (8 optimiser starts), 750-step
 pilots, two ladders of 6 rungs × 300 steps. Too short to converge on creep posteriors, so the
 SBC with it is further from calibrated than with the ensembles (VALIDATION.md)."""
 
@@ -318,15 +320,12 @@ def _replicate_here(design, settings, n_draws, seed_seq):
         template.data.mask,
         template.data.test_keys,
     )
+    tempered = isinstance(settings, TemperedSettings)
+    sampler = Tempered(settings) if tempered else Ensemble(settings)
+    posterior = specimen_posterior(data, model=design.model, sensor=design.sensor)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fit(
-            data,
-            model=design.model,
-            sensor=design.sensor,
-            rng=int(rng.integers(2**31)),
-            settings=settings,
-        )
+        result = sampler.run(posterior, int(rng.integers(2**31)))
     draws = result.draws(10**9).reshape(-1, template.ndim)
     draws = draws[np.linspace(0, len(draws) - 1, n_draws).round().astype(int)]
     posterior = result.posterior
@@ -367,7 +366,8 @@ def calibrate_specimen(
     settings : SamplerSettings or TemperedSettings
         Sampler settings of every fit (fixed length recommended: ``min_steps = max_steps``);
         :class:`~fsrbayes.inference.evidence.tempered.TemperedSettings` (e.g.
-        :data:`SBC_TEMPERED_SETTINGS`) fit with the tempered sampler.
+        :data:`SBC_TEMPERED_SETTINGS`) calibrate the tempered estimator's β = 1 draws
+        (:meth:`~fsrbayes.inference.estimators.Tempered.run`) instead of the ensembles'.
     n_draws : int
         L, draws per replication, thinned evenly over the kept chains of all ensembles (keep it
         below the runs' effective sample size: correlated draws widen the rank histogram's ends).

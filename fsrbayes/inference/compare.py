@@ -9,33 +9,24 @@ predictive accuracy, and a nested pair of models (declared where the creep laws 
 :func:`~fsrbayes.physics.models.model_nesting`) is cross-checked by Savage–Dickey.
 """
 
-import os
 import warnings
-from dataclasses import replace
 
 import numpy as np
 
 from ..data.sensors import load_sensor
 from ..physics.models import model_nesting
-from . import fit as fitting
 from .comparison import KASS_RAFTERY, Comparison, ModelEvidence, strength
-from .evidence.bridge import bridge_from_fit
-from .evidence.referenced import (
-    MODE_SEARCH,
-    PILOT_SETTINGS,
-    REFERENCED_LADDER,
-    referenced_from_fit,
-    referenced_log_evidence,
-)
+from .design import DesignWarning, design_warnings
+from .estimators import BRIDGE_SPLIT_TOLERANCE, ESTIMATORS, Estimator, estimator_named
 from .evidence.savage_dickey import savage_dickey_posterior
 from .likelihood import SpecimenData
 from .posterior import LogPosterior
-from .samplers import ConvergenceWarning
 
 __all__ = [
     "BRIDGE_SPLIT_TOLERANCE",
+    "DEFAULT_PATH",
+    "ESTIMATORS",
     "KASS_RAFTERY",
-    "PATHS",
     "Comparison",
     "compare",
     "nested_pair",
@@ -72,16 +63,8 @@ def _loo(posterior, draws_u):
     }
 
 
-PATHS = ("bridge", "reference")
-"""How each log Z is estimated: bridge sampling from a converged fit's draws (default; seconds
-beyond the fit), or a stepping-stone ladder from a reference density fitted to a pilot run (few
-nats to cross)."""
-
-BRIDGE_SPLIT_TOLERANCE = 3.0
-"""The bridge path's two halves (the reference fitted to one half of the draws, the other half
-in the bridge, then swapped) must agree within this many combined standard errors
-√(σ₁² + σ₂²); a larger split means the reference or the draws miss part of the posterior, and
-the ladder runs instead."""
+DEFAULT_PATH = "bridge"
+"""The estimator :func:`compare` runs when given neither ``estimator`` nor ``path``."""
 
 
 def nested_pair(models):
@@ -117,7 +100,7 @@ def compare(
     settings=None,
     seed=0,
     with_loo=True,
-    path="bridge",
+    path=None,
     pilot=None,
     search=None,
     estimator=None,
@@ -133,32 +116,27 @@ def compare(
         ``+effect`` terms, and the peer model ``kalantari`` of eq. 14).
     specimens : sequence of str, optional
         Default: all specimens in the data.
-    settings : LadderSettings, optional
-        The ladder of the reference path and of the bridge path's fallback (default
-        :data:`~fsrbayes.inference.evidence.referenced.REFERENCED_LADDER`).
     seed : int
-    path : {"bridge", "reference"}
-        ``"bridge"`` (default): a converged :func:`~fsrbayes.inference.fit.fit` of each model
-        and specimen, then bridge sampling from its draws
-        (:mod:`~fsrbayes.inference.evidence.bridge`). Where the fit does not converge within its
-        budget, or the bridge's two halves disagree by more than
-        :data:`BRIDGE_SPLIT_TOLERANCE` combined errors, the referenced ladder (``settings``)
-        runs from the fit's draws instead, and ``method`` says so (``fallback`` says why).
-        ``"reference"``: a stepping-stone ladder from a Student-t reference in transport-map
-        coordinates fitted to a pilot run (:mod:`~fsrbayes.inference.evidence.referenced`).
-    pilot : SamplerSettings, optional
-        The reference path's pilot run (default
-        :data:`~fsrbayes.inference.evidence.referenced.PILOT_SETTINGS`).
-    search : ModeSearch, optional
-        The reference path's search for separate posterior regions, run once per replicate ladder
-        (default :data:`~fsrbayes.inference.evidence.referenced.MODE_SEARCH`, 12 optimiser starts).
-    estimator : callable, optional
-        ``estimator(posterior, seed)`` → :class:`~fsrbayes.inference.evidence.EvidenceEstimate`,
-        any evidence estimator; replaces the one chosen by ``path``. LOO and the Savage–Dickey
-        check need the estimate's ``posterior_draws`` and are left out without them.
-    fit_settings : SamplerSettings, optional
-        The fits of the ``"bridge"`` path (default :data:`~fsrbayes.inference.fit.FIT_SETTINGS`
-        with its ensembles side by side, one process per core).
+    estimator : Estimator, optional
+        How each log Z is estimated (:mod:`~fsrbayes.inference.estimators`):
+        ``Bridge()`` (the default) fits each model and specimen with the ensemble sampler and
+        bridge-samples its draws, with the referenced ladder from the fit's draws where the fit
+        does not converge or the bridge's halves disagree; ``Reference()`` runs stepping-stone
+        ladders from a reference fitted to a pilot run; ``Tempered()`` the same ladders with
+        their β = 1 draws checked; ``Laplace()`` the Laplace approximation (no error bar); or
+        any :class:`~fsrbayes.inference.evidence.estimate.Estimator`. LOO and the
+        Savage–Dickey check need the estimate's ``posterior_draws`` and are left out without
+        them.
+    path : str, optional
+        A registered estimator's name (:data:`ESTIMATORS`: ``"bridge"``, ``"reference"``,
+        ``"tempered"``, ``"laplace"``, and any registered from outside), in place of
+        ``estimator``.
+    settings, pilot, search, fit_settings : optional
+        Shorthand for the options of the estimator that ``path`` names (or of the default
+        bridge): ``settings`` its ladder (``Bridge(ladder=...)``'s fallback,
+        ``Reference(ladder=...)``), ``pilot`` and ``search`` the reference's, ``fit_settings``
+        the bridge's fits. An option the estimator does not take is refused, and so is any
+        with an ``estimator`` object (give them to its constructor).
 
     Returns
     -------
@@ -189,14 +167,8 @@ def compare(
     models = list(dict.fromkeys(models))
     if len(models) < 2:
         raise ValueError(f"compare needs at least two models, got {models}")
-    if path not in PATHS:
-        raise ValueError(f"path must be one of {PATHS}, got {path!r}")
-    settings = settings or REFERENCED_LADDER
-    if fit_settings is None:
-        fit_settings = replace(
-            fitting.FIT_SETTINGS,
-            processes=min(fitting.FIT_SETTINGS.n_ensembles, os.cpu_count() or 1),
-        )
+    options = {"settings": settings, "pilot": pilot, "search": search, "fit_settings": fit_settings}
+    estimator = _chosen_estimator(estimator, path, options)
     specimens = list(specimens) if specimens is not None else list(data.specimens)
     pair = nested_pair(models)
     full_draws = {}
@@ -211,21 +183,10 @@ def compare(
             posterior = LogPosterior.for_sensor(
                 packed, chosen, model=model, tunneling=tunneling, likelihood=likelihood
             )
-            job_seed = [seed, m_index, s_index]
-            if estimator is not None:
-                result = estimator(posterior, job_seed)
-            elif path == "bridge":
-                result = _fit_and_bridge(
-                    packed, chosen, model, (tunneling, likelihood), settings, fit_settings, job_seed
-                )
-            else:
-                result = referenced_log_evidence(
-                    posterior,
-                    settings,
-                    seed=job_seed,
-                    pilot=pilot or PILOT_SETTINGS,
-                    search=search or MODE_SEARCH,
-                ).estimate()
+            if estimator.needs_fit:  # a fit's notes on what the tests cannot identify
+                for note in design_warnings(posterior):
+                    warnings.warn(DesignWarning(note), stacklevel=2)
+            result = estimator.estimate(posterior, [seed, m_index, s_index])
             per_specimen[specimen] = {
                 "log_evidence": result.log_z,
                 "log_evidence_err": result.error,
@@ -240,50 +201,50 @@ def compare(
                 full_draws[specimen] = (posterior, result.posterior_draws)
         entries[model] = ModelEvidence.from_specimens(per_specimen, loo)
     check = _savage_dickey_check(entries, full_draws, pair) if full_draws else None
-    return Comparison.of(entries, specimens, path=path, settings=settings, savage_dickey=check)
-
-
-def _fit_and_bridge(packed, sensor, model, laws, ladder, fit_settings, seed):
-    """Converged fit + bridge sampling; the referenced ladder from the fit's draws otherwise.
-
-    The ladder runs when the fit does not converge, or when the bridge's two halves disagree
-    by more than :data:`BRIDGE_SPLIT_TOLERANCE` combined standard errors.
-    """
-    tunneling, likelihood = laws
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        result = fitting.fit(
-            packed,
-            model=model,
-            tunneling=tunneling,
-            likelihood=likelihood,
-            sensor=sensor,
-            rng=np.random.default_rng(seed),
-            settings=fit_settings,
-        )
-    bridge = {}
-    if result.converged:
-        estimate = bridge_from_fit(result, seed=np.random.default_rng([*seed, 1]))
-        split_z = estimate.details["split_z"]
-        if np.isfinite(estimate.log_z) and split_z <= BRIDGE_SPLIT_TOLERANCE:
-            return estimate
-        halves = [f"{s['log_z']:.3f}" for s in estimate.details["splits"]]
-        why = (
-            f"halves disagree ({' vs '.join(halves)}: {split_z:.1f} combined sd apart, > "
-            f"{BRIDGE_SPLIT_TOLERANCE:g})"
-            if np.isfinite(estimate.log_z)
-            else "estimate not finite"
-        )
-        note = f"bridge {why}: ladder from the fit's draws"
-        bridge = {"bridge": {"log_z": estimate.log_z, "error": estimate.error, **estimate.details}}
-    else:
-        note = f"fit did not converge ({result.run.report.worst()}): ladder from its draws"
-    estimate = referenced_from_fit(result, ladder, seed=seed)
-    return replace(
-        estimate,
-        method=f"{estimate.method} (fallback)",
-        details={**estimate.details, **bridge, "fallback": note},
+    return Comparison.of(
+        entries, specimens, path=estimator.name, settings=estimator.settings, savage_dickey=check
     )
+
+
+class _FunctionEstimator(Estimator):
+    """A plain function ``estimator(posterior, seed)`` as an Estimator (deprecated)."""
+
+    def __init__(self, function):
+        self.function = function
+        self.name = getattr(function, "__name__", "custom")
+
+    def estimate(self, posterior, seed):
+        return self.function(posterior, seed)
+
+
+def _chosen_estimator(estimator, path, options):
+    """Return the Estimator that ``compare`` runs (its docstring: ``estimator``, ``path``)."""
+    given = {k: v for k, v in options.items() if v is not None}
+    if estimator is None:
+        named = estimator_named(DEFAULT_PATH if path is None else path)
+        attributes = {"ladder" if k == "settings" else k: v for k, v in given.items()}
+        unknown = [k for k, a in zip(given, attributes, strict=True) if not hasattr(named, a)]
+        if unknown:
+            raise TypeError(f"path {named.name!r} takes no {', '.join(unknown)}")
+        return named.with_options(**attributes)
+    if path is not None:
+        raise ValueError(f"give compare an estimator or a path, not both (path={path!r})")
+    if given:
+        raise TypeError(
+            f"compare's {', '.join(given)}: shorthand for the options of a path's estimator; "
+            "with an estimator object, give them to its constructor"
+        )
+    if isinstance(estimator, Estimator):
+        return estimator
+    if callable(estimator):
+        warnings.warn(
+            "compare(estimator=function) is deprecated since 0.3.0 and goes in 0.4.0: pass an "
+            "Estimator (fsrbayes.inference.evidence.estimate.Estimator) object",
+            FutureWarning,
+            stacklevel=3,
+        )
+        return _FunctionEstimator(estimator)
+    raise TypeError(f"estimator must be an Estimator, got {type(estimator).__name__}")
 
 
 def _savage_dickey_check(entries, full_draws, pair, max_draws=8000):

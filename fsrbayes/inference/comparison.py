@@ -111,10 +111,12 @@ class Comparison:
     strength : str
         The weakest of the Bayes factors' words: the verdict on the preference.
     path : str
-        How each log Z was estimated (``"bridge"`` or ``"reference"``); the per-specimen
-        ``method`` says which estimator ran (a fallback, or the ``estimator`` passed in).
-    settings : LadderSettings
-        The ladder of the reference path and of the bridge path's fallback.
+        The name of the estimator that ran (``"bridge"``, ``"reference"``, ``"tempered"``,
+        ``"laplace"`` or a registered one, :mod:`~fsrbayes.inference.estimators`); the
+        per-specimen ``method`` says which estimate each log Z is (the bridge's fallback too).
+    settings : dataclass or None
+        The estimator's ``settings``: the ladder of the reference path and of the bridge's
+        fallback, the tempered estimator's settings; None for estimators without any.
     savage_dickey : dict or None
         The Savage–Dickey cross-check of the first nested pair compared
         (:func:`~fsrbayes.physics.models.model_nesting`): ``per_specimen`` → ln B of the nested
@@ -147,7 +149,7 @@ class Comparison:
             Model name → :class:`ModelEvidence`.
         specimens : sequence of str
         path : str
-        settings : LadderSettings
+        settings : dataclass or None
         savage_dickey : dict, optional
         """
         preferred = max(models, key=lambda m: models[m].log_z)
@@ -176,7 +178,7 @@ class Comparison:
         """Return the record as JSON-ready nested dicts (non-finite numbers as None).
 
         Keys, in order: ``models.<name>`` with ``per_specimen``, ``loo``, ``log_evidence`` and
-        ``log_evidence_err``; ``specimens``; ``scale``; ``settings`` (the ladder's, with
+        ``log_evidence_err``; ``specimens``; ``scale``; ``settings`` (the estimator's, with
         ``path``); ``preferred``; ``bayes_factors.<other>`` with ``log_bf_preferred_over``,
         ``err`` and ``strength``; ``strength``; and ``savage_dickey`` where there is one.
         """
@@ -192,7 +194,7 @@ class Comparison:
             },
             "specimens": list(self.specimens),
             "scale": self.scale,
-            "settings": {**asdict(self.settings), "path": self.path},
+            "settings": {**(asdict(self.settings) if self.settings else {}), "path": self.path},
             "preferred": self.preferred,
             "bayes_factors": {
                 name: {"log_bf_preferred_over": bf.log_bf, "err": bf.error, "strength": bf.strength}

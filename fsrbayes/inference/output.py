@@ -354,7 +354,7 @@ def segment_drifts(posterior, draws):
 
 
 def _evidence(result):
-    """Return the tempered sampler's log Z with its error budget (None for other samplers)."""
+    """Return the tempered ladders' log Z with its error budget (None for fits)."""
     evidence = getattr(result, "evidence", None)
     if evidence is None:
         return None

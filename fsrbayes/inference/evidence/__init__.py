@@ -4,16 +4,18 @@
   bridge-sampling and thermodynamic-integration cross-checks and a full error budget.
 - :mod:`.referenced` — the same ladders started from a reference density fitted to a pilot run
   (few nats to cross instead of thousands): the default for creep posteriors.
-- :mod:`.tempered` — the referenced ladders' β = 1 rung used as a sampler. It lives here, not
-  among the samplers, because it *is* the referenced evidence run: its draws come with log Z.
+- :mod:`.tempered` — the referenced ladders with their β = 1 draws kept and checked: an
+  evidence estimator whose draws serve the SBC and the closed-form checks (no sampler of
+  :func:`fsrbayes.fit`).
 - :mod:`.laplace` — the Laplace approximation (a screen, labelled as such: no error bar).
 - :mod:`.savage_dickey` — Bayes factors of a nested model (Zener inside Burgers) from one
   posterior.
 
-Every log Z reaches its callers as an :class:`EvidenceEstimate`.
+Every log Z reaches its callers as an :class:`EvidenceEstimate`, from an :class:`Estimator`
+(the registered ones, objects with their options: :mod:`fsrbayes.inference.estimators`).
 """
 
-from .estimate import EvidenceEstimate
+from .estimate import Estimator, EvidenceEstimate
 from .ladder import LadderSettings, log_evidence
 from .laplace import LaplaceFit, LocalDraws, laplace_fit
 from .referenced import (
@@ -26,13 +28,14 @@ from .referenced import (
 )
 from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
 from .stepping_stone import EvidenceResult
-from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_run
+from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_fit, tempered_run
 
 __all__ = [
     "MODE_SEARCH",
     "PILOT_SETTINGS",
     "REFERENCED_LADDER",
     "TEMPERED_SETTINGS",
+    "Estimator",
     "EvidenceEstimate",
     "EvidenceResult",
     "LadderSettings",
@@ -47,5 +50,6 @@ __all__ = [
     "referenced_log_evidence",
     "savage_dickey",
     "savage_dickey_posterior",
+    "tempered_fit",
     "tempered_run",
 ]

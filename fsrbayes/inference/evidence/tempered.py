@@ -1,4 +1,9 @@
-"""Posterior draws from the β = 1 rung of tempered ladders that start at a fitted reference.
+"""Log Z and posterior draws from the β = 1 rung of tempered ladders that start at a reference.
+
+The tempered estimator (:class:`~fsrbayes.inference.estimators.Tempered`, ``compare(...,
+path="tempered")``) runs these ladders for log Z; its draws (:func:`tempered_fit`) serve the
+simulation-based calibration and the closed-form checks. It is no sampler of
+:func:`fsrbayes.fit`: its ladders have a fixed length and no checkpoints.
 
 The ensemble sampler (:mod:`~fsrbayes.inference.samplers.ensemble`) moves walkers along the
 posterior; a walker must *walk* to every part of it. The creep posterior's s0–Va ridge can bend into
@@ -38,12 +43,15 @@ import numpy as np
 
 from ..samplers import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
 from ..samplers.convergence import normal_scores, rank_rhat
+from ..sampling import FitResult
 from .ladder import LadderSettings
 from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence
 
 __all__ = [
     "TemperedSettings",
     "TEMPERED_SETTINGS",
+    "tempered_evidence",
+    "tempered_fit",
     "tempered_run",
     "tempered_report",
     "reference_optima",
@@ -52,7 +60,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class TemperedSettings:
-    """How the tempered sampler runs.
+    """How the tempered estimator runs its ladders.
 
     Attributes
     ----------
@@ -107,6 +115,51 @@ TEMPERED_SETTINGS = TemperedSettings()
 """Default: 2 pilot groups, 4 ladders of 8 rungs × 600 steps, every β = 1 step kept."""
 
 
+def tempered_evidence(posterior, settings=TEMPERED_SETTINGS, seed=0):
+    """Return the referenced ladders' :class:`~.stepping_stone.EvidenceResult` (log Z, β = 1 draws).
+
+    Parameters
+    ----------
+    posterior : LogPosterior
+    settings : TemperedSettings
+    seed : int, sequence of int or numpy.random.SeedSequence
+    """
+    ladder = replace(settings.ladder, processes=settings.processes)
+    return referenced_log_evidence(
+        posterior,
+        ladder,
+        seed,
+        dof=settings.dof,
+        pilot=settings.pilot,
+        search=settings.search,
+        pilot_groups=settings.pilot_groups,
+        quadratic=settings.quadratic,
+    )
+
+
+def tempered_fit(posterior, settings=TEMPERED_SETTINGS, seed=0):
+    """Return :func:`tempered_run`'s draws as a :class:`~fsrbayes.inference.sampling.FitResult`.
+
+    Its ``map_u`` is the best optimum the ladders' mode searches found (the best draw where the
+    references were fitted to given draws), ``sampler`` is ``"tempered"`` and ``evidence`` the
+    ladders' log Z.
+
+    Parameters
+    ----------
+    posterior : LogPosterior
+    settings : TemperedSettings
+    seed : int
+    """
+    run, evidence = tempered_run(posterior, settings, seed, names=posterior.names)
+    optima = np.array(reference_optima(evidence))
+    if not len(optima):  # references fitted to given draws: no search ran
+        e, t, w = np.unravel_index(np.argmax(run.log_prob), run.log_prob.shape)
+        return FitResult(posterior, run, run.chain[e, t, w], seed, None, "tempered", evidence)
+    values = posterior(optima)
+    best = optima[int(np.argmax(values))]
+    return FitResult(posterior, run, best, seed, np.sort(values)[::-1], "tempered", evidence)
+
+
 def tempered_run(posterior, settings=TEMPERED_SETTINGS, seed=0, names=()):
     """Sample ``posterior`` (prior-scaled u) from the top rung of referenced ladders.
 
@@ -126,17 +179,7 @@ def tempered_run(posterior, settings=TEMPERED_SETTINGS, seed=0, names=()):
         in which a slot's state changed. The evidence result is the ladders' log Z; its
         ``settings`` list each group's reference components and their optima.
     """
-    ladder = replace(settings.ladder, processes=settings.processes)
-    evidence = referenced_log_evidence(
-        posterior,
-        ladder,
-        seed,
-        dof=settings.dof,
-        pilot=settings.pilot,
-        search=settings.search,
-        pilot_groups=settings.pilot_groups,
-        quadratic=settings.quadratic,
-    )
+    evidence = tempered_evidence(posterior, settings, seed)
     chain = np.asarray(evidence.posterior_draws, dtype=float)
     n_ladders, n_steps, n_walk, ndim = chain.shape
     flat = chain.reshape(-1, ndim)
