@@ -12,7 +12,9 @@ import emcee
 import numpy as np
 
 from benchmarks.likelihood import benchmark_specimen
-from fsrbayes.inference.samplers import MixtureProposal, ensemble_moves, step_ensemble
+from fsrbayes.inference.samplers.ensemble import ensemble_moves
+from fsrbayes.inference.samplers.moves import MixtureProposal
+from fsrbayes.inference.samplers.stepping import step_ensemble
 
 
 def _gaussian(u):

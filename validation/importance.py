@@ -23,8 +23,8 @@ not return for their own image.
 import numpy as np
 import scipy.stats
 
-from fsrbayes.inference.samplers import even_index
 from fsrbayes.inference.samplers.coordinates import SampledLogProb
+from fsrbayes.inference.samplers.ensemble import even_index
 
 __all__ = ["importance_quantiles"]
 

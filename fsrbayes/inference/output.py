@@ -16,7 +16,7 @@ from ..data.sensors import load_sensor
 from ..physics.constants import DRIFT_TIME_S
 from ..utils import atomic_path, json_ready, write_json_atomic
 from .posterior import drift_between
-from .samplers import even_index
+from .samplers.ensemble import even_index
 
 __all__ = [
     "FORMAT_VERSION",

@@ -24,14 +24,9 @@ import numpy as np
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
 from .pinned import PinnedCoordinates, pinned_start, polish_along_pins
 from .posterior import LogPosterior
-from .samplers import (
-    EnsembleRun,
-    SamplerSettings,
-    check_checkpoint,
-    even_index,
-    load_kept,
-    run_ensembles,
-)
+from .samplers import EnsembleRun, SamplerSettings, run_ensembles
+from .samplers.checkpoint import check_checkpoint, load_kept
+from .samplers.ensemble import even_index
 
 __all__ = [
     "CHECK_EVERY",

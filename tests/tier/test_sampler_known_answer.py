@@ -1,13 +1,13 @@
 """Validation tier: the fit's ensemble sampler on a posterior with a known answer.
 
-A 12-dimensional correlated Gaussian — the dimension of a specimen's Burgers fit — sampled with
-the package's moves (differential evolution and the stretch move, stepped by
-:func:`fsrbayes.inference.samplers.step_ensemble`) and its convergence criteria. Every mean and
-variance must match the closed form within 5 Monte-Carlo standard errors of the run itself (the
-bulk ESS it reports), and the squared Mahalanobis radius of the draws — χ²(12) exactly — must
-have its mean 12 within 5 of its own standard errors. A move that is not volume-preserving in
-its acceptance (the stretch move without its z^(d−1) factor) pulls the ensemble towards the mode
-and fails the radius check by tens of errors.
+A 12-dimensional correlated Gaussian — the dimension of a specimen's Burgers fit — sampled with the
+package's moves (differential evolution and the stretch move, stepped by
+:func:`fsrbayes.inference.samplers.stepping.step_ensemble`) and its convergence criteria. Every
+mean and variance must match the closed form within 5 Monte-Carlo standard errors of the run itself
+(the bulk ESS it reports), and the squared Mahalanobis radius of the draws — χ²(12) exactly — must
+have its mean 12 within 5 of its own standard errors. A move that is not volume-preserving in its
+acceptance (the stretch move without its z^(d−1) factor) pulls the ensemble towards the mode and
+fails the radius check by tens of errors.
 """
 
 import numpy as np

@@ -17,39 +17,22 @@ Every log Z reaches its callers as an :class:`EvidenceEstimate`, from an :class:
 
 from .estimate import Estimator, EvidenceEstimate
 from .ladder import LadderSettings, log_evidence
-from .laplace import LaplaceFit, LocalDraws, laplace_fit
-from .referenced import (
-    MODE_SEARCH,
-    PILOT_SETTINGS,
-    REFERENCED_LADDER,
-    ModeSearch,
-    referenced_from_fit,
-    referenced_log_evidence,
-)
-from .savage_dickey import SavageDickey, savage_dickey, savage_dickey_posterior
+from .laplace import laplace_fit
+from .referenced import ModeSearch, referenced_log_evidence
+from .savage_dickey import SavageDickey, savage_dickey_posterior
 from .stepping_stone import EvidenceResult
-from .tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_fit, tempered_run
+from .tempered import TemperedSettings
 
 __all__ = [
-    "MODE_SEARCH",
-    "PILOT_SETTINGS",
-    "REFERENCED_LADDER",
-    "TEMPERED_SETTINGS",
     "Estimator",
     "EvidenceEstimate",
     "EvidenceResult",
     "LadderSettings",
-    "LaplaceFit",
-    "LocalDraws",
     "ModeSearch",
     "SavageDickey",
     "TemperedSettings",
     "laplace_fit",
     "log_evidence",
-    "referenced_from_fit",
     "referenced_log_evidence",
-    "savage_dickey",
     "savage_dickey_posterior",
-    "tempered_fit",
-    "tempered_run",
 ]

@@ -25,8 +25,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..parallel import fork_pool, single_threaded_blas
-from ..samplers import walkers_for
 from ..samplers.moves import StretchMove, tempered_log_density
+from ..samplers.settings import walkers_for
 from .stepping_stone import combine_ladder, summarise_ladders
 
 __all__ = [

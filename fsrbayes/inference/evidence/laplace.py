@@ -26,7 +26,8 @@ import numpy as np
 from ...utils import HALF_LOG_2PI
 from ..optimize import MAP_ITERATIONS, find_map, polish, root_covariance
 from ..pinned import map_refinement
-from ..samplers import ensemble_moves, step_ensemble
+from ..samplers.ensemble import ensemble_moves
+from ..samplers.stepping import step_ensemble
 from .estimate import EvidenceEstimate
 
 __all__ = ["LocalDraws", "LaplaceFit", "laplace_fit", "local_laplace_fit"]

@@ -12,37 +12,23 @@
   group and the sourcing voltage that minimises drift.
 """
 
-from .model import NOISE_PARAMETERS, JointTarget, Population, TwoStageTarget
-from .predictive import (
-    BOX_QUANTILES,
-    ForwardTemplate,
-    NewSpecimens,
-    drift_groups,
-    new_specimens,
-    optimal_voltage,
-)
+from .model import Population
+from .predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
 from .routes import (
     HierarchicalResult,
     ReweightingWarning,
     SpecimenFitWarning,
-    draw_error,
     fit_specimens,
     joint,
     two_stage,
 )
 
 __all__ = [
-    "BOX_QUANTILES",
-    "NOISE_PARAMETERS",
     "ForwardTemplate",
     "HierarchicalResult",
-    "JointTarget",
-    "NewSpecimens",
     "Population",
     "ReweightingWarning",
     "SpecimenFitWarning",
-    "TwoStageTarget",
-    "draw_error",
     "drift_groups",
     "fit_specimens",
     "joint",

@@ -23,7 +23,7 @@ from ...physics.models import parse_model
 from ...physics.sensor import solve_current
 from ...utils import first_sign_change
 from ..nuisance import noise_parameters
-from ..samplers import even_index
+from ..samplers.ensemble import even_index
 
 __all__ = [
     "ForwardTemplate",

@@ -1,12 +1,12 @@
 """Hierarchical inference across specimens: two routes to the population posterior.
 
 * :func:`two_stage` — fit every specimen on its own (in parallel, :func:`fit_specimens`), then
-  sample the hyper-posterior by reweighting their draws (:class:`~.population.TwoStageTarget`).
+  sample the hyper-posterior by reweighting their draws (:class:`~.model.TwoStageTarget`).
   Scales to thousands of specimens; its Monte-Carlo error is each specimen's effective number
   of draws, reported and warned about when small.
 * :func:`joint` — sample hyper-parameters and all specimens' parameters together with emcee:
   blocked Gibbs sweeps as emcee's move (:mod:`~.gibbs`; proposals from the specimens' own fits)
-  or plain ensemble moves (:class:`~.population.JointTarget`), started from the two-stage answer
+  or plain ensemble moves (:class:`~.model.JointTarget`), started from the two-stage answer
   when one is given.
 
 Both return a :class:`HierarchicalResult`.
@@ -21,7 +21,8 @@ from ...physics.models import model_components, register_components
 from ..fit import FIT_SETTINGS, fit
 from ..optimize import find_map, laplace_start
 from ..parallel import JobFailure, map_jobs, single_threaded_blas
-from ..samplers import SamplerSettings, even_index, run_ensembles
+from ..samplers import SamplerSettings, run_ensembles
+from ..samplers.ensemble import even_index
 from .coordinates import NonCentredCoordinates
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .model import JointTarget, Population, TwoStageTarget
