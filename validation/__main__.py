@@ -28,7 +28,8 @@ The studies (:data:`validation.registry.STUDIES`, each entry's ``how`` gives its
 The other modules are not studies: :mod:`validation.closed_form` (test problems with known
 evidence, which the slow tests run) and :mod:`validation.importance` (a check of a fit's
 quantiles, which ``rig_coverage`` calls) have no command of their own;
-:mod:`validation.rates` tabulates the rates of rows the diagnose studies saved;
+:mod:`validation.rates` turns the diagnose studies' rows into rates and :mod:`validation.rate_table`
+tabulates the rows they saved;
 :mod:`validation.erfc_chebyshev` derives the coefficients of a compiled kernel (and needs
 mpmath); :mod:`validation.tables` and :mod:`validation.registry` serve this runner.
 """

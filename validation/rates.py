@@ -11,11 +11,10 @@ module turns rows into outcomes and outcomes into rates with their binomial unce
 - *false adequate*: data with a hidden cause called ``adequate``;
 - *false refusal*: data without any effect not called ``adequate``.
 
-Run ``python -m validation.rates ROWS.json ...`` on the JSON rows the studies write.
+``python -m validation.rate_table ROWS.json ...`` tabulates the JSON rows the studies write
+(:mod:`validation.rate_table`).
 """
 
-import json
-import sys
 from math import sqrt
 
 __all__ = ["CREEP_KINETICS", "Rate", "outcome", "rate", "rates", "format_rates"]
@@ -113,33 +112,3 @@ def format_rates(groups):
         cells = [str(r[k]) if r[k][1] else "–" for k in r]
         lines.append(f"| {name} | {len(outcomes)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
-
-
-def _outcomes_of(row):
-    """Outcome of a row written by any of the studies."""
-    if "case" in row:  # diagnose_study
-        expected = row["expected"]
-        return outcome(
-            row["verdict"],
-            [row["effect"]] if row["effect"] else [],
-            (expected,) if expected else (),
-            null=expected is None,
-        )
-    if "mechanism" in row:  # foreign_forms
-        from validation.foreign_forms import CASES
-
-        accepted = {(m, a): right for m, a, right in CASES}[(row["mechanism"], row["magnitude"])]
-        return outcome(row["verdict"], row["effects"], accepted)
-    if "kind" in row:  # outside_menu
-        from validation.outside_menu import ACCEPTED
-
-        return outcome(row["verdict"], row["effects"], ACCEPTED[row["kind"]])
-    return outcome(row["verdict"], [], (), null=True)  # gap_band
-
-
-if __name__ == "__main__":
-    groups = {}
-    for path in sys.argv[1:]:
-        with open(path) as f:
-            groups[path] = [_outcomes_of(r) for r in json.load(f)]
-    print(format_rates(groups))
