@@ -3,8 +3,6 @@
 The examples are the first code a user copies; here each runs as a doctest (its temporary
 folders under pytest's ``tmp_path``). Their runs are cut short, so their outputs are chosen to
 be ones a short run gets right on any CPU: shapes, names, verdicts, rounded forces.
-``calibrate`` has none yet: its input, a population's fit folder, is written only by the
-command line (``fsrbayes fit --hierarchical``), not by a Python function.
 """
 
 import doctest
@@ -32,7 +30,7 @@ def test_the_top_level_entry_points_are_the_functions_a_user_calls():
     assert set(ENTRY_POINTS) >= {"current", "drift", "fit", "predict", "diagnose", "force"}
 
 
-@pytest.mark.parametrize("name", [n for n in ENTRY_POINTS if n != "calibrate"])
+@pytest.mark.parametrize("name", ENTRY_POINTS)
 def test_the_examples_run_and_print_what_they_say(name, tmp_path, monkeypatch):
     tests = _examples(name)
     assert tests, f"fsrbayes.{name} has no Examples section"

@@ -318,7 +318,7 @@ def _with_priors(sensor, model, priors):
 
 
 def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
-    """Fit new specimens' calibration tests as the population in ``fit_dir`` was fitted.
+    r"""Fit new specimens' calibration tests as the population in ``fit_dir`` was fitted.
 
     Each specimen of ``data`` is fitted alone, with the model, tunnelling law and likelihood of
     the population of its sensor, under the population predictive of :func:`calibration_prior`
@@ -347,6 +347,52 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
     ------
     ValueError
         No population of a specimen's sensor in ``fit_dir``, or a specimen fitted there.
+
+    Examples
+    --------
+    A population of two FSR 402s (a simulated divider log, runs cut short), written as
+    ``fsrbayes fit --hierarchical`` writes it; a third sensor calibrated on 100 g, then its 300 g
+    test predicted from the population alone and through its calibration:
+
+    >>> import tempfile, warnings
+    >>> from pathlib import Path
+    >>> import fsrbayes
+    >>> from fsrbayes.data import read_csv
+    >>> from fsrbayes.data.rigsim import simulate_rig
+    >>> from fsrbayes.inference import SamplerSettings, save_fit, save_population
+    >>> from fsrbayes.inference.population import ForwardTemplate, fit_specimens, two_stage
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> log_text, truth = simulate_rig(3, seed=4, duration_s=30, rate_hz=1,
+    ...                                weights_g=(100.0, 300.0))
+    >>> _ = (folder / "three.csv").write_text(log_text)
+    >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
+    >>> population, observed = folder / "population", []
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     fits = fit_specimens(read_csv(folder / "three.csv"), ["fsr402-01", "fsr402-02"],
+    ...                          settings=short, model="burgers", placement=False, rng=1)
+    ...     for name, result in fits.items():
+    ...         (population / name).mkdir(parents=True)
+    ...         observed += save_fit(result, population / name)["tests"]
+    ...     template = ForwardTemplate.from_posterior(fits["fsr402-01"].posterior)
+    ...     _ = save_population(two_stage(fits, settings=short, seed=1), template, observed,
+    ...                         population)
+    >>> header, *rows = log_text.splitlines()
+    >>> for test, name in (("w1", "new-100g.csv"), ("w2", "new-300g.csv")):
+    ...     part = [r for r in rows if r.startswith(f"fsr402-03,fsr402,{test},")]
+    ...     _ = (folder / name).write_text("\n".join([header] + part))
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     _ = fsrbayes.calibrate(population, read_csv(folder / "new-100g.csv"),
+    ...                            folder / "calibrated", settings=short)
+    ...     protocol = read_csv(folder / "new-300g.csv")
+    ...     alone = fsrbayes.predict(population, protocol, n_draws=200)
+    ...     calibrated = fsrbayes.predict(population, protocol, n_draws=200,
+    ...                                   calibration=folder / "calibrated")
+    >>> alone["tests"][0]["specimen_source"], calibrated["tests"][0]["specimen_source"]
+    ('population', 'calibrated')
+    >>> calibrated["width_90_rel"] < alone["width_90_rel"]
+    True
     """
     from .fit import fit
     from .output import save_fit
