@@ -33,7 +33,7 @@ from benchmarks.evidence import specimen_posterior
 from fsrbayes.inference.evidence.ladder import evaluate_target
 from fsrbayes.inference.evidence.reference_density import ReferenceDensity
 from fsrbayes.inference.evidence.referenced import pilot_draws
-from fsrbayes.inference.samplers.independence import student_t_log_density
+from fsrbayes.inference.samplers.moves.independence import student_t_log_density
 
 
 class _UnitCube:
