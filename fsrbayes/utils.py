@@ -127,3 +127,42 @@ def json_ready(value, *, keep_nan=False):
     if isinstance(value, float) and not keep_nan:
         return value if math.isfinite(value) else None
     return value
+
+
+def register_in(registry, item, base, kind, *, replace=False):
+    """Add ``item`` (an instance of ``base``, or a subclass made with its defaults) to ``registry``.
+
+    The registries of samplers and evidence estimators share this: the item is keyed by its
+    ``name``, which must be a non-empty string, and a name already taken needs ``replace``.
+
+    Parameters
+    ----------
+    registry : dict
+        Name → instance.
+    item : object or type
+    base : type
+        What the registry holds.
+    kind : str
+        What the registry holds, in words, for the error messages (``"sampler"``).
+    replace : bool
+        Allow replacing an item of the same name.
+
+    Returns
+    -------
+    object or type
+        ``item``, so that the call can decorate a class.
+    """
+    chosen = item() if isinstance(item, type) and issubclass(item, base) else item
+    if not isinstance(chosen, base):
+        article = "an" if base.__name__[0] in "AEIOU" else "a"
+        raise TypeError(
+            f"register_{kind} takes {article} {base.__name__}, got {type(item).__name__}"
+        )
+    if not isinstance(chosen.name, str) or not chosen.name:
+        raise ValueError(f"{type(chosen).__name__}.name must be a non-empty string")
+    if chosen.name in registry and not replace:
+        raise ValueError(
+            f"a {kind} named {chosen.name!r} is already registered (replace=True to replace it)"
+        )
+    registry[chosen.name] = chosen
+    return item

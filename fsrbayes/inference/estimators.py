@@ -23,6 +23,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..utils import register_in
 from .evidence.bridge import bridge_from_fit
 from .evidence.estimate import Estimator, EvidenceEstimate
 from .evidence.laplace import laplace_fit
@@ -69,19 +70,7 @@ def register_estimator(estimator, *, replace=False):
     Estimator or type
         ``estimator``, so that the call can decorate a class.
     """
-    chosen = estimator
-    if isinstance(estimator, type) and issubclass(estimator, Estimator):
-        chosen = estimator()
-    if not isinstance(chosen, Estimator):
-        raise TypeError(f"register_estimator takes an Estimator, got {type(estimator).__name__}")
-    if not isinstance(chosen.name, str) or not chosen.name:
-        raise ValueError(f"{type(chosen).__name__}.name must be a non-empty string")
-    if chosen.name in ESTIMATORS and not replace:
-        raise ValueError(
-            f"an estimator named {chosen.name!r} is already registered (replace=True to replace it)"
-        )
-    ESTIMATORS[chosen.name] = chosen
-    return estimator
+    return register_in(ESTIMATORS, estimator, Estimator, "estimator", replace=replace)
 
 
 def estimator_named(name):

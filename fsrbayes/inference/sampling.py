@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..utils import register_in
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
 from .pinned import PinnedCoordinates, pinned_start, polish_along_pins
 from .posterior import LogPosterior
@@ -259,17 +260,7 @@ def register_sampler(sampler, *, replace=False):
     Sampler or type
         ``sampler``, so that the call can decorate a class.
     """
-    chosen = sampler() if isinstance(sampler, type) and issubclass(sampler, Sampler) else sampler
-    if not isinstance(chosen, Sampler):
-        raise TypeError(f"register_sampler takes a Sampler, got {type(sampler).__name__}")
-    if not isinstance(chosen.name, str) or not chosen.name:
-        raise ValueError(f"{type(chosen).__name__}.name must be a non-empty string")
-    if chosen.name in SAMPLERS and not replace:
-        raise ValueError(
-            f"a sampler named {chosen.name!r} is already registered (replace=True to replace it)"
-        )
-    SAMPLERS[chosen.name] = chosen
-    return sampler
+    return register_in(SAMPLERS, sampler, Sampler, "sampler", replace=replace)
 
 
 def sampler_named(sampler):
