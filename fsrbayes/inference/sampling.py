@@ -15,6 +15,7 @@ of the ensembles' warm-up fits so that walkers cross between regions (:mod:`fsrb
 says why).
 """
 
+import abc
 import copy
 import json
 from dataclasses import dataclass, replace
@@ -164,7 +165,7 @@ def _coordinates(coordinates):
     return coordinates
 
 
-class Sampler:
+class Sampler(abc.ABC):
     """How :func:`~fsrbayes.fit` draws from a built posterior: a name, settings and :meth:`run`.
 
     A sampler of one's own subclasses this, sets the class attributes and implements
@@ -215,6 +216,7 @@ class Sampler:
         chosen.settings = settings
         return chosen
 
+    @abc.abstractmethod
     def run(
         self, posterior, seed, *, coordinates=None, checkpoint=None, resume=False, progress=False
     ):
@@ -236,7 +238,6 @@ class Sampler:
             :class:`~fsrbayes.inference.samplers.ConvergenceReport` (``report.n_kept``: the
             steps after warm-up that :meth:`FitResult.draws` uses).
         """
-        raise NotImplementedError(f"{type(self).__name__} does not implement run")
 
     def __repr__(self):
         return f"{type(self).__name__}({self.settings!r})"

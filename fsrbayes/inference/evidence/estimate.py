@@ -8,6 +8,7 @@ Savage–Dickey). An :class:`Estimator` returns one; :func:`~fsrbayes.inference.
 takes any (the registered ones: :mod:`fsrbayes.inference.estimators`).
 """
 
+import abc
 import copy
 from dataclasses import dataclass, field
 
@@ -47,7 +48,7 @@ class EvidenceEstimate:
         return f"log Z = {self.log_z:.3f}{error} ({self.method})"
 
 
-class Estimator:
+class Estimator(abc.ABC):
     """How :func:`~fsrbayes.compare` estimates log Z of one model on one specimen.
 
     An estimator of one's own subclasses this, sets ``name`` and implements :meth:`estimate`;
@@ -71,6 +72,7 @@ class Estimator:
     needs_fit = False
     settings = None
 
+    @abc.abstractmethod
     def estimate(self, posterior, seed):
         """Return log Z of ``posterior`` as an :class:`EvidenceEstimate`.
 
@@ -86,7 +88,6 @@ class Estimator:
             With ``posterior_draws`` where the estimator sampled the posterior (``compare``'s
             LOO and Savage–Dickey check need them).
         """
-        raise NotImplementedError(f"{type(self).__name__} does not implement estimate")
 
     def with_options(self, **options):
         """Return a copy with the given options (attributes) replaced; None leaves one as is."""
