@@ -19,6 +19,7 @@ from fsrbayes.physics.compiled_kernels import predicted_start
 from fsrbayes.physics.rheology import creep_strain
 from fsrbayes.physics.sensor import sensor_state, solve_current
 from fsrbayes.physics.solver import solve_bulk
+from tests.solver_oracle import solve_bulk_numpy
 
 # docs/physics.md, "Reference numbers": paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
@@ -268,7 +269,7 @@ def _assert_same_solution(got, expected, rtol=1e-12):
 def test_compiled_engine_matches_the_numpy_reference_point_by_point(rng):
     inputs = _hostile_inputs(rng, 20000)
     compiled = solve_bulk(*inputs)
-    reference = solve_bulk(*inputs, engine="numpy")
+    reference = solve_bulk_numpy(*inputs)
     assert set(np.unique(reference.regime)) == {0, 1, 2, 4}  # invalid, V = 0, eq. 10, above Va
     _assert_same_solution(compiled, reference)
     assert compiled.iterations == reference.iterations
@@ -281,7 +282,7 @@ def test_compiled_paper_law_matches_the_numpy_reference_point_by_point(rng):
     threshold = np.exp(rng.normal(np.log(0.07), 0.6, 20000))
     threshold[rng.random(20000) < 0.01] = np.nan
     compiled = solve_bulk(*inputs, law="paper", threshold=threshold)
-    reference = solve_bulk(*inputs, law="paper", threshold=threshold, engine="numpy")
+    reference = solve_bulk_numpy(*inputs, law="paper", threshold=threshold)
     assert set(np.unique(reference.regime)) == {0, 1, 2, 3, 5}
     past_peak = ~reference.valid & (inputs[0] > 0) & tl.smooth_law_is_valid(inputs[2], inputs[3])
     assert past_peak.sum() > 10
@@ -309,7 +310,7 @@ def test_compiled_engine_matches_on_creep_rows_with_warm_starts(a201, rng, law):
         and (compiled.regime == above_va).any()
         and (compiled.regime == 2).any()
     )
-    _assert_same_solution(compiled, solve_bulk(*args, law=law, threshold=threshold, engine="numpy"))
+    _assert_same_solution(compiled, solve_bulk_numpy(*args, law=law, threshold=threshold))
     # Time reversed: the warm starts come from the other side.
     if threshold is not None:
         args = (*args, threshold)
@@ -405,8 +406,3 @@ def test_the_predicted_start_is_exact_for_a_polynomial_of_its_order():
     assert predicted_start(s_new, *flat[:2], nan, nan, nan, nan) == flat[1]
     repeated = [s_k[0], 1.0, s_k[0], 1.0, s_k[0], 1.0]  # one gap thrice: nothing to extrapolate
     assert predicted_start(s_new, *repeated) == 1.0
-
-
-def test_an_unknown_engine_is_refused():
-    with pytest.raises(ValueError, match="solver engine must be one of"):
-        solve_bulk(1.0, 1e3, 4.4e-9, 0.229, 1e-16, engine="fortran")

@@ -1,19 +1,20 @@
 """The bulk-voltage solver of both tunneling laws compiled point by point with numba.
 
-The same algorithm as :mod:`fsrbayes.physics.solver` (bracketed Newton in the logit
+The algorithm :mod:`fsrbayes.physics.solver` describes (bracketed Newton in the logit
 ℓ = log(V_bulk/(V − V_bulk)) of eqs. 19–21, bisection when a step leaves the bracket, the last
 step below ``finish`` taken without another evaluation) for the smooth law (eq. 10 below Va,
 the shortened-barrier forward law above it) and the paper law (eq. 9's closed-form root below
 Vth, eq. 10, the corrected eq. 11 up to its peak, the jump points between them: one point of it
 in :mod:`~.compiled_paper`), written as one loop over points instead of chains of numpy
 operations on masked arrays. Each point stops at its own convergence, nothing is allocated per
-iteration, and the transcendental functions run back to back, so it is faster than the numpy
-version (BENCHMARKS.md), which stays the reference (``solve_bulk(..., engine="numpy")``).
+iteration, and the transcendental functions run back to back, so it is faster than an array
+version (BENCHMARKS.md, ``engine``).
 
-The results agree with the numpy solver to rounding (the tests compare both on random and
-edge-case inputs); regimes and validity are decided by the same comparisons, so they agree
-exactly. Compiled functions are cached on disk (``cache=True``): the first call in a fresh
-installation compiles for a few seconds, later processes load the cache.
+The test suite keeps the array version, written with numpy, as the reference: the results
+agree with it to rounding on random and edge-case inputs, and regimes and validity are decided
+by the same comparisons, so they agree exactly. Compiled functions are cached on disk
+(``cache=True``): the first call in a fresh installation compiles for a few seconds, later
+processes load the cache.
 
 References
 ----------
@@ -72,7 +73,7 @@ def _solve_row_point(
     :func:`~fsrbayes.physics.tunneling.prepare_forward` and the ohmic conductance are
     assembled from logs: only log s changes along a row. ``warm_ell`` (predicted from the
     row's previous roots, :func:`~.compiled_kernels.predicted_start`; NaN for none) starts Newton
-    if the point's root is on their branch (``warm_regime``); otherwise the numpy solver's
+    if the point's root is on their branch (``warm_regime``); otherwise the ohmic
     starts are used.
     """
     opacity = KAPPA * s * sqrt_va
@@ -81,8 +82,8 @@ def _solve_row_point(
     regime = INTERMEDIATE
     start = warm_ell
     if v > va:
-        # Which side of Va holds the root: the sign of h at Va (solver._branch_h). At x = Va,
-        # sqrt(Va ∓ Va/2) = sqrt(Va)·sqrt(1/2), sqrt(Va)·sqrt(3/2).
+        # Which side of Va holds the root: the sign of the intermediate branch's h at Va.
+        # At x = Va, sqrt(Va ∓ Va/2) = sqrt(Va)·sqrt(1/2), sqrt(Va)·sqrt(3/2).
         r_minus, r_plus = sqrt_va * SQRT_HALF, sqrt_va * SQRT_THREE_HALVES
         em1 = math.expm1(-ks * va / (r_plus + r_minus))
         e_d = 1.0 + em1

@@ -57,7 +57,7 @@ LOG_TWO = math.log(2.0)
 INVALID, OHMIC, INTERMEDIATE, HIGH, FORWARD, JUMP = range(6)
 """The solver's regime codes (``solver.REGIMES``); a branch is named by its regime."""
 JIT = dict(cache=True, nogil=True, error_model="numpy")
-"""numpy's error model: x/0 gives ±inf or NaN, as in the numpy solver, instead of raising."""
+"""numpy's error model: x/0 gives ±inf or NaN, as numpy gives, instead of raising."""
 
 
 @numba.njit(**JIT)
@@ -118,7 +118,7 @@ def evaluate_branch(branch, x, log_x, c0, c1, c2, c3):
 
 @numba.njit(**JIT)
 def logit(x, v):
-    """ℓ = log(x/(V − x)), ∓inf at the ends (``solver._logit``)."""
+    """ℓ = log(x/(V − x)), ∓inf at the ends."""
     if x <= 0.0:
         return -math.inf
     if x >= v:
@@ -141,7 +141,7 @@ def fallback(lo, hi):
 def newton_in_logit(branch, v, log_v, lo_x, hi_x, start, c0, c1, c2, c3, finish, max_iter):
     """Bracketed Newton in ℓ on one branch for one point: (x, log I, ℓ at the root, iterations).
 
-    ``c0`` already holds log(R_s), so h = log I − log(V − x) (``solver._newton_block``).
+    ``c0`` already holds log(R_s), so h = log I − log(V − x).
     """
     lo, hi = logit(lo_x, v), logit(hi_x, v)
     ell = start if (start > lo and start < hi) else fallback(lo, hi)

@@ -3,7 +3,7 @@
 :func:`solve_paper_point` is called point by point from :func:`~.compiled.solve_points` (which
 holds the row constants and the warm starts): eq. 9's closed-form root below Vth, eq. 10 up to
 Va, the corrected eq. 11 up to its peak, and the jump points between them, decided by the same
-comparisons as the numpy solver (``solver._solve_block``).
+comparisons as the test suite's numpy reference solver.
 
 References
 ----------
@@ -88,7 +88,7 @@ def _log_current_at_va(branch, log_pre, c, va, log_va, r_minus_va, r_plus_va):
 
 @numba.njit(**JIT)
 def _paper_branch_h(branch, x, v, log_rs, c0, c1, c2):
-    """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch (``solver._branch_h``)."""
+    """h(x) = log(R_s·I(x)) − log(V − x) on a paper-law branch."""
     return _paper_branch_h_logs(branch, x, log_or_nan(x), log_or_nan(v - x), log_rs, c0, c1, c2)
 
 
@@ -133,7 +133,7 @@ def solve_paper_point(
 ):
     """One valid point with V > 0 of the paper law: (|I|, V_bulk, regime, ℓ, iterations).
 
-    The decisions of ``solver._solve_block`` for ``law="paper"``, in the same order: eq. 9's
+    The paper law's decisions, in the order :mod:`~.solver` describes them: eq. 9's
     closed-form root if it lies below Vth; else the branch holding the root from the sign of
     eq. 10's h at Va; the jump point if h is already ≥ 0 at the branch's lower end; outside
     the domain if the root lies past eq. 11's peak; else Newton on the branch, warm-started
