@@ -1,4 +1,4 @@
-"""The command line's grammar: help on every option, defaults shown, old spellings retired."""
+"""The command line's grammar: help on every option, defaults shown, old spellings refused."""
 
 import argparse
 import contextlib
@@ -7,7 +7,6 @@ import io
 import pytest
 
 from fsrbayes.cli import build_parser
-from fsrbayes.cli.grammar import DEPRECATED_IN, REMOVED_IN, deprecated_spellings
 
 
 def _subparsers(parser, prefix=()):
@@ -43,12 +42,6 @@ def _minimal_argv(words, parser):
     return argv
 
 
-def _value(action):
-    if action.choices:
-        return str(list(action.choices)[0])
-    return "1"
-
-
 def test_the_top_level_help_says_what_fsrbayes_is_and_shows_the_four_commands():
     text = build_parser().format_help()
     assert "force sensing resistors" in text and "Command-line interface" not in text
@@ -60,9 +53,6 @@ def test_the_top_level_help_says_what_fsrbayes_is_and_shows_the_four_commands():
 def test_every_option_has_help_and_shows_its_default(words, parser):
     assert parser.description, f"{' '.join(words)} has no description"
     for action in _options(parser):
-        if action.help == argparse.SUPPRESS:
-            assert action.option_strings[0] in deprecated_spellings(parser)
-            continue
         name = action.option_strings[-1]
         assert action.help and len(action.help) > 8, f"{' '.join(words)} {name} has no help"
         shown = parser.formatter_class(prog="x")._get_help_string(action)
@@ -72,48 +62,26 @@ def test_every_option_has_help_and_shows_its_default(words, parser):
             )
 
 
+RETIRED = ("--output", "--specimens", "--voltages", "--stresses", "--forces", "--duration")
+RETIRED += ("--time", "--noise", "--pre", "--rest", "--amp-offset")
+
+
 def test_no_option_keeps_a_spelling_the_grammar_replaced():
-    retired = {"--output", "--specimens", "--voltages", "--stresses", "--forces", "--duration"}
-    retired |= {"--time", "--noise", "--pre", "--rest", "--amp-offset"}
     for words, parser in COMMANDS:
-        shown = {
-            s for a in _options(parser) if a.help != argparse.SUPPRESS for s in a.option_strings
-        }
-        assert not shown & retired, f"{' '.join(words)}: {shown & retired}"
+        spellings = {s for a in _options(parser) for s in a.option_strings}
+        assert not spellings & set(RETIRED), f"{' '.join(words)}: {spellings & set(RETIRED)}"
         counts = [a for a in _options(parser) if a.dest == "n_specimens"]
         assert all(a.type is int for a in counts)
 
 
-DEPRECATED = [
-    (words, parser, old, new)
-    for words, parser in COMMANDS
-    for old, new in deprecated_spellings(parser).items()
-]
-
-
-@pytest.mark.parametrize(
-    "words,parser,old,new", DEPRECATED, ids=[f"{' '.join(d[0])} {d[2]}" for d in DEPRECATED]
-)
-def test_an_old_spelling_prints_one_line_and_acts_as_the_new_one(words, parser, old, new):
-    argv = _minimal_argv(words, parser)
-    action = next(a for a in _options(parser) if new in a.option_strings)
-    top = build_parser()
-    if isinstance(action, argparse._AppendAction):  # --specimens a,b → --specimen a --specimen b
-        with_old, with_new = [old, "a,b"], [new, "a", new, "b"]
-    else:
-        with_old, with_new = [old, _value(action)], [new, _value(action)]
+def test_a_spelling_retired_in_0_3_0_is_refused_in_one_line():
+    """The 0.2.0 renames printed what to write instead for one minor version; now they fail."""
+    argv = _minimal_argv(("simulate",), dict(COMMANDS)[("simulate",)])
     err = io.StringIO()
-    with contextlib.redirect_stderr(err):
-        old_args = top.parse_args(argv + with_old)
-    lines = err.getvalue().strip().splitlines()
-    assert len(lines) == 1, lines
-    assert old in lines[0] and new in lines[0] and DEPRECATED_IN in lines[0]
-    assert REMOVED_IN in lines[0]
-    quiet = io.StringIO()
-    with contextlib.redirect_stderr(quiet):
-        new_args = top.parse_args(argv + with_new)
-    assert quiet.getvalue() == ""
-    assert vars(old_args) == vars(new_args)
+    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as stop:
+        build_parser().parse_args(argv + ["--output", "x.csv"])
+    assert stop.value.code == 2
+    assert "unrecognized arguments: --output x.csv" in err.getvalue()
 
 
 def test_specimen_is_repeated_where_it_picks_ids():

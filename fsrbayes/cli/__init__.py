@@ -67,7 +67,6 @@ def build_parser():
         "--time-s",
         type=float,
         default=3600.0,
-        old=("--time",),
         help="time of the Figure 7 drift table, in s",
     )
     option(
@@ -84,26 +83,20 @@ def build_parser():
         formatter_class=HelpFormatter,
     )
     option(fwd, "--sensor", default="a201", help=f"one of {available_sensors()}")
-    option(
-        fwd, "--voltages-v", default="0.1,0.2,0.5,1,2", old=("--voltages",), help="V_FSR list in V"
-    )
+    option(fwd, "--voltages-v", default="0.1,0.2,0.5,1,2", help="V_FSR list in V")
     group = fwd.add_mutually_exclusive_group()
     option(
         group,
         "--stresses-pa",
         default="50e3,100e3,200e3",
-        old=("--stresses",),
         help="stress list in Pa",
     )
     option(
         group,
         "--forces-n",
-        old=("--forces",),
         help="force list in N (converted with the sensor's area; default: --stresses-pa)",
     )
-    option(
-        fwd, "--time-s", type=float, default=3600.0, old=("--time",), help="time of the drift, in s"
-    )
+    option(fwd, "--time-s", type=float, default=3600.0, help="time of the drift, in s")
     add_model_options(fwd, likelihood=False)
     fwd.set_defaults(func=cmd_forward)
 

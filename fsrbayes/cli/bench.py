@@ -19,9 +19,7 @@ def add_bench_commands(sub):
         "their truth beside them: data to check a fit, a comparison or a diagnosis against.",
         formatter_class=HelpFormatter,
     )
-    option(
-        sim, "-o", "--out", required=True, old=("--output",), help="CSV to write (.csv or .csv.gz)"
-    )
+    option(sim, "-o", "--out", required=True, help="CSV to write (.csv or .csv.gz)")
     option(sim, "--truth", help="truth JSON (default: beside the CSV, <name>.truth.json)")
     option(
         sim,
@@ -37,24 +35,21 @@ def add_bench_commands(sub):
         sim,
         "--n-specimens",
         type=int,
-        old=("--specimens",),
         help="specimens per sensor (default 16)",
     )
     option(
         sim,
         "--voltages-v",
-        old=("--voltages",),
         help="V_FSR list in V (default: the paper's list for the sensor)",
     )
     group = sim.add_mutually_exclusive_group()
-    option(group, "--stresses-pa", old=("--stresses",), help="stress list in Pa")
-    option(group, "--forces-n", old=("--forces",), help="force list in N (default 1.96,4.9,9.8)")
+    option(group, "--stresses-pa", help="stress list in Pa")
+    option(group, "--forces-n", help="force list in N (default 1.96,4.9,9.8)")
     option(
         sim,
         "--duration-s",
         type=float,
         default=3600.0,
-        old=("--duration",),
         help="length of each test in s",
     )
     option(sim, "--samples", type=int, help="samples per test (default 25; paper preset 361)")
@@ -77,7 +72,6 @@ def add_bench_commands(sub):
         "--noise-rel",
         type=float,
         default=0.005,
-        old=("--noise",),
         help="relative noise of each sample (a fraction of the current)",
     )
     option(
@@ -85,7 +79,6 @@ def add_bench_commands(sub):
         "--amp-offset-v",
         type=float,
         default=0.0,
-        old=("--amp-offset",),
         help="sd of a constant amplifier offset per test, in V",
     )
     option(
@@ -131,7 +124,6 @@ def add_bench_commands(sub):
         "-o",
         "--out",
         required=True,
-        old=("--output",),
         help="CSV to write (with --acceptance-set: the existing folder to write the set into)",
     )
     option(
@@ -170,7 +162,6 @@ def add_bench_commands(sub):
         rig,
         "--n-specimens",
         type=int,
-        old=("--specimens",),
         help="specimens (default 1; real-402: 1 on rig A, 2 on B)",
     )
     option(
@@ -187,7 +178,6 @@ def add_bench_commands(sub):
         rig,
         "--duration-s",
         type=float,
-        old=("--duration",),
         help="seconds under each weight (default 600; real-402: the protocol's)",
     )
     option(
@@ -195,7 +185,6 @@ def add_bench_commands(sub):
         "--pre-s",
         type=float,
         default=1.5,
-        old=("--pre",),
         help="seconds logged before the weight lands",
     )
     option(
@@ -203,7 +192,6 @@ def add_bench_commands(sub):
         "--noise-rel",
         type=float,
         default=0.002,
-        old=("--noise",),
         help="relative noise of the divider's output (a fraction)",
     )
     option(
@@ -227,14 +215,12 @@ def add_bench_commands(sub):
         "--rest-s",
         type=float,
         default=0.0,
-        old=("--rest",),
         help="staircase: seconds unloaded between weights (0: no unloading)",
     )
     option(
         rig,
         "--ramp-s",
         default="0",
-        old=("--ramp",),
         help="seconds each test's first weight takes to settle, rising linearly: one number, "
         "or one per test, comma-separated (0: a step); written in a ramp_s column unless "
         "--hide-ramp",

@@ -9,30 +9,21 @@ One grammar across the subcommands:
   ``--voltages-v``, ``--weights-g``);
 * every option has help, and the help shows its default.
 
-A spelling the grammar replaced still works for one minor version: it prints one line saying
-what to write instead (:data:`DEPRECATED_IN`, :data:`REMOVED_IN`) and is hidden from the help.
+A spelling the grammar replaces is refused after one minor version in which it printed what to
+write instead (CHANGELOG.md: the 0.2.0 renames were dropped in 0.3.0).
 """
 
 import argparse
-import sys
 
 __all__ = [
     "sampler_choice",
-    "DEPRECATED_IN",
-    "REMOVED_IN",
     "HelpFormatter",
     "add_loading_options",
     "add_model_options",
     "add_reading_options",
     "add_specimen_option",
-    "deprecated_spellings",
     "option",
 ]
-
-DEPRECATED_IN = "0.2.0"
-"""The version whose grammar replaced the old spellings."""
-REMOVED_IN = "0.3.0"
-"""The version that drops them."""
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -51,37 +42,14 @@ class HelpFormatter(argparse.HelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
-class _Deprecated(argparse.Action):
-    """An old spelling of an option: says what to write instead, then acts as the new one."""
-
-    def __init__(self, option_strings, dest, replacement, split=False, **kwargs):
-        self.replacement = replacement
-        self.split = split
-        super().__init__(option_strings, dest, **kwargs)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        print(
-            f"{parser.prog}: {option_string} is deprecated since {DEPRECATED_IN} and goes in "
-            f"{REMOVED_IN}: write {self.replacement}",
-            file=sys.stderr,
-        )
-        if self.split:  # a comma-separated list given to an option that is now repeated
-            values = list(getattr(namespace, self.dest, None) or []) + [
-                v.strip() for v in values.split(",") if v.strip()
-            ]
-        setattr(namespace, self.dest, values)
-
-
-def option(parser, *names, old=(), **kwargs):
-    """Add an option under ``names``, and each spelling in ``old`` as a deprecated alias.
+def option(parser, *names, **kwargs):
+    """Add an option under ``names``; its help is required.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser or argument group
     *names : str
-        The option's spellings (the last is the one the deprecation line recommends).
-    old : sequence of str
-        Retired spellings: accepted, hidden from the help, one line on stderr when used.
+        The option's spellings (the last is its long name).
     **kwargs
         As :meth:`argparse.ArgumentParser.add_argument`; ``help`` is required.
 
@@ -91,36 +59,7 @@ def option(parser, *names, old=(), **kwargs):
     """
     if not kwargs.get("help"):
         raise ValueError(f"option {names[-1]} needs help")
-    action = parser.add_argument(*names, **kwargs)
-    for spelling in old:
-        _alias(parser, spelling, action, split=False)
-    return action
-
-
-def _alias(parser, spelling, action, split):
-    """Add ``spelling`` as a deprecated alias of ``action``."""
-    extra = {"type": action.type, "choices": action.choices} if not split else {}
-    parser.add_argument(
-        spelling,
-        dest=action.dest,
-        action=_Deprecated,
-        replacement=action.option_strings[-1],
-        split=split,
-        default=argparse.SUPPRESS,
-        help=argparse.SUPPRESS,
-        metavar=action.metavar,
-        **extra,
-    )
-
-
-def deprecated_spellings(parser):
-    """Return ``{old spelling: replacement}`` of every deprecated alias of ``parser``."""
-    return {
-        spelling: action.replacement
-        for action in parser._actions
-        if isinstance(action, _Deprecated)
-        for spelling in action.option_strings
-    }
+    return parser.add_argument(*names, **kwargs)
 
 
 def add_reading_options(parser):
@@ -162,21 +101,15 @@ def add_model_options(parser, likelihood=True):
     )
 
 
-def add_specimen_option(parser, what, old_list=False):
-    """``--specimen ID``, repeatable (``dest="specimen"``: a list, or None for every specimen).
-
-    ``old_list``: also accept the retired ``--specimens a,b`` (comma-separated).
-    """
-    action = option(
+def add_specimen_option(parser, what):
+    """``--specimen ID``, repeatable (``dest="specimen"``: a list, or None for every specimen)."""
+    return option(
         parser,
         "--specimen",
         action="append",
         metavar="ID",
         help=f"{what}; repeat for several (default: every specimen)",
     )
-    if old_list:
-        _alias(parser, "--specimens", action, split=True)
-    return action
 
 
 def add_loading_options(parser):

@@ -261,7 +261,7 @@ def _add_diagnose(sub):
         help="creep laws tried in place of the base's, comma-separated; 'none' for none "
         "(default: every registered law but the base's)",
     )
-    add_specimen_option(dia, "diagnose this specimen", old_list=True)
+    add_specimen_option(dia, "diagnose this specimen")
     option(
         dia,
         "--threshold",
@@ -324,14 +324,12 @@ def _add_calibrate(sub):
         cal,
         "--voltages-v",
         default="0.1,1,3",
-        old=("--voltages",),
         help="V_FSR of the simulated tests, in V",
     )
     option(
         cal,
         "--forces-n",
         default="1.96,4.9,9.8",
-        old=("--forces",),
         help="forces of the simulated tests, in N",
     )
     option(cal, "--samples", type=int, default=8, help="log-spaced samples per test over 1 h")
@@ -354,7 +352,6 @@ def _add_drift(sub):
         "--time-s",
         type=float,
         default=3600.0,
-        old=("--time",),
         help="time of the drift, in s",
     )
     option(drf, "--json", help="write the groups (and optimal voltages) here, atomically")
@@ -366,10 +363,8 @@ def _add_drift(sub):
         default="voltage",
         help="x axis of the figure: voltage (Figures 10, 11) or stress (Figures 13, 14)",
     )
-    option(drf, "--voltages-v", old=("--voltages",), help="V_FSR list in V (default: the data's)")
-    option(
-        drf, "--stresses-pa", old=("--stresses",), help="stress list in Pa (default: the data's)"
-    )
+    option(drf, "--voltages-v", help="V_FSR list in V (default: the data's)")
+    option(drf, "--stresses-pa", help="stress list in Pa (default: the data's)")
     option(
         drf,
         "--optimal-voltage",
