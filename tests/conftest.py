@@ -15,6 +15,7 @@ from fsrbayes import load_sensor
 # the suite is sized for, rounded), these modules go first and the short ones fill in after
 # them, so that the two workers finish together instead of one of them running a long module
 # alone at the end. A module missing from the list only runs later; the order changes no result.
+# Modules are named by file name alone, wherever under tests/ they are (the names are unique).
 LONG_MODULES = (
     # The validation tier (pytest -m validation), one core per worker. A worker takes the next
     # module as soon as fewer than two of its tests are pending, so the one running the SBC

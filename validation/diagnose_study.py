@@ -9,8 +9,8 @@ paper's own mismatch (:data:`PAPER_MISMATCH`: a negative area creep that makes d
 independent of stress at low voltage, as the paper measured on A201 sensors).
 
 Run ``python -m validation.diagnose_study [ROWS.json]`` for the table and, with ROWS.json, its
-rows (``--scan`` for the detection limits); the slow test ``tests/test_diagnose_matrix.py`` runs
-the matrix.
+rows (``--scan`` for the detection limits); the slow test
+``tests/discrepancy/test_diagnose_matrix.py`` runs the matrix.
 """
 
 import json

@@ -25,7 +25,7 @@ the verdict is never ``adequate``, a ``missing-effect`` verdict names effects th
 the verdict's definition); and the study counts right and false names (:data:`ACCEPTED`: an
 artefact is rightly named only as a readout effect, never as the sensor's physics). Run ``python -m
 validation.outside_menu [n_sets] [rows.json]``; the slow test
-``tests/test_diagnose_matrix.py::test_outside_the_menu`` runs it.
+``tests/discrepancy/test_diagnose_matrix.py::test_outside_the_menu`` runs it.
 """
 
 import json

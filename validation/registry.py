@@ -317,7 +317,7 @@ STUDIES = {
         how="the acceptance matrix: the catalogue effects hidden at two magnitudes, effect-free "
         "Burgers and Zener truths and the paper's mismatch, 2 specimens × 9 tests × 31 samples a "
         "case (`python -m validation.diagnose_study ROWS.json`; the slow test "
-        "`tests/test_diagnose_matrix.py`)",
+        "`tests/discrepancy/test_diagnose_matrix.py`)",
         run=_call("diagnose_study", "run"),
         table=_call("diagnose_study", "format_study"),
         summary=_matrix_summary,

@@ -4,9 +4,9 @@ A bench of what the model lacks must not make its data through the code it is me
 sign or a factor wrong in :mod:`fsrbayes.physics.rheology` would then be in the data too, and a
 fit would agree with it. The benches (:mod:`.paperlike`, :mod:`.realfsr`,
 ``validation/foreign_forms.py``, ``validation/outside_menu.py``) therefore never import the
-model's creep laws or its effect catalogue (``tests/test_independence.py`` enforces it). Where a
-bench's base is the paper's Burgers element, it takes it from here: eq. 17 restated from the
-paper, and checked against the model's own implementation by a test, not shared with it. The
+model's creep laws or its effect catalogue (``tests/data/test_independence.py`` enforces it).
+Where a bench's base is the paper's Burgers element, it takes it from here: eq. 17 restated from
+the paper, and checked against the model's own implementation by a test, not shared with it. The
 stress laws (eqs. 5–7), the tunnelling law and the circuit solver are the package's: they are
 not what such a bench tests.
 """

@@ -13,8 +13,8 @@ with g a Chebyshev series on [−1, 1] (:data:`ERFC_CHEBYSHEV`; the form of Nume
 is exact to ~1e-19; the tail's error is that of exp(−a²), as in scipy's (relative ~a²·1e-16),
 and the exponential is :func:`~.reductions.exp_into`'s. The counts' probabilities are formed in
 one pass and their logarithms in another, by :func:`~.reductions.log_into` (also four at a time).
-``tests/test_quantised.py`` checks the tail against scipy's ``ndtr`` and the likelihood against
-the numpy version.
+``tests/inference/test_quantised.py`` checks the tail against scipy's ``ndtr`` and the
+likelihood against the numpy version.
 """
 
 import math

@@ -64,8 +64,8 @@ RANK_TOLERANCE = 1e-4
 (the singular values of the pivoted QR). Below it the root search loses a parameter to round-off,
 and, more to the point, parameters the data pin only weakly get solved for: over the posterior's
 spread the map u → w then stops being one-to-one (no root, or a root elsewhere), proposals there
-are rejected and the sampled posterior is cut short (``tests/test_fit_checks.py`` checks that a
-converged fit's draws all map back)."""
+are rejected and the sampled posterior is cut short (``tests/discrepancy/test_fit_checks.py``
+checks that a converged fit's draws all map back)."""
 MAX_STEP = 2.0
 """Largest root-search step of a solved parameter, in prior widths (u units)."""
 FD_STEP = 3e-6

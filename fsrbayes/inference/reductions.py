@@ -6,7 +6,7 @@ with the C library one at a time, and those exponentials are most of a hyper-pos
 :func:`logsumexp_last` forms them with the same argument reduction and polynomial a libm uses,
 written so that the compiler packs four of them into one vector instruction. Its terms agree
 with ``np.exp`` to about one unit in the last place, its results with
-:func:`scipy.special.logsumexp` to ~1e-15 (tests/test_utils.py).
+:func:`scipy.special.logsumexp` to ~1e-15 (tests/package/test_utils.py).
 
 The exponential: x = k·ln 2 + r with k = round(x/ln 2) and |r| ≤ ln(2)/2 (Cody and Waite's
 two-part ln 2, so r is exact to ~1e-20), e^r by its Taylor polynomial of degree 13 (remainder

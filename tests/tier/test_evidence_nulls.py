@@ -1,10 +1,10 @@
 """Validation tier: Zener against Burgers by evidence, on data simulated from each.
 
-The designs of ``tests/test_model_selection.py`` (one A201 specimen, the paper's three forces),
-with seeds of their own, through ``compare``'s fit-and-bridge path: on data from Zener (Burgers
-with no linear flow) the evidence prefers Zener, the simpler model, beyond twice its error; on
-data with the paper's Burgers parameters it prefers Burgers "very strongly" (2 ln B > 10) beyond
-three errors. Each log-evidence's error bar is the run's own.
+The designs of ``tests/inference/evidence/test_model_selection.py`` (one A201 specimen, the
+paper's three forces), with seeds of their own, through ``compare``'s fit-and-bridge path: on data
+from Zener (Burgers with no linear flow) the evidence prefers Zener, the simpler model, beyond
+twice its error; on data with the paper's Burgers parameters it prefers Burgers "very strongly"
+(2 ln B > 10) beyond three errors. Each log-evidence's error bar is the run's own.
 """
 
 from dataclasses import replace

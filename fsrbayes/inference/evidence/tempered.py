@@ -77,9 +77,9 @@ class TemperedSettings:
         Degrees of freedom of the reference's Student-t components.
     quadratic : bool
         Quadratic transport maps for the reference's charts. Off by default: on a kinked ridge
-        (the creep posterior's, and :mod:`tests.test_tempered`'s closed form) the parabola bends
-        the arms' far ends and the ladders under-sample them (x's 99.9 % quantile 2.8 instead of
-        3.09; affine charts: 3.06–3.11).
+        (the creep posterior's, and :mod:`tests.inference.evidence.test_tempered`'s closed form)
+        the parabola bends the arms' far ends and the ladders under-sample them (x's 99.9 %
+        quantile 2.8 instead of 3.09; affine charts: 3.06–3.11).
     rhat_target, tau_factor, ess_target : float
         Convergence criteria (as :class:`~fsrbayes.inference.samplers.settings.SamplerSettings`).
     processes : int

@@ -11,9 +11,9 @@ fsrbayes' own :class:`~.moves.stretch.StretchMove` and
 :class:`~emcee.moves.MHMove`, whose ``get_proposal`` it calls. It draws the same random numbers in
 the same order from the same ``RandomState``, so every
 stored position, log-density, blob and acceptance count equals emcee's bit for bit
-(``tests/test_stepping.py`` runs both), and the checkpoints keep emcee's random-state tuple. Any
-other move (a target's own, such as the population's blocked Gibbs sweep) is left to emcee:
-:func:`steps_alone` says which.
+(``tests/inference/samplers/test_stepping.py`` runs both), and the checkpoints keep emcee's
+random-state tuple. Any other move (a target's own, such as the population's blocked Gibbs sweep)
+is left to emcee: :func:`steps_alone` says which.
 """
 
 import emcee

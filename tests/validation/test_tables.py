@@ -53,6 +53,6 @@ def test_a_missing_table_or_a_short_row_is_refused(tmp_path):
 def test_the_repository_tables_exist():
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     header, _ = read_table(root / "BENCHMARKS.md", "benchmarks")
     assert header == ["benchmark", "result", "measured", "commit", "machine"]

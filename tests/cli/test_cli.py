@@ -10,7 +10,7 @@ import pytest
 import fsrbayes
 from tests.commandline import fsrbayes_command
 
-REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
+REFERENCE = json.loads((Path(__file__).parents[1] / "fixtures/reference_drift.json").read_text())
 
 
 def run(*args):

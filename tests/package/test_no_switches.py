@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "fsrbayes"
 SCRIPTS = [ROOT / folder for folder in ("tests", "benchmarks", "validation")]
 

@@ -33,7 +33,7 @@ def test_a_given_ramp_is_the_bench_s_ramp(truth):
     # a weight settling over 0.3 s, its ramp written in the log but not its landing instant: the
     # first loading's creep exact (ramp compliance), its samples kept out of log-spaced bins, and
     # at the bench's landing in the interval before the first loaded row (sampled by a fit) the
-    # model is the one with the onset given (tests/test_landing.py)
+    # model is the one with the onset given (tests/inference/test_landing.py)
     bench = {"ramp_s": 0.3}
     check = score_check(truth, truth["sigma_rel"], 12, **BENCH, **bench)
     mean_p, variance_p = check.p_values()

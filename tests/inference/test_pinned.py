@@ -27,7 +27,7 @@ from fsrbayes.inference.pinned import PinnedCoordinates, polish_along_pins
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
 from fsrbayes.inference.samplers.coordinates import SampledLogProb, round_trips
-from tests.test_transport import BEND, WIDTH, Banana
+from tests.inference.samplers.test_transport import BEND, WIDTH, Banana
 
 banana = Banana()
 

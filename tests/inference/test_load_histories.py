@@ -481,7 +481,7 @@ def test_a_fit_with_a_fitted_ramp_recovers_a_hidden_ramp_and_the_sensor(tmp_path
 def test_a_ramp_whose_landing_is_not_given_is_pointed_out(tmp_path):
     # the landing taken at the first loaded row is known to one sample; under a ramp that is
     # far more than a logger's noise, so the data summary says the fit samples it (landing[k],
-    # tests/test_landing.py) and that onset_s would pin it — not when given
+    # tests/inference/test_landing.py) and that onset_s would pin it — not when given
     text, truth = simulate_rig(1, reading="vout_V", ramp_s=0.3, duration_s=5.0, rate_hz=20.0)
     found = read_csv(write_rig(text, truth, tmp_path / "found.csv")[0])
     assert "in 4 of them the onset is known to one sample interval" in found.summary()

@@ -22,7 +22,7 @@ from fsrbayes.physics.solver import solve_bulk
 from tests.solver_oracle import solve_bulk_numpy
 
 # docs/physics.md, "Reference numbers": paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
-REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_drift.json").read_text())
+REFERENCE = json.loads((Path(__file__).parents[1] / "fixtures/reference_drift.json").read_text())
 
 
 def test_reference_drift_table(a201):

@@ -12,7 +12,7 @@ from validation.__main__ import main
 from validation.registry import STUDIES
 from validation.tables import read_table
 
-VALIDATION = Path(__file__).resolve().parents[1] / "validation"
+VALIDATION = Path(__file__).resolve().parents[2] / "validation"
 
 NOT_STUDIES = {
     "__init__": "the package",

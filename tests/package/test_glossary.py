@@ -9,7 +9,7 @@ import pytest
 from fsrbayes.physics.parameters import PARAMETERS
 from tests.commandline import fsrbayes_command
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GLOSSARY = (ROOT / "docs" / "glossary.md").read_text()
 DEFINED = set(re.findall(r"`([^`]+)`", GLOSSARY))
 TERMS = GLOSSARY.split("## Output keys")[0]

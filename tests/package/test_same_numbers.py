@@ -1,6 +1,6 @@
 """The forward model gives the recorded currents, and a short fit the recorded posterior summaries.
 
-``data/reference_summaries.json`` holds
+``tests/fixtures/reference_summaries.json`` holds
 
 - the current of every model family and effect, and of three stress histories, at fixed
   parameters, voltages, stresses and times (``currents``). They are compared to rtol 1e-10.
@@ -27,7 +27,7 @@
   draws, understates the spread three- to eightfold here (τ is estimated from ~100 steps, and
   the walkers of an ensemble are not independent draws), so the spread is measured instead.
 
-``python -m tests.test_same_numbers`` records the file from the package as it is.
+``python -m tests.package.test_same_numbers`` records the file from the package as it is.
 """
 
 import json
@@ -43,7 +43,7 @@ from fsrbayes.inference.samplers import SamplerSettings
 from fsrbayes.physics import loading
 from fsrbayes.physics.sensor import current_history
 
-REFERENCE_PATH = Path(__file__).parent / "data" / "reference_summaries.json"
+REFERENCE_PATH = Path(__file__).parents[1] / "fixtures" / "reference_summaries.json"
 SHORT = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
 EFFECTS = ("area-creep", "contact-creep", "power-law-creep", "voltage-degradation", "offset-stress")
 FAMILIES = ("burgers", "zener", "nutting", "kalantari")
