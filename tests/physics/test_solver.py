@@ -19,7 +19,7 @@ from fsrbayes.physics.compiled_kernels import predicted_start
 from fsrbayes.physics.rheology import creep_strain
 from fsrbayes.physics.sensor import sensor_state, solve_current
 from fsrbayes.physics.solver import solve_bulk
-from tests.solver_oracle import solve_bulk_numpy
+from tests.oracles import solve_bulk_numpy
 
 # docs/physics.md, "Reference numbers": paper law, A201 Table 1, paper rheology, drift(3600 s) in %.
 REFERENCE = json.loads((Path(__file__).parents[1] / "fixtures/reference_drift.json").read_text())
