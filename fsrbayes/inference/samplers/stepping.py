@@ -19,7 +19,8 @@ other move (a target's own, such as the population's blocked Gibbs sweep) is lef
 import emcee
 import numpy as np
 
-from .moves import DifferentialMove, StretchMove
+from .moves.differential import DifferentialMove
+from .moves.stretch import StretchMove
 
 __all__ = ["step_ensemble", "steps_alone"]
 
