@@ -19,7 +19,8 @@ from scipy import special
 from fsrbayes.data import read_csv
 from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.physics import spectrum
 
 LAWS = ("burgers", "zener", "nutting", "log-spectrum", "log-spectrum-sat")

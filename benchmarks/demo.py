@@ -8,7 +8,8 @@ stages' times come from the demo's own progress lines.
 import tempfile
 import time
 
-from fsrbayes.demo import FULL, QUICK, run_demo
+from fsrbayes.demo import QUICK, run_demo
+from fsrbayes.demo.plan import FULL
 
 
 def _timed(plan):

@@ -13,7 +13,7 @@ import numpy as np
 
 from benchmarks.likelihood import benchmark_specimen
 from fsrbayes.inference.samplers.ensemble import ensemble_moves
-from fsrbayes.inference.samplers.moves import MixtureProposal
+from fsrbayes.inference.samplers.moves.independence import MixtureProposal
 from fsrbayes.inference.samplers.stepping import step_ensemble
 
 

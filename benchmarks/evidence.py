@@ -19,7 +19,7 @@ from benchmarks.likelihood import benchmark_specimen
 from fsrbayes.inference.evidence.bridge import bridge_from_fit
 from fsrbayes.inference.evidence.referenced import REFERENCED_LADDER, referenced_log_evidence
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
-from fsrbayes.inference.samplers import ConvergenceWarning
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 
 PATHS = ("bridge", "reference")
 """The estimators of :func:`fsrbayes.compare` (``path``) this benchmark times."""

@@ -17,7 +17,7 @@ import numpy as np
 
 from fsrbayes.data import synthetic
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
-from fsrbayes.inference.samplers import ConvergenceWarning
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 
 TARGET_S = 30.0
 SEEDS = (1, 2, 3, 4, 5)

@@ -19,7 +19,8 @@ import numpy as np
 from fsrbayes.data import synthetic
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 FIT_SETTINGS = SamplerSettings(n_ensembles=2, chunk=300, max_steps=2100, min_steps=2100)
 HYPER_SETTINGS = SamplerSettings(processes=2)

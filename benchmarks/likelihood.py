@@ -6,7 +6,8 @@ import numpy as np
 
 import fsrbayes
 from fsrbayes.data import synthetic
-from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
 
 
 def benchmark_specimen(samples=61, model="burgers"):

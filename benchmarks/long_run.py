@@ -15,7 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.ensemble import run_ensembles
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 NDIM = 13
 

@@ -14,7 +14,7 @@ import warnings
 
 from fsrbayes.data import synthetic
 from fsrbayes.inference.population.routes import fit_specimens, two_stage
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 from .hierarchical import FIT_SETTINGS
 

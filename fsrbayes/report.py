@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 from . import plots
+from .plots.diagnosis import diagnosis_discrepancy_plot
 from .utils import atomic_path, json_ready
 
 __all__ = ["diagnosis_narrative", "write_diagnosis_report", "markdown_to_html", "embed_figure"]
@@ -324,7 +325,7 @@ FIGURES = (
     (
         "discrepancy_shape.png",
         "Where and what shape: the smooth discrepancy term of every test",
-        plots.diagnosis_discrepancy_plot,
+        diagnosis_discrepancy_plot,
     ),
 )
 

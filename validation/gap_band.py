@@ -31,7 +31,8 @@ import time
 import numpy as np
 
 from fsrbayes.data.synthetic import PAPER_VOLTAGES, simulate
-from fsrbayes.discrepancy import diagnose, gap, gap_band
+from fsrbayes.discrepancy import diagnose
+from fsrbayes.discrepancy.gaps import gap, gap_band
 from fsrbayes.utils import json_ready
 
 DESIGNS = (

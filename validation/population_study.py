@@ -29,7 +29,8 @@ from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.population.predictive import ForwardTemplate, drift_groups, new_specimens
 from fsrbayes.inference.population.routes import fit_specimens, joint, two_stage
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
 from fsrbayes.utils import json_ready
 

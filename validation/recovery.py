@@ -22,7 +22,8 @@ import numpy as np
 from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics.constants import DRIFT_TIME_S
 from fsrbayes.utils import json_ready
 

@@ -48,10 +48,10 @@ import scipy.stats
 from fsrbayes.data.csvio import read_csv
 from fsrbayes.data.rigsim import RIG_DEFAULTS, simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference import SpecimenData
 from fsrbayes.inference.design import ADC_MIN_COUNTS
 from fsrbayes.inference.fit import FIT_SETTINGS, fit
-from fsrbayes.inference.samplers import ConvergenceWarning
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 from fsrbayes.utils import json_ready
 from validation.importance import importance_quantiles
 

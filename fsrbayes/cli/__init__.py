@@ -1,6 +1,9 @@
 """fsrbayes: Bayesian inference on the creep (drift) of force sensing resistors.
 
 Errors on bad input are one line on stderr and exit code 2, never a traceback.
+
+The package exports :func:`main`, the ``fsrbayes`` command; :func:`build_parser` stays here
+unexported (for tools that read the parser), and the commands live in the modules below.
 """
 
 import argparse
@@ -15,7 +18,7 @@ from .grammar import HelpFormatter, add_model_options, add_reading_options, opti
 from .model import cmd_check, cmd_demo, cmd_forward
 from .parsers import add_analysis_commands
 
-__all__ = ["main", "build_parser", "UsageError"]
+__all__ = ["main"]
 
 DESCRIPTION = """\
 Bayesian inference on the creep (drift) of force sensing resistors: under a constant load an

@@ -17,7 +17,7 @@ def cmd_compare(args):
     """Compare models by log-evidence per specimen, Bayes factors and PSIS-LOO (JSON)."""
     from ..inference.compare import compare
     from ..inference.evidence.referenced import MODE_SEARCH
-    from ..inference.samplers import SamplerSettings
+    from ..inference.samplers.settings import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     models = [m.strip() for m in args.models.split(",") if m.strip()]
@@ -193,7 +193,8 @@ def cmd_calibrate(args):
         calibrate_specimen,
         format_sbc,
     )
-    from ..plots import save_figure, sbc_rank_plot
+    from ..plots import save_figure
+    from ..plots.fit import sbc_rank_plot
     from .common import floats
 
     load_sensor(args.sensor)

@@ -40,7 +40,8 @@ def cmd_fit(args):
     """Fit each specimen (or the one named) with emcee: posterior.nc + summary.json for each."""
     from ..inference.fit import CHECK_EVERY, SAMPLERS, DesignWarning, fit
     from ..inference.output import save_fit
-    from ..inference.samplers import ConvergenceWarning, SamplerSettings
+    from ..inference.samplers.convergence import ConvergenceWarning
+    from ..inference.samplers.settings import SamplerSettings
 
     data = csvio.read_csv(args.data, sep=args.sep, shift_time=args.shift_time)
     specimens = chosen_specimens(args, data) or data.specimens
@@ -136,7 +137,8 @@ def _check_space(args, data, specimens, settings, out):
     Refuse before sampling when the output folder's disk cannot hold the checkpoints and posteriors.
     """
     from ..data.sensors import load_sensor
-    from ..inference import LogPosterior, SpecimenData
+    from ..inference.likelihood import SpecimenData
+    from ..inference.posterior import LogPosterior
 
     need = 0
     for specimen in specimens:

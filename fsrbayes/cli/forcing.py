@@ -49,9 +49,10 @@ def cmd_force(args):
     if args.json:
         write_json_atomic(Path(args.json), json_ready(result))
     if args.plot:
-        from .. import plots
+        from ..plots import save_figure
+        from ..plots.fit import force_plot
 
-        plots.save_figure(plots.force_plot(result)[0], Path(args.plot))
+        save_figure(force_plot(result)[0], Path(args.plot))
     return 0
 
 

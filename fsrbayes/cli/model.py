@@ -54,7 +54,8 @@ def cmd_demo(args):
     _figure7(args.time_s, out)
     if args.figure7_only:
         return 0
-    from ..demo import FULL, QUICK, run_demo
+    from ..demo.plan import FULL, QUICK
+    from ..demo.run import run_demo
 
     plan = QUICK if args.quick else FULL
     print(

@@ -21,7 +21,7 @@ def _calibrated(args, out):
     """Fit the calibration tests of ``--calibrate`` into ``out`` (with their fit checks)."""
     from ..inference.fit import DesignWarning
     from ..inference.predictive_draws import calibrate
-    from ..inference.samplers import ConvergenceWarning
+    from ..inference.samplers.convergence import ConvergenceWarning
 
     data = csvio.read_csv(args.calibrate, sep=args.sep, shift_time=args.shift_time)
     print(f"fitting the calibration of {', '.join(data.specimens)} ...", flush=True)
@@ -104,7 +104,8 @@ def cmd_predict(args):
     if args.json:
         write_json_atomic(Path(args.json), json_ready(result))
     if args.plot:
-        from .. import plots
+        from ..plots import save_figure
+        from ..plots.fit import predict_plot
 
-        plots.save_figure(plots.predict_plot(result)[0], Path(args.plot))
+        save_figure(predict_plot(result)[0], Path(args.plot))
     return 0

@@ -20,10 +20,15 @@ never does. The demo:
 5. writes one self-contained HTML report (figures embedded), ``results.json``, and netCDF
    posteriors.
 
-The plan (:data:`FULL`, :data:`QUICK`) sets how many specimens, voltages and draws are used.
+The plan (:data:`~.plan.FULL`, the default, or :data:`QUICK`) sets how many specimens, voltages
+and draws are used.
+
+The package exports :func:`run_demo` and :data:`QUICK`; the plans (:class:`~.plan.DemoPlan`,
+:data:`~.plan.FULL`) and the study's steps are imported from :mod:`.plan`, :mod:`.run` and
+:mod:`.study`.
 """
 
-from .plan import FULL, QUICK, DemoPlan
+from .plan import QUICK
 from .run import run_demo
 
-__all__ = ["DemoPlan", "FULL", "QUICK", "run_demo"]
+__all__ = ["QUICK", "run_demo"]

@@ -3,7 +3,7 @@
 from dataclasses import dataclass, field
 
 from ..inference.evidence.ladder import LadderSettings
-from ..inference.samplers import SamplerSettings
+from ..inference.samplers.settings import SamplerSettings
 
 __all__ = ["DemoPlan", "FULL", "QUICK", "PAPER_HYPOTHESES", "FIGURE12", "subset"]
 

@@ -12,6 +12,8 @@ from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES
 from ..inference.compare import strength
 from ..inference.output import to_datatree
 from ..inference.parallel import map_jobs
+from ..plots.fit import drift_time_plot
+from ..plots.population import drift_curves_plot
 from ..report import embed_figure, markdown_to_html, write_diagnosis_report
 from ..utils import atomic_path, json_ready, write_json_atomic
 from .narrative import narrative
@@ -151,7 +153,7 @@ def _fit_figures(sensor, fit, roles, folder):
     tests = figure12_tests(fit["posterior"][roles[0]].data, *FIGURE12[sensor])
     curves = folder / f"drift_time_{fit['specimen']}.png"
     titles = [f"{fit['posterior'][role].model} ({_when(role)})" for role in roles]
-    plots.save_figure(plots.drift_time_plot([trees[r] for r in roles], titles, tests)[0], curves)
+    plots.save_figure(drift_time_plot([trees[r] for r in roles], titles, tests)[0], curves)
     made.append(
         (
             curves,
@@ -350,7 +352,7 @@ def _run(out, plan, processes, seed, echo):
     }
     path = out / "figure7.png"
     plots.save_figure(
-        plots.drift_curves_plot(*figure7_curves(), FIGURE7_VOLTAGES, FIGURE7_STRESSES)[0], path
+        drift_curves_plot(*figure7_curves(), FIGURE7_VOLTAGES, FIGURE7_STRESSES)[0], path
     )
     figures = [
         (

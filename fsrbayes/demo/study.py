@@ -10,7 +10,9 @@ import numpy as np
 
 from ..data.sensors import load_sensor
 from ..data.synthetic import FIGURE7_STRESSES, FIGURE7_VOLTAGES, PAPER_VOLTAGES
-from ..discrepancy import diagnose, gap, predictive_checks
+from ..discrepancy.checks import predictive_checks
+from ..discrepancy.diagnose import diagnose
+from ..discrepancy.gaps import gap
 from ..inference.evidence.bridge import bridge_from_fit
 from ..inference.evidence.laplace import LocalDraws, laplace_fit
 from ..inference.evidence.referenced import referenced_from_fit
@@ -27,7 +29,7 @@ from ..inference.population.predictive import (
 )
 from ..inference.population.routes import two_stage
 from ..inference.posterior import LogPosterior
-from ..inference.samplers import ConvergenceWarning
+from ..inference.samplers.convergence import ConvergenceWarning
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS
 from ..physics.models import parse_model
@@ -119,7 +121,7 @@ def fit_specimen(job):
     ``"zener"`` also gets posterior draws — with ``plan.converged_fits`` from emcee ensembles run
     until convergence (:func:`~fsrbayes.inference.fit.sample_posterior`, started at the Laplace
     mode), else from a short run at the mode — and the gap of its predictive checks
-    (:func:`~fsrbayes.discrepancy.gap`).
+    (:func:`~fsrbayes.discrepancy.gaps.gap`).
 
     Returns
     -------

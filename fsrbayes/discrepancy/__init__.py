@@ -4,28 +4,23 @@
 and shows the gap shrink; :func:`fit_checks` is the check every fit gets (a converged posterior of
 a model that does not fit must not be silent); both rest on the posterior predictive checks of
 :mod:`.checks`.
+
+The package exports :func:`diagnose` and the :class:`Diagnosis` it returns, :func:`fit_checks`,
+:func:`predictive_checks`, :func:`locate` and :func:`diagnose_schema`; the gap measures
+(:mod:`.gaps`), the verdicts (:mod:`.verdict`) and the rest are imported from their modules.
 """
 
 from .checks import predictive_checks
-from .diagnose import DEFAULT_THRESHOLD, GAP_METRIC, Diagnosis, diagnose
+from .diagnose import Diagnosis, diagnose
 from .fitcheck import fit_checks
-from .gaps import failed_checks, gap, gap_band
-from .locate import locate, misfit_by
-from .verdict import VERDICTS, diagnose_schema, verdict_of
+from .locate import locate
+from .verdict import diagnose_schema
 
 __all__ = [
-    "DEFAULT_THRESHOLD",
-    "GAP_METRIC",
     "Diagnosis",
     "diagnose",
     "diagnose_schema",
-    "VERDICTS",
-    "failed_checks",
     "fit_checks",
-    "gap",
-    "gap_band",
     "locate",
-    "misfit_by",
     "predictive_checks",
-    "verdict_of",
 ]

@@ -241,7 +241,7 @@ EVIDENCE_METHOD = (
 )
 BAND_METHOD = (
     "95th percentile of the gap of the base model fitted to data it generated, by the numbers of "
-    "creep tests and specimens (fsrbayes.discrepancy.gap_band)"
+    "creep tests and specimens (fsrbayes.discrepancy.gaps.gap_band)"
 )
 BAND_SIMULATED = (
     "95th percentile of the gap of {n} null data sets per specimen, simulated as the data were "

@@ -2,9 +2,9 @@
 
 What a fit of one specimen is made of sits at this level — the data packed for the likelihood
 (:mod:`.likelihood`), the target (:mod:`.posterior`), the optimisers that find its modes
-(:mod:`.optimize`), the samplers as registered objects (:mod:`.sampling`: :class:`Ensemble`),
-the evidence estimators as registered objects (:mod:`.estimators`: :class:`Bridge`,
-:class:`Reference`, :class:`Tempered`, :class:`Laplace`), the fit that orchestrates them
+(:mod:`.optimize`), the samplers as registered objects (:mod:`.sampling`: ``Ensemble``),
+the evidence estimators as registered objects (:mod:`.estimators`: ``Bridge``, ``Reference``,
+``Tempered``, ``Laplace``), the fit that orchestrates them
 (:mod:`.fit`), model comparison
 (:mod:`.compare`, its result in :mod:`.comparison`), ArviZ output (:mod:`.output`), parallel
 jobs (:mod:`.parallel`) and the user-facing simulation-based calibration
@@ -18,53 +18,36 @@ jobs (:mod:`.parallel`) and the user-facing simulation-based calibration
 The entry points themselves are :func:`fsrbayes.fit` and :func:`fsrbayes.compare` (the
 modules :mod:`.fit` and :mod:`.compare` keep their names here, so they are not re-exported).
 
+The package exports what a user of a fit touches — its result, settings, warnings and output —
+and the registries and base classes a new sampler or estimator is written against
+(docs/extending.md); everything else is imported from its module (e.g. ``Ensemble`` from
+:mod:`.sampling`, ``Laplace`` from :mod:`.estimators`, ``LogPosterior`` from :mod:`.posterior`).
+
 Inside this layer imports flow one way: parallel, likelihood, posterior → samplers →
 optimize → sampling → evidence → estimators → fit → population, compare, output, calibration.
 """
 
-from .compare import KASS_RAFTERY, Comparison, strength
-from .estimators import (
-    ESTIMATORS,
-    Bridge,
-    Laplace,
-    Reference,
-    Tempered,
-    register_estimator,
-)
-from .evidence import Estimator, EvidenceEstimate
-from .fit import FIT_SETTINGS, DesignWarning, FitResult
-from .likelihood import LIKELIHOODS, SpecimenData, log_likelihood_pointwise
+from .design import DesignWarning
+from .estimators import ESTIMATORS, register_estimator
+from .evidence.estimate import Estimator, EvidenceEstimate
 from .output import save_fit, save_population, to_datatree
-from .posterior import LogPosterior
-from .samplers import ConvergenceWarning, SamplerSettings
-from .sampling import SAMPLERS, Ensemble, Sampler, register_sampler
+from .samplers.convergence import ConvergenceWarning
+from .samplers.settings import SamplerSettings
+from .sampling import SAMPLERS, FitResult, Sampler, register_sampler
 
 __all__ = [
     "ESTIMATORS",
-    "FIT_SETTINGS",
-    "KASS_RAFTERY",
-    "LIKELIHOODS",
     "SAMPLERS",
-    "Bridge",
-    "Comparison",
     "ConvergenceWarning",
     "DesignWarning",
-    "Ensemble",
     "Estimator",
     "EvidenceEstimate",
     "FitResult",
-    "Laplace",
-    "LogPosterior",
-    "Reference",
     "Sampler",
     "SamplerSettings",
-    "SpecimenData",
-    "Tempered",
-    "log_likelihood_pointwise",
     "register_estimator",
     "register_sampler",
     "save_fit",
     "save_population",
-    "strength",
     "to_datatree",
 ]

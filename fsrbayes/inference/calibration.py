@@ -48,7 +48,8 @@ from .fit import specimen_posterior
 from .likelihood import SpecimenData
 from .parallel import map_jobs, single_threaded_blas
 from .posterior import LogPosterior
-from .samplers import ConvergenceWarning, SamplerSettings
+from .samplers.convergence import ConvergenceWarning
+from .samplers.settings import SamplerSettings
 from .sampling import Ensemble
 
 __all__ = [

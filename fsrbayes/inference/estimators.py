@@ -35,7 +35,7 @@ from .evidence.referenced import (
     referenced_log_evidence,
 )
 from .evidence.tempered import TEMPERED_SETTINGS, TemperedSettings, tempered_evidence, tempered_fit
-from .samplers import ConvergenceWarning
+from .samplers.convergence import ConvergenceWarning
 from .sampling import FIT_SETTINGS, Ensemble, seed_of
 
 __all__ = [

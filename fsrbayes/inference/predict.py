@@ -329,7 +329,7 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
     >>> import fsrbayes
     >>> from fsrbayes.data.synthetic import simulate
     >>> from fsrbayes.inference.output import save_fit
-    >>> from fsrbayes.inference.samplers import SamplerSettings
+    >>> from fsrbayes.inference import SamplerSettings
     >>> data = simulate("a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8],
     ...                 samples=11, seed=2).data
     >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)

@@ -26,9 +26,9 @@ from ..utils import register_in
 from .optimize import MAP_ITERATIONS, ensemble_start, find_map, nested_starts, start_regions
 from .pinned import PinnedCoordinates, pinned_start, polish_along_pins
 from .posterior import LogPosterior
-from .samplers import EnsembleRun, SamplerSettings, run_ensembles
 from .samplers.checkpoint import check_checkpoint, load_kept
-from .samplers.ensemble import even_index
+from .samplers.ensemble import EnsembleRun, even_index, run_ensembles
+from .samplers.settings import SamplerSettings
 
 __all__ = [
     "CHECK_EVERY",
@@ -285,8 +285,8 @@ def sampler_named(sampler):
 class Ensemble(Sampler):
     """Emcee ensembles started at the separate optima and run until convergence (the default).
 
-    ``Ensemble(settings)`` with :class:`~fsrbayes.inference.samplers.SamplerSettings` (default
-    :data:`FIT_SETTINGS`); :meth:`run` is :func:`sample_posterior`. Writes and resumes
+    ``Ensemble(settings)`` with :class:`~fsrbayes.inference.samplers.settings.SamplerSettings`
+    (default :data:`FIT_SETTINGS`); :meth:`run` is :func:`sample_posterior`. Writes and resumes
     checkpoints.
     """
 

@@ -9,27 +9,22 @@ a Burgers or Zener sensor is compiled too, for many small evaluations (:mod:`.co
 finite-difference gradient's neighbours are carried from one solve along the root's tangent
 (:mod:`.tangent`).
 
-The package exports what a user calls: the current and drift of a stress step or history, the
-contact, creep and tunnelling laws one at a time, and the readout circuits. The solver and its
-compiled engines (:mod:`.solver`, :mod:`.compiled`), the registries a model is built from
-(:mod:`.rheology`, :mod:`.effects`, :mod:`.models`, :mod:`.parameters`) and the peer models
-(:mod:`.peers`) are imported from their modules, e.g. ``from fsrbayes.physics import rheology``.
+The package exports what a user calls: the current and drift of a stress step or history, one
+function per law (contact, creep, tunnelling), the two readout circuits and the domain errors.
+The rest is imported from its module — the laws' other functions (:mod:`.contact`,
+:mod:`.rheology`, :mod:`.tunneling`), the readout conversions (:mod:`.circuits`), the solver and
+its engines, the registries (:mod:`.rheology`, :mod:`.effects`, :mod:`.models`,
+:mod:`.parameters`) and the peer models (:mod:`.peers`), e.g.
+``from fsrbayes.physics import rheology``.
 """
 
-from .circuits import (
-    DividerResult,
-    amplifier_output,
-    current_from_amplifier,
-    resistance_from_amplifier,
-    resistances,
-    voltage_divider,
-)
-from .contact import contact_resistance, effective_area, gap, stress_from_force
+from .circuits import amplifier_output, voltage_divider
+from .contact import contact_resistance
 from .domain import DomainError, DomainWarning
 from .loading import StressHistory
-from .rheology import creep_compliance, creep_strain, strain_history
+from .rheology import creep_strain
 from .sensor import current, current_history, drift
-from .tunneling import paper_peak_voltage, tunneling_current
+from .tunneling import tunneling_current
 
 __all__ = [
     "current",
@@ -39,18 +34,8 @@ __all__ = [
     "DomainError",
     "DomainWarning",
     "contact_resistance",
-    "effective_area",
-    "gap",
-    "stress_from_force",
-    "creep_compliance",
     "creep_strain",
-    "strain_history",
     "tunneling_current",
-    "paper_peak_voltage",
-    "DividerResult",
     "voltage_divider",
     "amplifier_output",
-    "resistances",
-    "current_from_amplifier",
-    "resistance_from_amplifier",
 ]

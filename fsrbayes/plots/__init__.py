@@ -6,6 +6,11 @@
   curve families.
 - :mod:`.diagnosis` — a diagnosis: drift, misfit, residuals, discrepancy shapes.
 
+The package exports the figures the notebooks draw (a fit's corner, band and drift(3600 s) plots,
+a population's box plots, a diagnosis's drift, misfit and residual plots) and
+:func:`save_figure`; the other figures and the layout constants are imported from
+:mod:`.fit`, :mod:`.population` and :mod:`.diagnosis`.
+
 Nothing here is imported by the layers below. Matplotlib's non-interactive Agg backend is chosen
 unless ``MPLBACKEND`` says otherwise (a notebook's kernel sets it, for inline figures).
 """
@@ -20,43 +25,21 @@ if "MPLBACKEND" not in os.environ:  # a notebook's kernel sets it: keep its inli
 import matplotlib.pyplot as plt  # noqa: E402
 
 from .diagnosis import (  # noqa: E402
-    diagnosis_discrepancy_plot,
     diagnosis_drift_plot,
     diagnosis_misfit_plot,
     diagnosis_residual_plot,
 )
-from .fit import (  # noqa: E402
-    band_plot,
-    corner_plot,
-    drift_3600_plot,
-    drift_time_plot,
-    force_plot,
-    predict_plot,
-    sbc_rank_plot,
-)
-from .population import (  # noqa: E402
-    PANELS_PER_ROW,
-    SYMLOG_SPAN,
-    drift_curves_plot,
-    population_drift_plot,
-)
+from .fit import band_plot, corner_plot, drift_3600_plot  # noqa: E402
+from .population import population_drift_plot  # noqa: E402
 
 __all__ = [
-    "PANELS_PER_ROW",
-    "SYMLOG_SPAN",
     "corner_plot",
     "band_plot",
-    "drift_time_plot",
     "drift_3600_plot",
     "population_drift_plot",
-    "drift_curves_plot",
     "diagnosis_drift_plot",
     "diagnosis_misfit_plot",
-    "diagnosis_discrepancy_plot",
     "diagnosis_residual_plot",
-    "sbc_rank_plot",
-    "predict_plot",
-    "force_plot",
     "save_figure",
 ]
 

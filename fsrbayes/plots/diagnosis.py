@@ -74,7 +74,7 @@ def diagnosis_drift_plot(diagnosis):
 
 def diagnosis_misfit_plot(diagnosis):
     """Mean standardised drift(3600 s) misfit z per voltage and per stress, before and after."""
-    from ..discrepancy import misfit_by
+    from ..discrepancy.locate import misfit_by
 
     panels = _diagnosis_panels(diagnosis)
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), squeeze=False)

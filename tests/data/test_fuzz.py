@@ -15,7 +15,8 @@ from hypothesis import strategies as st
 
 import fsrbayes
 from fsrbayes.data import CreepData, DataError, read_csv, synthetic
-from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
 
 HEADER = "specimen,sensor,voltage_V,stress_Pa,time_s,current_A\n"
 GOOD_ROWS = [

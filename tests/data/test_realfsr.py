@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsrbayes.data import load_sensor, read_csv
+from fsrbayes.data import read_csv
 from fsrbayes.data import realfsr as bench
 from fsrbayes.data.realfsr import RIGS, counts_to_ohm, draw_specimen, gap_strain
 from fsrbayes.data.realfsr_protocols import (
@@ -23,6 +23,7 @@ from fsrbayes.data.realfsr_protocols import (
     write_acceptance_set,
     write_real_rig,
 )
+from fsrbayes.data.sensors import load_sensor
 from tests.commandline import fsrbayes_command
 
 TUNED = (0, 1, 2)

@@ -509,7 +509,7 @@ def test_rig_intervals_hold_the_truth_at_their_nominal_rate():
     VALIDATION.md, `rig_coverage`."""
     from dataclasses import replace
 
-    from fsrbayes.inference import FIT_SETTINGS
+    from fsrbayes.inference.sampling import FIT_SETTINGS
     from validation.rig_coverage import coverage_summary, format_coverage, rig_replication
 
     settings = replace(FIT_SETTINGS, processes=2, max_steps=100000)

@@ -14,7 +14,7 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 from fsrbayes.data.sensor_ranges import outside_calibration
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics.sensor import solve_current
 
 FAST = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=50, map_starts=1)

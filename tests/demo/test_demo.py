@@ -137,7 +137,7 @@ def test_the_full_plans_specimen_posteriors_are_converged_emcee_runs_from_the_la
     from fsrbayes.data.embedded import default_data
     from fsrbayes.demo.plan import FULL, subset
     from fsrbayes.demo.study import fit_specimen
-    from fsrbayes.discrepancy import gap_band
+    from fsrbayes.discrepancy.gaps import gap_band
 
     data = subset(default_data(), replace(FULL, specimens_per_sensor=1)).select(sensor="fsr402")
     (specimen,) = data.specimens

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from fsrbayes.data.embedded import default_truth
-from fsrbayes.demo import FULL, run_demo
+from fsrbayes.demo import run_demo
+from fsrbayes.demo.plan import FULL
 from fsrbayes.discrepancy.verdict import closes
 
 

@@ -7,10 +7,10 @@ import pytest
 
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.data.synthetic import simulate
-from fsrbayes.discrepancy import diagnose, diagnose_schema, predictive_checks, verdict_of
+from fsrbayes.discrepancy import diagnose, diagnose_schema, predictive_checks
 from fsrbayes.discrepancy.checks import two_sided_p
 from fsrbayes.discrepancy.gaps import drift_gap, gap
-from fsrbayes.discrepancy.verdict import closes
+from fsrbayes.discrepancy.verdict import closes, verdict_of
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
 
@@ -210,8 +210,7 @@ def test_no_candidate_that_helps_is_unexplained():
 
 
 def test_the_band_follows_the_null_gap_of_more_tests_and_more_specimens():
-    from fsrbayes.discrepancy import gap_band
-    from fsrbayes.discrepancy.gaps import GAP_NULL_OVERFIT, GAP_NULL_SPREAD_FLOOR
+    from fsrbayes.discrepancy.gaps import GAP_NULL_OVERFIT, GAP_NULL_SPREAD_FLOOR, gap_band
 
     # one specimen: more tests leave less of the misfit to the fit, the null gap² rises towards 1
     top = np.sqrt(1 + 1.645 * GAP_NULL_SPREAD_FLOOR * 1.01)  # and the spread to its floor

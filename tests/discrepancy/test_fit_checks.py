@@ -12,7 +12,8 @@ import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.data import write_csv
 from fsrbayes.discrepancy import fit_checks
-from fsrbayes.inference import FIT_SETTINGS, save_fit
+from fsrbayes.inference import save_fit
+from fsrbayes.inference.sampling import FIT_SETTINGS
 from tests.commandline import fsrbayes_command
 
 

@@ -8,7 +8,8 @@ import pytest
 from fsrbayes.data import read_csv
 from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.synthetic import simulate
-from fsrbayes.discrepancy import diagnose, gap_band
+from fsrbayes.discrepancy import diagnose
+from fsrbayes.discrepancy.gaps import gap_band
 from fsrbayes.discrepancy.nullband import formula_band_applies, redrawn_test, simulated_band
 
 

@@ -11,7 +11,8 @@ import fsrbayes
 from fsrbayes.data import CreepData, CreepTest
 from fsrbayes.data import synthetic as syn
 from fsrbayes.discrepancy import fit_checks
-from fsrbayes.inference import FIT_SETTINGS, SpecimenData, log_likelihood_pointwise
+from fsrbayes.inference.likelihood import SpecimenData, log_likelihood_pointwise
+from fsrbayes.inference.sampling import FIT_SETTINGS
 
 
 def test_the_ar1_likelihood_is_the_ou_process_multivariate_normal():

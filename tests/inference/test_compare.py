@@ -11,7 +11,7 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.inference.compare import strength
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import ModeSearch
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 TINY = LadderSettings(n_temps=4, burn=20, steps=120, replicates=2, n_walkers=32, n_batches=10)
@@ -207,7 +207,7 @@ def test_compare_takes_any_evidence_estimator(small):
     LOO/Savage–Dickey are left out because it draws no posterior samples. The comparison records
     its name as the path; a plain function still works, with a FutureWarning."""
     from fsrbayes.inference.estimators import Laplace
-    from fsrbayes.inference.evidence import EvidenceEstimate
+    from fsrbayes.inference.evidence.estimate import EvidenceEstimate
 
     calls = []
 
@@ -314,7 +314,7 @@ def test_the_bridge_path_is_the_default_and_falls_back_when_its_halves_disagree(
     from types import SimpleNamespace
 
     from fsrbayes.inference import estimators
-    from fsrbayes.inference.evidence import EvidenceEstimate
+    from fsrbayes.inference.evidence.estimate import EvidenceEstimate
 
     halves = {"zener": (10.0, 10.1), "burgers": (20.0, 20.5)}  # 0.1 and 0.5 apart
     monkeypatch.setattr(

@@ -12,7 +12,7 @@ from fsrbayes.data import synthetic
 from fsrbayes.inference.parallel import JobError, JobFailure, map_jobs
 from fsrbayes.inference.population import routes as hierarchical
 from fsrbayes.inference.population.routes import SpecimenFitWarning, fit_specimens
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 
 def square_or_fail(job):

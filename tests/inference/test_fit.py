@@ -18,11 +18,9 @@ import fsrbayes
 from fsrbayes.data import synthetic as syn
 from fsrbayes.inference import design
 from fsrbayes.inference.output import FORMAT_VERSION, open_fit_tree, save_fit
-from fsrbayes.inference.samplers import (
-    CheckpointMismatch,
-    ConvergenceWarning,
-    SamplerSettings,
-)
+from fsrbayes.inference.samplers.checkpoint import CheckpointMismatch
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 FAST = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
@@ -472,9 +470,10 @@ def test_map_search_reaches_the_truth_on_a_ridged_posterior():
     # 9 tests x 31 samples: plain L-BFGS-B stopped 19 nats below the true parameters here;
     # the whitened polish must end at or above them — also after the short first phase the fit
     # uses (MAP_ITERATIONS).
-    from fsrbayes.inference import LogPosterior, SpecimenData
     from fsrbayes.inference.fit import MAP_ITERATIONS
+    from fsrbayes.inference.likelihood import SpecimenData
     from fsrbayes.inference.optimize import find_map
+    from fsrbayes.inference.posterior import LogPosterior
 
     sim = syn.simulate(
         "a201",

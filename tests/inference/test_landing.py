@@ -17,7 +17,7 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.point_fit import write_point_fit
-from fsrbayes.inference.population import Population
+from fsrbayes.inference.population.model import Population
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import predict
 

@@ -10,7 +10,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference import ConvergenceWarning, SamplerSettings
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.point_fit import write_point_fit
-from fsrbayes.inference.population import Population
+from fsrbayes.inference.population.model import Population
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.predict import predict
 from fsrbayes.physics.loading import StressHistory
@@ -446,7 +446,7 @@ def test_a_fit_with_a_fitted_ramp_recovers_a_hidden_ramp_and_the_sensor(tmp_path
     from dataclasses import replace
 
     import fsrbayes
-    from fsrbayes.inference import FIT_SETTINGS
+    from fsrbayes.inference.sampling import FIT_SETTINGS
     from fsrbayes.physics.parameters import physical_parameters
 
     ramps = (0.3, 0.2, 0.45, 0.25)

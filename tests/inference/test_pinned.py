@@ -25,8 +25,10 @@ from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish
 from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.pinned import PinnedCoordinates, polish_along_pins
 from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 from fsrbayes.inference.samplers.coordinates import SampledLogProb, round_trips
+from fsrbayes.inference.samplers.ensemble import run_ensembles
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from tests.inference.samplers.test_transport import BEND, WIDTH, Banana
 
 banana = Banana()

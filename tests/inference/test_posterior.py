@@ -8,7 +8,8 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference import LogPosterior, SpecimenData
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,8 @@ from fsrbayes.inference import estimators, sampling
 from fsrbayes.inference.optimize import find_map
 from fsrbayes.inference.parallel import map_jobs
 from fsrbayes.inference.population import fit_specimens
-from fsrbayes.inference.samplers import ConvergenceReport, EnsembleRun, SamplerSettings
+from fsrbayes.inference.samplers import ConvergenceReport, EnsembleRun
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics import effects, models, parameters, rheology
 
 SHORT = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100, map_starts=2)
@@ -190,7 +191,8 @@ def test_a_registered_law_that_declares_a_nesting_gets_savage_dickey(toy_sensor,
     from dataclasses import replace
 
     from fsrbayes.inference import compare as comparing
-    from fsrbayes.inference.evidence import Estimator, EvidenceEstimate, SavageDickey
+    from fsrbayes.inference.evidence.estimate import Estimator, EvidenceEstimate
+    from fsrbayes.inference.evidence.savage_dickey import SavageDickey
 
     elastic = rheology.CreepLaw("toy-elastic", ("k1",), lambda t, p: 1.0 / p["k1"], None)
     rheology.register_creep_law(elastic)

@@ -39,7 +39,7 @@ import pytest
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics import loading
 from fsrbayes.physics.sensor import current_history
 

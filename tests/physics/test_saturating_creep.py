@@ -227,7 +227,8 @@ def test_more_junctions_make_the_current_follow_the_gap_as_the_ohmic_law_does():
 def test_a_sensor_file_without_junctions_fits_as_one_junction(tmp_path):
     """A file written before n_junctions existed: the model runs with the paper's one junction."""
     from fsrbayes.data import synthetic as syn
-    from fsrbayes.inference import LogPosterior, SpecimenData
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.posterior import LogPosterior
 
     bundled = load_sensor("a201")
     text = "".join(

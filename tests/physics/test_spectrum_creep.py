@@ -230,7 +230,7 @@ def test_fits_a_real_402_bench_log_end_to_end(tmp_path):
 
     from fsrbayes.data import read_csv
     from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
-    from fsrbayes.inference.samplers import SamplerSettings
+    from fsrbayes.inference.samplers.settings import SamplerSettings
 
     short = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100, min_steps=100, map_starts=2)
     log = simulate_real_rig("A", "hold", seed=5, duration_s=30.0, rate_hz=2.0)

@@ -13,7 +13,8 @@ fails the radius check by tens of errors.
 import numpy as np
 import pytest
 
-from fsrbayes.inference.samplers import SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.ensemble import run_ensembles
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 pytestmark = pytest.mark.validation
 

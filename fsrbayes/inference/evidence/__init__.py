@@ -11,28 +11,13 @@
 - :mod:`.savage_dickey` — Bayes factors of a nested model (Zener inside Burgers) from one
   posterior.
 
-Every log Z reaches its callers as an :class:`EvidenceEstimate`, from an :class:`Estimator`
+Every log Z reaches its callers as an :class:`~.estimate.EvidenceEstimate`, from an
+:class:`~.estimate.Estimator`
 (the registered ones, objects with their options: :mod:`fsrbayes.inference.estimators`).
+
+The package exports nothing of its own: ``Estimator`` and ``EvidenceEstimate`` are exported by
+:mod:`fsrbayes.inference`, and everything else is imported from the modules above
+(e.g. ``from fsrbayes.inference.evidence.ladder import log_evidence``).
 """
 
-from .estimate import Estimator, EvidenceEstimate
-from .ladder import LadderSettings, log_evidence
-from .laplace import laplace_fit
-from .referenced import ModeSearch, referenced_log_evidence
-from .savage_dickey import SavageDickey, savage_dickey_posterior
-from .stepping_stone import EvidenceResult
-from .tempered import TemperedSettings
-
-__all__ = [
-    "Estimator",
-    "EvidenceEstimate",
-    "EvidenceResult",
-    "LadderSettings",
-    "ModeSearch",
-    "SavageDickey",
-    "TemperedSettings",
-    "laplace_fit",
-    "log_evidence",
-    "referenced_log_evidence",
-    "savage_dickey_posterior",
-]
+__all__ = []

@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..parallel import fork_pool, single_threaded_blas
-from ..samplers.moves import StretchMove, tempered_log_density
+from ..samplers.moves.stretch import StretchMove, tempered_log_density
 from ..samplers.settings import walkers_for
 from .stepping_stone import combine_ladder, summarise_ladders
 

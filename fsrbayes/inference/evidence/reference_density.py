@@ -12,7 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from ..samplers.moves import IndependenceProposal, student_t_draws, student_t_log_density
+from ..samplers.moves.independence import (
+    IndependenceProposal,
+    student_t_draws,
+    student_t_log_density,
+)
 from ..samplers.transport import TriangularMap
 from .ladder import evaluate_target
 

@@ -50,7 +50,9 @@ from scipy.special import logsumexp
 from ..optimize import ensemble_start, find_map, separate_regions
 from ..parallel import fork_pool, single_threaded_blas
 from ..pinned import map_refinement
-from ..samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from ..samplers.convergence import ConvergenceWarning
+from ..samplers.ensemble import run_ensembles
+from ..samplers.settings import SamplerSettings
 from .ladder import (
     LadderSettings,
     beta_ladder,

@@ -41,8 +41,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..samplers import ConvergenceReport, ConvergenceWarning, EnsembleRun, SamplerSettings
-from ..samplers.convergence import normal_scores, rank_rhat
+from ..samplers.convergence import ConvergenceReport, ConvergenceWarning, normal_scores, rank_rhat
+from ..samplers.ensemble import EnsembleRun
+from ..samplers.settings import SamplerSettings
 from ..sampling import FitResult
 from .ladder import LadderSettings
 from .referenced import MODE_SEARCH, PILOT_SETTINGS, ModeSearch, referenced_log_evidence

@@ -18,6 +18,9 @@ fitted with ``--hierarchical``, as a new specimen of the population, conditioned
 calibration where one is given (``calibration``, :func:`~fsrbayes.inference.predictive_draws.
 calibrate`), exactly as ``predict`` does. :class:`OnlineForce` gives the force now, one reading
 at a time, for an acquisition loop (:mod:`.online`).
+
+The package exports :func:`force`, :class:`OnlineForce` and :func:`force_schema`; the quantiles,
+units and the inversion's parts are imported from :mod:`.estimate` and :mod:`.segments`.
 """
 
 import json
@@ -38,16 +41,8 @@ from .estimate import (
     read_force,
 )
 from .online import OnlineForce
-from .segments import find_segments
 
-__all__ = [
-    "FORCE_QUANTILES",
-    "FORCE_UNITS",
-    "OnlineForce",
-    "find_segments",
-    "force",
-    "force_schema",
-]
+__all__ = ["OnlineForce", "force", "force_schema"]
 
 QUANTILE_KEYS = tuple(f"q{round(100 * q):02d}" for q in FORCE_QUANTILES)
 
@@ -97,7 +92,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
     >>> from fsrbayes.data import read_csv
     >>> from fsrbayes.data.rigsim import simulate_rig
     >>> from fsrbayes.inference.output import save_fit
-    >>> from fsrbayes.inference.samplers import SamplerSettings
+    >>> from fsrbayes.inference import SamplerSettings
     >>> folder = Path(tempfile.mkdtemp())
     >>> log_text, truth = simulate_rig(1, seed=3, duration_s=30, rate_hz=1,
     ...                                weights_g=(100.0, 300.0))

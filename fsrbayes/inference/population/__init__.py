@@ -1,6 +1,6 @@
 """Population (hierarchical) models across specimens and what they predict for new ones.
 
-- :mod:`.model` — the population distribution of the physical parameters (:class:`Population`)
+- :mod:`.model` — the population distribution of the physical parameters (``Population``)
   and its two targets: the two-stage hyper-posterior that reweights per-specimen posterior
   draws, and the joint posterior of all specimens and the hyper-parameters.
 - :mod:`.routes` — how to get there: fit every specimen (:func:`fit_specimens`, locally or on
@@ -10,9 +10,12 @@
   proposals of its specimen blocks.
 - :mod:`.predictive` — new specimens drawn from the population: drift(3600 s) box plots per
   group and the sourcing voltage that minimises drift.
+
+The package exports the routes, their result and warnings, and the new-specimen predictions;
+:class:`~.model.Population` (a result's ``population``), the targets and the Gibbs and proposal
+machinery are imported from their modules.
 """
 
-from .model import Population
 from .predictive import ForwardTemplate, drift_groups, new_specimens, optimal_voltage
 from .routes import (
     HierarchicalResult,
@@ -26,7 +29,6 @@ from .routes import (
 __all__ = [
     "ForwardTemplate",
     "HierarchicalResult",
-    "Population",
     "ReweightingWarning",
     "SpecimenFitWarning",
     "drift_groups",

@@ -7,7 +7,7 @@ carries q, so the step is exact whatever the fit's error.
 
 import numpy as np
 
-from ..samplers.moves import student_t_draws, student_t_log_density
+from ..samplers.moves.independence import student_t_draws, student_t_log_density
 from ..samplers.transport import TriangularMap
 
 __all__ = ["ConditionalMapProposal"]

@@ -21,8 +21,8 @@ from ...physics.models import model_components, register_components
 from ..fit import FIT_SETTINGS, fit
 from ..optimize import find_map, laplace_start
 from ..parallel import JobFailure, map_jobs, single_threaded_blas
-from ..samplers import SamplerSettings, run_ensembles
-from ..samplers.ensemble import even_index
+from ..samplers.ensemble import even_index, run_ensembles
+from ..samplers.settings import SamplerSettings
 from .coordinates import NonCentredCoordinates
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .model import JointTarget, Population, TwoStageTarget

@@ -19,7 +19,8 @@ is left to emcee: :func:`steps_alone` says which.
 import emcee
 import numpy as np
 
-from .moves import DifferentialMove, StretchMove
+from .moves.differential import DifferentialMove
+from .moves.stretch import StretchMove
 
 __all__ = ["step_ensemble", "steps_alone"]
 

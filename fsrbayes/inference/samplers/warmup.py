@@ -11,7 +11,7 @@ here is a deterministic function of the stored chains, so a resumed run decides 
 import numpy as np
 
 from .coordinates import sampled_draws
-from .moves import MixtureProposal
+from .moves.independence import MixtureProposal
 from .transport import TriangularMap
 
 __all__ = ["MAP_CHECK", "even_index", "map_settled", "transport_maps", "warmup_rounds"]

@@ -157,7 +157,7 @@ def test_walkers_started_outside_the_domain_are_replaced_before_burn_in():
 def test_the_printed_result_leaves_out_ti_on_the_referenced_path(path, shows_ti):
     """TI integrates log(L·π/g) on the referenced path, whose β = 0 variance is huge in the
     reference's tails (nan on creep posteriors): the one-line summary must not show it there."""
-    from fsrbayes.inference.evidence import EvidenceResult
+    from fsrbayes.inference.evidence.stepping_stone import EvidenceResult
 
     result = EvidenceResult(
         log_z=-3.0,

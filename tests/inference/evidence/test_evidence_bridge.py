@@ -10,7 +10,9 @@ from scipy import stats
 from fsrbayes.inference.evidence.bridge import bridge_from_fit, bridge_log_evidence
 from fsrbayes.inference.evidence.ladder import LadderSettings
 from fsrbayes.inference.evidence.referenced import referenced_from_fit
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.ensemble import run_ensembles
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from validation.closed_form import BentRidge, LinearGaussian
 
 

@@ -19,7 +19,8 @@ from fsrbayes.inference.evidence.referenced import PILOT_SETTINGS, ModeSearch
 from fsrbayes.inference.evidence.tempered import TemperedSettings, tempered_run
 from fsrbayes.inference.fit import specimen_posterior
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from validation.closed_form import BentRidge
 
 SMALL = TemperedSettings(

@@ -18,7 +18,8 @@ from fsrbayes.cli import main
 from fsrbayes.data import DataError
 from fsrbayes.data.logs import read_log
 from fsrbayes.data.rigsim import simulate_rig, write_rig
-from fsrbayes.inference.force import find_segments, force, force_schema
+from fsrbayes.inference.force import force, force_schema
+from fsrbayes.inference.force.segments import find_segments
 from fsrbayes.inference.point_fit import write_point_fit
 
 HEADER = "specimen,sensor,time_s,supply_V,rm_ohm,adc_bits,adc_vref_V,adc_counts"

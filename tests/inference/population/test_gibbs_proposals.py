@@ -189,7 +189,7 @@ def test_the_shift_and_scale_move_keeps_the_hyper_posterior():
     specimen's φ follows its θ along the curve of its proposal's transport map — the ratio must
     still be exact. Slow (~3 min): the move is off by default."""
     from fsrbayes.inference.population.routes import joint
-    from fsrbayes.inference.samplers import SamplerSettings
+    from fsrbayes.inference.samplers.settings import SamplerSettings
 
     ys = 1.0 + 2.0 * np.random.default_rng(11).standard_normal(8)
     population = Population(PRIOR, names=("theta",))

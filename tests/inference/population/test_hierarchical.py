@@ -20,7 +20,8 @@ from fsrbayes.inference.population.routes import (
     joint,
     two_stage,
 )
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
 SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])

@@ -17,7 +17,7 @@ from fsrbayes.data.creep import CreepData
 from fsrbayes.data.csvwrite import write_csv
 from fsrbayes.inference.predict import predict, predict_schema
 from fsrbayes.inference.predictive_draws import calibrate
-from fsrbayes.inference.samplers import SamplerSettings
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from tests.commandline import fsrbayes_command
 
 

@@ -7,13 +7,13 @@ import emcee
 import numpy as np
 import pytest
 
-from fsrbayes.inference.samplers import SamplerSettings
 from fsrbayes.inference.samplers.convergence import (
     convergence_report,
     ensemble_tau,
     tau_warmup,
     walker_averaged_tau,
 )
+from fsrbayes.inference.samplers.settings import SamplerSettings
 
 
 @pytest.mark.parametrize("steps", [1, 7, 64, 1000, 1250])
@@ -142,7 +142,7 @@ def test_a_run_that_checks_the_slowest_coordinates_first_samples_and_stops_as_be
     """The same seed gives the same chain, stop and report with the early stop of the checks as
     without it, and the early stop is taken."""
     import fsrbayes.inference.samplers.convergence as convergence
-    from fsrbayes.inference.samplers import run_ensembles
+    from fsrbayes.inference.samplers.ensemble import run_ensembles
 
     def target(u):
         u = np.atleast_2d(u)

@@ -9,13 +9,12 @@ from scipy import stats
 
 import fsrbayes
 from fsrbayes.data import synthetic as syn
-from fsrbayes.inference import LogPosterior, SpecimenData
-from fsrbayes.inference.samplers import (
-    CheckpointMismatch,
-    ConvergenceWarning,
-    SamplerSettings,
-    run_ensembles,
-)
+from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.samplers.checkpoint import CheckpointMismatch
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.ensemble import run_ensembles
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from validation.closed_form import BentRidge
 
 MU = np.array([1.0, -2.0, 0.5])

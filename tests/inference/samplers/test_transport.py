@@ -6,12 +6,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fsrbayes.inference.samplers import ConvergenceWarning, SamplerSettings, run_ensembles
+from fsrbayes.inference.samplers.convergence import ConvergenceWarning
+from fsrbayes.inference.samplers.ensemble import run_ensembles
 from fsrbayes.inference.samplers.moves.independence import (
     IndependenceProposal,
     MixtureProposal,
     student_t_log_density,
 )
+from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.inference.samplers.transport import MappedLogProb, TriangularMap
 from fsrbayes.inference.samplers.warmup import map_settled, warmup_rounds
 from tests import oracles

@@ -4,7 +4,7 @@ import emcee
 import numpy as np
 import pytest
 
-from fsrbayes.inference.samplers.moves import StretchMove
+from fsrbayes.inference.samplers.moves.stretch import StretchMove
 
 N_WALK, BURN, STEPS = 32, 500, 4000
 K = 4.0
