@@ -50,7 +50,7 @@ def __getattr__(name):
 
         return force
     if name == "calibrate":
-        from .inference.predictive_draws import calibrate
+        from .inference.new_specimen import calibrate
 
         return calibrate
     if name == "diagnose":

@@ -20,7 +20,7 @@ SOURCE_NOTES = {
 def _calibrated(args, out):
     """Fit the calibration tests of ``--calibrate`` into ``out`` (with their fit checks)."""
     from ..inference.fit import DesignWarning
-    from ..inference.predictive_draws import calibrate
+    from ..inference.new_specimen import calibrate
     from ..inference.samplers.convergence import ConvergenceWarning
 
     data = csvio.read_csv(args.calibrate, sep=args.sep, shift_time=args.shift_time)

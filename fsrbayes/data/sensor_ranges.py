@@ -1,6 +1,6 @@
 """What a sensor file's priors were made for, and what the sensor is known to read.
 
-Two optional tables of a sensor TOML (models/README.md):
+Three optional tables of a sensor TOML (models/README.md):
 
 ``[calibration]``
     The stresses, voltages across the sensor and test durations the priors were made for, with
@@ -11,6 +11,10 @@ Two optional tables of a sensor TOML (models/README.md):
 ``[envelope]``
     Resistances the sensor is known to read under given forces (a datasheet's band, or
     measurements), with their source: the priors' predictive R(F) must cover them (tested).
+``[population]``
+    How far specimens of the type spread in the level of their readings at a reference stress
+    and in their force exponent, with the source: the spreads a new specimen of a fitted
+    population is predicted with (:mod:`fsrbayes.inference.specimen_scatter`).
 """
 
 import math
@@ -19,8 +23,8 @@ from types import MappingProxyType
 
 import numpy as np
 
-__all__ = ["CalibrationRange", "Envelope", "outside_calibration", "parse_calibration",
-           "parse_envelope"]  # fmt: skip
+__all__ = ["CalibrationRange", "Envelope", "SpecimenScatter", "outside_calibration",
+           "parse_calibration", "parse_envelope", "parse_population"]  # fmt: skip
 
 RANGES = {
     "stress_Pa": ("stress", 1e-3, "kPa"),
@@ -48,6 +52,49 @@ class Envelope:
     r_low_ohm: tuple
     r_high_ohm: tuple
     source: str
+
+
+@dataclass(frozen=True)
+class SpecimenScatter:
+    """How far specimens of a sensor type spread (the ``[population]`` table).
+
+    Attributes
+    ----------
+    level_sd : float
+        The typical spread ω_L of log R (equally of log I) at ``reference_stress_Pa`` across
+        specimens: the median of its hyperprior.
+    exponent_sd : float
+        The typical spread ω_S of the force exponent d log R / d log σ across specimens.
+    reference_stress_Pa : float
+        Where the level is read.
+    source : str
+        Where the numbers come from.
+    """
+
+    level_sd: float
+    exponent_sd: float
+    reference_stress_Pa: float
+    source: str
+
+
+def parse_population(raw, where):
+    """Parse ``[population]``: ``level_sd``, ``exponent_sd``, ``reference_stress_Pa`` (> 0)."""
+    if not raw:
+        return None
+    label = f"{where}: population"
+    keys = ("level_sd", "exponent_sd", "reference_stress_Pa")
+    unknown = sorted(set(raw) - {*keys, "source"})
+    if unknown:
+        raise ValueError(f"{label} has unknown key(s) {unknown}; known: {[*keys, 'source']}")
+    values = {}
+    for key in keys:
+        value = raw.get(key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{label}.{key} must be a number > 0, got {value!r}")
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{label}.{key} must be a number > 0, got {value!r}")
+        values[key] = float(value)
+    return SpecimenScatter(source=_source(raw, label), **values)
 
 
 def _pair(value, label):

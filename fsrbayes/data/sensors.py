@@ -15,7 +15,7 @@ from ..physics.models import model_families, model_parameters, parse_model
 from ..physics.parameters import PARAMETERS
 from .distributions import make_distribution
 from .prior import JointPrior
-from .sensor_ranges import parse_calibration, parse_envelope
+from .sensor_ranges import parse_calibration, parse_envelope, parse_population
 
 __all__ = ["RIG_PRIORS", "Sensor", "load_sensor", "available_sensors", "models_directory"]
 
@@ -88,6 +88,9 @@ class Sensor:
         own under its name), empty if the file states none (:meth:`calibration_for`).
     envelope : Envelope or None
         Resistances the sensor is known to read under given forces (``[envelope]``).
+    population : SpecimenScatter or None
+        How far specimens of the type spread (``[population]``): what a new specimen of a
+        fitted population is predicted with.
     """
 
     name: str
@@ -102,6 +105,7 @@ class Sensor:
     default_model: str = "burgers"
     calibration: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     envelope: object = None
+    population: object = None
 
     @property
     def csv_name(self):
@@ -247,6 +251,7 @@ def _parse(path, raw):
         default_model=default_model,
         calibration=parse_calibration(raw.get("calibration"), where, model_families()),
         envelope=parse_envelope(raw.get("envelope"), where),
+        population=parse_population(raw.get("population"), where),
         name=str(sensor["name"]),
         description=str(sensor["description"]),
         area_m2=float(area),

@@ -27,7 +27,7 @@ from scipy.stats import norm
 from ..data.readouts import current_of, reading_of
 from ..inference.evidence.laplace import local_laplace_fit
 from ..inference.likelihood import SpecimenData, is_rig_design
-from ..inference.predict import evaluation_packing
+from ..inference.predictive_draws import evaluation_packing
 from ..inference.replicates import relative_noise
 from .checks import predictive_checks
 

@@ -29,20 +29,22 @@ the noise and the reading are drawn at every sample.
 """
 
 import json
-from dataclasses import replace
 from importlib import resources
 
 import numpy as np
 
 from ..data.readouts import reading_of
-from .likelihood import SpecimenData
-from .predictive_draws import draw_sources, population_draws, specimen_draws
+from .predictive_draws import (
+    draw_sources,
+    evaluation_packing,
+    population_draws,
+    specimen_draws,
+)
 from .replicates import median_or_none, relative_noise, relative_widths, share_inside
 
 __all__ = [
     "PREDICT_QUANTILES",
     "READING_UNITS",
-    "evaluation_packing",
     "predict",
     "predict_schema",
     "reading_name",
@@ -121,35 +123,6 @@ def _interpolate(test, model_t, log_i):
     return out
 
 
-def evaluation_packing(tests, time_s=None):
-    """Return the tests packed as for a fit (circuit, load steps, ramps), to evaluate the model.
-
-    Parameters
-    ----------
-    tests : sequence of fsrbayes.data.creep.CreepTest
-        One specimen's tests.
-    time_s : ndarray, shape (C, T), optional
-        Where to evaluate it (padded); default every sample, unbinned.
-
-    Returns
-    -------
-    SpecimenData
-        No readings: every point unmasked, no bins, counts or quantisation.
-    """
-    packed = SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests))
-    time_s = packed.time_s if time_s is None else time_s
-    return replace(
-        packed,
-        time_s=time_s,
-        log_current=np.zeros_like(time_s),
-        mask=np.ones_like(time_s, dtype=bool),
-        weight=None,
-        scatter=None,
-        quant_var=None,
-        counts=None,
-    )
-
-
 def _predict_tests(source, tests, n_draws, rng, draws_from):
     """Predictive bands of one specimen's protocol tests.
 
@@ -165,8 +138,11 @@ def _predict_tests(source, tests, n_draws, rng, draws_from):
     if kind == "fitted":
         posterior, draws, attrs = specimen_draws(folder, packed, rng)
     else:
-        posterior, draws, attrs = population_draws(folder, packed, n_draws, rng, source[2])
+        posterior, draws, attrs = population_draws(
+            folder, packed, n_draws, rng, source[2], template=tests[0]
+        )
         kind = "population" if source[2] is None else "calibrated"
+    offsets = attrs.get("offsets")
     if attrs["sensor"] != tests[0].sensor:
         raise ValueError(
             f"specimen {tests[0].specimen!r} was fitted as a {attrs['sensor']} sensor, the "
@@ -176,8 +152,12 @@ def _predict_tests(source, tests, n_draws, rng, draws_from):
         draws = posterior.prior.sample(rng, n_draws)
     else:  # n_draws replicate readings per sample: the stored draws, subsampled or resampled
         resample = draws.shape[0] < n_draws
-        draws = draws[np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))]
+        rows = np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))
+        draws = draws[rows]
+        offsets = None if offsets is None else offsets.take(rows)
     log_model = posterior.log_model_current(draws)
+    if offsets is not None and draws_from == "posterior":  # a new specimen's level and exponent
+        log_model = offsets.apply(log_model, packed)
     closed = None
     if not np.isfinite(log_model).all():  # why draws are invalid: the gap, or the tunnelling law
         closed = posterior.gap_strain(draws) >= 1.0
@@ -299,7 +279,7 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
         sensor priors and fixed parameters) — the prior predictive, whose band widths show how
         much the fit's data narrowed the prediction (sharpness).
     calibration : str or Path, optional
-        Fits of new specimens' calibration tests (:func:`~.predictive_draws.calibrate`): each
+        Fits of new specimens' calibration tests (:func:`~.new_specimen.calibrate`): each
         specimen there is predicted as a new specimen of the population conditioned on its
         calibration ("calibrated").
 

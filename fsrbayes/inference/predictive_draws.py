@@ -5,12 +5,11 @@ its parameter draws, one row per replicate reading:
 
 * **fitted** (:func:`specimen_draws`) — the specimen's own posterior draws (``fsrbayes fit``).
 * **population** (:func:`population_draws`) — a specimen never fitted, of a sensor type fitted
-  with ``--hierarchical``: its population parameters θ drawn from the population predictive
-  p(θ | data) = ∫ p(θ | Λ) p(Λ | data) dΛ, one hyper-posterior draw Λ per replicate (θ | Λ is
-  normal in the population coordinates, log θ for positive parameters, kept to the
-  per-specimen prior's support); its measurement noise, loading ramps and placements are those
-  of a fitted specimen's posterior draw, picked at random — a new sensor on the same rig is
-  read as noisily, and its weights land as the fitted ones did.
+  with ``--hierarchical``: a fitted specimen's posterior draw, picked at random — its physics,
+  measurement noise, loading ramps and placements: a new sensor on the same rig is read as
+  noisily, and its weights land as the fitted ones did — with its log-current moved by the
+  new specimen's level and force exponent against that specimen's
+  (:mod:`~.specimen_scatter`; the spreads from the sensor file's ``[population]`` table).
 * **calibrated** — the same new specimen conditioned on its own calibration tests (say one
   weight). The calibration is fitted like any specimen (:func:`calibrate`), with the
   population predictive as the prior of its population parameters: each parameter's
@@ -26,36 +25,68 @@ its parameter draws, one row per replicate reading:
 import json
 from dataclasses import replace
 from pathlib import Path
-from types import MappingProxyType, SimpleNamespace
 
 import numpy as np
 
-from ..data.distributions import Distribution
 from ..data.sensors import load_sensor
-from ..physics.models import parse_model
+from .likelihood import SpecimenData
 from .nuisance import (
     is_per_test,
     is_placement,
     is_placement_creep,
     is_ramp,
-    noise_parameters,
     nuisance_parameters,
     samples_landing,
 )
 from .output import open_fit_tree
-from .population.model import Population
 from .posterior import LogPosterior
+from .specimen_scatter import (
+    ScatterOffsets,
+    member_coordinates,
+    reference_tests,
+    scatter_of,
+    sensor_log_resistance,
+)
 
 __all__ = [
-    "calibrate",
-    "calibration_prior",
     "draw_sources",
+    "evaluation_packing",
     "fit_folders",
     "placement_draws",
     "population_draws",
     "population_folders",
+    "population_members",
     "specimen_draws",
 ]
+
+
+def evaluation_packing(tests, time_s=None):
+    """Return the tests packed as for a fit (circuit, load steps, ramps), to evaluate the model.
+
+    Parameters
+    ----------
+    tests : sequence of fsrbayes.data.creep.CreepTest
+        One specimen's tests.
+    time_s : ndarray, shape (C, T), optional
+        Where to evaluate it (padded); default every sample, unbinned.
+
+    Returns
+    -------
+    SpecimenData
+        No readings: every point unmasked, no bins, counts or quantisation.
+    """
+    packed = SpecimenData.from_tests(tests, max_samples=max(t.time_s.size for t in tests))
+    time_s = packed.time_s if time_s is None else time_s
+    return replace(
+        packed,
+        time_s=time_s,
+        log_current=np.zeros_like(time_s),
+        mask=np.ones_like(time_s, dtype=bool),
+        weight=None,
+        scatter=None,
+        quant_var=None,
+        counts=None,
+    )
 
 
 def fit_folders(fit_dir):
@@ -186,17 +217,7 @@ def population_folders(fit_dir):
     return out
 
 
-def _population_of(folder, posterior):
-    """Return the population of ``folder``'s population.nc and its hyper-posterior draws (H, 2P)."""
-    with open_fit_tree(folder / "population.nc") as tree:
-        population = Population(posterior.prior, json.loads(tree.attrs["population"]))
-        hyper = np.stack(
-            [tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1
-        )
-    return population, hyper
-
-
-def _members(folder):
+def population_members(folder):
     """Folders of the fitted specimens a population was built from."""
     with open_fit_tree(folder / "population.nc") as tree:
         names = json.loads(tree.attrs["specimens"])
@@ -207,25 +228,7 @@ def _members(folder):
     return members, attrs
 
 
-def _new_parameters(population, hyper, n, rng):
-    """Return the population parameters of ``n`` new specimens, inside π's support."""
-    out = np.empty((n, population.size))
-    todo = np.arange(n)
-    for _ in range(100):
-        rows = hyper[rng.integers(len(hyper), size=todo.size)]
-        x = population.sample(rng, rows)
-        inside = np.isfinite(population.interim.log_prob(x))
-        out[todo[inside]] = x[inside]
-        todo = todo[~inside]
-        if todo.size == 0:
-            return out
-    raise ValueError(
-        f"the population's new specimens fall outside the per-specimen prior's support "
-        f"({todo.size} of {n} after 100 tries): the hyper-posterior is not of this prior"
-    )
-
-
-def population_draws(folder, packed, n_draws, rng, calibration=None):
+def population_draws(folder, packed, n_draws, rng, calibration=None, template=None):
     """Draws of a specimen never fitted, from the population in ``folder`` (module docstring).
 
     Parameters
@@ -239,6 +242,9 @@ def population_draws(folder, packed, n_draws, rng, calibration=None):
     calibration : Path, optional
         A fit of the new specimen's calibration tests by :func:`calibrate`: the draws are
         conditioned on it.
+    template : fsrbayes.data.creep.CreepTest, optional
+        Without a calibration: a protocol test whose circuit and voltage the fitted specimens'
+        level and force exponent are read under (:func:`~.specimen_scatter.reference_tests`).
 
     Returns
     -------
@@ -246,9 +252,10 @@ def population_draws(folder, packed, n_draws, rng, calibration=None):
     draws : ndarray, shape (n_draws, ndim)
     attrs : dict
         ``sensor``, ``fsrbayes_model``, ``converged`` (the population's, and the calibration
-        fit's).
+        fit's) and, without a calibration, ``offsets``: the new specimens'
+        :class:`~.specimen_scatter.ScatterOffsets`, one per draw.
     """
-    members, attrs = _members(folder)
+    members, attrs = population_members(folder)
     pooled = [specimen_draws(m, packed, rng) for m in members]
     posterior = pooled[0][0]
     if len({d.shape[1] for _, d, _ in pooled}) != 1:
@@ -257,12 +264,23 @@ def population_draws(folder, packed, n_draws, rng, calibration=None):
             "parameters (ramps, placements); predict needs them fitted alike"
         )
     draws = np.concatenate([d for _, d, _ in pooled])
-    draws = draws[rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)]
+    member_of = np.concatenate([np.full(len(d), j) for j, (_, d, _) in enumerate(pooled)])
+    pick = rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)
+    draws, member_of = draws[pick], member_of[pick]
     converged = bool(int(attrs.get("converged", 0)))
+    info = {"sensor": attrs["sensor"], "fsrbayes_model": attrs["fsrbayes_model"]}
     if calibration is None:
-        population, hyper = _population_of(folder, posterior)
-        columns = [posterior.names.index(n) for n in population.names]
-        draws[:, columns] = _new_parameters(population, hyper, n_draws, rng)
+        scatter = scatter_of(load_sensor(attrs["sensor"]))
+        reference = evaluation_packing(reference_tests(template, scatter))
+        coordinates = []
+        for member in members:
+            on_grid, grid_draws, _ = specimen_draws(member, reference, rng)
+            log_i = on_grid.log_model_current(grid_draws[: min(len(grid_draws), 400)])
+            median = np.nanmedian(sensor_log_resistance(log_i, reference)[:, :, 0], axis=0)
+            coordinates.append(
+                member_coordinates(median, reference.stress_Pa, scatter.reference_stress_Pa)
+            )
+        info["offsets"] = ScatterOffsets.draw(coordinates, member_of, scatter, rng)
     else:  # the calibration fit's own draws of every parameter but the per-test ones
         with open_fit_tree(calibration / "posterior.nc") as tree:
             model = tree.attrs["fsrbayes_model"]
@@ -278,164 +296,7 @@ def population_draws(folder, packed, n_draws, rng, calibration=None):
             converged &= bool(int(tree.attrs.get("converged", 0)))
         pick = rng.choice(len(own), n_draws, replace=len(own) < n_draws)
         draws[:, [posterior.names.index(n) for n in names]] = own[pick]
-    info = {"sensor": attrs["sensor"], "fsrbayes_model": attrs["fsrbayes_model"]}
     return posterior, draws, {**info, "converged": int(converged)}
-
-
-def calibration_prior(population, hyper, rng, n=20000):
-    """Return the prior of a calibration fit (module docstring): name → Distribution.
-
-    Each population parameter's population predictive, sampled (``n`` new specimens, one
-    hyper-posterior draw each) and moment-matched in the family of the per-specimen prior's
-    support: log-normal on (0, ∞), normal on the line, truncated normal on an interval.
-    """
-    x = _new_parameters(population, hyper, n, rng)
-    out = {}
-    for k, (name, dist) in enumerate(zip(population.names, population.interim.dists, strict=True)):
-        lower, upper = dist.support
-        if np.isfinite(lower) and np.isfinite(upper):
-            args = {"mu": float(np.mean(x[:, k])), "sigma": float(np.std(x[:, k]))}
-            out[name] = Distribution("truncnormal", {**args, "lower": lower, "upper": upper})
-        elif lower == 0.0:
-            z = np.log(x[:, k])
-            args = {"median": float(np.exp(np.mean(z))), "sigma": float(np.std(z))}
-            out[name] = Distribution("lognormal", args)
-        else:
-            args = {"mu": float(np.mean(x[:, k])), "sigma": float(np.std(x[:, k]))}
-            out[name] = Distribution("normal", args)
-    return out
-
-
-def _with_priors(sensor, model, priors):
-    """Return ``sensor`` with ``priors`` in place of its own for ``model``'s family."""
-    family = parse_model(model)[0]
-    own = {**sensor.family_priors.get(family, {}), **priors}
-    return replace(
-        sensor,
-        priors=MappingProxyType({**sensor.priors, **priors}),
-        family_priors=MappingProxyType({**sensor.family_priors, family: MappingProxyType(own)}),
-    )
-
-
-def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
-    r"""Fit new specimens' calibration tests as the population in ``fit_dir`` was fitted.
-
-    Each specimen of ``data`` is fitted alone, with the model, tunnelling law and likelihood of
-    the population of its sensor, under the population predictive of :func:`calibration_prior`
-    for the population parameters (the sensor's priors for the rest); its fit is written to
-    ``out/<specimen>/`` (``posterior.nc``, ``summary.json``), where :func:`~.predict.predict`
-    (``calibration=out``) conditions the population's new specimens on it.
-
-    Parameters
-    ----------
-    fit_dir : str or Path
-        A hierarchical fit (``fsrbayes fit --hierarchical``) of the specimens' sensor type.
-    data : CreepData
-        The new specimens' calibration tests (say one weight each), none of a fitted specimen.
-    out : str or Path
-    seed : int
-    settings : SamplerSettings, optional
-    on_fit : callable, optional
-        ``on_fit(specimen, result)`` → dict added to that fit's summary.json (e.g. its checks).
-
-    Returns
-    -------
-    dict
-        Specimen → its FitResult.
-
-    Raises
-    ------
-    ValueError
-        No population of a specimen's sensor in ``fit_dir``, or a specimen fitted there.
-
-    Examples
-    --------
-    A population of two FSR 402s (a simulated divider log, runs cut short), written as
-    ``fsrbayes fit --hierarchical`` writes it; a third sensor calibrated on 100 g, then its 300 g
-    test predicted from the population alone and through its calibration:
-
-    >>> import tempfile, warnings
-    >>> from pathlib import Path
-    >>> import fsrbayes
-    >>> from fsrbayes.data import read_csv
-    >>> from fsrbayes.data.rigsim import simulate_rig
-    >>> from fsrbayes.inference import SamplerSettings, save_fit, save_population
-    >>> from fsrbayes.inference.population import ForwardTemplate, fit_specimens, two_stage
-    >>> folder = Path(tempfile.mkdtemp())
-    >>> log_text, truth = simulate_rig(3, seed=4, duration_s=30, rate_hz=1,
-    ...                                weights_g=(100.0, 300.0))
-    >>> _ = (folder / "three.csv").write_text(log_text)
-    >>> short = SamplerSettings(n_ensembles=2, chunk=100, max_steps=200, min_steps=100)
-    >>> population, observed = folder / "population", []
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore")
-    ...     fits = fit_specimens(read_csv(folder / "three.csv"), ["fsr402-01", "fsr402-02"],
-    ...                          settings=short, model="burgers", placement=False, rng=1)
-    ...     for name, result in fits.items():
-    ...         (population / name).mkdir(parents=True)
-    ...         observed += save_fit(result, population / name)["tests"]
-    ...     template = ForwardTemplate.from_posterior(fits["fsr402-01"].posterior)
-    ...     _ = save_population(two_stage(fits, settings=short, seed=1), template, observed,
-    ...                         population)
-    >>> header, *rows = log_text.splitlines()
-    >>> for test, name in (("w1", "new-100g.csv"), ("w2", "new-300g.csv")):
-    ...     part = [r for r in rows if r.startswith(f"fsr402-03,fsr402,{test},")]
-    ...     _ = (folder / name).write_text("\n".join([header] + part))
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore")
-    ...     _ = fsrbayes.calibrate(population, read_csv(folder / "new-100g.csv"),
-    ...                            folder / "calibrated", settings=short)
-    ...     protocol = read_csv(folder / "new-300g.csv")
-    ...     alone = fsrbayes.predict(population, protocol, n_draws=200)
-    ...     calibrated = fsrbayes.predict(population, protocol, n_draws=200,
-    ...                                   calibration=folder / "calibrated")
-    >>> alone["tests"][0]["specimen_source"], calibrated["tests"][0]["specimen_source"]
-    ('population', 'calibrated')
-    >>> calibrated["width_90_rel"] < alone["width_90_rel"]
-    True
-    """
-    from .fit import fit
-    from .output import save_fit
-
-    populations = population_folders(fit_dir)
-    fitted = fit_folders(fit_dir)
-    results = {}
-    for specimen in data.specimens:
-        sensor = data.select(specimen=specimen).tests[0].sensor
-        if sensor not in populations:
-            raise ValueError(
-                f"{fit_dir} holds no population of {sensor} sensors to calibrate specimen "
-                f"{specimen!r} against; run 'fsrbayes fit --hierarchical' first"
-            )
-        if specimen in fitted:
-            raise ValueError(
-                f"specimen {specimen!r} was fitted in {fit_dir}: a calibration is for a new one"
-            )
-        members, _ = _members(populations[sensor])
-        with open_fit_tree(members[0] / "posterior.nc") as tree:
-            member = dict(tree.attrs)
-        model = member["fsrbayes_model"]
-        own = load_sensor(sensor)
-        population, hyper = _population_of(
-            populations[sensor],
-            SimpleNamespace(prior=own.prior_for(model, noise_parameters(member["likelihood"]))),
-        )
-        informed = calibration_prior(population, hyper, np.random.default_rng(seed))
-        result = fit(
-            data,
-            specimen,
-            model=model,
-            tunneling=member["tunneling"],
-            likelihood=member["likelihood"],
-            sensor=_with_priors(own, model, informed),
-            rng=seed,
-            settings=settings,
-        )
-        folder = Path(out) / specimen
-        folder.mkdir(parents=True, exist_ok=True)
-        save_fit(result, folder, extra=on_fit(specimen, result) if on_fit else None)
-        results[specimen] = result
-    return results
 
 
 def draw_sources(fit_dir, specimens, calibration=None, what="the data"):

@@ -1,5 +1,6 @@
 """What a sensor file's priors were made for ([calibration]), what the sensor reads ([envelope]),
-and the model it is fitted with by default (default_model)."""
+how far its specimens spread ([population]) and the model it is fitted with by default
+(default_model)."""
 
 import re
 import warnings
@@ -48,6 +49,14 @@ def _sensor_file(tmp_path, extra, default_model="burgers"):
          "need equal lengths"),
         ('[envelope]\nforce_N = [1.0]\nr_low_ohm = [3.0]\nr_high_ohm = [2.0]\nsource = "x"',
          "must not exceed"),
+        ('[population]\nreference_stress_Pa = 5e4\nlevel_sd = 0.3\nexponent_sd = 0.2',
+         "population.source must say where the numbers come from"),
+        ('[population]\nreference_stress_Pa = 5e4\nlevel_sd = -0.3\nexponent_sd = 0.2\n'
+         'source = "x"', r"population.level_sd must be a number > 0, got -0.3"),
+        ('[population]\nreference_stress_Pa = 5e4\nlevel_sd = 0.3\nsource = "x"',
+         r"population.exponent_sd must be a number > 0, got None"),
+        ('[population]\nreference_stress_Pa = 5e4\nlevel_sd = 0.3\nexponent_sd = 0.2\n'
+         'spread = 1\nsource = "x"', r"unknown key\(s\) \['spread'\]"),
     ],
 )  # fmt: skip
 def test_a_bad_table_is_refused_in_one_line_naming_the_file(tmp_path, extra, message):
@@ -179,3 +188,11 @@ def test_the_402s_rig_priors_cover_its_envelope_and_the_papers_do_not():
     assert q01 < low and high < q99
     paper = _prior_resistance("burgers", 9.80665, [1.0, 720.0], 5.0, 2833.0)
     assert np.nanmin(paper) > high
+
+
+def test_the_402_file_states_its_specimens_spread_with_a_source():
+    scatter = load_sensor("fsr402").population
+    assert (scatter.level_sd, scatter.exponent_sd) == (0.35, 0.25)
+    assert scatter.reference_stress_Pa == pytest.approx(load_sensor("fsr402").stress(9.80665), 1e-3)
+    assert "224 and 335 Ohm" in scatter.source
+    assert load_sensor("a201").population is None

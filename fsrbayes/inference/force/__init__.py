@@ -15,9 +15,10 @@ calibrate with ``fsrbayes fit --no-placement``.
 
 A specimen the fit saw is read through its own posterior; one it never saw, of a sensor type
 fitted with ``--hierarchical``, as a new specimen of the population, conditioned on its own
-calibration where one is given (``calibration``, :func:`~fsrbayes.inference.predictive_draws.
-calibrate`), exactly as ``predict`` does. :class:`OnlineForce` gives the force now, one reading
-at a time, for an acquisition loop (:mod:`.online`).
+calibration where one is given (``calibration``,
+:func:`~fsrbayes.inference.new_specimen.calibrate`), exactly as ``predict`` does.
+:class:`OnlineForce` gives the force now, one reading at a time, for an acquisition loop
+(:mod:`.online`).
 
 The package exports :func:`force`, :class:`OnlineForce` and :func:`force_schema`; the quantiles,
 units and the inversion's parts are imported from :mod:`.estimate` and :mod:`.segments`.

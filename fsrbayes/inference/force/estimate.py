@@ -35,8 +35,7 @@ from ...data.readouts import STANDARD_GRAVITY
 from ...data.sensors import load_sensor
 from ..nuisance import is_landing, is_per_test, is_placement, is_ramp
 from ..output import open_fit_tree
-from ..predict import evaluation_packing
-from ..predictive_draws import population_draws, specimen_draws
+from ..predictive_draws import evaluation_packing, population_draws, specimen_draws
 from .segments import find_segments
 
 __all__ = [
@@ -103,8 +102,8 @@ class ModelDraws:
                 self.rows = np.sort(pick.choice(len(draws), self.n_draws, replace=replace))
             draws = draws[self.rows]
         else:
-            posterior, draws, _ = population_draws(
-                folder, packed, self.n_draws, rng, self.source[2]
+            posterior, draws, attrs = population_draws(
+                folder, packed, self.n_draws, rng, self.source[2], template=tests[0]
             )
         self.model = posterior.model
         names = list(posterior.names)
@@ -112,7 +111,10 @@ class ModelDraws:
             cols = [i for i, n in enumerate(names) if family(n) and is_per_test(n)]
             if len(cols) > 1:
                 draws[:, cols] = draws[:, cols[:1]]
-        return posterior.log_model_current(draws) + (self.misfit * self.z)[:, None, None]
+        log_i = posterior.log_model_current(draws) + (self.misfit * self.z)[:, None, None]
+        if kind != "fitted" and attrs.get("offsets") is not None:  # a new specimen's level
+            log_i = attrs["offsets"].apply(log_i, packed)
+        return log_i
 
 
 def fit_attrs(source, sensor=None):

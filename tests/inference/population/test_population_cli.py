@@ -15,8 +15,8 @@ from fsrbayes import load_sensor
 from fsrbayes.data import synthetic
 from fsrbayes.data.creep import CreepData
 from fsrbayes.data.csvwrite import write_csv
+from fsrbayes.inference.new_specimen import calibrate
 from fsrbayes.inference.predict import predict, predict_schema
-from fsrbayes.inference.predictive_draws import calibrate
 from fsrbayes.inference.samplers.settings import SamplerSettings
 from tests.commandline import fsrbayes_command
 
@@ -269,6 +269,10 @@ def test_predict_reads_a_new_specimen_from_the_population(hierarchical_fit, tmp_
     assert {t["specimen_source"] for t in fitted["tests"]} == {"fitted"}
     own, new = _widths(fitted), _widths(result)
     assert all(new[k] > 2 * own[k] for k in own), (own, new)
+    # but a fitted specimen's physics moved by a new level and exponent, not the prior's spread
+    prior = _widths(predict(out, new_sensor(), n_draws=400, draws_from="prior"))
+    ratios = [new[k] / prior[k] for k in prior]
+    assert max(ratios) < 1 and np.median(ratios) < 0.3, [(k, prior[k], new[k]) for k in prior]
 
 
 def test_a_calibration_narrows_a_new_specimens_bands(hierarchical_fit, tmp_path):
