@@ -424,14 +424,16 @@ def _add_predict(sub):
         prd,
         "--calibrate",
         metavar="CSV",
-        help="calibration tests of new specimens (say one weight each): each is fitted, and "
-        "its prediction conditioned on them as well as on the population",
+        help="calibration tests of new specimens (say one weight each): their level and force "
+        "exponent against the population's fitted specimens are set from them (nothing is "
+        "fitted), and the prediction follows",
     )
     option(
         prd,
         "--calibration-out",
         metavar="DIR",
-        help="keep the calibration fits in this folder (default: a temporary one)",
+        help="keep the calibration records (DIR/SPECIMEN/calibration.json) in this folder, for "
+        "'fsrbayes force --calibration DIR' (default: a temporary one)",
     )
     option(prd, "--seed", type=int, default=0, help="random seed")
     prd.set_defaults(func=cmd_predict)
@@ -465,8 +467,9 @@ def _add_force(sub):
         frc,
         "--calibration",
         metavar="DIR",
-        help="fits of new specimens' calibrations ('fsrbayes calibrate'): each is read as a new "
-        "specimen of the population conditioned on its calibration",
+        help="new specimens' calibration records ('fsrbayes predict --calibrate CSV "
+        "--calibration-out DIR'): each is read as a new specimen of the population with its "
+        "calibrated level and force exponent",
     )
     option(
         frc,

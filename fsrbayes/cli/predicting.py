@@ -1,13 +1,11 @@
 """The predict command: what a fitted sensor, or a new one of a fitted population, will read."""
 
-import sys
 import tempfile
-import warnings
 from pathlib import Path
 
 from ..data import csvio
 from ..utils import json_ready, write_json_atomic
-from .common import UsageError, checked_fit, writable
+from .common import UsageError, writable
 
 SOURCE_NOTES = {
     "fitted": "",
@@ -18,33 +16,23 @@ SOURCE_NOTES = {
 
 
 def _calibrated(args, out):
-    """Fit the calibration tests of ``--calibrate`` into ``out`` (with their fit checks)."""
-    from ..inference.fit import DesignWarning
+    """Write the calibration records of ``--calibrate`` into ``out`` and say what they set."""
     from ..inference.new_specimen import calibrate
-    from ..inference.samplers.convergence import ConvergenceWarning
 
     data = csvio.read_csv(args.calibrate, sep=args.sep, shift_time=args.shift_time)
-    print(f"fitting the calibration of {', '.join(data.specimens)} ...", flush=True)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
-        # a design the data leave open (one stress) is what the population's prior is for
-        warnings.simplefilter("ignore", DesignWarning)
-        results = calibrate(
-            args.fit_dir,
-            data,
-            out,
-            seed=args.seed,
-            on_fit=lambda specimen, result: {"checks": checked_fit(specimen, result, args.seed)},
-        )
-    said = [str(w.message) for w in caught if issubclass(w.category, ConvergenceWarning)]
-    for message in dict.fromkeys(said):
-        print(f"fsrbayes predict: warning: calibration: {message}", file=sys.stderr)
-    for specimen, result in results.items():
-        print(
-            f"  {specimen}: calibration fit {'converged' if result.converged else 'NOT converged'}"
-            f"; {result.run.report.worst()}",
-            flush=True,
-        )
+    records = calibrate(args.fit_dir, data, out, seed=args.seed)
+    for specimen, record in records.items():
+        tests = ", ".join(f"{t['test'] or 'test'} ({t['stress_Pa'] / 1e3:.3g} kPa)"
+                          for t in record["tests"])  # fmt: skip
+        print(f"  {specimen}: calibrated on {tests}", flush=True)
+        at = record["scatter"]["reference_stress_Pa"] / 1e3
+        for member, level in record["level"].items():
+            exponent = record["exponent"][member]
+            print(
+                f"    against {member}: log R at {at:.3g} kPa {level['mean']:+.3f} ± "
+                f"{level['sd']:.3f}, force exponent {exponent['mean']:+.3f} ± {exponent['sd']:.3f}",
+                flush=True,
+            )
 
 
 def cmd_predict(args):

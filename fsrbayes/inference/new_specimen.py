@@ -1,103 +1,103 @@
 """A new specimen of a fitted population, calibrated on a few of its own tests.
 
-:func:`calibrate` fits the new specimen's calibration tests (say one weight) like any specimen,
-with the population predictive as the prior of its population parameters
-(:func:`calibration_prior`): each parameter's p(θ | data) = ∫ p(θ | Λ) p(Λ | data) dΛ, one
-hyper-posterior draw Λ per new specimen, moment-matched in the family of the per-specimen
-prior's support (log-normal on (0, ∞), normal on the line, truncated normal on an interval).
-:func:`~.predict.predict` then predicts the specimen's protocol from that fit's draws
-(:mod:`~.predictive_draws`, the **calibrated** source).
+A sensor that a ``--hierarchical`` fit never saw is predicted as one of the fitted specimens
+moved by a new level and force exponent (:mod:`~.specimen_scatter`). :func:`calibrate`
+conditions that level and exponent on a few tests of the new sensor (say one weight): per test
+and fitted specimen j, the gap between the sensor's measured log R and j's model log R,
+averaged over the test's loaded samples after the first ``SETTLE_S`` seconds, is the offset of
+the new specimen against j at that test's stress, give or take a placement's own level
+(:func:`~.specimen_scatter.calibrated_offsets`). The record it writes (``calibration.json``)
+holds draws of the offsets against each fitted specimen; :func:`~.predict.predict` and
+:func:`~.force.force` read the new sensor through them (``calibration=``; the **calibrated**
+source of :mod:`~.predictive_draws`). Nothing is fitted: the calibration takes seconds, and one
+weight sets the level where it was taken, while the exponent keeps what the population knows
+of it unless the tests span several stresses.
 """
 
-import json
-from dataclasses import replace
+import warnings
 from pathlib import Path
-from types import MappingProxyType, SimpleNamespace
 
 import numpy as np
 
-from ..data.distributions import Distribution
 from ..data.sensors import load_sensor
-from ..physics.models import parse_model
-from .nuisance import noise_parameters
+from ..utils import json_ready, write_json_atomic
+from .nuisance import is_placement
 from .output import open_fit_tree
-from .population.model import Population
-from .predictive_draws import fit_folders, population_folders, population_members
+from .predictive_draws import (
+    CALIBRATION_FILE,
+    CALIBRATION_FORMAT,
+    evaluation_packing,
+    fit_folders,
+    member_coordinate_table,
+    member_log_resistance,
+    population_folders,
+    population_members,
+)
+from .specimen_scatter import TEST_SD, calibrated_offsets, scatter_of, stress_at
 
-__all__ = ["calibrate", "calibration_prior"]
+__all__ = ["CALIBRATION_DRAWS", "SETTLE_S", "calibrate", "test_sd_of"]
 
+SETTLE_S = 1.0
+"""Seconds after each load change left out of a calibration test (a weight settling)."""
 
-def _population_of(folder, posterior):
-    """Return the population of ``folder``'s population.nc and its hyper-posterior draws (H, 2P)."""
-    with open_fit_tree(folder / "population.nc") as tree:
-        population = Population(posterior.prior, json.loads(tree.attrs["population"]))
-        hyper = np.stack(
-            [tree.posterior[n].values.ravel() for n in population.hyper_names], axis=-1
-        )
-    return population, hyper
-
-
-def _new_parameters(population, hyper, n, rng):
-    """Return the population parameters of ``n`` new specimens, inside π's support."""
-    out = np.empty((n, population.size))
-    todo = np.arange(n)
-    for _ in range(100):
-        rows = hyper[rng.integers(len(hyper), size=todo.size)]
-        x = population.sample(rng, rows)
-        inside = np.isfinite(population.interim.log_prob(x))
-        out[todo[inside]] = x[inside]
-        todo = todo[~inside]
-        if todo.size == 0:
-            return out
-    raise ValueError(
-        f"the population's new specimens fall outside the per-specimen prior's support "
-        f"({todo.size} of {n} after 100 tries): the hyper-posterior is not of this prior"
-    )
+CALIBRATION_DRAWS = 4000
+"""Draws of the offsets a calibration record keeps."""
 
 
-def calibration_prior(population, hyper, rng, n=20000):
-    """Return the prior of a calibration fit (module docstring): name → Distribution.
+def test_sd_of(members):
+    """Return how far one test's level strays from its specimen's law, in log R.
 
-    Each population parameter's population predictive, sampled (``n`` new specimens, one
-    hyper-posterior draw each) and moment-matched in the family of the per-specimen prior's
-    support: log-normal on (0, ∞), normal on the line, truncated normal on an interval.
+    The spread of the fitted specimens' placement levels (the median over specimens of the sd
+    of their tests' posterior-median ``placement[k]``), at least 0.01; :data:`TEST_SD` where
+    they sampled none.
     """
-    x = _new_parameters(population, hyper, n, rng)
-    out = {}
-    for k, (name, dist) in enumerate(zip(population.names, population.interim.dists, strict=True)):
-        lower, upper = dist.support
-        if np.isfinite(lower) and np.isfinite(upper):
-            args = {"mu": float(np.mean(x[:, k])), "sigma": float(np.std(x[:, k]))}
-            out[name] = Distribution("truncnormal", {**args, "lower": lower, "upper": upper})
-        elif lower == 0.0:
-            z = np.log(x[:, k])
-            args = {"median": float(np.exp(np.mean(z))), "sigma": float(np.std(z))}
-            out[name] = Distribution("lognormal", args)
-        else:
-            args = {"mu": float(np.mean(x[:, k])), "sigma": float(np.std(x[:, k]))}
-            out[name] = Distribution("normal", args)
-    return out
+    spreads = []
+    for member in members:
+        with open_fit_tree(member / "posterior.nc") as tree:
+            levels = [
+                float(np.median(tree.posterior[n].values))
+                for n in tree.posterior.data_vars
+                if is_placement(str(n))
+            ]
+        if len(levels) > 1:
+            spreads.append(np.std(levels, ddof=1))
+    return max(float(np.median(spreads)), 0.01) if spreads else TEST_SD
 
 
-def _with_priors(sensor, model, priors):
-    """Return ``sensor`` with ``priors`` in place of its own for ``model``'s family."""
-    family = parse_model(model)[0]
-    own = {**sensor.family_priors.get(family, {}), **priors}
-    return replace(
-        sensor,
-        priors=MappingProxyType({**sensor.priors, **priors}),
-        family_priors=MappingProxyType({**sensor.family_priors, family: MappingProxyType(own)}),
-    )
+def _gaps(members, tests, scatter, rng):
+    """Per fitted specimen and test, the mean log R gap; and each test's mean log(σ/σ_ref)."""
+    packed = evaluation_packing(tests)
+    x = np.log(stress_at(packed) / scatter.reference_stress_Pa)
+    kept = []
+    for test in tests:
+        since = test.time_s[:, None] - test.load_changes()[None, :]
+        settled = ~np.any((since >= 0) & (since < SETTLE_S), axis=1)
+        if not settled.any():
+            raise ValueError(
+                f"calibration test {test.key} holds no sample {SETTLE_S:g} s after its load "
+                "changes: nothing to calibrate on"
+            )
+        kept.append(np.flatnonzero(settled))
+    with np.errstate(divide="ignore", invalid="ignore"):  # a zero reading: no resistance
+        measured = [
+            np.log(t.voltage_V / t.current_A[k] - t.rm_ohm)
+            for t, k in zip(tests, kept, strict=True)
+        ]
+    gaps = np.empty((len(members), len(tests)))
+    for j, member in enumerate(members):
+        model = member_log_resistance(member, packed, rng)
+        for c, k in enumerate(kept):
+            gap = measured[c] - model[c, k]
+            gaps[j, c] = np.mean(gap[np.isfinite(gap)])
+    return gaps, np.array([np.mean(x[c, k]) for c, k in enumerate(kept)])
 
 
 def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
-    r"""Fit new specimens' calibration tests as the population in ``fit_dir`` was fitted.
+    r"""Condition new specimens' level and force exponent on their calibration tests.
 
-    Each specimen of ``data`` is fitted alone, with the model, tunnelling law and likelihood of
-    the population of its sensor, under the population predictive of :func:`calibration_prior`
-    for the population parameters (the sensor's priors for the rest); its fit is written to
-    ``out/<specimen>/`` (``posterior.nc``, ``summary.json``), where :func:`~.predict.predict`
-    (``calibration=out``) conditions the population's new specimens on it.
+    Each specimen of ``data`` is compared with every fitted specimen of its sensor's population
+    in ``fit_dir`` (module docstring); the record, ``out/<specimen>/calibration.json``, is
+    what :func:`~.predict.predict` and :func:`~.force.force` read with ``calibration=out``.
 
     Parameters
     ----------
@@ -107,14 +107,16 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
         The new specimens' calibration tests (say one weight each), none of a fitted specimen.
     out : str or Path
     seed : int
-    settings : SamplerSettings, optional
-    on_fit : callable, optional
-        ``on_fit(specimen, result)`` → dict added to that fit's summary.json (e.g. its checks).
+    settings, on_fit
+        Deprecated since 0.3.0 and ignored (a calibration no longer fits); they go in 0.4.0.
 
     Returns
     -------
     dict
-        Specimen → its FitResult.
+        Specimen → its record: ``members`` (the fitted specimens), ``tests`` (each test's
+        label, mean stress and gap against each fitted specimen), ``test_sd``, ``scatter``,
+        ``level`` and ``exponent`` (the new specimen's offsets' mean and sd against each fitted
+        specimen), ``effective_pairs`` and ``draws`` (``member``, ``level``, ``exponent``).
 
     Raises
     ------
@@ -157,7 +159,7 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
     >>> with warnings.catch_warnings():
     ...     warnings.simplefilter("ignore")
     ...     _ = fsrbayes.calibrate(population, read_csv(folder / "new-100g.csv"),
-    ...                            folder / "calibrated", settings=short)
+    ...                            folder / "calibrated")
     ...     protocol = read_csv(folder / "new-300g.csv")
     ...     alone = fsrbayes.predict(population, protocol, n_draws=200)
     ...     calibrated = fsrbayes.predict(population, protocol, n_draws=200,
@@ -167,14 +169,20 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
     >>> calibrated["width_90_rel"] < alone["width_90_rel"]
     True
     """
-    from .fit import fit
-    from .output import save_fit
-
+    if settings is not None or on_fit is not None:
+        warnings.warn(
+            "calibrate(settings=..., on_fit=...) is deprecated since 0.3.0 and goes in 0.4.0: "
+            "a calibration no longer fits, so they do nothing",
+            FutureWarning,
+            stacklevel=2,
+        )
     populations = population_folders(fit_dir)
     fitted = fit_folders(fit_dir)
-    results = {}
+    rng = np.random.default_rng(seed)
+    records = {}
     for specimen in data.specimens:
-        sensor = data.select(specimen=specimen).tests[0].sensor
+        tests = data.select(specimen=specimen).tests
+        sensor = tests[0].sensor
         if sensor not in populations:
             raise ValueError(
                 f"{fit_dir} holds no population of {sensor} sensors to calibrate specimen "
@@ -185,27 +193,51 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
                 f"specimen {specimen!r} was fitted in {fit_dir}: a calibration is for a new one"
             )
         members, _ = population_members(populations[sensor])
-        with open_fit_tree(members[0] / "posterior.nc") as tree:
-            member = dict(tree.attrs)
-        model = member["fsrbayes_model"]
-        own = load_sensor(sensor)
-        population, hyper = _population_of(
-            populations[sensor],
-            SimpleNamespace(prior=own.prior_for(model, noise_parameters(member["likelihood"]))),
+        scatter = scatter_of(load_sensor(sensor))
+        coordinates = member_coordinate_table(members, tests[0], scatter, rng)
+        gaps, x = _gaps(members, tests, scatter, rng)
+        test_sd = test_sd_of(members)
+        member, level, exponent, effective = calibrated_offsets(
+            gaps, x, coordinates, scatter, test_sd, rng, CALIBRATION_DRAWS
         )
-        informed = calibration_prior(population, hyper, np.random.default_rng(seed))
-        result = fit(
-            data,
-            specimen,
-            model=model,
-            tunneling=member["tunneling"],
-            likelihood=member["likelihood"],
-            sensor=_with_priors(own, model, informed),
-            rng=seed,
-            settings=settings,
-        )
+        names = [m.name for m in members]
+        record = {
+            "format_version": CALIBRATION_FORMAT,
+            "specimen": specimen,
+            "sensor": sensor,
+            "population": str(populations[sensor]),
+            "members": names,
+            "tests": [
+                {
+                    "test": t.test,
+                    "stress_Pa": float(scatter.reference_stress_Pa * np.exp(x[c])),
+                    "gap_log_r": dict(zip(names, gaps[:, c].tolist(), strict=True)),
+                }
+                for c, t in enumerate(tests)
+            ],
+            "test_sd": test_sd,
+            "scatter": vars(scatter),
+            "effective_pairs": effective,
+            **{
+                what: {
+                    name: {
+                        "mean": float(np.mean(values[member == j])),
+                        "sd": float(np.std(values[member == j])),
+                        "draws": int(np.sum(member == j)),
+                    }
+                    for j, name in enumerate(names)
+                    if np.any(member == j)
+                }
+                for what, values in (("level", level), ("exponent", exponent))
+            },
+            "draws": {
+                "member": member.tolist(),
+                "level": level.tolist(),
+                "exponent": exponent.tolist(),
+            },
+        }
         folder = Path(out) / specimen
         folder.mkdir(parents=True, exist_ok=True)
-        save_fit(result, folder, extra=on_fit(specimen, result) if on_fit else None)
-        results[specimen] = result
-    return results
+        write_json_atomic(folder / CALIBRATION_FILE, json_ready(record))
+        records[specimen] = record
+    return records

@@ -7,19 +7,13 @@ its parameter draws, one row per replicate reading:
 * **population** (:func:`population_draws`) — a specimen never fitted, of a sensor type fitted
   with ``--hierarchical``: a fitted specimen's posterior draw, picked at random — its physics,
   measurement noise, loading ramps and placements: a new sensor on the same rig is read as
-  noisily, and its weights land as the fitted ones did — with its log-current moved by the
-  new specimen's level and force exponent against that specimen's
+  noisily, and its weights land as the fitted ones did — with its resistance moved by the new
+  specimen's level and force exponent against that specimen's
   (:mod:`~.specimen_scatter`; the spreads from the sensor file's ``[population]`` table).
-* **calibrated** — the same new specimen conditioned on its own calibration tests (say one
-  weight). The calibration is fitted like any specimen (:func:`calibrate`), with the
-  population predictive as the prior of its population parameters: each parameter's
-  p(θ | data), moment-matched in the family of the per-specimen prior's support (log-normal on
-  (0, ∞), normal on the line, truncated normal on an interval), so that its mean and spread —
-  the hyper-posterior's uncertainty included — carry over, and its shape is the normal's in
-  the population coordinates. The exact mixture would need importance weights p(θ | data)/q(θ)
-  on the fit's draws; tried on three fitted specimens, hyper-draws with small spreads ω make
-  it peaked in eleven dimensions at once and left 9–17 effective draws of 2,000, so the fit's
-  own draws are used as they are. Its measurement noise is the calibration's own.
+* **calibrated** — the same new specimen with its level and force exponent conditioned on its
+  own calibration tests (say one weight; :func:`~.new_specimen.calibrate` writes the record):
+  the fitted specimens' draws are borrowed as for **population**, each with an offset drawn
+  from the calibration's posterior against that specimen.
 """
 
 import json
@@ -49,15 +43,26 @@ from .specimen_scatter import (
 )
 
 __all__ = [
+    "CALIBRATION_FILE",
+    "CALIBRATION_FORMAT",
+    "calibration_folders",
     "draw_sources",
     "evaluation_packing",
     "fit_folders",
+    "member_coordinate_table",
+    "member_log_resistance",
     "placement_draws",
     "population_draws",
     "population_folders",
     "population_members",
+    "read_calibration",
     "specimen_draws",
 ]
+
+CALIBRATION_FILE = "calibration.json"
+"""A new specimen's calibration record, a folder per specimen (:func:`~.new_specimen.calibrate`)."""
+CALIBRATION_FORMAT = 1
+"""The calibration record's format; other formats are refused."""
 
 
 def evaluation_packing(tests, time_s=None):
@@ -197,6 +202,16 @@ def _lent(seen, n_tests, rng, own=None):
     return [np.take_along_axis(a, picks, axis=1) for a in seen]
 
 
+def calibration_folders(out):
+    """Map specimen → folder of its calibration record under ``out`` (:func:`read_calibration`)."""
+    root = Path(out)
+    files = [root / CALIBRATION_FILE] if (root / CALIBRATION_FILE).is_file() else []
+    out = {}
+    for path in files + sorted(root.glob(f"*/{CALIBRATION_FILE}")):
+        out.setdefault(str(read_calibration(path.parent)["specimen"]), path.parent)
+    return out
+
+
 def population_folders(fit_dir):
     """Map sensor → folder of its ``population.nc`` under a ``fit --hierarchical`` output folder.
 
@@ -228,6 +243,36 @@ def population_members(folder):
     return members, attrs
 
 
+def member_log_resistance(member, packed, rng, n_draws=400):
+    """Return a fitted specimen's median model log R on the packed tests, shape (C, T).
+
+    The sensor's own resistance V_FSR/I (:func:`~.specimen_scatter.sensor_log_resistance`),
+    the median over up to ``n_draws`` of its posterior draws.
+    """
+    posterior, draws, _ = specimen_draws(member, packed, rng)
+    log_i = posterior.log_model_current(draws[: min(len(draws), n_draws)])
+    return np.nanmedian(sensor_log_resistance(log_i, packed), axis=0)
+
+
+def member_coordinate_table(members, template, scatter, rng):
+    """Return each fitted specimen's (L, S) under ``template``'s circuit, shape (J, 2).
+
+    Read from its median log R ``REFERENCE_TIME_S`` after loading at stresses around the
+    reference (:func:`~.specimen_scatter.reference_tests`, :func:`member_coordinates`).
+    """
+    reference = evaluation_packing(reference_tests(template, scatter))
+    return np.array(
+        [
+            member_coordinates(
+                member_log_resistance(m, reference, rng)[:, 0],
+                reference.stress_Pa,
+                scatter.reference_stress_Pa,
+            )
+            for m in members
+        ]
+    )
+
+
 def population_draws(folder, packed, n_draws, rng, calibration=None, template=None):
     """Draws of a specimen never fitted, from the population in ``folder`` (module docstring).
 
@@ -240,8 +285,8 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
     n_draws : int
     rng : numpy.random.Generator
     calibration : Path, optional
-        A fit of the new specimen's calibration tests by :func:`calibrate`: the draws are
-        conditioned on it.
+        The new specimen's calibration (its folder written by
+        :func:`~.new_specimen.calibrate`): its level and force exponent are drawn from it.
     template : fsrbayes.data.creep.CreepTest, optional
         Without a calibration: a protocol test whose circuit and voltage the fitted specimens'
         level and force exponent are read under (:func:`~.specimen_scatter.reference_tests`).
@@ -251,9 +296,8 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
     posterior : LogPosterior
     draws : ndarray, shape (n_draws, ndim)
     attrs : dict
-        ``sensor``, ``fsrbayes_model``, ``converged`` (the population's, and the calibration
-        fit's) and, without a calibration, ``offsets``: the new specimens'
-        :class:`~.specimen_scatter.ScatterOffsets`, one per draw.
+        ``sensor``, ``fsrbayes_model``, ``converged`` (the population's) and ``offsets``: the
+        new specimens' :class:`~.specimen_scatter.ScatterOffsets`, one per draw.
     """
     members, attrs = population_members(folder)
     pooled = [specimen_draws(m, packed, rng) for m in members]
@@ -265,38 +309,47 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
         )
     draws = np.concatenate([d for _, d, _ in pooled])
     member_of = np.concatenate([np.full(len(d), j) for j, (_, d, _) in enumerate(pooled)])
-    pick = rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)
-    draws, member_of = draws[pick], member_of[pick]
-    converged = bool(int(attrs.get("converged", 0)))
-    info = {"sensor": attrs["sensor"], "fsrbayes_model": attrs["fsrbayes_model"]}
+    scatter = scatter_of(load_sensor(attrs["sensor"]))
     if calibration is None:
-        scatter = scatter_of(load_sensor(attrs["sensor"]))
-        reference = evaluation_packing(reference_tests(template, scatter))
-        coordinates = []
-        for member in members:
-            on_grid, grid_draws, _ = specimen_draws(member, reference, rng)
-            log_i = on_grid.log_model_current(grid_draws[: min(len(grid_draws), 400)])
-            median = np.nanmedian(sensor_log_resistance(log_i, reference)[:, :, 0], axis=0)
-            coordinates.append(
-                member_coordinates(median, reference.stress_Pa, scatter.reference_stress_Pa)
+        pick = rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)
+        coordinates = member_coordinate_table(members, template, scatter, rng)
+        offsets = ScatterOffsets.draw(coordinates, member_of[pick], scatter, rng)
+    else:
+        record = read_calibration(calibration)
+        names = [m.name for m in members]
+        if record["members"] != names:
+            raise ValueError(
+                f"the calibration in {calibration} was made against the specimens "
+                f"{record['members']}; the population in {folder} holds {names}: calibrate "
+                "again against this population"
             )
-        info["offsets"] = ScatterOffsets.draw(coordinates, member_of, scatter, rng)
-    else:  # the calibration fit's own draws of every parameter but the per-test ones
-        with open_fit_tree(calibration / "posterior.nc") as tree:
-            model = tree.attrs["fsrbayes_model"]
-            names = [n for n in posterior.names if not is_per_test(n)]
-            missing = [n for n in names if n not in tree.posterior.data_vars]
-            if missing or model != posterior.model:
-                raise ValueError(
-                    f"the calibration fit in {calibration} is of model {model!r}; the "
-                    f"population's is {posterior.model!r} (it lacks {missing}): fit the "
-                    "calibration with 'fsrbayes predict --calibrate'"
-                )
-            own = np.stack([tree.posterior[n].values.ravel() for n in names], axis=-1)
-            converged &= bool(int(tree.attrs.get("converged", 0)))
-        pick = rng.choice(len(own), n_draws, replace=len(own) < n_draws)
-        draws[:, [posterior.names.index(n) for n in names]] = own[pick]
-    return posterior, draws, {**info, "converged": int(converged)}
+        kept = {k: np.asarray(v) for k, v in record["draws"].items()}
+        rows = rng.choice(len(kept["member"]), n_draws, replace=True)
+        pick = np.array([rng.choice(np.flatnonzero(member_of == j)) for j in kept["member"][rows]])
+        offsets = ScatterOffsets(
+            kept["level"][rows], kept["exponent"][rows], scatter.reference_stress_Pa
+        )
+    info = {"sensor": attrs["sensor"], "fsrbayes_model": attrs["fsrbayes_model"]}
+    return posterior, draws[pick], {**info, "converged": int(attrs.get("converged", 0)),
+                                    "offsets": offsets}  # fmt: skip
+
+
+def read_calibration(folder):
+    """Return a new specimen's calibration record (``calibration.json`` in ``folder``)."""
+    path = Path(folder) / CALIBRATION_FILE
+    try:
+        record = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(
+            f"{folder} holds no {CALIBRATION_FILE}: make the calibration with "
+            "'fsrbayes predict --calibrate' or fsrbayes.calibrate"
+        ) from None
+    if record.get("format_version") != CALIBRATION_FORMAT:
+        raise ValueError(
+            f"{path} is of format {record.get('format_version')!r}, this fsrbayes reads "
+            f"{CALIBRATION_FORMAT}: calibrate again"
+        )
+    return record
 
 
 def draw_sources(fit_dir, specimens, calibration=None, what="the data"):
@@ -309,7 +362,7 @@ def draw_sources(fit_dir, specimens, calibration=None, what="the data"):
     specimens : sequence of (str, str)
         (specimen, sensor) pairs.
     calibration : str or Path, optional
-        Fits of new specimens' calibration tests (:func:`calibrate`).
+        New specimens' calibrations (:func:`~.new_specimen.calibrate`).
     what : str
         What the specimens come from, for messages.
 
@@ -329,7 +382,7 @@ def draw_sources(fit_dir, specimens, calibration=None, what="the data"):
     populations = population_folders(fit_dir)
     if not folders:
         raise ValueError(f"{fit_dir} holds no posterior.nc; run 'fsrbayes fit' first")
-    calibrated = fit_folders(calibration) if calibration is not None else {}
+    calibrated = calibration_folders(calibration) if calibration is not None else {}
     sources, missing = {}, []
     for specimen, sensor in specimens:
         population = populations.get(sensor)

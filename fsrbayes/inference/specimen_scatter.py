@@ -33,6 +33,8 @@ __all__ = [
     "DEFAULT_LEVEL_SD",
     "DEFAULT_EXPONENT_SD",
     "HYPER_SIGMA",
+    "TEST_SD",
+    "calibrated_offsets",
     "REFERENCE_TIME_S",
     "ScatterOffsets",
     "member_coordinates",
@@ -54,6 +56,10 @@ DEFAULT_LEVEL_SD = 0.5
 DEFAULT_EXPONENT_SD = 0.3
 """The spreads a sensor file without a ``[population]`` table is given (:func:`scatter_of`): a
 factor 1.6 in level and 0.3 in force exponent, weakly held."""
+
+TEST_SD = 0.05
+"""The spread of one test's level about the specimen's law (log R) where the fitted specimens
+sampled no placement levels to say it: a weight put on again reads a few percent off."""
 
 _GRID = (0.1, 0.2, 0.5, 1.0, 2.0)
 """Stresses where a fitted specimen's coordinates are read, in units of the reference stress."""
@@ -229,3 +235,69 @@ class ScatterOffsets:
         new = new_coordinates(coordinates, scatter, rng, len(member_of_draw))
         moved = new - coordinates[member_of_draw]
         return cls(moved[:, 0], moved[:, 1], scatter.reference_stress_Pa)
+
+
+def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=20000):
+    """Draw a calibrated new specimen's offsets against the fitted specimens it borrows from.
+
+    Each calibration test c says how far the new specimen's log R stands from fitted specimen
+    j's, on average over the test: gaps[j, c] = a_j + b_j·x[c] + ε_c, with (a_j, b_j) =
+    (L* − L_j, S* − S_j), x[c] = the test's mean log(σ/σ_ref) and ε_c ~ N(0, test_sd²) (a
+    placement's own level). Given the spreads ω, (a_j, b_j) has the Gaussian prior of
+    :func:`new_coordinates` shifted by (L_j, S_j), so its posterior is Gaussian too. Pairs
+    (j, ω) drawn from the population predictive are weighted by the marginal likelihood of
+    j's gaps under ω and resampled, then (a_j, b_j) is drawn from its posterior: a fitted
+    specimen whose shape fits the calibration better lends more draws.
+
+    Parameters
+    ----------
+    gaps : ndarray, shape (J, C)
+    x : ndarray, shape (C,)
+    coordinates : ndarray, shape (J, 2)
+    scatter : SpecimenScatter
+    test_sd : float
+    rng : numpy.random.Generator
+    n : int
+        Draws returned.
+    n_pairs : int
+        Pairs (j, ω) weighed.
+
+    Returns
+    -------
+    member : ndarray of int, shape (n,)
+    level, slope : ndarray, shape (n,)
+    effective_pairs : float
+        Kish's effective number of the weighed pairs.
+    """
+    gaps, x = np.asarray(gaps, dtype=float), np.asarray(x, dtype=float)
+    coordinates = np.asarray(coordinates, dtype=float)
+    n_members = len(coordinates)
+    member = rng.integers(n_members, size=n_pairs)
+    inflate = 1.0 + 1.0 / n_members
+    var = np.stack(
+        [
+            inflate * spread_draws(coordinates[:, k], median, rng, n_pairs) ** 2
+            for k, median in enumerate((scatter.level_sd, scatter.exponent_sd))
+        ],
+        axis=1,
+    )  # (P, 2)
+    mean = coordinates.mean(axis=0) - coordinates[member]  # (P, 2)
+    design = np.stack([np.ones_like(x), x], axis=1)  # (C, 2)
+    y = gaps[member]  # (P, C)
+    cov = np.einsum("ck,pk,dk->pcd", design, var, design) + test_sd**2 * np.eye(x.size)
+    resid = y - mean @ design.T
+    _, logdet = np.linalg.slogdet(cov)
+    quad = np.einsum("pc,pc->p", resid, np.linalg.solve(cov, resid[..., None])[..., 0])
+    log_w = -0.5 * (logdet + quad)
+    w = np.exp(log_w - log_w.max())
+    w /= w.sum()
+    chosen = rng.choice(n_pairs, size=n, p=w)
+    precision = np.eye(2)[None] / var[chosen][:, None, :]  # diag(1/var)
+    precision = precision + design.T @ design / test_sd**2
+    shift = mean[chosen] / var[chosen] + (y[chosen] @ design) / test_sd**2
+    post_cov = np.linalg.inv(precision)
+    post_mean = np.einsum("pij,pj->pi", post_cov, shift)
+    draws = post_mean + np.einsum(
+        "pij,pj->pi", np.linalg.cholesky(post_cov), rng.standard_normal((n, 2))
+    )
+    return member[chosen], draws[:, 0], draws[:, 1], float(1.0 / np.sum(w**2))

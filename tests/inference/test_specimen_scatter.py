@@ -11,6 +11,7 @@ from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.specimen_scatter import (
     HYPER_SIGMA,
     ScatterOffsets,
+    calibrated_offsets,
     member_coordinates,
     new_coordinates,
     scatter_of,
@@ -121,3 +122,31 @@ def test_a_sensor_without_a_population_table_gets_the_defaults_at_1_kg():
     assert scatter.reference_stress_Pa == pytest.approx(a201.stress(9.80665))
     assert "no [population] table" in scatter.source
     assert scatter_of(load_sensor("fsr402")) == load_sensor("fsr402").population
+
+
+def test_one_calibration_weight_sets_the_level_there_and_leaves_the_exponent_to_the_population():
+    rng = np.random.default_rng(9)
+    coordinates = np.array([[5.0, -1.0], [5.2, -1.1]])
+    gaps = np.array([[0.8], [0.6]])  # the new sensor's log R stands 0.8 above j = 0's at x = -0.5
+    member, level, exponent, effective = calibrated_offsets(
+        gaps, np.array([-0.5]), coordinates, SCATTER, 0.02, rng, 20000
+    )
+    for j in (0, 1):
+        at_test = level[member == j] - 0.5 * exponent[member == j]
+        assert abs(at_test.mean() - gaps[j, 0]) < 0.01 and at_test.std() < 0.025
+        # one stress says nothing of the exponent: its spread stays the population's
+        assert exponent[member == j].std() > 0.15
+    assert effective > 1000
+
+
+def test_two_stresses_give_the_exponent_and_a_better_fitting_lender_more_draws():
+    rng = np.random.default_rng(10)
+    coordinates = np.array([[5.0, -1.0], [5.0, -1.0]])
+    x = np.array([-1.0, 0.5])
+    # against j = 0 the gaps follow a + b·x with b = -0.3; against j = 1 they are inconsistent
+    # with any level within the spreads (a 3 nat swing the tests' 0.02 cannot absorb)
+    gaps = np.array([[0.4 + 0.3, 0.4 - 0.15], [3.0, -3.0]])
+    member, level, exponent, _ = calibrated_offsets(gaps, x, coordinates, SCATTER, 0.02, rng, 20000)
+    assert np.mean(member == 0) > 0.99
+    assert exponent[member == 0].mean() == pytest.approx(-0.3, abs=0.02)
+    assert level[member == 0].mean() == pytest.approx(0.4, abs=0.02)

@@ -35,7 +35,12 @@ from ...data.readouts import STANDARD_GRAVITY
 from ...data.sensors import load_sensor
 from ..nuisance import is_landing, is_per_test, is_placement, is_ramp
 from ..output import open_fit_tree
-from ..predictive_draws import evaluation_packing, population_draws, specimen_draws
+from ..predictive_draws import (
+    evaluation_packing,
+    population_draws,
+    population_members,
+    specimen_draws,
+)
 from .segments import find_segments
 
 __all__ = [
@@ -85,7 +90,7 @@ class ModelDraws:
     def __init__(self, source, n_draws, seed):
         self.source, self.n_draws, self.seed = source, int(n_draws), int(seed)
         self.rows = None
-        folders = [source[1]] if source[0] == "fitted" else _population_fits(*source[1:])
+        folders = [source[1]] if source[0] == "fitted" else population_members(source[1])[0]
         self.misfit = float(np.sqrt(np.mean([_misfit(f) ** 2 for f in folders])))
         self.z = np.random.default_rng(self.seed + 3).standard_normal(self.n_draws)
 
@@ -127,9 +132,6 @@ def fit_attrs(source, sensor=None):
     name = "posterior.nc" if source[0] == "fitted" else "population.nc"
     with open_fit_tree(Path(source[1]) / name) as tree:
         attrs = dict(tree.attrs)
-    if source[0] == "population" and source[2] is not None:  # its calibration's convergence
-        with open_fit_tree(Path(source[2]) / "posterior.nc") as tree:
-            attrs["converged"] = tree.attrs.get("converged", 0)
     fits = [Path(source[1])] if source[0] == "fitted" else sorted(
         p.parent for p in Path(source[1]).glob("*/posterior.nc")
     )  # fmt: skip
@@ -166,16 +168,6 @@ def _misfit(folder):
         residual = np.log(observed) - np.log(model)
     residual = residual[np.isfinite(residual)]
     return float(np.sqrt(np.mean(residual**2))) if residual.size else 0.0
-
-
-def _population_fits(folder, calibration):
-    """Return the fits whose residuals stand for a new specimen's.
-
-    Its calibration's where it has one, else the population's members'.
-    """
-    if calibration is not None:
-        return sorted(p.parent for p in Path(calibration).glob("**/posterior.nc"))
-    return sorted(p.parent for p in Path(folder).glob("*/posterior.nc"))
 
 
 def candidate_test(log, history, stress, start_s, times_s, label):
