@@ -224,9 +224,9 @@ class ScatterOffsets:
         supply = np.asarray(packed.voltage_V, dtype=float)[:, None]
         series = np.zeros_like(supply) if packed.extra_series is None else packed.extra_series
         log_r = sensor_log_resistance(log_current, packed) + self.log_offset(packed)
-        with np.errstate(divide="ignore"):  # log 0 = −inf: no resistor in series
+        with np.errstate(divide="ignore", invalid="ignore"):  # log 0: no resistor in series;
             log_series = np.log(np.asarray(series, dtype=float).reshape(-1, 1))
-        return np.log(supply) - np.logaddexp(log_r, log_series)
+            return np.log(supply) - np.logaddexp(log_r, log_series)  # NaN: an invalid draw
 
     @classmethod
     def draw(cls, coordinates, member_of_draw, scatter, rng):
