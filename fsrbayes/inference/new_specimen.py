@@ -11,7 +11,7 @@ holds draws of the offsets against each fitted specimen; :func:`~.predict.predic
 :func:`~.force.force` read the new sensor through them (``calibration=``; the **calibrated**
 source of :mod:`~.predictive_draws`). Nothing is fitted: the calibration takes seconds, and one
 weight sets the level where it was taken, while the exponent keeps what the population knows
-of it unless the tests span several stresses.
+of it unless tests at several stresses are given.
 """
 
 import warnings
@@ -45,11 +45,12 @@ CALIBRATION_DRAWS = 4000
 
 
 def test_sd_of(members):
-    """Return how far one test's level strays from its specimen's law, in log R.
+    """Return how far one test's level strays from its specimen's law, in log I.
 
     The spread of the fitted specimens' placement levels (the median over specimens of the sd
     of their tests' posterior-median ``placement[k]``), at least 0.01; :data:`TEST_SD` where
-    they sampled none.
+    they sampled none. A test read through a divider's fixed resistor R_m at resistance R
+    strays (R + R_m)/R times as far in log R (:func:`_gaps`).
     """
     spreads = []
     for member in members:
@@ -83,13 +84,31 @@ def _gaps(members, tests, scatter, rng):
             np.log(t.voltage_V / t.current_A[k] - t.rm_ohm)
             for t, k in zip(tests, kept, strict=True)
         ]
+    for test, values in zip(tests, measured, strict=True):
+        if not np.isfinite(values).mean() > 0.5:
+            raise ValueError(
+                f"calibration test {test.key}: most readings give no resistance (zero or "
+                "saturated readings); calibrate on readings inside the readout's range"
+            )
     gaps = np.empty((len(members), len(tests)))
     for j, member in enumerate(members):
         model = member_log_resistance(member, packed, rng)
         for c, k in enumerate(kept):
             gap = measured[c] - model[c, k]
+            if not np.isfinite(gap).any():
+                raise ValueError(
+                    f"the fitted specimen {member.name} gives no current on calibration test "
+                    f"{tests[c].key} (out of its model's domain): calibrate on another test"
+                )
             gaps[j, c] = np.mean(gap[np.isfinite(gap)])
-    return gaps, np.array([np.mean(x[c, k]) for c, k in enumerate(kept)])
+    # how much further a placement's level (a factor on I) strays in log R: (R + R_m)/R
+    amplify = np.array(
+        [
+            1.0 + t.rm_ohm / np.exp(np.median(v[np.isfinite(v)]))
+            for t, v in zip(tests, measured, strict=True)
+        ]
+    )
+    return gaps, np.array([np.mean(x[c, k]) for c, k in enumerate(kept)]), amplify
 
 
 def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
@@ -114,7 +133,8 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
     -------
     dict
         Specimen → its record: ``members`` (the fitted specimens), ``tests`` (each test's
-        label, mean stress and gap against each fitted specimen), ``test_sd``, ``scatter``,
+        label, mean stress and gap against each fitted specimen), ``test_sd_log_r`` (each
+        test's own spread), ``scatter``,
         ``level`` and ``exponent`` (the new specimen's offsets' mean and sd against each fitted
         specimen), ``effective_pairs`` and ``draws`` (``member``, ``level``, ``exponent``).
 
@@ -195,8 +215,8 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
         members, _ = population_members(populations[sensor])
         scatter = scatter_of(load_sensor(sensor))
         coordinates = member_coordinate_table(members, tests[0], scatter, rng)
-        gaps, x = _gaps(members, tests, scatter, rng)
-        test_sd = test_sd_of(members)
+        gaps, x, amplify = _gaps(members, tests, scatter, rng)
+        test_sd = test_sd_of(members) * amplify
         member, level, exponent, effective = calibrated_offsets(
             gaps, x, coordinates, scatter, test_sd, rng, CALIBRATION_DRAWS
         )
@@ -215,7 +235,7 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
                 }
                 for c, t in enumerate(tests)
             ],
-            "test_sd": test_sd,
+            "test_sd_log_r": test_sd.tolist(),
             "scatter": vars(scatter),
             "effective_pairs": effective,
             **{

@@ -323,13 +323,12 @@ class LogPosterior(PriorScaledTarget):
         )
         return np.broadcast_to(strain, (len(x), len(self.data.stress_Pa), np.shape(time)[-1]))
 
-    def log_model_current(self, x, time_s=None):
+    def log_model_current(self, x, time_s=None, placements=True):
         """Return log I of the model, shape (W, C, T).
 
-        Return log I of the model, shape (W, C, T) (T from the data, or ``time_s`` of shape (T,) or
-        (C, T)).
-
-        −inf where the parameters leave the model's validity domain.
+        T from the data, or ``time_s`` of shape (T,) or (C, T). With ``placements`` each test's
+        sampled placement level is added (:meth:`placement_levels`). −inf where the parameters
+        leave the model's validity domain.
         """
         x = np.atleast_2d(np.asarray(x, dtype=float))
         params, time, steps, first_ramp, ramps = self._model_inputs(x, time_s)
@@ -352,9 +351,16 @@ class LogPosterior(PriorScaledTarget):
         valid = solution.valid & (solution.current > 0)
         if self._ramps:  # a ramp ends before its test's load changes again
             valid &= (ramps < self._ramp_limit)[..., None]
-        if self._placements:  # each test's readings stand its own factor above the model
-            log_current = log_current + x[:, self._placements][:, self.data.ramp_rows(), None]
+        if placements:  # each test's readings stand its own factor above the model
+            log_current = log_current + self.placement_levels(x)
         return np.where(valid, log_current, -np.inf)
+
+    def placement_levels(self, x):
+        """Return each test's placement level (log of its factor on I), (W, C, 1); 0 without."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if not self._placements:
+            return np.zeros((len(x), self.data.n_tests, 1))
+        return x[:, self._placements][:, self.data.ramp_rows(), None]
 
     def landing_window(self, x):
         """Return the interval each test's sampled landing is a share of, shape (W, C), in s.

@@ -37,6 +37,7 @@ from ..data.readouts import reading_of
 from .predictive_draws import (
     draw_sources,
     evaluation_packing,
+    new_specimen_log_current,
     population_draws,
     specimen_draws,
 )
@@ -127,8 +128,9 @@ def _predict_tests(source, tests, n_draws, rng, draws_from):
     """Predictive bands of one specimen's protocol tests.
 
     ``source``: ``("fitted", folder)`` — the specimen's fit; ``("population", folder,
-    calibration)`` — a new specimen of the population in ``folder``, conditioned on the fit of
-    its calibration tests when ``calibration`` is a folder (:mod:`.predictive_draws`).
+    calibration)`` — a new specimen of the population in ``folder``, its level and force
+    exponent conditioned on its calibration when ``calibration`` is a folder
+    (:mod:`.predictive_draws`).
     """
     times = [_model_times(t) for t in tests]
     width = max(t.size for t in times)
@@ -155,9 +157,10 @@ def _predict_tests(source, tests, n_draws, rng, draws_from):
         rows = np.sort(rng.choice(draws.shape[0], n_draws, replace=resample))
         draws = draws[rows]
         offsets = None if offsets is None else offsets.take(rows)
-    log_model = posterior.log_model_current(draws)
     if offsets is not None and draws_from == "posterior":  # a new specimen's level and exponent
-        log_model = offsets.apply(log_model, packed)
+        log_model = new_specimen_log_current(posterior, draws, offsets, packed)
+    else:
+        log_model = posterior.log_model_current(draws)
     closed = None
     if not np.isfinite(log_model).all():  # why draws are invalid: the gap, or the tunnelling law
         closed = posterior.gap_strain(draws) >= 1.0
@@ -279,7 +282,7 @@ def predict(fit_dir, protocol, *, n_draws=1000, seed=0, draws_from="posterior", 
         sensor priors and fixed parameters) — the prior predictive, whose band widths show how
         much the fit's data narrowed the prediction (sharpness).
     calibration : str or Path, optional
-        Fits of new specimens' calibration tests (:func:`~.new_specimen.calibrate`): each
+        New specimens' calibrations (:func:`~.new_specimen.calibrate`): each
         specimen there is predicted as a new specimen of the population conditioned on its
         calibration ("calibrated").
 

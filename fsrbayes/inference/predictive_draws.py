@@ -51,6 +51,7 @@ __all__ = [
     "fit_folders",
     "member_coordinate_table",
     "member_log_resistance",
+    "new_specimen_log_current",
     "placement_draws",
     "population_draws",
     "population_folders",
@@ -206,6 +207,12 @@ def calibration_folders(out):
     """Map specimen → folder of its calibration record under ``out`` (:func:`read_calibration`)."""
     root = Path(out)
     files = [root / CALIBRATION_FILE] if (root / CALIBRATION_FILE).is_file() else []
+    old = [p.parent for p in [root / "posterior.nc", *root.glob("*/posterior.nc")] if p.is_file()]
+    if old and not any((folder / CALIBRATION_FILE).is_file() for folder in old):
+        raise ValueError(
+            f"{old[0]} is a calibration fit of fsrbayes 0.2.0; a calibration is now a record "
+            "(calibration.json): calibrate again with 'fsrbayes predict --calibrate'"
+        )
     out = {}
     for path in files + sorted(root.glob(f"*/{CALIBRATION_FILE}")):
         out.setdefault(str(read_calibration(path.parent)["specimen"]), path.parent)
@@ -250,7 +257,8 @@ def member_log_resistance(member, packed, rng, n_draws=400):
     the median over up to ``n_draws`` of its posterior draws.
     """
     posterior, draws, _ = specimen_draws(member, packed, rng)
-    log_i = posterior.log_model_current(draws[: min(len(draws), n_draws)])
+    rows = np.linspace(0, len(draws) - 1, min(len(draws), n_draws)).astype(int)
+    log_i = posterior.log_model_current(draws[rows])
     return np.nanmedian(sensor_log_resistance(log_i, packed), axis=0)
 
 
@@ -311,6 +319,10 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
     member_of = np.concatenate([np.full(len(d), j) for j, (_, d, _) in enumerate(pooled)])
     scatter = scatter_of(load_sensor(attrs["sensor"]))
     if calibration is None:
+        if template is None:
+            raise ValueError(
+                "a new specimen without a calibration needs a protocol test (template)"
+            )
         pick = rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)
         coordinates = member_coordinate_table(members, template, scatter, rng)
         offsets = ScatterOffsets.draw(coordinates, member_of[pick], scatter, rng)
@@ -326,12 +338,22 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
         kept = {k: np.asarray(v) for k, v in record["draws"].items()}
         rows = rng.choice(len(kept["member"]), n_draws, replace=True)
         pick = np.array([rng.choice(np.flatnonzero(member_of == j)) for j in kept["member"][rows]])
-        offsets = ScatterOffsets(
-            kept["level"][rows], kept["exponent"][rows], scatter.reference_stress_Pa
-        )
+        reference_stress = record["scatter"]["reference_stress_Pa"]  # the record's, as made
+        offsets = ScatterOffsets(kept["level"][rows], kept["exponent"][rows], reference_stress)
     info = {"sensor": attrs["sensor"], "fsrbayes_model": attrs["fsrbayes_model"]}
     return posterior, draws[pick], {**info, "converged": int(attrs.get("converged", 0)),
                                     "offsets": offsets}  # fmt: skip
+
+
+def new_specimen_log_current(posterior, draws, offsets, packed):
+    """Return log I of new specimens on the packed tests, shape (S, C, T).
+
+    The borrowed draws' model current without their placement levels, moved by the
+    :class:`~.specimen_scatter.ScatterOffsets` through each test's circuit, then each test's
+    placement level added as the fit adds it (a factor on the current).
+    """
+    bare = posterior.log_model_current(draws, placements=False)
+    return offsets.apply(bare, packed) + posterior.placement_levels(draws)
 
 
 def read_calibration(folder):

@@ -58,8 +58,9 @@ DEFAULT_EXPONENT_SD = 0.3
 factor 1.6 in level and 0.3 in force exponent, weakly held."""
 
 TEST_SD = 0.05
-"""The spread of one test's level about the specimen's law (log R) where the fitted specimens
-sampled no placement levels to say it: a weight put on again reads a few percent off."""
+"""The spread of one test's level about the specimen's law, in log I as a placement level is,
+where the fitted specimens sampled no placement levels to say it: a weight put on again reads a
+few percent off."""
 
 _GRID = (0.1, 0.2, 0.5, 1.0, 2.0)
 """Stresses where a fitted specimen's coordinates are read, in units of the reference stress."""
@@ -242,8 +243,8 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
 
     Each calibration test c says how far the new specimen's log R stands from fitted specimen
     j's, on average over the test: gaps[j, c] = a_j + b_j·x[c] + ε_c, with (a_j, b_j) =
-    (L* − L_j, S* − S_j), x[c] = the test's mean log(σ/σ_ref) and ε_c ~ N(0, test_sd²) (a
-    placement's own level). Given the spreads ω, (a_j, b_j) has the Gaussian prior of
+    (L* − L_j, S* − S_j), x[c] = the test's mean log(σ/σ_ref) and ε_c ~ N(0, test_sd[c]²) (a
+    placement's own level, in log R). Given the spreads ω, (a_j, b_j) has the Gaussian prior of
     :func:`new_coordinates` shifted by (L_j, S_j), so its posterior is Gaussian too. Pairs
     (j, ω) drawn from the population predictive are weighted by the marginal likelihood of
     j's gaps under ω and resampled, then (a_j, b_j) is drawn from its posterior: a fitted
@@ -255,7 +256,7 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
     x : ndarray, shape (C,)
     coordinates : ndarray, shape (J, 2)
     scatter : SpecimenScatter
-    test_sd : float
+    test_sd : float or ndarray, shape (C,)
     rng : numpy.random.Generator
     n : int
         Draws returned.
@@ -270,6 +271,7 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
         Kish's effective number of the weighed pairs.
     """
     gaps, x = np.asarray(gaps, dtype=float), np.asarray(x, dtype=float)
+    noise = np.broadcast_to(np.asarray(test_sd, dtype=float) ** 2, x.shape)  # (C,)
     coordinates = np.asarray(coordinates, dtype=float)
     n_members = len(coordinates)
     member = rng.integers(n_members, size=n_pairs)
@@ -284,7 +286,7 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
     mean = coordinates.mean(axis=0) - coordinates[member]  # (P, 2)
     design = np.stack([np.ones_like(x), x], axis=1)  # (C, 2)
     y = gaps[member]  # (P, C)
-    cov = np.einsum("ck,pk,dk->pcd", design, var, design) + test_sd**2 * np.eye(x.size)
+    cov = np.einsum("ck,pk,dk->pcd", design, var, design) + np.diag(noise)
     resid = y - mean @ design.T
     _, logdet = np.linalg.slogdet(cov)
     quad = np.einsum("pc,pc->p", resid, np.linalg.solve(cov, resid[..., None])[..., 0])
@@ -293,8 +295,8 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
     w /= w.sum()
     chosen = rng.choice(n_pairs, size=n, p=w)
     precision = np.eye(2)[None] / var[chosen][:, None, :]  # diag(1/var)
-    precision = precision + design.T @ design / test_sd**2
-    shift = mean[chosen] / var[chosen] + (y[chosen] @ design) / test_sd**2
+    precision = precision + design.T @ (design / noise[:, None])
+    shift = mean[chosen] / var[chosen] + (y[chosen] / noise) @ design
     post_cov = np.linalg.inv(precision)
     post_mean = np.einsum("pij,pj->pi", post_cov, shift)
     draws = post_mean + np.einsum(

@@ -150,3 +150,25 @@ def test_two_stresses_give_the_exponent_and_a_better_fitting_lender_more_draws()
     assert np.mean(member == 0) > 0.99
     assert exponent[member == 0].mean() == pytest.approx(-0.3, abs=0.02)
     assert level[member == 0].mean() == pytest.approx(0.4, abs=0.02)
+
+
+def test_a_calibration_folder_of_0_2_0_is_refused_in_one_line(tmp_path):
+    from fsrbayes.inference.predictive_draws import calibration_folders
+
+    (tmp_path / "402-new").mkdir()
+    (tmp_path / "402-new" / "posterior.nc").write_bytes(b"")
+    with pytest.raises(ValueError, match="calibration fit of fsrbayes 0.2.0") as caught:
+        calibration_folders(tmp_path)
+    assert "\n" not in str(caught.value)
+
+
+def test_per_test_spreads_weigh_the_tests():
+    rng = np.random.default_rng(11)
+    coordinates = np.array([[5.0, -1.0]])
+    x = np.array([-1.0, 0.0])
+    gaps = np.array([[0.5, 0.0]])  # two tests that disagree on the level
+    wide_first = calibrated_offsets(
+        gaps, x, coordinates, SCATTER, np.array([1.0, 0.01]), rng, 20000
+    )
+    # the precise test sets the level at x = 0; the vague one barely moves it
+    assert abs(wide_first[1].mean()) < 0.02

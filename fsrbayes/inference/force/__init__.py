@@ -63,7 +63,7 @@ def force(fit_dir, log, *, unit="N", n_draws=200, seed=0, calibration=None, sett
         Posterior draws the band is made of.
     seed : int
     calibration : str or Path, optional
-        Fits of new specimens' calibrations (:func:`~fsrbayes.calibrate`).
+        New specimens' calibrations (:func:`~fsrbayes.calibrate`).
     settle_s : float, optional
         Seconds after each change left out of its segment's match (default: the fit's, else 1).
 

@@ -37,6 +37,7 @@ from ..nuisance import is_landing, is_per_test, is_placement, is_ramp
 from ..output import open_fit_tree
 from ..predictive_draws import (
     evaluation_packing,
+    new_specimen_log_current,
     population_draws,
     population_members,
     specimen_draws,
@@ -116,10 +117,11 @@ class ModelDraws:
             cols = [i for i, n in enumerate(names) if family(n) and is_per_test(n)]
             if len(cols) > 1:
                 draws[:, cols] = draws[:, cols[:1]]
-        log_i = posterior.log_model_current(draws) + (self.misfit * self.z)[:, None, None]
-        if kind != "fitted" and attrs.get("offsets") is not None:  # a new specimen's level
-            log_i = attrs["offsets"].apply(log_i, packed)
-        return log_i
+        if kind == "fitted":
+            log_i = posterior.log_model_current(draws)
+        else:  # a new specimen's level and exponent, through the circuit
+            log_i = new_specimen_log_current(posterior, draws, attrs["offsets"], packed)
+        return log_i + (self.misfit * self.z)[:, None, None]
 
 
 def fit_attrs(source, sensor=None):
