@@ -44,13 +44,14 @@ CALIBRATION_DRAWS = 4000
 """Draws of the offsets a calibration record keeps."""
 
 
-def test_sd_of(members):
-    """Return how far one test's level strays from its specimen's law, in log I.
+def test_sd_of(members, amplify):
+    """Return how far each calibration test's level strays from its specimen's law, in log R.
 
     The spread of the fitted specimens' placement levels (the median over specimens of the sd
-    of their tests' posterior-median ``placement[k]``), at least 0.01; :data:`TEST_SD` where
-    they sampled none. A test read through a divider's fixed resistor R_m at resistance R
-    strays (R + R_m)/R times as far in log R (:func:`_gaps`).
+    of their tests' posterior-median ``placement[k]``, at least 0.01): a placement is a factor
+    on the current, so on a divider (fixed resistor R_m, the test read at resistance R) it
+    strays ``amplify`` = (R + R_m)/R times as far in log R (:func:`_gaps`).
+    :data:`~.specimen_scatter.TEST_SD` in log R where the fitted specimens sampled none.
     """
     spreads = []
     for member in members:
@@ -62,7 +63,9 @@ def test_sd_of(members):
             ]
         if len(levels) > 1:
             spreads.append(np.std(levels, ddof=1))
-    return max(float(np.median(spreads)), 0.01) if spreads else TEST_SD
+    if not spreads:
+        return np.full(len(amplify), TEST_SD)
+    return max(float(np.median(spreads)), 0.01) * np.asarray(amplify)
 
 
 def _gaps(members, tests, scatter, rng):
@@ -216,7 +219,7 @@ def calibrate(fit_dir, data, out, *, seed=0, settings=None, on_fit=None):
         scatter = scatter_of(load_sensor(sensor))
         coordinates = member_coordinate_table(members, tests[0], scatter, rng)
         gaps, x, amplify = _gaps(members, tests, scatter, rng)
-        test_sd = test_sd_of(members) * amplify
+        test_sd = test_sd_of(members, amplify)
         member, level, exponent, effective = calibrated_offsets(
             gaps, x, coordinates, scatter, test_sd, rng, CALIBRATION_DRAWS
         )

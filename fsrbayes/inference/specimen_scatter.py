@@ -58,9 +58,8 @@ DEFAULT_EXPONENT_SD = 0.3
 factor 1.6 in level and 0.3 in force exponent, weakly held."""
 
 TEST_SD = 0.05
-"""The spread of one test's level about the specimen's law, in log I as a placement level is,
-where the fitted specimens sampled no placement levels to say it: a weight put on again reads a
-few percent off."""
+"""The spread of one test's level about the specimen's law, in log R, where the fitted specimens
+sampled no placement levels to say it: a weight put on again reads a few percent off."""
 
 _GRID = (0.1, 0.2, 0.5, 1.0, 2.0)
 """Stresses where a fitted specimen's coordinates are read, in units of the reference stress."""
