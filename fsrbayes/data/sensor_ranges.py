@@ -89,9 +89,8 @@ def parse_population(raw, where):
     values = {}
     for key in keys:
         value = raw.get(key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"{label}.{key} must be a number > 0, got {value!r}")
-        if not (math.isfinite(value) and value > 0):
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not (number and math.isfinite(value) and value > 0):
             raise ValueError(f"{label}.{key} must be a number > 0, got {value!r}")
         values[key] = float(value)
     return SpecimenScatter(source=_source(raw, label), **values)

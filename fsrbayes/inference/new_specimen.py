@@ -33,7 +33,7 @@ from .predictive_draws import (
     population_folders,
     population_members,
 )
-from .specimen_scatter import TEST_SD, calibrated_offsets, scatter_of, stress_at
+from .specimen_scatter import TEST_SD, calibrated_offsets, log_resistance, scatter_of, stress_at
 
 __all__ = ["CALIBRATION_DRAWS", "SETTLE_S", "calibrate", "test_sd_of"]
 
@@ -82,9 +82,9 @@ def _gaps(members, tests, scatter, rng):
                 "changes: nothing to calibrate on"
             )
         kept.append(np.flatnonzero(settled))
-    with np.errstate(divide="ignore", invalid="ignore"):  # a zero reading: no resistance
+    with np.errstate(divide="ignore"):  # a zero reading: no resistance
         measured = [
-            np.log(t.voltage_V / t.current_A[k] - t.rm_ohm)
+            log_resistance(np.log(t.current_A[k]), t.voltage_V, t.rm_ohm)
             for t, k in zip(tests, kept, strict=True)
         ]
     for test, values in zip(tests, measured, strict=True):

@@ -317,12 +317,12 @@ def population_draws(folder, packed, n_draws, rng, calibration=None, template=No
         )
     draws = np.concatenate([d for _, d, _ in pooled])
     member_of = np.concatenate([np.full(len(d), j) for j, (_, d, _) in enumerate(pooled)])
-    scatter = scatter_of(load_sensor(attrs["sensor"]))
     if calibration is None:
         if template is None:
             raise ValueError(
                 "a new specimen without a calibration needs a protocol test (template)"
             )
+        scatter = scatter_of(load_sensor(attrs["sensor"]))
         pick = rng.choice(len(draws), n_draws, replace=len(draws) < n_draws)
         coordinates = member_coordinate_table(members, template, scatter, rng)
         offsets = ScatterOffsets.draw(coordinates, member_of[pick], scatter, rng)

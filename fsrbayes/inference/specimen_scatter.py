@@ -28,14 +28,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..data.sensor_ranges import SpecimenScatter
+from ..physics.superposition import load_of_steps
 
 __all__ = [
     "DEFAULT_LEVEL_SD",
     "DEFAULT_EXPONENT_SD",
     "HYPER_SIGMA",
     "TEST_SD",
-    "calibrated_offsets",
     "REFERENCE_TIME_S",
+    "calibrated_offsets",
+    "log_resistance",
     "ScatterOffsets",
     "member_coordinates",
     "new_coordinates",
@@ -81,22 +83,21 @@ def scatter_of(sensor):
 def stress_at(packed):
     """Return the stress (Pa) of each packed test at each of its times, shape (C, T).
 
-    Between load steps the stress is the sum of the steps so far; where it is zero (an unloaded
-    pause) the last nonzero level stands, so that log σ stays finite.
+    Between load steps the stress is the sum of the steps so far
+    (:func:`~fsrbayes.physics.superposition.load_of_steps`); where it is zero (an unloaded
+    pause) the last nonzero level stands, or the first one before any, so that log σ stays
+    finite.
     """
     first = np.asarray(packed.stress_Pa, dtype=float)[:, None] * np.ones_like(packed.time_s)
     if packed.step_time is None:
         return first
-    reached = packed.step_time[:, None, :] <= packed.time_s[:, :, None]
-    level = np.sum(np.where(reached, packed.step_size[:, None, :], 0.0), axis=-1)
-    level = np.where(level > 0, level, np.nan)
-    for row in level:  # carry the last loaded level through unloaded pauses
-        good = np.isfinite(row)
-        if good.any():
-            idx = np.where(good, np.arange(row.size), 0)
-            np.maximum.accumulate(idx, out=idx)
-            row[:] = np.where(good[idx], row[idx], row[good][0])
-    return np.where(np.isfinite(level), level, first)
+    level = load_of_steps(packed.step_time, packed.step_size, packed.time_s)
+    loaded = level > 0
+    last = np.where(loaded, np.arange(level.shape[1]), -1)
+    np.maximum.accumulate(last, axis=1, out=last)
+    last = np.where(last < 0, np.argmax(loaded, axis=1)[:, None], last)
+    carried = np.take_along_axis(level, last, axis=1)
+    return np.where(np.take_along_axis(loaded, last, axis=1), carried, first)
 
 
 def reference_tests(test, scatter):
@@ -122,16 +123,28 @@ def reference_tests(test, scatter):
     ]
 
 
-def sensor_log_resistance(log_current, packed):
-    """Return log R = log(V_FSR/I) of the sensor from log I on the packed tests' circuits.
+def log_resistance(log_current, supply, series):
+    """Return log R = log(V_FSR/I) of a sensor in series with ``series`` Ω at ``supply`` V.
 
-    ``log_current`` is (..., C, T); a divider's fixed resistor R_m takes its share of the supply
-    V: V_FSR = V − I·R_m.
+    A divider's fixed resistor R_m takes its share of the supply V: V_FSR = V − I·R_m, so
+    R = V/I − R_m (R_m = 0 at a constant sourcing voltage). NaN where the current is out of
+    the circuit's reach.
     """
-    supply = np.asarray(packed.voltage_V, dtype=float)[:, None]
-    series = 0.0 if packed.extra_series is None else np.asarray(packed.extra_series)[:, None]
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.log(supply * np.exp(-log_current) - series)
+        return np.log(supply * np.exp(-np.asarray(log_current)) - series)
+
+
+def _circuit(packed):
+    """Each packed test's supply and series resistance, shapes (C, 1)."""
+    supply = np.asarray(packed.voltage_V, dtype=float)[:, None]
+    if packed.extra_series is None:
+        return supply, np.zeros_like(supply)
+    return supply, np.asarray(packed.extra_series, dtype=float)[:, None]
+
+
+def sensor_log_resistance(log_current, packed):
+    """Return log R of the sensor from log I (..., C, T) on the packed tests' circuits."""
+    return log_resistance(log_current, *_circuit(packed))
 
 
 def member_coordinates(log_resistance, stresses, reference_stress):
@@ -171,6 +184,15 @@ def spread_draws(values, median, rng, n, sigma=HYPER_SIGMA):
     return rng.choice(omega, size=n, p=p / p.sum())
 
 
+def _predictive_variance(values, median, rng, n):
+    """Draw the variance of a new specimen's coordinate about the fitted ones' mean, (n,).
+
+    ω²·(1 + 1/J), ω from :func:`spread_draws`: the spread across specimens, and the mean's
+    own uncertainty over J fitted specimens.
+    """
+    return (1.0 + 1.0 / len(values)) * spread_draws(values, median, rng, n) ** 2
+
+
 def new_coordinates(coordinates, scatter, rng, n):
     """Draw (L*, S*) of ``n`` new specimens from the population predictive (module docstring).
 
@@ -187,17 +209,16 @@ def new_coordinates(coordinates, scatter, rng, n):
     ndarray, shape (n, 2)
     """
     coordinates = np.asarray(coordinates, dtype=float)
-    inflate = np.sqrt(1.0 + 1.0 / len(coordinates))
     out = np.empty((n, 2))
     for k, median in enumerate((scatter.level_sd, scatter.exponent_sd)):
-        omega = spread_draws(coordinates[:, k], median, rng, n)
-        out[:, k] = coordinates[:, k].mean() + inflate * omega * rng.standard_normal(n)
+        var = _predictive_variance(coordinates[:, k], median, rng, n)
+        out[:, k] = coordinates[:, k].mean() + np.sqrt(var) * rng.standard_normal(n)
     return out
 
 
 @dataclass(frozen=True)
 class ScatterOffsets:
-    """Per draw, how a new specimen's log-current stands off the fitted specimen it borrows.
+    """Per draw, how a new specimen's log R stands off the fitted specimen it borrows from.
 
     Attributes
     ----------
@@ -221,12 +242,10 @@ class ScatterOffsets:
 
     def apply(self, log_current, packed):
         """Return log I of the new specimens: R·exp δ through each test's circuit, (S, C, T)."""
-        supply = np.asarray(packed.voltage_V, dtype=float)[:, None]
-        series = np.zeros_like(supply) if packed.extra_series is None else packed.extra_series
-        log_r = sensor_log_resistance(log_current, packed) + self.log_offset(packed)
+        supply, series = _circuit(packed)
+        log_r = log_resistance(log_current, supply, series) + self.log_offset(packed)
         with np.errstate(divide="ignore", invalid="ignore"):  # log 0: no resistor in series;
-            log_series = np.log(np.asarray(series, dtype=float).reshape(-1, 1))
-            return np.log(supply) - np.logaddexp(log_r, log_series)  # NaN: an invalid draw
+            return np.log(supply) - np.logaddexp(log_r, np.log(series))  # NaN: an invalid draw
 
     @classmethod
     def draw(cls, coordinates, member_of_draw, scatter, rng):
@@ -272,12 +291,10 @@ def calibrated_offsets(gaps, x, coordinates, scatter, test_sd, rng, n, n_pairs=2
     gaps, x = np.asarray(gaps, dtype=float), np.asarray(x, dtype=float)
     noise = np.broadcast_to(np.asarray(test_sd, dtype=float) ** 2, x.shape)  # (C,)
     coordinates = np.asarray(coordinates, dtype=float)
-    n_members = len(coordinates)
-    member = rng.integers(n_members, size=n_pairs)
-    inflate = 1.0 + 1.0 / n_members
+    member = rng.integers(len(coordinates), size=n_pairs)
     var = np.stack(
         [
-            inflate * spread_draws(coordinates[:, k], median, rng, n_pairs) ** 2
+            _predictive_variance(coordinates[:, k], median, rng, n_pairs)
             for k, median in enumerate((scatter.level_sd, scatter.exponent_sd))
         ],
         axis=1,
