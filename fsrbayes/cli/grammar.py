@@ -9,8 +9,8 @@ One grammar across the subcommands:
   ``--voltages-v``, ``--weights-g``);
 * every option has help, and the help shows its default.
 
-A spelling the grammar replaces is refused after one minor version in which it printed what to
-write instead (CHANGELOG.md: the 0.2.0 renames were dropped in 0.3.0).
+A spelling the grammar replaced is refused with argparse's one line (exit code 2); CHANGELOG.md
+lists the renames.
 """
 
 import argparse

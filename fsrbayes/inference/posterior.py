@@ -351,7 +351,7 @@ class LogPosterior(PriorScaledTarget):
         valid = solution.valid & (solution.current > 0)
         if self._ramps:  # a ramp ends before its test's load changes again
             valid &= (ramps < self._ramp_limit)[..., None]
-        if placements:  # each test's readings stand its own factor above the model
+        if placements and self._placements:  # each test reads its own factor above the model
             log_current = log_current + self.placement_levels(x)
         return np.where(valid, log_current, -np.inf)
 

@@ -134,9 +134,7 @@ def fit_attrs(source, sensor=None):
     name = "posterior.nc" if source[0] == "fitted" else "population.nc"
     with open_fit_tree(Path(source[1]) / name) as tree:
         attrs = dict(tree.attrs)
-    fits = [Path(source[1])] if source[0] == "fitted" else sorted(
-        p.parent for p in Path(source[1]).glob("*/posterior.nc")
-    )  # fmt: skip
+    fits = [Path(source[1])] if source[0] == "fitted" else population_members(source[1])[0]
     for folder in fits:
         with open_fit_tree(folder / "posterior.nc") as tree:
             placed = any(is_placement(str(n)) for n in tree.posterior.data_vars)
