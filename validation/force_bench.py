@@ -22,9 +22,17 @@ sensors), four weights (200, 500, 1000, 2000 g) for 3 min each, fitted by ``fsrb
   static over whole histories, ≤ ⅓ after 10 min);
 * ``unloaded_zero``: the share of unloaded samples (a second after each release on) read as 0.
 
-Run ``python -m validation.force_bench [FOLDER] [ROWS.json]`` (FOLDER keeps the logs and fits;
-fits already there are reused). ``python -m validation --markdown force_bench=ROWS.json`` writes
-the summary row of VALIDATION.md's current table.
+With ``--new-sensor`` the sensors are **new**: a lab's population — two other bench sensors
+(seed ``POPULATION_SEED``, renamed ``pop-1``, ``pop-2``) with the same four-weight calibration,
+fitted by ``fsrbayes fit --hierarchical --no-placement`` — reads each history through the
+specimen scatter, once from the population alone and once calibrated on the sensor's own 1 kg
+weight (``fsrbayes.calibrate``: its level and force exponent conditioned, nothing fitted). The
+rows say which in ``reading``; the static power law stays the sensor's own four-weight one.
+
+Run ``python -m validation.force_bench [FOLDER] [ROWS.json] [--new-sensor]`` (FOLDER keeps the
+logs and fits; fits already there are reused). ``python -m validation --markdown
+force_bench=ROWS.json`` (``force_new_sensor=ROWS.json``) writes the summary row of
+VALIDATION.md's current table.
 """
 
 import json
@@ -35,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fsrbayes.data import read_csv
 from fsrbayes.data.logs import read_log
 from fsrbayes.data.realfsr_protocols import (
     ACCEPTANCE_SETS,
@@ -42,11 +51,16 @@ from fsrbayes.data.realfsr_protocols import (
     write_real_rig,
 )
 from fsrbayes.inference.force import force
+from fsrbayes.inference.new_specimen import calibrate
 
 CALIBRATION_G = (200.0, 500.0, 1000.0, 2000.0)
 CALIBRATION_S = 180.0
 STATIC_WINDOW_S = (4.0, 6.0)
 LATE_S = (240.0, 600.0)
+POPULATION_SEED = 2029
+"""The seed of the new-sensor mode's population: no frozen log's, so its sensors are others."""
+ONE_WEIGHT_TEST = "w1000"
+"""The calibration test a new sensor is calibrated on in the new-sensor mode."""
 ENTRIES = [e for e in ACCEPTANCE_SETS["force"]] + [
     e for e in ACCEPTANCE_SETS["model"] if e[0] == "B-hold-60min"
 ]
@@ -75,15 +89,51 @@ def history(entry, folder):
     return path, json.loads(path.with_suffix(".truth.json").read_text())
 
 
-def fitted(csv, out):
+def fitted(csv, out, *options):
     """Fit the calibration as a user would, without placement levels; return the folder."""
     if not any(out.glob("*/posterior.nc")) and not (out / "posterior.nc").is_file():
         subprocess.run(
             [sys.executable, "-m", "fsrbayes", "fit", str(csv), "--out", str(out),
-             "--no-placement", "--no-plots"],
+             "--no-placement", "--no-plots", *options],
             check=True, capture_output=True,
         )  # fmt: skip
     return out
+
+
+def population(folder):
+    """The new-sensor mode's population: two other sensors' calibrations, fitted together."""
+    path = folder / "population-cal.csv"
+    if not path.is_file():
+        log = simulate_real_rig(
+            "B", "hold", seed=POPULATION_SEED, weights_g=CALIBRATION_G, duration_s=CALIBRATION_S
+        )
+        write_real_rig(log, path)
+        text = path.read_text()
+        for k in (1, 2):  # not the names of the frozen histories' sensors
+            text = text.replace(f"\n402-B{k},", f"\npop-{k},")
+        path.write_text(text)
+    return fitted(path, folder / "population-fit", "--hierarchical")
+
+
+def one_weight(cal_csv, test=ONE_WEIGHT_TEST):
+    """Write the rows of one calibration test beside ``cal_csv``; return its path."""
+    lines = cal_csv.read_text().splitlines()
+    column = lines[0].split(",").index("test")
+    kept = [line for line in lines[1:] if line.split(",")[column] == test]
+    path = cal_csv.with_name(f"{cal_csv.stem}-{test}.csv")
+    path.write_text("\n".join([lines[0], *kept]) + "\n")
+    return path
+
+
+def readers(entry, folder, cal_csv, new_sensor):
+    """{reading: (fit folder, calibration folder or None)} for one entry."""
+    if not new_sensor:
+        return {"specimen fit": (fitted(cal_csv, folder / f"{entry[0]}-fit"), None)}
+    pop = population(folder)
+    calibrated = folder / f"{entry[0]}-new-calibration"
+    if not calibrated.is_dir():
+        calibrate(pop, read_csv(one_weight(cal_csv)), calibrated, seed=0)
+    return {"new, population": (pop, None), "new, one weight": (pop, calibrated)}
 
 
 def static_power_law(csv, truth):
@@ -119,16 +169,26 @@ def true_force(test_truth, part):
     return grams, since
 
 
-def score(entry, folder):
-    """Read one entry's history through its calibration's fit; one row per specimen."""
+def score(entry, folder, new_sensor=False):
+    """Read one entry's history through its calibration's fit; one row per specimen.
+
+    With ``new_sensor``, through the population of :func:`population` instead, alone and
+    calibrated on one weight: two rows per specimen.
+    """
     cal_csv, cal_truth = calibration(entry, folder)
     log_csv, log_truth = history(entry, folder)
-    fit = fitted(cal_csv, folder / f"{entry[0]}-fit")
     laws = static_power_law(cal_csv, cal_truth)
     parts = read_log(log_csv)
-    started = time.perf_counter()
-    result = force(fit, parts, unit="g")
-    seconds = time.perf_counter() - started
+    rows = []
+    for reading, (fit, calibrated) in readers(entry, folder, cal_csv, new_sensor).items():
+        started = time.perf_counter()
+        result = force(fit, parts, unit="g", calibration=calibrated)
+        seconds = time.perf_counter() - started
+        rows += _score_result(entry, reading, parts, result, log_truth, laws, seconds)
+    return rows
+
+
+def _score_result(entry, reading, parts, result, log_truth, laws, seconds):
     rows = []
     for part, test, test_truth in zip(parts, result["tests"], log_truth["tests"], strict=True):
         grams, since = true_force(test_truth, part)
@@ -143,6 +203,7 @@ def score(entry, folder):
         row = {
             "entry": entry[0],
             "specimen": part.specimen,
+            "reading": reading,
             "loaded": int(loaded.sum()),
             "inside_90": int(((grams >= q05) & (grams <= q95))[loaded].sum()),
             "median_err": float(np.median(rel[loaded])),
@@ -163,11 +224,11 @@ def score(entry, folder):
     return rows
 
 
-def run(folder):
-    """Score every entry; one row per specimen."""
+def run(folder, new_sensor=False):
+    """Score every entry; one row per specimen (and reading)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return [row for entry in ENTRIES for row in score(entry, folder)]
+    return [row for entry in ENTRIES for row in score(entry, folder, new_sensor)]
 
 
 def _pooled(rows, key, static_key):
@@ -184,8 +245,17 @@ def _coverage(rows):
 
 
 def summary(rows):
-    """One line: pooled coverage (all, the force set alone, per history), the error ratios,
-    unloaded samples read as 0."""
+    """One line: per reading (a specimen's fit, or a new sensor's), pooled coverage (all, the
+    force set alone, per history), the error ratios, unloaded samples read as 0."""
+    readings = {}
+    for r in rows:
+        readings.setdefault(r.get("reading", "specimen fit"), []).append(r)
+    if list(readings) == ["specimen fit"]:
+        return _summary_of(rows)
+    return "; ".join(f"{name}: {_summary_of(group)}" for name, group in readings.items())
+
+
+def _summary_of(rows):
     loaded = sum(r["loaded"] for r in rows)
     force_set = [r for r in rows if r["entry"].startswith("F-")]
     per_history = [_coverage([r for r in rows if r["entry"] == e])
@@ -209,9 +279,9 @@ def summary(rows):
 def format_rows(rows):
     """A Markdown table, one row per specimen, and the summary."""
     lines = [
-        "| history | specimen | loaded | in 90 % | median err (static) | ≥ 4 min | ≥ 10 min | "
-        "unloaded → 0 | band width | s |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| history | specimen | reading | loaded | in 90 % | median err (static) | ≥ 4 min | "
+        "≥ 10 min | unloaded → 0 | band width | s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def pair(r, key, static_key):
@@ -222,7 +292,8 @@ def format_rows(rows):
     for r in rows:
         zero = "–" if r["unloaded_zero"] is None else f"{r['unloaded_zero']:.3f}"
         lines.append(
-            f"| {r['entry']} | {r['specimen']} | {r['loaded']} | "
+            f"| {r['entry']} | {r['specimen']} | {r.get('reading', 'specimen fit')} | "
+            f"{r['loaded']} | "
             f"{r['inside_90'] / r['loaded']:.3f} | {pair(r, 'median_err', 'median_err_static')} | "
             f"{pair(r, 'err_after_240s', 'err_static_after_240s')} | "
             f"{pair(r, 'err_after_600s', 'err_static_after_600s')} | {zero} | "
@@ -233,7 +304,8 @@ def format_rows(rows):
 
 
 if __name__ == "__main__":
-    rows = run(sys.argv[1] if len(sys.argv) > 1 else "force-bench")
+    args = [a for a in sys.argv[1:] if a != "--new-sensor"]
+    rows = run(args[0] if args else "force-bench", new_sensor="--new-sensor" in sys.argv)
     print(format_rows(rows))
-    if len(sys.argv) > 2:
-        Path(sys.argv[2]).write_text(json.dumps(rows, indent=1) + "\n")
+    if len(args) > 1:
+        Path(args[1]).write_text(json.dumps(rows, indent=1) + "\n")

@@ -416,6 +416,26 @@ STUDIES = {
         table=_call("real402", "format_rows"),
         summary=_real402_forecast_summary,
     ),
+    "force_new_sensor": Study(
+        module="force_bench",
+        how="the force bench's histories read by new sensors: a population of two other bench "
+        "sensors (the same four-weight calibration, `fit --hierarchical --no-placement`), alone "
+        "and with each sensor's own 1 kg weight as its one-weight calibration "
+        "(`python -m validation.force_bench FOLDER ROWS.json --new-sensor`)",
+        run=_call("force_bench", "run", "force-bench", new_sensor=True),
+        table=_call("force_bench", "format_rows"),
+        summary=_call("force_bench", "summary"),
+    ),
+    "new_sensor": Study(
+        module="new_sensor",
+        how="two real-402 bench sensors (spread protocol: four weights × 60 s) fitted with "
+        "`fit --hierarchical`, and 30 new ones (another seed) predicted from that population, "
+        "alone and calibrated on each weight in turn (`python -m validation.new_sensor OUT`; rows "
+        "in OUT/new_sensor.json)",
+        run=_call("new_sensor", "run", "new-sensor-out"),
+        table=_call("new_sensor", "format_rows"),
+        summary=_call("new_sensor", "summary"),
+    ),
     "force_bench": Study(
         module="force_bench",
         how="the real-402 bench's frozen load histories (5 of the force set, B-hold-60min) read "

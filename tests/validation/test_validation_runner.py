@@ -85,7 +85,9 @@ ROW_LITERALS = {
     "sbc_power": ("run", "rejected", set()),
     "real402_fit": ("fit_log", "outside_prior_99", set()),
     "real402_forecast": ("forecast", "coverage_after", set()),
-    "force_bench": ("score", "inside_90", LATE),
+    "force_bench": ("_score_result", "inside_90", LATE),
+    "new_sensor": ("side_row", "tests_held", set()),
+    "force_new_sensor": ("_score_result", "inside_90", LATE),
 }
 
 
@@ -372,7 +374,11 @@ def _real402_forecast():
     ]
 
 
-def _force_bench():
+def _force_bench(readings=("specimen fit",)):
+    return [row | {"reading": reading} for reading in readings for row in _force_rows()]
+
+
+def _force_rows():
     row = {"unloaded_zero": 1.0, "width_90_rel": 0.07, "seconds": 1.0}
     late = {"n_after_240s": 10, "err_after_240s": 0.01, "err_static_after_240s": 0.1}
     return [
@@ -386,6 +392,18 @@ def _force_bench():
         | {"median_err": 0.03, "median_err_static": 0.1}
         | late
         | {"n_after_600s": 200, "err_after_600s": 0.01, "err_static_after_600s": 0.05},
+    ]
+
+
+def _new_sensor():
+    row = {"sensors": 30, "tests": 120, "coverage_90": 0.912, "tests_held": 0.875}
+    return [
+        row
+        | {"side": "population", "width_90_rel": 2.5, "population_width_90_rel": None}
+        | {"narrower_by": None},
+        row
+        | {"side": "calibrated", "width_90_rel": 0.5, "population_width_90_rel": 2.5}
+        | {"narrower_by": 5.0},
     ]
 
 
@@ -464,6 +482,14 @@ SYNTHETIC = {
     "force_bench": (
         _force_bench,
         ["0.925 of 400 loaded samples", "0.900 on the force set alone", "0.90–0.93 per"],
+    ),
+    "force_new_sensor": (
+        lambda: _force_bench(("new, population", "new, one weight")),
+        ["new, population: 90 % band covers the true force on 0.925", "; new, one weight: 90 %"],
+    ),
+    "new_sensor": (
+        _new_sensor,
+        ["population: 0.912 of the readings of 120 tests of 30", "0.88 of the tests", "5.0×"],
     ),
 }
 
