@@ -93,7 +93,7 @@ def _add_fit(sub):
         help=f"steps between convergence checks and checkpoints (default {CHECK_EVERY}, or "
         "--chunk if that is shorter)",
     )
-    option(fit_, "--max-steps", type=int, default=20000, help="step budget per ensemble")
+    option(fit_, "--max-steps", type=int, default=30000, help="step budget per ensemble")
     option(
         fit_,
         "--map-starts",
