@@ -15,8 +15,6 @@ from fsrbayes.data import synthetic as syn
 from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 from fsrbayes.data.sensor_ranges import outside_calibration
 from fsrbayes.data.sensors import load_sensor
-from fsrbayes.inference.posterior import LogPosterior
-from fsrbayes.inference.predictive_draws import evaluation_packing
 from fsrbayes.inference.samplers.settings import SamplerSettings
 from fsrbayes.physics.sensor import solve_current
 
@@ -198,15 +196,3 @@ def test_the_402_file_states_its_specimens_spread_with_a_source():
     assert scatter.reference_stress_Pa == pytest.approx(load_sensor("fsr402").stress(9.80665), 1e-3)
     assert "314 and ~300 Ohm" in scatter.source and "3x apart" in scatter.source
     assert load_sensor("a201").population is None
-
-
-def test_a_family_holds_a_parameter_at_a_value_of_its_own():
-    # the 402's log-spectrum-sat family holds n_junctions at 100; the paper's models keep 1
-    sensor = load_sensor("fsr402")
-    assert sensor.params_for("log-spectrum-sat")["n_junctions"] == 100.0
-    assert sensor.params_for("burgers")["n_junctions"] == sensor.params["n_junctions"] == 1.0
-    assert "n_junctions" not in sensor.free_parameters("log-spectrum-sat")
-    data = syn.simulate("fsr402", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5).data
-    for model, held in (("log-spectrum-sat", 100.0), ("burgers", 1.0)):
-        posterior = LogPosterior.for_sensor(evaluation_packing(data.tests), sensor, model=model)
-        assert posterior.fixed["n_junctions"] == held
