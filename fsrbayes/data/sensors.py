@@ -130,6 +130,18 @@ class Sensor:
         own = self.family_priors.get(parse_model(model)[0], {})
         return own[base] if base in own else self.priors[base]
 
+    def params_for(self, model="burgers"):
+        """Return the default parameter values ``model`` is evaluated with (read-only).
+
+        ``params``, with the value of each parameter that ``model``'s family holds ``fixed`` at
+        a value of its own (``[family_priors.<family>]``).
+        """
+        own = self.family_priors.get(parse_model(model)[0], {})
+        held = {
+            k: float(d.args["value"]) for k, d in own.items() if d.is_fixed and k in self.params
+        }
+        return MappingProxyType({**self.params, **held})
+
     def free_parameters(self, model="burgers", noise=("sigma_rel",)):
         """Parameters a model samples: those it uses whose prior is not ``fixed``.
 
@@ -237,6 +249,8 @@ def _parse(path, raw):
         checked += [(f" in [family_priors.{family}]", name, dist) for name, dist in own.items()]
     for table, name, dist in checked:
         lo, hi = dist.support
+        if table and dist.is_fixed:  # the family holds the parameter at a value of its own
+            continue
         if name in params and not (lo <= params[name] <= hi):
             raise ValueError(
                 f"{where}: params.{name} = {params[name]:g} lies outside its prior's support "

@@ -231,7 +231,7 @@ class LogPosterior(PriorScaledTarget):
             placement_creep=placement and bool(creep_amplitude(model)),
         )
         prior = sensor.prior_for(model, nuisance)
-        fixed = {k: v for k, v in sensor.params.items() if k not in prior.names}
+        fixed = {k: v for k, v in sensor.params_for(model).items() if k not in prior.names}
         return cls(
             data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
         )

@@ -196,3 +196,29 @@ def test_the_402_file_states_its_specimens_spread_with_a_source():
     assert scatter.reference_stress_Pa == pytest.approx(load_sensor("fsr402").stress(9.80665), 1e-3)
     assert "314 and ~300 Ohm" in scatter.source and "3x apart" in scatter.source
     assert load_sensor("a201").population is None
+
+
+def test_a_family_holds_a_parameter_at_a_value_of_its_own(tmp_path):
+    from fsrbayes.inference.posterior import LogPosterior
+    from fsrbayes.inference.predictive_draws import evaluation_packing
+
+    # a copy of the 402 file whose log-spectrum-sat family holds n_junctions at 1000 and
+    # tau_max at 3e5 s, values [params] does not hold; the paper's models keep [params]'
+    text = load_sensor("fsr402").source.read_text()
+    text = text.replace(
+        'n_junctions = { dist = "lognormal", median = 100.0, sigma = 1.0 }',
+        'n_junctions = { dist = "fixed", value = 1000.0 }',
+    ).replace(
+        'tau_max = { dist = "fixed", value = 1.0e5 }', 'tau_max = { dist = "fixed", value = 3.0e5 }'
+    )
+    path = tmp_path / "held.toml"
+    path.write_text(text)
+    sensor = load_sensor(path)
+    held = sensor.params_for("log-spectrum-sat")
+    assert (held["n_junctions"], held["tau_max"]) == (1000.0, 3.0e5)
+    assert sensor.params_for("burgers")["n_junctions"] == sensor.params["n_junctions"] == 1.0
+    assert {"n_junctions", "tau_max"}.isdisjoint(sensor.free_parameters("log-spectrum-sat"))
+    data = syn.simulate("fsr402", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5).data
+    for model, count in (("log-spectrum-sat", 1000.0), ("burgers", 1.0)):
+        posterior = LogPosterior.for_sensor(evaluation_packing(data.tests), sensor, model=model)
+        assert posterior.fixed["n_junctions"] == count

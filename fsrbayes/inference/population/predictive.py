@@ -63,7 +63,7 @@ class ForwardTemplate:
     def from_sensor(cls, sensor, model="burgers", tunneling="smooth", likelihood="gaussian"):
         """Template from a sensor file, as :meth:`LogPosterior.for_sensor` sets a fit up."""
         prior = sensor.prior_for(model, noise_parameters(likelihood))
-        fixed = {k: float(v) for k, v in sensor.params.items() if k not in prior.names}
+        fixed = {k: float(v) for k, v in sensor.params_for(model).items() if k not in prior.names}
         return cls(sensor.name, model, tunneling, prior, fixed)
 
     @classmethod
