@@ -206,7 +206,7 @@ def test_a_family_holds_a_parameter_at_a_value_of_its_own(tmp_path):
     # tau_max at 3e5 s, values [params] does not hold; the paper's models keep [params]'
     text = load_sensor("fsr402").source.read_text()
     text = text.replace(
-        'n_junctions = { dist = "lognormal", median = 100.0, sigma = 1.0 }',
+        'n_junctions = { dist = "fixed", value = 100.0 }',
         'n_junctions = { dist = "fixed", value = 1000.0 }',
     ).replace(
         'tau_max = { dist = "fixed", value = 1.0e5 }', 'tau_max = { dist = "fixed", value = 3.0e5 }'
@@ -222,3 +222,6 @@ def test_a_family_holds_a_parameter_at_a_value_of_its_own(tmp_path):
     for model, count in (("log-spectrum-sat", 1000.0), ("burgers", 1.0)):
         posterior = LogPosterior.for_sensor(evaluation_packing(data.tests), sensor, model=model)
         assert posterior.fixed["n_junctions"] == count
+    # the bundled file holds the junction count at 100 and tau_max at 1e5 s for that family
+    shipped = load_sensor("fsr402").params_for("log-spectrum-sat")
+    assert (shipped["n_junctions"], shipped["tau_max"]) == (100.0, 1.0e5)
