@@ -400,10 +400,16 @@ STUDIES = {
     ),
     "real402_fit": Study(
         module="real402",
-        how="`fsrbayes fit` with its defaults on the real-402 bench's frozen `A-spread` and "
-        "`B-hold-12min` logs (`python -m validation.real402 OUT fit A-spread B-hold-12min`; "
-        "rows in OUT/fit.json)",
-        run=_call("real402", "run", "real402-out", "fit", ["A-spread", "B-hold-12min"]),
+        how="`fsrbayes fit` with its defaults on the real-402 bench's frozen `A-hold-10min`, "
+        "`A-hold-10min-2`, `B-hold-12min` and `A-spread` logs (`python -m validation.real402 OUT "
+        "fit A-hold-10min A-hold-10min-2 B-hold-12min A-spread`; rows in OUT/fit.json)",
+        run=_call(
+            "real402",
+            "run",
+            "real402-out",
+            "fit",
+            ["A-hold-10min", "A-hold-10min-2", "B-hold-12min", "A-spread"],
+        ),
         table=_call("real402", "format_rows"),
         summary=_real402_fit_summary,
     ),
