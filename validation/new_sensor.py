@@ -26,6 +26,7 @@ OUT is reused.
 
 import csv
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -153,6 +154,7 @@ def run(out, n=N_SENSORS, seed=SEED):
     for test in sorted({t.test for t in data.tests}):
         one, others = split_by_test(path, test)
         folder = out / f"calibration-{test}"
+        shutil.rmtree(folder, ignore_errors=True)  # a calibration is cheap: made anew each run
         calibrate(fit_dir, read_csv(one), folder, seed=1)
         result = predict(fit_dir, read_csv(others), n_draws=DRAWS, seed=1, calibration=folder)
         calibrated.update({(*k, test): v for k, v in _tests(result).items()})
