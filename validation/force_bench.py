@@ -52,6 +52,7 @@ from fsrbayes.data.realfsr_protocols import (
 )
 from fsrbayes.inference.force import force
 from fsrbayes.inference.new_specimen import calibrate
+from validation.new_sensor import split_by_test
 
 CALIBRATION_G = (200.0, 500.0, 1000.0, 2000.0)
 CALIBRATION_S = 180.0
@@ -115,16 +116,6 @@ def population(folder):
     return fitted(path, folder / "population-fit", "--hierarchical")
 
 
-def one_weight(cal_csv, test=ONE_WEIGHT_TEST):
-    """Write the rows of one calibration test beside ``cal_csv``; return its path."""
-    lines = cal_csv.read_text().splitlines()
-    column = lines[0].split(",").index("test")
-    kept = [line for line in lines[1:] if line.split(",")[column] == test]
-    path = cal_csv.with_name(f"{cal_csv.stem}-{test}.csv")
-    path.write_text("\n".join([lines[0], *kept]) + "\n")
-    return path
-
-
 def readers(entry, folder, cal_csv, new_sensor):
     """{reading: (fit folder, calibration folder or None)} for one entry."""
     if not new_sensor:
@@ -132,7 +123,7 @@ def readers(entry, folder, cal_csv, new_sensor):
     pop = population(folder)
     calibrated = folder / f"{entry[0]}-new-calibration"
     if not calibrated.is_dir():
-        calibrate(pop, read_csv(one_weight(cal_csv)), calibrated, seed=0)
+        calibrate(pop, read_csv(split_by_test(cal_csv, ONE_WEIGHT_TEST)[0]), calibrated, seed=0)
     return {"new, population": (pop, None), "new, one weight": (pop, calibrated)}
 
 

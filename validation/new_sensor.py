@@ -27,23 +27,17 @@ OUT is reused.
 import csv
 import json
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from validation.real402 import format_rows as _real402_table
+from validation.real402 import fsrbayes_command
+
 N_SENSORS = 30
 SEED = 2026
 DRAWS = 400
-
-
-def _fsrbayes(*args):
-    done = subprocess.run(
-        [sys.executable, "-m", "fsrbayes", *map(str, args)], capture_output=True, text=True
-    )
-    if done.returncode != 0:
-        raise RuntimeError(f"fsrbayes {args[0]}: {done.stderr.strip()[-600:]}")
 
 
 def bench_sensors(path, n, seed, prefix=None):
@@ -55,7 +49,7 @@ def bench_sensors(path, n, seed, prefix=None):
     path = Path(path)
     if path.is_file():
         return path
-    _fsrbayes("simulate-rig", "--preset", "real-402", "--rig", "A", "--protocol", "spread",
+    fsrbayes_command("simulate-rig", "--preset", "real-402", "--rig", "A", "--protocol", "spread",
               "--n-specimens", n, "--seed", seed, "-o", path)  # fmt: skip
     if prefix is not None:
         with open(path, newline="") as handle:
@@ -73,11 +67,16 @@ def _write(path, rows):
 
 
 def split_by_test(path, test):
-    """Write the rows of ``test`` and of every other test to two CSVs beside ``path``."""
+    """Write the rows of ``test`` and of every other test to two CSVs beside ``path``.
+
+    They are named ``STEM-TEST.csv`` and ``STEM-not-TEST.csv``; returns their paths.
+    """
+    path = Path(path)
     with open(path, newline="") as handle:
         head, *body = list(csv.reader(handle))
     column = head.index("test")
-    one, others = Path(path).with_name(f"cal-{test}.csv"), Path(path).with_name(f"not-{test}.csv")
+    one = path.with_name(f"{path.stem}-{test}.csv")
+    others = path.with_name(f"{path.stem}-not-{test}.csv")
     _write(one, [head, *(r for r in body if r[column] == test)])
     _write(others, [head, *(r for r in body if r[column] != test)])
     return one, others
@@ -113,9 +112,7 @@ def side_row(name, tests, beside=None):
 
 def format_rows(rows):
     """Markdown table of the rows."""
-    from validation.real402 import format_rows as table
-
-    return table(rows)
+    return _real402_table(rows)
 
 
 def summary(rows):
@@ -145,7 +142,7 @@ def run(out, n=N_SENSORS, seed=SEED):
     fit_dir = out / "population"
     if not (fit_dir / "population.nc").is_file():
         members = bench_sensors(out / "members.csv", 2, seed)
-        _fsrbayes("fit", members, "--hierarchical", "--out", fit_dir, "--no-plots")
+        fsrbayes_command("fit", members, "--hierarchical", "--out", fit_dir, "--no-plots")
     path = bench_sensors(out / "new.csv", n, seed + 1, prefix="new")
     data = read_csv(path)
     population = _tests(predict(fit_dir, data, n_draws=DRAWS, seed=1))

@@ -41,11 +41,17 @@ def frozen_set(folder):
     folder = Path(folder)
     if not (folder / "A-spread.csv").is_file():
         folder.mkdir(parents=True, exist_ok=True)
-        _run("simulate-rig", "--preset", "real-402", "--acceptance-set", "model", "-o", folder)
+        fsrbayes_command(
+            "simulate-rig", "--preset", "real-402", "--acceptance-set", "model", "-o", folder
+        )
     return folder
 
 
-def _run(*args):
+def fsrbayes_command(*args):
+    """Run ``fsrbayes ARGS…`` as a user would; return the finished process and its seconds.
+
+    Raises RuntimeError with the command's last error lines when it fails.
+    """
     started = time.perf_counter()
     done = subprocess.run(
         [sys.executable, "-m", "fsrbayes", *map(str, args)], capture_output=True, text=True
@@ -59,7 +65,7 @@ def _fit_once(data, folder):
     """Run ``fsrbayes fit`` with its defaults unless ``folder`` holds its result; its seconds."""
     if any(Path(folder).glob("**/summary.json")):
         return None  # reused: the study goes on where it stopped
-    return round(_run("fit", data, "--out", folder, "--no-plots")[1])
+    return round(fsrbayes_command("fit", data, "--out", folder, "--no-plots")[1])
 
 
 def _summaries(folder):
