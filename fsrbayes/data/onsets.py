@@ -91,16 +91,19 @@ def late_changes(raw, idx, level, first, changes, column, readout, decimal_comma
     For a change to a nonzero load: the unbroken run of rows just before its row whose
     log-current is within :data:`STAMP_BAND` of the new segment's (median of its first rows) and,
     from a nonzero load, nearer it than the old segment's (median of its first half), takes the
-    new load (at least two rows). An unloading is left at its row (the rows after it carry no
-    reading).
+    new load (at least two rows). An unloading (the rows after it carry no reading) moves back
+    over the rows just before it that read below the loaded level: see :func:`_early_unload`.
     """
     level = level.copy()
     _, current = lenient_currents(raw, idx, column, readout, decimal_comma)
     log_i = np.log(np.where(current > 0, current, np.nan))
+    with np.errstate(divide="ignore"):
+        log_read = np.log(current)  # −inf: no current; NaN: no reading
     bounds = np.concatenate([[first], changes, [idx.size]])
     for k, row in enumerate(changes):
         start, end = bounds[k], bounds[k + 2]
         if level[row] <= 0:
+            level[_early_unload(log_read, start, row) : row] = 0.0
             continue
         new = np.nanmedian(log_i[row : min(end, row + 20)])
         old = -np.inf  # from zero load: any reading in the band is the new weight's
@@ -118,6 +121,39 @@ def late_changes(raw, idx, level, first, changes, column, readout, decimal_comma
         if row - moved >= 2:
             level[moved:row] = level[row]
     return level
+
+
+def _early_unload(log_read, start, row):
+    """Return the row where a weight left before its unloading was written at ``row``.
+
+    An operator may write the unloading after lifting the weight: the rows just before the stamp
+    already read the residual conduction of an unloaded sensor (a third of the current or less,
+    then falling). The unbroken run of rows before ``row`` whose log-current lies more than
+    ln :data:`STAMP_BAND` below the segment's late level (the median of its second half, before
+    the run) read no load, and so do rows reading no current at all; no creep law explains a
+    fall by half within a row. An unreadable field ends the run (it is reported where it is
+    read). ``row`` itself when the reading holds its level up to the stamp.
+    """
+
+    def run_start(level):
+        moved = row
+        while moved > start + 1 and log_read[moved - 1] < level - np.log(STAMP_BAND):
+            moved -= 1
+        return moved
+
+    def late_level(end):
+        late = log_read[start + (end - start) // 2 : end]
+        late = late[np.isfinite(late)]
+        return np.median(late) if late.size else np.nan
+
+    level = late_level(row)
+    if not np.isfinite(level):
+        return row
+    moved = run_start(level)
+    if moved < row:  # the level again without the run's own rows
+        level = late_level(moved)
+        moved = run_start(level) if np.isfinite(level) else row
+    return moved
 
 
 def settling_rows(raw, rows, column, readout, decimal_comma):

@@ -227,6 +227,7 @@ def rig_tests(
             level = late_changes(raw, idx, level, first, changes, renamed_reading, readout,
                                   decimal_comma)  # fmt: skip
             changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
+            loaded = level > 0
         if changes.size >= MAX_LOAD_STEPS:
             raise DataError(
                 f"{what} changes its load {changes.size} times; at most {MAX_LOAD_STEPS - 1} "

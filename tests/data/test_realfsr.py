@@ -373,3 +373,37 @@ def test_a_stamp_on_time_stays_the_onset(tmp_path):
     for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
         assert test.onset_source == "load"
         assert abs(test.onset_s - tt["landing_s"][0]) <= 0.1 + 1e-9
+
+
+def _loaded_at(times, truth_test):
+    """Whether the bench's weight was on the sensor at each time (landings and unloadings)."""
+    on = np.zeros(times.size, dtype=bool)
+    for landed, left in zip(truth_test["landing_s"], truth_test["unloading_s"] + [np.inf],
+                            strict=False):  # fmt: skip
+        on |= (times >= landed) & (times < left)
+    return on
+
+
+@pytest.mark.parametrize("protocol, seed", [("hold", 812), ("hold", 913), ("cycles", 1014)])
+def test_a_weight_lifted_before_its_unloading_was_written_reads_no_load(tmp_path, protocol, seed):
+    """Rig B writes an unloading up to 2.5 s early or 0.5 s late. No reading taken after the
+    weight left is kept as a loaded one (the residual conduction reads a third of the current:
+    a fit would take it for noise of several percent), and where the weight stayed until its
+    stamp every loaded row before the stamp is kept."""
+    log = simulate_real_rig("B", protocol, seed=seed)
+    csv_path, truth_path = write_real_rig(log, tmp_path / "b.csv")
+    truth = json.loads(truth_path.read_text())
+    late = 0
+    for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
+        times = test.onset_s + test.time_s
+        assert _loaded_at(times - 1e-9, tt).all(), times[~_loaded_at(times - 1e-9, tt)]
+        unloads = [s for s in tt["stamps"] if s["grams"] == 0.0]
+        step = np.median(np.diff(test.time_s))
+        for stamp in unloads:
+            kept_before = times[times < stamp["stamp_s"]]
+            if stamp["offset_s"] > 0:  # written after the weight left
+                late += 1
+                assert kept_before[-1] < stamp["true_s"]
+            else:  # written while the weight was on: kept up to the stamp
+                assert kept_before[-1] >= stamp["stamp_s"] - 1.5 * step
+    assert late >= 1  # the seeds include a late unloading stamp
