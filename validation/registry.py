@@ -259,17 +259,30 @@ def _sbc_power_summary(rows):
     )
 
 
+REAL402_LOGS = (
+    "A-hold-10min", "A-hold-10min-2", "A-spread", "A-hold-60min", "A-cycles", "A-staircase",
+    "B-hold-12min", "B-hold-60min", "B-cycles", "B-staircase", "B-staircase-2",
+)  # fmt: skip
+"""The frozen ``model`` set's logs, rig A's first."""
+
+
 def _real402_fit_summary(rows):
-    failed = [f"{r['specimen']} {len(r['checks_failed'])}" for r in rows if r["checks_failed"]]
+    def named(r):
+        return f"{r['log']} {r['specimen']}"
+
+    failed = [f"{named(r)} {len(r['checks_failed'])}" for r in rows if r["checks_failed"]]
     outside = [
-        f"{r['specimen']} {', '.join(r['outside_prior_99'])}" for r in rows if r["outside_prior_99"]
+        f"{named(r)} {', '.join(r['outside_prior_99'])}" for r in rows if r["outside_prior_99"]
     ]
+    passing = [named(r) for r in rows if not r["checks_failed"]]
     return (
         f"{_share(r['converged'] for r in rows)} specimens of "
         f"{', '.join(dict.fromkeys(r['log'] for r in rows))} converged with "
         f"{', '.join(sorted({r['model'] for r in rows}))} (at most "
-        f"{max(r['steps'] for r in rows)} steps); checks failed: {'; '.join(failed) or 'none'}; "
-        f"posterior medians outside the prior's 99 %: {'; '.join(outside) or 'none'}"
+        f"{max(r['steps'] for r in rows)} steps, {max(r['seconds'] or 0 for r in rows)} s per log); "
+        f"every check passed on {len(passing)}: {', '.join(passing) or 'none'}; checks failed: "
+        f"{'; '.join(failed) or 'none'}; posterior medians outside the prior's 99 %: "
+        f"{'; '.join(outside) or 'none'}"
     )
 
 
@@ -400,16 +413,10 @@ STUDIES = {
     ),
     "real402_fit": Study(
         module="real402",
-        how="`fsrbayes fit` with its defaults on the real-402 bench's frozen `A-hold-10min`, "
-        "`A-hold-10min-2`, `B-hold-12min` and `A-spread` logs (`python -m validation.real402 OUT "
-        "fit A-hold-10min A-hold-10min-2 B-hold-12min A-spread`; rows in OUT/fit.json)",
-        run=_call(
-            "real402",
-            "run",
-            "real402-out",
-            "fit",
-            ["A-hold-10min", "A-hold-10min-2", "B-hold-12min", "A-spread"],
-        ),
+        how="`fsrbayes fit` with its defaults on each of the real-402 bench's eleven frozen "
+        "`model` logs (`python -m validation.real402 OUT fit " + " ".join(REAL402_LOGS) + "`; rows "
+        "in OUT/fit.json)",
+        run=_call("real402", "run", "real402-out", "fit", list(REAL402_LOGS)),
         table=_call("real402", "format_rows"),
         summary=_real402_fit_summary,
     ),
