@@ -10,6 +10,7 @@ VALIDATION.md's current table.
 
 import importlib
 from dataclasses import dataclass
+from pathlib import Path
 from statistics import median
 from typing import Callable
 
@@ -279,7 +280,8 @@ def _real402_fit_summary(rows):
         f"{_share(r['converged'] for r in rows)} specimens of "
         f"{', '.join(dict.fromkeys(r['log'] for r in rows))} converged with "
         f"{', '.join(sorted({r['model'] for r in rows}))} (at most "
-        f"{max(r['steps'] for r in rows)} steps, {max(r['seconds'] or 0 for r in rows)} s per log); "
+        f"{max(r['steps'] for r in rows)} steps, "
+        f"{max(r['seconds'] or 0 for r in rows)} s per log); "
         f"every check passed on {len(passing)}: {', '.join(passing) or 'none'}; checks failed: "
         f"{'; '.join(failed) or 'none'}; posterior medians outside the prior's 99 %: "
         f"{'; '.join(outside) or 'none'}"
@@ -287,16 +289,24 @@ def _real402_fit_summary(rows):
 
 
 def _real402_forecast_summary(rows):
-    scored = [r["coverage_after"] for r in rows if r["coverage_after"] is not None]
+    scored = [r for r in rows if r["coverage_after"] is not None]
     if not scored:
         return f"none of {len(rows)} tests had readings past its fitted first 10 min to forecast"
+
+    def case(r):
+        predicted = Path(r["protocol"]).stem
+        what = f"{r['log']} {r['specimen']}" + (
+            f" {r['test']}" if predicted == r["log"] else f" → {predicted}"
+        )
+        return (
+            f"{what} {r['coverage_after']:.3f} ({100 * r['width_90_rel']:.1f} % wide, the prior "
+            f"predictive's {100 * r['prior_width_90_rel']:.0f} %)"
+        )
+
     return (
-        f"the later readings inside the 90 % band: {min(scored):.3f}–{max(scored):.3f} over "
-        f"{len(scored)} tests of {', '.join(dict.fromkeys(r['log'] for r in rows))} (target "
-        f"0.80–0.98), the band {100 * median(r['width_90_rel'] for r in rows):.1f} % of the "
-        f"reading wide against the prior predictive's "
-        f"{100 * median(r['prior_width_90_rel'] for r in rows):.0f} %; fits converged "
-        f"{_share(r['converged'] for r in rows)}"
+        "the readings after the fitted first 10 min inside the 90 % band (target 0.80–0.98): "
+        + "; ".join(case(r) for r in scored)
+        + f"; fits converged {_share(r['converged'] for r in rows)}"
     )
 
 
@@ -422,10 +432,18 @@ STUDIES = {
     ),
     "real402_forecast": Study(
         module="real402",
-        how="`fsrbayes fit` on each test's first 10 min of the frozen `A-hold-60min` log, "
-        "`predict` of the rest (`python -m validation.real402 OUT forecast A-hold-60min`; rows "
-        "in OUT/forecast.json)",
-        run=_call("real402", "run", "real402-out", "forecast", ["A-hold-60min"]),
+        how="`fsrbayes fit` on each test's first 10 min of a frozen log, `predict` of the rest "
+        "(`python -m validation.real402 OUT forecast A-hold-60min B-hold-60min A-cycles "
+        "A-staircase`), and of protocols the fit never saw on the same specimen (`… forecast "
+        "A-hold-10min --protocol CSV`, the CSV from `fsrbayes simulate-rig --preset real-402 "
+        "--rig A --protocol staircase --seed 358695`, and `cycles`); rows in OUT/forecast.json",
+        run=_call(
+            "real402",
+            "run",
+            "real402-out",
+            "forecast",
+            ["A-hold-60min", "B-hold-60min", "A-cycles", "A-staircase"],
+        ),
         table=_call("real402", "format_rows"),
         summary=_real402_forecast_summary,
     ),

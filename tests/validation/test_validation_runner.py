@@ -371,6 +371,9 @@ def _real402_forecast():
         row
         | {"test": "t3", "coverage_after": None, "width_90_rel": 0.03}
         | {"prior_width_90_rel": 0.55},
+        row
+        | {"log": "A-hold-10min", "protocol": "A1-staircase.csv", "test": "staircase"}
+        | {"coverage_after": 0.972, "width_90_rel": 0.6, "prior_width_90_rel": 379.0},
     ]
 
 
@@ -477,7 +480,12 @@ SYNTHETIC = {
     ),
     "real402_forecast": (
         _real402_forecast,
-        ["0.916–0.917 over 2 tests of A-hold-60min", "3.0 % of the reading", "55 %", "3 of 3"],
+        [
+            "A-hold-60min 402-A1 t1 0.916 (2.5 % wide",
+            "t2 0.917 (3.2 % wide, the prior predictive's 60 %)",
+            "A-hold-10min 402-A1 → A1-staircase 0.972 (60.0 % wide",
+            "4 of 4",
+        ],
     ),
     "force_bench": (
         _force_bench,
