@@ -97,19 +97,22 @@ def late_changes(raw, idx, level, first, changes, column, readout, decimal_comma
     level = level.copy()
     _, current = lenient_currents(raw, idx, column, readout, decimal_comma)
     log_i = np.log(np.where(current > 0, current, np.nan))
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         log_read = np.log(current)  # −inf: no current; NaN: no reading
     bounds = np.concatenate([[first], changes, [idx.size]])
+    start = first  # where the segment before each change begins, after the moves so far
     for k, row in enumerate(changes):
-        start, end = bounds[k], bounds[k + 2]
+        end = bounds[k + 2]
         if level[row] <= 0:
-            level[_early_unload(log_read, start, row) : row] = 0.0
+            start = _early_unload(log_read, start, row)
+            level[start:row] = 0.0
             continue
         new = np.nanmedian(log_i[row : min(end, row + 20)])
         old = -np.inf  # from zero load: any reading in the band is the new weight's
         if level[row - 1] > 0:
             old = np.nanmedian(log_i[start : start + max(1, (row - start) // 2)])
         if not (np.isfinite(new) and not np.isnan(old)):
+            start = row
             continue
         with np.errstate(invalid="ignore"):
             near = (np.abs(log_i - new) < np.abs(log_i - old)) & (
@@ -120,6 +123,7 @@ def late_changes(raw, idx, level, first, changes, column, readout, decimal_comma
             moved -= 1
         if row - moved >= 2:
             level[moved:row] = level[row]
+        start = moved if row - moved >= 2 else row
     return level
 
 

@@ -1,6 +1,7 @@
 """Rig data: divider and resistance readouts, logger units, load onsets, binning, hostile input."""
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -549,3 +550,37 @@ def test_the_study_counts_the_truths_drawn_from_the_priors_tails():
     )
     older = [{k: v for k, v in r.items() if k != "truth_prior_quantile"} for r in rows]
     assert "outside_prior_90" not in coverage_summary(older)
+
+
+def _divider_log(tmp_path, grams, reading, column="adc_counts"):
+    """A one-test divider log at 10 Hz: ``grams`` and ``reading`` per row."""
+    extra = {"adc_counts": ",10,5.0", "vout_V": ""}[column]
+    head = "specimen,sensor,test,time_s,force_g,supply_V,rm_ohm" + (
+        ",adc_bits,adc_vref_V" if column == "adc_counts" else ""
+    )
+    rows = [f"s,fsr402,t,{0.1 * i:.1f},{g},5.0,2833{extra},{r}" for i, (g, r) in
+            enumerate(zip(grams, reading, strict=True))]  # fmt: skip
+    path = tmp_path / f"{column}.csv"
+    path.write_text(f"{head},{column}\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_an_unloading_written_late_after_a_reload_written_late_drops_the_rows_after_it(tmp_path):
+    """A reload stamped 10 s after it landed, then lifted 0.2 s before its unloading was written:
+    the two rows read after the weight left are not kept, the reload's rows from its landing are."""
+    grams = [0] * 5 + [1000] * 100 + [0] * 195 + [1000] * 6 + [0] * 30
+    counts = [0] * 5 + [300] * 100 + [0] * 95 + [300] * 104 + [100, 90] + [60] * 30
+    test = read_csv(_divider_log(tmp_path, grams, counts)).tests[0]
+    rows = np.round((test.onset_s + test.time_s) / 0.1).astype(int)
+    assert rows.max() == 303 and 200 in rows  # the reload from its landing, not its stamp (300)
+    assert np.all(np.isin(np.arange(200, 304), rows))
+
+
+def test_an_open_divider_reading_below_zero_volts_raises_no_warning(tmp_path):
+    """A vout log whose open divider reads −1 mV before the load and after it: read silently."""
+    grams = [0] * 5 + [1000] * 95 + [0] * 30
+    volts = [-0.001] * 5 + [1.5] * 95 + [-0.001] * 30
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        test = read_csv(_divider_log(tmp_path, grams, volts, "vout_V")).tests[0]
+    assert test.time_s.size == 95
