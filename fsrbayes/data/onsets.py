@@ -91,14 +91,14 @@ def late_changes(raw, idx, level, first, changes, column, readout, decimal_comma
     For a change to a nonzero load: the unbroken run of rows just before its row whose
     log-current is within :data:`STAMP_BAND` of the new segment's (median of its first rows) and,
     from a nonzero load, nearer it than the old segment's (median of its first half), takes the
-    new load (at least two rows). An unloading (the rows after it carry no reading) moves back
-    over the rows just before it that read below the loaded level: see :func:`_early_unload`.
+    new load (at least two rows). An unloading (the rows after it carry no reading) takes the
+    rows just before it that read below the loaded level (:func:`_early_unload`).
     """
     level = level.copy()
     _, current = lenient_currents(raw, idx, column, readout, decimal_comma)
-    log_i = np.log(np.where(current > 0, current, np.nan))
     with np.errstate(divide="ignore", invalid="ignore"):
         log_read = np.log(current)  # −inf: no current; NaN: no reading
+    log_i = np.where(np.isneginf(log_read), np.nan, log_read)  # readings with a current only
     bounds = np.concatenate([[first], changes, [idx.size]])
     start = first  # where the segment before each change begins, after the moves so far
     for k, row in enumerate(changes):
