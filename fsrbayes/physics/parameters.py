@@ -107,6 +107,19 @@ for _entry in (
     Parameter(
         "sigma_c", "Pa", "physical", None, "log-spectrum-sat stress at which creep half-saturates"
     ),
+    Parameter(
+        "creep_drop",
+        "–",
+        "physical",
+        None,
+        "log-spectrum-sat share of the drive lost at high stress",
+    ),
+    Parameter(
+        "sigma_drop", "Pa", "physical", None, "log-spectrum-sat stress around which the drive drops"
+    ),
+    Parameter(
+        "drop_steepness", "–", "physical", None, "log-spectrum-sat Hill steepness of the drop"
+    ),
     Parameter("sigma_rel", "–", "nuisance", None, "relative noise of the current (sd of its log)"),
     Parameter("nu", "–", "nuisance", None, "Student-t degrees of freedom"),
     Parameter("noise_tau", "s", "nuisance", None, "correlation time of AR(1) measurement noise"),

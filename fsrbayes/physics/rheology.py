@@ -27,8 +27,9 @@ so that Zener is the point ``inv_b1 = 0`` of the Burgers parameter space and
 1/(Pa·s^n) and the exponent ``n``. The ``log-spectrum`` law (a box retardation spectrum, creep
 linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the delayed modulus
 ``kd`` in Pa and the longest retardation time ``tau_max`` in s; ``log-spectrum-sat``, the same
-spectrum driven by g(σ) = σ/(σ + σ_c), has ``k1``, ``eps_sat`` (the delayed strain at
-saturation), ``sigma_c`` in Pa and ``tau_max``.
+spectrum driven by g(σ) = σ/(σ + σ_c)·[1 − a·σ^m/(σ^m + σ_d^m)], has ``k1``, ``eps_sat`` (the
+delayed strain at saturation), ``sigma_c`` in Pa, the high-stress drop a = ``creep_drop``
+around σ_d = ``sigma_drop`` in Pa with steepness m = ``drop_steepness``, and ``tau_max``.
 
 References
 ----------
@@ -310,7 +311,8 @@ def _log_spectrum_sat_ramp(t, params):
 
 
 def _saturating(stress, params):
-    return saturating_drive(stress, params["sigma_c"])
+    drop = ("creep_drop", "sigma_drop", "drop_steepness") if "creep_drop" in params else ()
+    return saturating_drive(stress, params["sigma_c"], *(params[name] for name in drop))
 
 
 CREEP_LAWS = {}
@@ -397,11 +399,11 @@ LOG_SPECTRUM = register_creep_law(
 LOG_SPECTRUM_SAT = register_creep_law(
     CreepLaw(
         "log-spectrum-sat",
-        ("k1", "eps_sat", "sigma_c", "tau_max"),
+        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max"),
         _log_spectrum_sat,
         _log_spectrum_sat_ramp,
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "
-        "in stress (Schapery)",
+        "in stress and falling by creep_drop around sigma_drop (Schapery)",
         drive=_saturating,
         amplitude=(("eps_sat", 1.0),),
     )

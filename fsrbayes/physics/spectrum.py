@@ -39,10 +39,21 @@ at saturation ε_sat (:mod:`fsrbayes.physics.rheology` superposes Δg over load 
     ε(t) = σ/k1 + ε_sat·g(σ)·F(t)    after a step σ from rest.
 
 Below σ_c the delayed strain grows ∝ σ (the ``log-spectrum`` law with 1/kd = ε_sat/σ_c), above
-it it tends to ε_sat. As 0 ≤ g < 1 and g ≤ σ/σ_c, sup_t ε ≤ σ_max/k1 + ε_sat·g(σ_max) <
-σ_max/k1 + ε_sat for any history with 0 ≤ σ ≤ σ_max (the argument above, with g for σ in the
-delayed part); a prior with k1 ≥ k1_lo and ε_sat ≤ ε_hi keeps the gap open for every draw where
-σ_max/k1_lo + ε_hi < 1 (:func:`saturating_gap_bound`).
+it it tends to ε_sat.
+
+Real 402s also creep *less* at higher stress: about 0.15 in ln R per decade held from rest at
+7 kPa, half that at 14–110 kPa. The drive therefore falls by a share a (``creep_drop``) around
+σ_d (``sigma_drop``), with Hill steepness m (``drop_steepness``):
+
+    g(σ) = σ/(σ + σ_c) · [1 − a·σ^m/(σ^m + σ_d^m)],
+
+a = 0 giving the saturating drive alone. Under Schapery's superposition a step up across σ_d
+then lowers the drive, and the creep of the steps before partly recovers. For 0 ≤ a ≤ 1,
+0 ≤ g(σ) ≤ σ/(σ + σ_c) < 1. By parts, the delayed strain under any history is
+∫₀ᵗ g(σ(s))·J'(t − s) ds, between 0 and sup g·[J(t) − J(0)] since J' ≥ 0; so sup_t ε ≤
+σ_max/k1 + ε_sat·σ_max/(σ_max + σ_c) < σ_max/k1 + ε_sat for any history with 0 ≤ σ ≤ σ_max,
+whatever a, σ_d and m. A prior with k1 ≥ k1_lo, ε_sat ≤ ε_hi and 0 ≤ a ≤ 1 keeps the gap open
+for every draw where σ_max/k1_lo + ε_hi < 1 (:func:`saturating_gap_bound`).
 
 Numerics. Ein is entire; below x = 1 its series Σ (−1)^(k+1) x^k/(k·k!) (no cancellation:
 E1(x) + ln x + γ would cancel as x → 0), above it E1(x) + ln x + γ with E1 from its continued
@@ -222,18 +233,29 @@ def gap_bound(k1, kd, stress=GAP_STRESS_CAP):
     return np.asarray(stress, dtype=float) * (1.0 / np.asarray(k1, float) + 1.0 / np.asarray(kd))
 
 
-def saturating_drive(stress, sigma_c):
-    """Return Schapery's input g(σ) = σ/(σ + σ_c) of the ``log-spectrum-sat`` law (0 at σ ≤ 0).
+def saturating_drive(stress, sigma_c, drop=0.0, sigma_drop=1.0, steepness=1.0):
+    """Return Schapery's input g(σ) of the ``log-spectrum-sat`` law (0 at σ ≤ 0).
 
-    Dimensionless, increasing, below 1 and below σ/σ_c: the delayed strain ε_sat·g·F(t) grows
-    ∝ σ under σ_c and saturates at ε_sat above it (module docstring).
+    g(σ) = σ/(σ + σ_c) · [1 − a·σ^m/(σ^m + σ_d^m)]: saturating at σ_c, then falling by the share
+    a = ``drop`` around σ_d = ``sigma_drop`` with Hill steepness m = ``steepness`` (module
+    docstring). Dimensionless; for 0 ≤ a ≤ 1 it lies in [0, 1) and below σ/σ_c, so the gap bound
+    holds. a = 0 (the default) is the saturating drive σ/(σ + σ_c) alone.
     """
     stress = np.maximum(np.asarray(stress, dtype=float), 0.0)
-    return stress / (stress + np.asarray(sigma_c, dtype=float))
+    rise = stress / (stress + np.asarray(sigma_c, dtype=float))
+    drop = np.asarray(drop, dtype=float)
+    if not np.any(drop):
+        return rise
+    ratio = (stress / np.asarray(sigma_drop, dtype=float)) ** np.asarray(steepness, dtype=float)
+    return rise * (1.0 - drop * ratio / (1.0 + ratio))
 
 
 def saturating_gap_bound(k1, eps_sat, sigma_c, stress=GAP_STRESS_CAP):
-    """Return sup over t and histories up to σ of ε: σ/k1 + ε_sat·g(σ); the gap is open below 1."""
+    """Return a bound on sup over t and histories up to σ of ε: σ/k1 + ε_sat·σ/(σ + σ_c).
+
+    The drive's high-stress drop (0 ≤ a ≤ 1) only lowers g, so the bound holds for every a; the
+    gap is open where it is below 1.
+    """
     stress = np.asarray(stress, dtype=float)
     return stress / np.asarray(k1, dtype=float) + np.asarray(eps_sat) * saturating_drive(
         stress, sigma_c

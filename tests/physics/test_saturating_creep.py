@@ -53,6 +53,45 @@ def test_the_drive_saturates_and_is_linear_below_sigma_c():
     assert value[2] == pytest.approx(0.5)
 
 
+DROP = {**PARAMS, "creep_drop": 0.5, "sigma_drop": 12.0e3, "drop_steepness": 4.0}
+
+
+def test_the_drive_drops_by_its_share_around_sigma_drop():
+    stress = np.array([0.0, 1.0e3, 7.0e3, 12.0e3, 14.0e3, 53.0e3, 3.0e5, 3.0e7])
+    value = saturating_drive(stress, 3.0e3, 0.5, 12.0e3, 4.0)
+    hill = (stress / 12.0e3) ** 4 / (1.0 + (stress / 12.0e3) ** 4)
+    np.testing.assert_allclose(value, g(stress) * (1.0 - 0.5 * hill), rtol=1e-13)
+    assert value[3] == pytest.approx(g(12.0e3) * 0.75)  # half the drop at sigma_drop
+    assert value[-1] == pytest.approx(0.5, rel=2e-4)  # the plateau: 1 - creep_drop
+    assert value[2] > value[4] > value[5]  # less creep drive at 14 and 53 kPa than at 7 kPa
+    # no drop is the saturating drive; a full drop stays between 0 and the saturating drive
+    np.testing.assert_array_equal(saturating_drive(stress, 3.0e3, 0.0, 12.0e3, 4.0), g(stress))
+    full = saturating_drive(stress, 3.0e3, 1.0, 12.0e3, 4.0)
+    assert np.all(full >= 0.0) and np.all(full <= g(stress))
+    # a parameter mapping without the drop is the drive without it
+    np.testing.assert_array_equal(LAW.drive(stress, PARAMS), g(stress))
+
+
+def test_a_step_up_across_the_drop_recovers_part_of_the_earlier_creep():
+    """Schapery by hand: 7 kPa from rest, 14 kPa from 1200 s; Δg < 0 at the second step."""
+    t = np.array([1.0, 600.0, 1199.0, 1201.0, 1300.0, 2400.0])
+    history = StressHistory(np.array([0.0, 0.0, 1200.0, 1200.0]), np.array([0, 7, 7, 14]) * 1e3)
+    got = strain_history(history, t, DROP, LAW)
+    steps = strain_of_steps(
+        DROP, np.array([[0.0, 1200.0]]), np.array([[7.0e3, 7.0e3]]), t[None], LAW
+    )
+    np.testing.assert_allclose(steps[0], got, rtol=1e-12)
+    g1, g2 = saturating_drive(np.array([7.0e3, 14.0e3]), 3.0e3, 0.5, 12.0e3, 4.0)
+    assert g2 < g1
+    f = np.array([box_fraction(u, DROP["tau_max"]) for u in t])
+    f2 = np.array([box_fraction(u - 1200.0, DROP["tau_max"]) if u > 1200.0 else 0.0 for u in t])
+    sigma = np.where(t >= 1200.0, 14.0e3, 7.0e3)
+    want = sigma / DROP["k1"] + DROP["eps_sat"] * (g1 * f + (g2 - g1) * f2)
+    np.testing.assert_allclose(got, want, rtol=1e-7)
+    assert got[4] < got[3]  # after the step up the delayed strain falls back for a while
+    assert np.all(np.diff(got[:3]) > 0)  # while held at 7 kPa it creeps
+
+
 @pytest.mark.parametrize("stress", [1.0e3, 7.0e3, 5.3e4])
 def test_a_step_from_rest_creeps_by_eps_sat_g_f(stress):
     t = np.array([0.0, 0.05, 1.0, 30.0, 600.0, 3600.0, 1.0e6])
@@ -157,19 +196,23 @@ def test_no_prior_draw_closes_the_gap_under_any_load_up_to_300_kpa():
     names = list(prior.names)
     draws = prior.sample(np.random.default_rng(83), 10_000)
     params = {n: draws[:, names.index(n)] for n in ("k1", "eps_sat", "sigma_c")}
+    for name in ("creep_drop", "sigma_drop", "drop_steepness"):  # the file's prior to free it
+        assert not sensor.priors[name].is_fixed
+        params[name] = sensor.priors[name].sample(np.random.default_rng(85), 10_000)
+    assert params["creep_drop"].min() >= 0.0 and params["creep_drop"].max() <= 1.0
     assert "tau_max" not in names  # the 402 holds it; the bound must hold whatever its value
     rng = np.random.default_rng(84)
     params["tau_max"] = np.exp(rng.uniform(np.log(1e4), np.log(1e8), len(draws)))
     bound = saturating_gap_bound(params["k1"], params["eps_sat"], params["sigma_c"])
     assert bound.max() < 1.0
-    # and numerically: a staircase to the cap and back, watched for 30 days
-    times = np.array([[0.0, 100.0, 1000.0, 5000.0]])
-    sizes = np.array([[5.0e4, 1.0e5, GAP_STRESS_CAP - 1.5e5, -2.0e5]])
+    # and numerically: a staircase to the cap and back, through the drop, watched for 30 days
+    times = np.array([[0.0, 100.0, 1000.0, 5000.0, 9000.0]])
+    sizes = np.array([[5.0e3, 4.5e4, 1.0e5, GAP_STRESS_CAP - 1.5e5, -2.9e5]])
     t = np.geomspace(1e-3, 2.6e6, 300)[None, :]
-    worst = [k for k in np.argsort(bound)[-50:]]
+    worst = [k for k in np.argsort(bound)[-50:]] + [int(np.argmax(params["creep_drop"]))]
     each = {n: v[worst][:, None, None] for n, v in params.items()}
     strain = strain_of_steps(each, times, sizes, t, LAW)
-    assert strain.max() < 1.0
+    assert strain.max() < 1.0 and strain.min() >= 0.0
     assert np.all(strain.max(axis=(1, 2)) <= bound[worst] + 1e-12)
 
 
