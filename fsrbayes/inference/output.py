@@ -276,8 +276,9 @@ def summary(result, tree):
             "n_walkers": int(result.run.chain.shape[2]),
         },
         "fixed_parameters": posterior.fixed,
-        "map_log_posterior": [
-            float(v) for v in (result.optima_log_post if result.optima_log_post is not None else [])
+        "map_log_posterior": [  # None for a start that ended outside the model's domain
+            _finite(v)
+            for v in (result.optima_log_post if result.optima_log_post is not None else [])
         ],
         "sampler": getattr(result, "sampler", "ensemble"),
         "coordinates": _coordinates(result),

@@ -113,6 +113,15 @@ def test_draws_whose_gap_closes_are_reported_out_of_domain_never_as_minus_100(re
     assert np.isnan(d3600).mean() == pytest.approx(0.5, abs=0.02) and np.nanmin(d3600) > -50.0
 
 
+def test_a_map_start_that_ended_outside_the_domain_is_written_as_null(result, tmp_path):
+    """A start of the MAP search may end where the log-posterior is −inf (a staircase fit did)."""
+    fake = copy.copy(result)
+    fake.optima_log_post = np.append(result.optima_log_post, -np.inf)
+    info = save_fit(fake, tmp_path)
+    assert info["map_log_posterior"][-1] is None
+    assert json.loads((tmp_path / "summary.json").read_text())["map_log_posterior"][-1] is None
+
+
 def test_several_specimens_need_a_choice():
     data = syn.simulate("a201", n_specimens=2, voltages=[1.0], forces=[4.9], samples=5).data
     with pytest.raises(ValueError, match="hold 2 specimens; choose one with specimen="):
