@@ -28,14 +28,24 @@ def _distinct_levels(values, rtol=0.01):
     return int(1 + np.sum(ordered[1:] > ordered[:-1] * (1 + rtol))) if ordered.size else 0
 
 
+def _held_stresses(data):
+    """Every stress the tests hold: each test's, and each load its steps reach (a staircase)."""
+    held = np.asarray(data.stress_Pa, dtype=float).ravel()
+    if getattr(data, "step_size", None) is None:
+        return held
+    loads = np.cumsum(data.step_size, axis=-1)
+    return np.concatenate([held, loads[(data.step_size != 0) & (loads > 0)]])
+
+
 def design_warnings(posterior):
     """One-line notes on what a specimen's tests cannot identify, whatever the sampler does.
 
     The tunneling area A(σ) = A0 + A1·σ^A2 (eq. 6) depends on the held stress only: tests at
-    fewer distinct stresses than it has sampled coefficients fix A at those stresses and leave
-    a curve of (A0, A1, A2) along which only the prior decides. Its posterior is then a curved
-    ridge that the ensembles explore slowly (autocorrelation times in VALIDATION.md), and drift
-    predictions at other stresses rest on the prior.
+    fewer distinct stresses (each test's, and each load a staircase's steps reach) than it has
+    sampled coefficients fix A at those stresses and leave a curve of (A0, A1, A2) along which
+    only the prior decides. Its posterior is then a curved ridge that the ensembles explore
+    slowly (autocorrelation times in VALIDATION.md), and drift predictions at other stresses
+    rest on the prior.
 
     ADC readings that stay below :data:`ADC_MIN_COUNTS` counts resolve the drift coarsely (a
     count is over 1 % of a reading): the divider's fixed resistor does not match the sensor.
@@ -46,7 +56,7 @@ def design_warnings(posterior):
     """
     notes = []
     sampled = [name for name in AREA_COEFFICIENTS if name in posterior.names]
-    levels = _distinct_levels(posterior.data.stress_Pa)
+    levels = _distinct_levels(_held_stresses(posterior.data))
     if len(sampled) > levels:
         notes.append(
             f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law "

@@ -9,6 +9,7 @@ import sys
 import time
 import warnings
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -328,6 +329,16 @@ def test_a_design_with_fewer_stresses_than_area_coefficients_is_named(small, mon
     )
     assert fit_module.design_warnings(posterior_of(three)) == []
     assert design._distinct_levels([2e5, 1e5, 1.004e5]) == 2  # measured loads scatter a little
+    # a staircase holds every load its steps reach, not only its first (padding steps are 0)
+    stairs = SimpleNamespace(
+        stress_Pa=np.array([7.1e3]),
+        step_size=np.array([[7.1e3, 2.2e3, 2.2e3, 2.1e3, 0.0]]),
+        step_time=np.array([[0.0, 1200.0, 2400.0, 3600.0, 3600.0]]),
+    )
+    staircase = SimpleNamespace(names=posterior_of(small).names, data=stairs)
+    assert fit_module.design_warnings(staircase) == []
+    stairs.step_size = np.array([[7.1e3, 0.0, 0.0, 0.0, 0.0]])
+    assert "1 distinct stress level " in fit_module.design_warnings(staircase)[0]
 
     class Stop(Exception):
         pass
