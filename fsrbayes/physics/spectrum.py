@@ -246,8 +246,9 @@ def saturating_drive(stress, sigma_c, drop=0.0, sigma_drop=1.0, steepness=1.0):
     drop = np.asarray(drop, dtype=float)
     if not np.any(drop):
         return rise
-    ratio = (stress / np.asarray(sigma_drop, dtype=float)) ** np.asarray(steepness, dtype=float)
-    return rise * (1.0 - drop * ratio / (1.0 + ratio))
+    with np.errstate(divide="ignore", over="ignore"):  # σ = 0 or a steep m: (σ_d/σ)^m = inf
+        below = (np.asarray(sigma_drop, dtype=float) / stress) ** np.asarray(steepness, float)
+    return rise * (1.0 - drop / (1.0 + below))
 
 
 def saturating_gap_bound(k1, eps_sat, sigma_c, stress=GAP_STRESS_CAP):

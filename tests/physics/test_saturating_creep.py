@@ -68,6 +68,10 @@ def test_the_drive_drops_by_its_share_around_sigma_drop():
     np.testing.assert_array_equal(saturating_drive(stress, 3.0e3, 0.0, 12.0e3, 4.0), g(stress))
     full = saturating_drive(stress, 3.0e3, 1.0, 12.0e3, 4.0)
     assert np.all(full >= 0.0) and np.all(full <= g(stress))
+    # a steep drop is a step at sigma_drop, finite everywhere (no inf/inf)
+    steep = saturating_drive(stress, 3.0e3, 0.5, 12.0e3, 200.0)
+    np.testing.assert_allclose(steep, g(stress) * np.where(stress > 12.0e3, 0.5, 1.0)
+                               * np.where(stress == 12.0e3, 0.75, 1.0), rtol=1e-12)  # fmt: skip
     # a parameter mapping without the drop is the drive without it
     np.testing.assert_array_equal(LAW.drive(stress, PARAMS), g(stress))
 
