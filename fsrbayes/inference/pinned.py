@@ -152,6 +152,7 @@ class PinnedCoordinates:
             model=posterior.model,
             tunneling=posterior.tunneling,
             likelihood=posterior.likelihood,
+            centred_placements=posterior.centred_placements,
         )
         self._step_model = _StepModel.of(self._at_references)
         self._y0 = self.log_current(self.anchor[None])[0]

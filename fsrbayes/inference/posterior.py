@@ -92,6 +92,10 @@ class PriorScaledTarget:
         """Draw n independent prior draws in u-space, shape (n, ndim)."""
         return self.prior.to_unconstrained(self.prior.sample(rng, n))
 
+    def applied(self, x):
+        """Return the parameters x (…, ndim) as the model applies them (here: unchanged)."""
+        return x
+
     def __call__(self, u):
         """log-posterior at u of shape (W, ndim) → (W,), or (ndim,) → float; −inf, never NaN."""
         u = np.asarray(u, dtype=float)
@@ -122,6 +126,10 @@ class LogPosterior(PriorScaledTarget):
     likelihood : {"gaussian", "student", "ar1"}
     beta : float
         Likelihood power (1 for the posterior, < 1 for the power posteriors of the evidence).
+    centred_placements : bool
+        Apply the sampled placement levels less their mean (:meth:`placement_levels`): how a
+        fit samples them, so that their common level is the law's and not a ridge between
+        the two. A posterior of stored draws (``predict``'s) applies them as they are.
     """
 
     def __init__(
@@ -134,6 +142,7 @@ class LogPosterior(PriorScaledTarget):
         tunneling="smooth",
         likelihood="gaussian",
         beta=1.0,
+        centred_placements=False,
     ):
         if not isinstance(data, SpecimenData):
             raise TypeError(f"data must be SpecimenData, got {type(data).__name__}")
@@ -151,6 +160,7 @@ class LogPosterior(PriorScaledTarget):
         self.prior = prior
         self.fixed = {k: float(v) for k, v in dict(fixed).items()}
         self.beta = float(beta)
+        self.centred_placements = bool(centred_placements)
         needed = set(model_parameters(model)) | set(noise_parameters(likelihood))
         needed -= set(OPTIONAL_PARAMETERS)
         missing = sorted(needed - set(prior.names) - set(self.fixed))
@@ -233,8 +243,9 @@ class LogPosterior(PriorScaledTarget):
         prior = sensor.prior_for(model, nuisance)
         fixed = {k: v for k, v in sensor.params_for(model).items() if k not in prior.names}
         return cls(
-            data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta
-        )
+            data, prior, fixed, model=model, tunneling=tunneling, likelihood=likelihood, beta=beta,
+            centred_placements=placement,
+        )  # fmt: skip
 
     def fingerprint(self):
         """Return a fingerprint of the target (checkpoints).
@@ -356,11 +367,34 @@ class LogPosterior(PriorScaledTarget):
         return np.where(valid, log_current, -np.inf)
 
     def placement_levels(self, x):
-        """Return each test's placement level (log of its factor on I), (W, C, 1); 0 without."""
+        """Return each test's placement level (log of its factor on I), (W, C, 1); 0 without.
+
+        With ``centred_placements`` the sampled levels less their mean over the placements: each
+        placement's own level about the specimen's law, the law carrying their common level.
+        """
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if not self._placements:
             return np.zeros((len(x), self.data.n_tests, 1))
-        return x[:, self._placements][:, self.data.ramp_rows(), None]
+        return self._applied_levels(x[:, self._placements])[:, self.data.ramp_rows(), None]
+
+    def _applied_levels(self, levels):
+        """Return the sampled placement levels (…, K) as the model applies them."""
+        if not self.centred_placements:
+            return levels
+        return levels - levels.mean(axis=-1, keepdims=True)
+
+    def applied(self, x):
+        """Return x (…, ndim) with the placement levels as the model applies them.
+
+        What a fit stores: with ``centred_placements`` the sampled levels are centred over the
+        placements (:meth:`placement_levels`), their mean being a direction the likelihood does
+        not see; the stored levels are each placement's own, which a posterior built without
+        centring (``predict``'s) applies as they are.
+        """
+        x = np.array(x, dtype=float)
+        if self._placements and self.centred_placements:
+            x[..., self._placements] = self._applied_levels(x[..., self._placements])
+        return x
 
     def landing_window(self, x):
         """Return the interval each test's sampled landing is a share of, shape (W, C), in s.

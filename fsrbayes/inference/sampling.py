@@ -147,7 +147,7 @@ class FitResult:
         per_ensemble = max(1, max_draws // n_ens)
         index = even_index(flat.shape[1], per_ensemble)
         x, _ = self.posterior.prior.from_unconstrained(flat[:, index])
-        return x
+        return self.posterior.applied(x)
 
 
 def seed_of(rng):

@@ -644,6 +644,9 @@ def test_cli_fit_progress_bar_goes_to_stderr(csv_file, tmp_path):
     assert all(t["observed_drift_3600"] is None for t in summary["tests"])
     tree = open_fit_tree(tmp_path / "p" / "posterior.nc")
     assert tree.attrs["settle_s"] == 0.5 and np.min(tree["constant_data"]["time_s"]) >= 0.5
+    # the levels stored are the ones applied: each placement's own, about the law (mean zero)
+    levels = sum(tree.posterior[f"placement[{k}]"].values for k in range(len(summary["tests"])))
+    np.testing.assert_allclose(levels, 0.0, atol=1e-12)
     # predict takes a fit with placement levels and creeps: each fitted test keeps its own
     predicted = cli(
         "predict", str(tmp_path / "p"), str(csv_file), "--draws", "50", "--json",

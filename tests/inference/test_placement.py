@@ -1,10 +1,11 @@
 """Each test's placement: a dead weight put on again reads a few percent off, and creeps its own.
 
-``placement[k]`` multiplies test k's model current by exp(placement[k]); drifts (ratios within
-a test) do not see it. ``placement_creep[k]`` multiplies test k's delayed strain by
-exp(placement_creep[k]), its elastic strain and the creep's time course unchanged. The population
-pools neither, and ``predict`` keeps a fitted test's own and lends a new placement the level and
-creep of one placement seen.
+``placement[k]`` multiplies test k's model current by exp(placement[k]) — in a fit, the sampled
+levels less their mean, which is what the fit stores; drifts (ratios within a test) do not see
+it. ``placement_creep[k]`` multiplies test k's delayed strain by exp(placement_creep[k]), its
+elastic strain and the creep's time course unchanged. The population pools neither, and
+``predict`` keeps a fitted test's own and lends a new placement the level and creep of one
+placement seen.
 """
 
 import json
@@ -60,8 +61,21 @@ def test_a_placement_level_scales_its_tests_current_and_no_drift(placed):
     x = levelled.prior.sample(np.random.default_rng(1), 4)
     x[:, -3:] = 0.0  # every test creeps by the law's own amount: the levels alone
     base = plain.log_model_current(x[:, : plain.ndim])
+    # a fit applies each level about the levels' mean: the law carries their common level
+    own = x[:, -6:-3] - x[:, -6:-3].mean(axis=1, keepdims=True)
+    assert levelled.centred_placements
+    np.testing.assert_allclose(levelled.log_model_current(x), base + own[..., None], atol=1e-12)
+    shifted = x.copy()
+    shifted[:, -6:-3] += 0.2  # their common level: a direction the likelihood does not see
+    np.testing.assert_allclose(levelled.log_model_current(shifted), levelled.log_model_current(x))
+    # what the fit stores is what it applied, and a posterior of stored draws applies it as is
+    stored = levelled.applied(x)
+    np.testing.assert_allclose(stored[:, -6:-3], own)
+    np.testing.assert_array_equal(stored[:, :-6], x[:, :-6])
+    rebuilt = LogPosterior(packed, levelled.prior, levelled.fixed, model=levelled.model)
+    assert not rebuilt.centred_placements
     np.testing.assert_allclose(
-        levelled.log_model_current(x), base + x[:, -6:-3, None], rtol=0, atol=1e-12
+        rebuilt.log_model_current(stored), levelled.log_model_current(x), atol=1e-12
     )
     np.testing.assert_allclose(levelled.drift_percent(x), plain.drift_percent(x[:, : plain.ndim]))
     # nuisances: never pooled across specimens
