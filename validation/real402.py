@@ -14,7 +14,9 @@ command line with its defaults:
   the prior predictive's (``predict --prior``): a band that covers by being wide shows there.
   ``--protocol LOG`` predicts another log of the same specimens instead (the bench draws a
   specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
-  the specimen of a frozen log of seed S under a new protocol).
+  the specimen of a frozen log of seed S under a new protocol). A name ``LOG@PROTOCOL`` (e.g.
+  ``A-hold-10min@staircase``) writes that log itself, with the frozen log's rig and seed, and
+  predicts it from the fit of ``LOG``.
 
 Run ``python -m validation.real402 OUT fit A-spread B-hold-12min`` or ``python -m
 validation.real402 OUT forecast A-hold-60min``; each fit takes minutes on 2 cores, and a fit
@@ -143,11 +145,34 @@ def _first_minutes(source, target, first_s=FIRST_S):
         csv.writer(handle).writerows([head, *keep])
 
 
+def protocol_log(frozen, name, kind, out):
+    """Write the specimens of frozen log ``name`` under protocol ``kind``; return its path.
+
+    The bench draws its specimens from the seed, so the frozen log's rig and seed (its truth
+    file) under another ``--protocol`` are the same sensors on a protocol never fitted.
+    """
+    truth = json.loads((Path(frozen) / f"{name}.truth.json").read_text())
+    path = Path(out) / f"{kind}-seed{truth['seed']}.csv"
+    if not path.is_file():
+        fsrbayes_command(
+            "simulate-rig", "--preset", "real-402", "--rig", truth["rig_name"], "--protocol",
+            kind, "--seed", truth["seed"], "-o", path,
+        )  # fmt: skip
+    return path
+
+
 def forecast(frozen, name, out, protocol=None, first_s=FIRST_S):
-    """Fit each test's first ``first_s`` s of a frozen log, predict a protocol; rows per test."""
+    """Fit each test's first ``first_s`` s of a frozen log, predict a protocol; rows per test.
+
+    ``name`` may be ``LOG@PROTOCOL``: the protocol's log of the same specimens
+    (:func:`protocol_log`) is predicted from the fit of ``LOG``.
+    """
     from fsrbayes.data import read_csv
     from fsrbayes.inference.predict import predict
 
+    if "@" in name:
+        name, kind = name.split("@", 1)
+        protocol = protocol_log(frozen, name, kind, out)
     source = Path(frozen) / f"{name}.csv"
     folder = Path(out) / f"forecast-{name}"
     folder.mkdir(parents=True, exist_ok=True)

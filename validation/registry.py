@@ -266,6 +266,12 @@ REAL402_LOGS = (
 )  # fmt: skip
 """The frozen ``model`` set's logs, rig A's first."""
 
+REAL402_FORECASTS = (
+    "A-hold-60min", "B-hold-60min", "A-cycles", "A-staircase", "A-hold-10min@staircase",
+    "A-hold-10min@cycles",
+)  # fmt: skip
+"""The forecasts: the rest of four logs, and two protocols a fit of 10-minute holds never saw."""
+
 
 def _real402_fit_summary(rows):
     def named(r):
@@ -432,18 +438,12 @@ STUDIES = {
     ),
     "real402_forecast": Study(
         module="real402",
-        how="`fsrbayes fit` on each test's first 10 min of a frozen log, `predict` of the rest "
-        "(`python -m validation.real402 OUT forecast A-hold-60min B-hold-60min A-cycles "
-        "A-staircase`), and of protocols the fit never saw on the same specimen (`… forecast "
-        "A-hold-10min --protocol CSV`, the CSV from `fsrbayes simulate-rig --preset real-402 "
-        "--rig A --protocol staircase --seed 358695`, and `cycles`); rows in OUT/forecast.json",
-        run=_call(
-            "real402",
-            "run",
-            "real402-out",
-            "forecast",
-            ["A-hold-60min", "B-hold-60min", "A-cycles", "A-staircase"],
-        ),
+        how="`fsrbayes fit` on each test's first 10 min of a frozen log, `predict` of the rest, "
+        "and of protocols the fit never saw on the same specimen (`python -m validation.real402 "
+        "OUT forecast " + " ".join(REAL402_FORECASTS) + "`: `LOG@PROTOCOL` is `fsrbayes "
+        "simulate-rig --preset real-402 --protocol PROTOCOL` with the log's rig and seed); rows "
+        "in OUT/forecast.json",
+        run=_call("real402", "run", "real402-out", "forecast", list(REAL402_FORECASTS)),
         table=_call("real402", "format_rows"),
         summary=_real402_forecast_summary,
     ),
