@@ -251,19 +251,20 @@ class LogPosterior(PriorScaledTarget):
         """Return a fingerprint of the target (checkpoints).
 
         Return a fingerprint that changes with the data, model, tunneling law, likelihood, priors,
-        parameter order or fixed values.
+        parameter order, fixed values or how the placement levels are applied.
         """
         fixed = ";".join(f"{k}={v!r}" for k, v in sorted(self.fixed.items()))
-        return "|".join(
-            [
-                self.data.fingerprint(),
-                self.model,
-                self.tunneling,
-                self.likelihood,
-                self.prior.fingerprint(),
-                fixed,
-            ]
-        )
+        parts = [
+            self.data.fingerprint(),
+            self.model,
+            self.tunneling,
+            self.likelihood,
+            self.prior.fingerprint(),
+            fixed,
+        ]
+        if self._placements and self.centred_placements:
+            parts.append("placement levels centred")
+        return "|".join(parts)
 
     def parameters(self, x, names=None):
         """Physical parameters for x (W, ndim), each (W,): sampled ones from x, the rest fixed.

@@ -74,6 +74,7 @@ def test_a_placement_level_scales_its_tests_current_and_no_drift(placed):
     np.testing.assert_array_equal(stored[:, :-6], x[:, :-6])
     rebuilt = LogPosterior(packed, levelled.prior, levelled.fixed, model=levelled.model)
     assert not rebuilt.centred_placements
+    assert rebuilt.fingerprint() != levelled.fingerprint()  # a checkpoint of one is not the other's
     np.testing.assert_allclose(
         rebuilt.log_model_current(stored), levelled.log_model_current(x), atol=1e-12
     )
