@@ -100,6 +100,10 @@ class CreepTest:
     last unloaded sample when the onset is the first loaded row (``load`` or ``reading``; a
     jump in the reading comes while a weight settles, so it may lag the load by its ramp too);
     0 when the ``onset_s`` column gives it or no sample precedes it."""
+    pressed_before_s: float = field(default=0.0, compare=False, repr=False)
+    """How long before the onset the sensor last read a load the log does not hold (an
+    operator's taps before the weight: :func:`fsrbayes.data.onsets.pressed_before`); 0: the
+    log shows none (or starts at the onset)."""
 
     @property
     def key(self):

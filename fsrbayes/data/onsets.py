@@ -4,7 +4,8 @@ The load column says when the experimenter wrote a weight; the reading says when
 it. :func:`landing_row` finds the landing when the weight is written on every row,
 :func:`late_stamp_row` when it was written seconds after it landed, :func:`late_changes` moves a
 staircase's later weights (and reloadings) to where the reading moved, and :func:`settling_rows`
-counts a landing's first rows that read an open circuit. Used by :mod:`.rigio`.
+counts a landing's first rows that read an open circuit, and :func:`pressed_before` says how long
+before a first loading the sensor last read a load the log does not hold. Used by :mod:`.rigio`.
 """
 
 import numpy as np
@@ -17,7 +18,9 @@ __all__ = [
     "landing_row",
     "late_changes",
     "late_stamp_row",
+    "PRESS_GUARD_S",
     "lenient_currents",
+    "pressed_before",
     "settling_rows",
 ]
 
@@ -158,6 +161,31 @@ def _early_unload(log_read, start, row):
         level = late_level(moved)
         moved = run_start(level) if np.isfinite(level) else row
     return moved
+
+
+PRESS_GUARD_S = 1.0
+"""Readings this close before a first loading are the weight's own landing, not a press."""
+
+
+def pressed_before(raw, rows, onset_s, time_s, level_A, column, readout, decimal_comma):
+    """Return how long before a test's first loading the sensor last read a load; 0: never.
+
+    ``rows`` are the test's rows before its onset (logger time ``time_s``, onset ``onset_s``).
+    A row more than :data:`PRESS_GUARD_S` before the onset whose current reaches
+    :data:`LANDING_FRACTION` of ``level_A`` (the first loaded rows' current) read a sensor under
+    load while the load column held none: an operator's taps or presses before placing the
+    weight. An open divider reads a few counts, far below that; so do the residual conduction's
+    last seconds after an unloading. The creep those loads left recovers during the test
+    (the ``unlogged-load`` effect of :mod:`fsrbayes.physics.effects`).
+    """
+    early = time_s < onset_s - PRESS_GUARD_S
+    if not early.any() or not level_A > 0:
+        return 0.0
+    _, current = lenient_currents(raw, rows[early], column, readout, decimal_comma)
+    pressed = np.nan_to_num(current, nan=0.0, posinf=0.0) >= LANDING_FRACTION * level_A
+    if not pressed.any():
+        return 0.0
+    return float(onset_s - time_s[early][np.flatnonzero(pressed)[-1]])
 
 
 def settling_rows(raw, rows, column, readout, decimal_comma):

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..utils import codes_of
 from .creep import CreepTest, DataError
-from .onsets import landing_row, late_changes, late_stamp_row, settling_rows
+from .onsets import landing_row, late_changes, late_stamp_row, pressed_before, settling_rows
 from .readouts import Readout, current_of
 
 __all__ = ["RIG_READINGS", "is_rig_file", "rig_tests"]
@@ -288,6 +288,8 @@ def rig_tests(
             raw, keep, renamed_reading, readout, line_no, path, decimal_comma, required
         )
         current = current_of(readout, values)
+        pressed = pressed_before(raw, idx[:first], t_on, t[:first], np.median(current[:20]),
+                                 renamed_reading, readout, decimal_comma)  # fmt: skip
         tests.append(
             CreepTest(
                 spec,
@@ -306,6 +308,7 @@ def rig_tests(
                 onset_from,
                 ramp_s,
                 window,
+                pressed,
             )
         )
     return tuple(tests)

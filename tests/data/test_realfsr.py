@@ -407,3 +407,24 @@ def test_a_weight_lifted_before_its_unloading_was_written_reads_no_load(tmp_path
             else:  # written while the weight was on: kept up to the stamp
                 assert kept_before[-1] >= stamp["stamp_s"] - 1.5 * step
     assert late >= 1  # the seeds include a late unloading stamp
+
+
+@pytest.mark.parametrize("protocol, seed", [("hold", 1117), ("cycles", 1218), ("staircase", 1319)])
+def test_taps_before_the_first_weight_are_seen_and_a_quiet_start_is_not(tmp_path, protocol, seed):
+    """Rig B's operator taps the sensor before each test's first weight, which its load column
+    does not hold: the reader says the sensor read a load before the onset (``pressed_before_s``
+    > 0, the last such reading after the first tap began). The same log without taps, and rig A's
+    (an open divider until the weight lands), say none: their fits add nothing for it."""
+    for taps in (True, False):
+        log = simulate_real_rig("B", protocol, seed=seed, taps=taps)
+        csv_path, truth_path = write_real_rig(log, tmp_path / f"b{taps}.csv")
+        truth = json.loads(truth_path.read_text())
+        for test, tt in zip(read_csv(csv_path).tests, truth["tests"], strict=True):
+            if taps:
+                assert test.pressed_before_s > 0
+                assert test.onset_s - test.pressed_before_s >= tt["taps"][0]["t_s"]
+            else:
+                assert not tt["taps"] and test.pressed_before_s == 0.0
+    log = simulate_real_rig("A", "hold", seed=seed, duration_s=20.0, rate_hz=10.0)
+    csv_path, _ = write_real_rig(log, tmp_path / "a.csv")
+    assert all(t.pressed_before_s == 0.0 for t in read_csv(csv_path).tests)
