@@ -29,6 +29,7 @@ from .._version import __version__
 from ..physics import effects as fx
 from ..physics.parameters import population_scatter
 from ..physics.sensor import current as model_current
+from ..physics.unlogged import acts_before
 from ..utils import atomic_path
 from .creep import CreepData, CreepTest
 from .csvwrite import write_csv
@@ -150,6 +151,12 @@ def effect_parameters(sensor, effects):
     resolved = {}
     for spec in effects or ():
         name, values = parse_effect(spec) if isinstance(spec, str) else spec
+        if acts_before(fx.EFFECTS[name]):
+            raise ValueError(
+                f"effect {name!r} stands for loads before a test that its log shows as readings "
+                "at no load, and the model's simulators write none: the real-402 bench's rig B "
+                "taps before each weight (simulate-rig --preset real-402 --rig B)"
+            )
         for key, value in values.items():
             if value is None:
                 value = _SENSOR_RELATIVE.get(key, lambda p, k=key: p[k])(sensor.params)

@@ -44,6 +44,8 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     Eqs. (5), (6) see σ(t) + mem_frac·E(t), E the recent past's excess load over σ(t), fading
     with mem_tau: a load that falls reads heavier (hysteresis).
 
+``unlogged-load`` (taps before the weight, whose creep recovers): :mod:`.unlogged`.
+
 ``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
 bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
 whole current is scaled. It is phenomenological — the paper gives no mechanism — and tied to
@@ -122,13 +124,12 @@ class Effect:
         """Factor on the bulk conduction at sourcing voltage V_FSR and time t (None: none)."""
         return None
 
-    def static_stress(self, params, stress, load_steps, time):
-        """Stress the contact and area laws (eqs. 5, 6) see under a load that changes in steps.
+    def strain_before(self, params, law, since):
+        """Strain left ``since`` s after the first loading by unlogged loads before it (None)."""
+        return None
 
-        ``stress`` is the momentary load (C, T) or (W, C, T), ``load_steps`` (step_time,
-        step_size) as :func:`~fsrbayes.physics.sensor.solve_current` takes them. None: the
-        momentary load itself.
-        """
+    def static_stress(self, params, stress, load_steps, time):
+        """Stress eqs. (5), (6) see under ``load_steps``; None: the momentary ``stress`` itself."""
         return None
 
 

@@ -25,6 +25,7 @@ from .solver import solve_bulk as solve_exactly
 from .superposition import load_of_steps, ramped_load, step_strain, strain_of_steps
 from .tangent import solve_bulk_near_first
 from .tunneling import TUNNELING_LAWS
+from .unlogged import acts_before
 
 __all__ = [
     "DomainError",
@@ -212,7 +213,13 @@ def _strain_step(params, stress, time, family, effects=()):
     stress = np.asarray(stress, dtype=float)
     if np.any(stress <= 0) and not np.any(np.asarray(params.get("sigma0", 0.0)) > 0):
         raise ValueError(f"stress must be > 0 Pa, got min {stress.min():g} Pa")
-    return step_strain(_creep_law(family), effects, params, stress, time)
+    law = _creep_law(family)
+    strain = step_strain(law, effects, params, stress, time)
+    for effect in effects:  # loads before the step that the log does not hold
+        left = effect.strain_before(params, law, time)
+        if left is not None:
+            strain = strain + left
+    return strain
 
 
 def gap_strain(
@@ -461,6 +468,12 @@ def current_history(
         raise ValueError(
             f"effect(s) {remembering} remember the loads of steps; current_history takes a smooth "
             "history: use solve_current with load_steps"
+        )
+    before = [e.name for e in effects if acts_before(e)]
+    if before:
+        raise ValueError(
+            f"effect(s) {before} add loads before the first loading; current_history takes the "
+            "whole history: put those loads in it"
         )
     strain = _creep_law(family).strain_history(history, time, params)
     for effect in effects:

@@ -33,7 +33,8 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
     ε(t) = Σ_k Δσ_k·J(t − τ_k), plus each effect's extra creep strain for the same steps (every
     catalogue strain effect is linear in the stress). J is 0 before its step. A law with a
     Schapery drive g (:attr:`~fsrbayes.physics.rheology.CreepLaw.drive`) superposes
-    Δg_k·[J(t − τ_k) − J(0)] for its delayed part instead. With
+    Δg_k·[J(t − τ_k) − J(0)] for its delayed part instead. An effect's loads before the first
+    step that the log does not hold add what they leave (its ``strain_before``). With
     ``first_ramp`` = r > 0 the first step rises linearly over r seconds instead — a hand-placed
     weight settling — and contributes exactly (Δσ_0/r)·[Ĵ(t − τ_0) − Ĵ(t − τ_0 − r)], Ĵ = ∫J
     the law's ramp compliance.
@@ -68,6 +69,11 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
         else:
             drive = drive_size[..., k : k + 1]
             strain = strain + step_strain(law, effects, params, size, since, drive)
+    since_first = time - step_time[..., :1]
+    for effect in effects:
+        left = effect.strain_before(params, law, since_first)
+        if left is not None:
+            strain = strain + left
     return strain
 
 
