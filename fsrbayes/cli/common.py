@@ -13,6 +13,7 @@ __all__ = [
     "default_model",
     "drift_lines",
     "loading_notes",
+    "pressed_notes",
     "population_folders",
     "warn_out_of_domain",
     "UsageError",
@@ -171,6 +172,26 @@ def loading_notes(data, specimens, settle_s, placement):
     return [
         f"note: the loads of {names} land while the log records (put on by hand): every fit "
         f"{' and '.join(what)}; --settle-s 0 and --no-placement keep and pool them"
+    ]
+
+
+def pressed_notes(data, specimens, default):
+    """Return the line naming the specimens whose default fit adds ``unlogged-load``, or nothing.
+
+    A log that reads a load before a test's first loading while its load column holds none
+    (an operator's taps) is fitted with the effect added to ``default``
+    (:func:`fsrbayes.inference.nuisance.model_for_log`).
+    """
+    from ..inference.nuisance import model_for_log
+
+    pressed = [s for s in specimens if model_for_log(data, s, default) != default]
+    if not pressed:
+        return []
+    names = ", ".join(pressed[:4]) + (" …" if len(pressed) > 4 else "")
+    return [
+        f"note: the logs of {names} read a load before the first loading that the load column "
+        f"does not hold (taps): their fits add unlogged-load, the creep it left recovering; "
+        f"--model {default} fits without it"
     ]
 
 

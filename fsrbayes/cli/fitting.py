@@ -29,6 +29,7 @@ from .common import (
     install_sigterm_handler,
     loading_notes,
     population_folders,
+    pressed_notes,
     warn_out_of_domain,
     writable,
 )
@@ -54,7 +55,9 @@ def cmd_fit(args):
     said = loading_notes(data, specimens, args.settle_s, args.placement)  # after a fit has run
     out = Path(args.out)
     writable(out)
-    args.model = args.model or default_model(data)
+    named, args.model = args.model, args.model or default_model(data)
+    if named is None and not args.hierarchical:
+        said += pressed_notes(data, specimens, args.model)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,
@@ -90,7 +93,7 @@ def cmd_fit(args):
             result = fit(
                 data,
                 specimen,
-                model=args.model,
+                model=named,  # None: the sensor's default, with the log's unlogged loads
                 tunneling=args.tunneling,
                 likelihood=args.likelihood,
                 ramp=args.ramp,

@@ -29,7 +29,7 @@ from .design import DesignWarning, design_warnings
 from .estimators import ESTIMATORS
 from .evidence.estimate import Estimator
 from .likelihood import SpecimenData
-from .nuisance import loading_treatment
+from .nuisance import loading_treatment, model_for_log
 from .optimize import MAP_ITERATIONS
 from .posterior import LogPosterior
 from .sampling import (
@@ -93,7 +93,9 @@ def fit(
     model : str, optional
         A creep law (``"burgers"``, ``"zener"``, ``"nutting"``, ``"log-spectrum"``,
         ``"log-spectrum-sat"``), optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
-        Default: the sensor file's ``default_model``.
+        Default: the sensor file's ``default_model``, with ``+unlogged-load`` where a test's log
+        shows the sensor pressed before its first loading (taps the load column does not hold;
+        :func:`~fsrbayes.inference.nuisance.model_for_log`).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     sensor : Sensor or str, optional
@@ -226,7 +228,7 @@ def specimen_posterior(
     settle_s, placement = loading_treatment(data, specimen, settle_s, placement)
     packed = SpecimenData.select(data, specimen, ramp=ramp, settle_s=settle_s)
     sensor = load_sensor(sensor or packed.sensor) if not hasattr(sensor, "priors") else sensor
-    model = sensor.default_model if model is None else model
+    model = model_for_log(packed, default=sensor.default_model) if model is None else model
     return LogPosterior.for_sensor(
         packed, sensor, model=model, tunneling=tunneling, likelihood=likelihood, ramp=ramp,
         placement=placement,

@@ -44,6 +44,7 @@ from .packing import (
     is_rig_design,
     load_step_arrays,
     pack_rig,
+    pressed_flags,
 )
 
 __all__ = [
@@ -109,6 +110,10 @@ class SpecimenData:
     onset_in_ramp : ndarray of bool, shape (C,), optional
         Whether each test's onset was found from the reading's jump, which comes while a weight
         settles: it may lag the load by the test's ramp as well as by ``onset_window``.
+    pressed : ndarray of bool, shape (C,), optional
+        Whether each test's log shows the sensor under a load it does not hold before the first
+        loading (taps: :attr:`fsrbayes.data.creep.CreepTest.pressed_before_s`); the
+        ``unlogged-load`` effect acts on those tests only. None: no test's does.
     settle_s : float
         Seconds after each load change whose readings were left out
         (:meth:`fsrbayes.data.creep.CreepTest.settled`); 0: every reading is in.
@@ -136,6 +141,7 @@ class SpecimenData:
     counts: CountHistograms = None
     onset_window: np.ndarray = None
     onset_in_ramp: np.ndarray = None
+    pressed: np.ndarray = None
     settle_s: float = 0.0
 
     @classmethod
@@ -181,6 +187,7 @@ class SpecimenData:
             logc,
             mask,
             tuple(t.key for t in tests),
+            pressed=pressed_flags(tests),
         )
 
     @classmethod
@@ -356,6 +363,7 @@ class SpecimenData:
             ramp_index=self.ramp_rows()[tests],
             onset_window=rows(self.onset_window),
             onset_in_ramp=rows(self.onset_in_ramp),
+            pressed=rows(self.pressed),
         )
 
     def ramp_rows(self):
@@ -396,6 +404,7 @@ class SpecimenData:
             self.ramp_index,
             self.onset_window,
             self.onset_in_ramp,
+            self.pressed,
         ):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())

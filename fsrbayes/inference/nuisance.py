@@ -22,6 +22,7 @@ __all__ = [
     "is_ramp",
     "landing_names",
     "loading_treatment",
+    "model_for_log",
     "noise_parameters",
     "nuisance_parameters",
     "placement_creep_names",
@@ -29,6 +30,9 @@ __all__ = [
     "ramp_names",
     "samples_landing",
 ]
+
+PRESSED_EFFECT = "unlogged-load"
+"""Added to a sensor's default model where a log shows presses before a first loading."""
 
 
 RAMPS = ("given", "fitted")
@@ -177,3 +181,22 @@ def loading_treatment(data, specimen=None, settle_s=None, placement=None):
     if placement is None:
         placement = placed and len(tests) >= 2
     return settle_s, bool(placement)
+
+
+def model_for_log(data, specimen=None, default="burgers"):
+    """Return the model a fit of ``specimen`` uses when none is named: ``default`` from the log.
+
+    Where a test's log shows the sensor under load before its first loading while the load
+    column held none (an operator's taps: :attr:`~fsrbayes.data.creep.CreepTest.pressed_before_s`),
+    the creep those loads left recovers during the test: ``default`` gains the
+    ``unlogged-load`` effect (:mod:`fsrbayes.physics.unlogged`), which acts on those tests
+    only. Packed data (:class:`~.likelihood.SpecimenData`) read their ``pressed`` flags.
+    """
+    if isinstance(data, SpecimenData):
+        pressed = data.pressed is not None and bool(np.any(data.pressed))
+    else:
+        tests = data.select(specimen=specimen).tests if specimen is not None else data.tests
+        pressed = any(t.pressed_before_s > 0 for t in tests)
+    if not pressed or PRESSED_EFFECT in default.split("+")[1:]:
+        return default
+    return f"{default}+{PRESSED_EFFECT}"

@@ -21,6 +21,7 @@ __all__ = [
     "load_step_arrays",
     "log_time_bins",
     "pack_rig",
+    "pressed_flags",
     "rise_end",
 ]
 
@@ -242,4 +243,11 @@ def pack_rig(cls, tests, max_samples, bins_per_decade, rise=False):
         onset_in_ramp=np.array([t.onset_source == "reading" for t in tests])
         if any(t.onset_source == "reading" for t in tests)
         else None,
+        pressed=pressed_flags(tests),
     )
+
+
+def pressed_flags(tests):
+    """Whether each test's log read the sensor pressed before its first loading; None: none."""
+    flags = np.array([t.pressed_before_s > 0 for t in tests])
+    return flags if flags.any() else None

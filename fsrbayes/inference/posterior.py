@@ -12,6 +12,7 @@ from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import resolve_effects
 from ..physics.models import creep_amplitude, model_family, model_parameters, parse_model
 from ..physics.sensor import gap_strain, solve_current
+from ..physics.unlogged import off_where_unpressed
 from .likelihood import SpecimenData, log_likelihood_pointwise
 from .nuisance import (
     is_landing,
@@ -311,6 +312,8 @@ class LogPosterior(PriorScaledTarget):
             steps, first_ramp = self.data.ramped(ramps)
         if self._landings:  # the first loading began its landing's share of a sample before 0
             steps = self.data.landed(steps, self._lag(x))
+        pressed = self.data.pressed  # an unlogged load acts where the log showed presses
+        params = off_where_unpressed(self.effect_objects, params, pressed, self.data.n_tests)
         if self._creeps:  # each test's delayed strain by its own factor: parameters (W, C, 1)
             factor = np.exp(x[:, self._creeps][:, self.data.ramp_rows(), None])
             params = self.family.scale_creep(params, factor)
