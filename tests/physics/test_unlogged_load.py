@@ -1,5 +1,7 @@
 """The unlogged-load effect: taps before the weight leave creep that recovers, and only there."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -7,6 +9,7 @@ from fsrbayes import load_sensor
 from fsrbayes.data.creep import CreepData
 from fsrbayes.inference.fit import specimen_posterior
 from fsrbayes.inference.likelihood import SpecimenData
+from fsrbayes.inference.nuisance import model_for_log
 from fsrbayes.inference.predictive_draws import evaluation_packing
 from fsrbayes.physics import loading
 from fsrbayes.physics.effects import EFFECTS
@@ -115,6 +118,16 @@ def test_a_fit_adds_the_effect_where_the_log_shows_presses_and_applies_it_to_tho
     quiet = CreepData(_rig_tests([0.0, 0.0]))
     assert specimen_posterior(quiet, "s1").model == "log-spectrum-sat"
     assert SpecimenData.from_tests(quiet.tests).pressed is None
+    # a weight lifted and put back keeps it; a staircase (one weight to another) does not
+    lifted = replace(pressed.tests[0], load_steps=(np.array([0.0, 30.0, 40.0]),
+                                                   np.array([53e3, -53e3, 53e3])))  # fmt: skip
+    stairs = replace(pressed.tests[0], load_steps=(np.array([0.0, 30.0]), np.array([53e3, 20e3])))
+    for test, want in ((lifted, "log-spectrum-sat+unlogged-load"), (stairs, "log-spectrum-sat")):
+        data = CreepData((test, pressed.tests[1]))
+        assert specimen_posterior(data, "s1").model == want
+        assert (
+            model_for_log(SpecimenData.from_tests(data.tests), default="log-spectrum-sat") == want
+        )
     # predict packs the log it predicts the same way: its own presses decide where the effect acts
     np.testing.assert_array_equal(evaluation_packing(pressed.tests[::-1]).pressed, [False, True])
 
