@@ -44,6 +44,7 @@ import numpy as np
 from ..data.creep import CreepData
 from ..inference.likelihood import SpecimenData
 from ..inference.nuisance import loading_treatment
+from ..inference.packing import pressed_flags
 from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
 from ..physics.effects import EFFECTS, check_effects, remembers_loads
@@ -292,7 +293,7 @@ def diagnose(
         Candidate effects (default: every catalogue effect the base model does not have). An
         effect that remembers loads (``contact-memory``) is tried only where a test's load falls,
         one that adds loads before the first loading (``unlogged-load``) only where a test's log
-        read the sensor pressed before it.
+        shows the sensor pressed before it.
     laws : sequence of str, optional
         Creep laws tried in place of the base model's, its effects kept (default: every
         registered creep law but the base's). With ``effects=()`` and ``laws=()`` only the base
@@ -379,7 +380,7 @@ def diagnose(
     if not any(np.any(np.asarray(t.load_steps[1]) < 0) for t in data.tests if t.load_steps):
         # a load's memory shows only where a load falls: elsewhere its fit is the base model's
         effects = tuple(e for e in effects if law_of(e) or not remembers_loads(EFFECTS[e]))
-    if not any(t.pressed_before_s > 0 for t in data.tests):
+    if pressed_flags(data.tests) is None:
         # loads before the first loading show only where the log read them (taps)
         effects = tuple(e for e in effects if law_of(e) or not acts_before(EFFECTS[e]))
     simulate_band = null_sets > 0 and not formula_band_applies(

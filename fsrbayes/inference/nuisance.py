@@ -11,6 +11,7 @@ specimen's data: a loading ramp ``ramp_s[k]`` (a hand-placed weight settling), a
 import numpy as np
 
 from .likelihood import LIKELIHOODS, SpecimenData
+from .packing import pressed_flags
 
 __all__ = [
     "HAND_PLACED_SETTLE_S",
@@ -191,9 +192,8 @@ def model_for_log(data, specimen=None, default="burgers"):
     the creep those loads left recovers during the test: ``default`` gains the
     ``unlogged-load`` effect (:mod:`fsrbayes.physics.unlogged`), which acts on those tests
     only. Not where a test's load steps from one weight to another (a staircase): there the
-    first weight's creep is one of several and the taps' timing was searched against the
-    staircase's other misfits (on the real-402 bench's rig-B staircase the fit ended 2,500 nats
-    below the one without it); name the model to add it. Packed data
+    first weight's creep is one of several, and the taps' timing would be searched against the
+    staircase's other misfits (docs/fitting.md); name the model to add it. Packed data
     (:class:`~.likelihood.SpecimenData`) read their ``pressed`` flags and load steps.
     """
     if isinstance(data, SpecimenData):
@@ -201,7 +201,7 @@ def model_for_log(data, specimen=None, default="burgers"):
         steps = [] if data.step_size is None else list(data.step_size)
     else:
         tests = data.select(specimen=specimen).tests if specimen is not None else data.tests
-        pressed = any(t.pressed_before_s > 0 for t in tests)
+        pressed = pressed_flags(tests) is not None
         steps = [t.load_steps[1] for t in tests if t.load_steps is not None]
     if not pressed or PRESSED_EFFECT in default.split("+")[1:] or any(map(_stairs, steps)):
         return default

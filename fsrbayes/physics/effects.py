@@ -125,7 +125,7 @@ class Effect:
         return None
 
     def strain_before(self, params, law, since):
-        """Strain left ``since`` s after the first loading by unlogged loads before it (None)."""
+        """Strain at ``since`` s after the first loading from unlogged loads before it (None)."""
         return None
 
     def static_stress(self, params, stress, load_steps, time):

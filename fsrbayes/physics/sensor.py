@@ -22,7 +22,13 @@ from .effects import remembers_loads, resolve_effects, static_stress_of
 from .models import PeerModel, model_family
 from .scattered import solve_scattered
 from .solver import solve_bulk as solve_exactly
-from .superposition import load_of_steps, ramped_load, step_strain, strain_of_steps
+from .superposition import (
+    load_of_steps,
+    ramped_load,
+    step_strain,
+    strain_before,
+    strain_of_steps,
+)
 from .tangent import solve_bulk_near_first
 from .tunneling import TUNNELING_LAWS
 from .unlogged import acts_before
@@ -215,11 +221,7 @@ def _strain_step(params, stress, time, family, effects=()):
         raise ValueError(f"stress must be > 0 Pa, got min {stress.min():g} Pa")
     law = _creep_law(family)
     strain = step_strain(law, effects, params, stress, time)
-    for effect in effects:  # loads before the step that the log does not hold
-        left = effect.strain_before(params, law, time)
-        if left is not None:
-            strain = strain + left
-    return strain
+    return strain + strain_before(law, effects, params, time)  # unlogged loads before the step
 
 
 def gap_strain(

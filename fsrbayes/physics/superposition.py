@@ -18,6 +18,7 @@ __all__ = [
     "load_of_steps",
     "ramped_load",
     "remembered_excess",
+    "strain_before",
     "step_strain",
     "strain_of_steps",
 ]
@@ -69,9 +70,18 @@ def strain_of_steps(params, step_time, step_size, time, law, effects=(), first_r
         else:
             drive = drive_size[..., k : k + 1]
             strain = strain + step_strain(law, effects, params, size, since, drive)
-    since_first = time - step_time[..., :1]
+    return strain + strain_before(law, effects, params, time - step_time[..., :1])
+
+
+def strain_before(law, effects, params, since):
+    """Strain at ``since`` s after the first loading from the effects' unlogged loads before it.
+
+    The sum of each effect's :meth:`~fsrbayes.physics.effects.Effect.strain_before` (0 where
+    none has such loads); everything broadcasts.
+    """
+    strain = 0.0
     for effect in effects:
-        left = effect.strain_before(params, law, since_first)
+        left = effect.strain_before(params, law, since)
         if left is not None:
             strain = strain + left
     return strain
