@@ -176,7 +176,9 @@ def read_csv(path, *, sep=",", shift_time=False, readings="required"):
         ``"optional"`` reads a protocol (``fsrbayes predict``): the reading column may be
         absent or have empty fields, which become NaN currents. A divider without a reading
         column reads ``adc_counts`` when it gives ``adc_bits`` and ``adc_vref_V``, else
-        ``vout_V``.
+        ``vout_V``. A rig test whose readings are all there is read as with ``"required"``
+        (where its weights landed, from the readings), so a fitted log predicted again lines up
+        with its fit.
 
     Returns
     -------

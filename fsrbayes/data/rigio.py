@@ -103,7 +103,9 @@ def rig_tests(
     renamed : dict, optional
         SI column → (column in the file, factor to SI), for unit-suffixed columns.
     required : bool
-        False for a protocol: the reading column may be absent or have empty fields (NaN).
+        False for a protocol: the reading column may be absent or have empty fields (NaN). A
+        protocol's test whose readings are all there is read as a log is: its landings and
+        later weights where the readings say (a late load stamp moved, as ``fit`` moves it).
 
     Returns
     -------
@@ -197,14 +199,17 @@ def rig_tests(
         level = stress[idx].copy()
         loaded = level > 0
         onset_from = "onset_s" if onset is not None else "load"
-        if onset is None and required and loaded[0]:
+        # where the test's readings are all there (a log; a protocol may leave them out) they
+        # say where its weights landed
+        readable = onset is None and (required or all(raw[i].strip() for i in idx))
+        if readable and loaded[0]:
             # the load is written on every row: the weight landed where the reading jumps
             landed = landing_row(raw, idx, renamed_reading, readout, decimal_comma)
             if landed > 0:
                 loaded = loaded.copy()
                 loaded[:landed] = False
                 onset_from = "reading"
-        elif onset is None and required and loaded.any():
+        elif readable and loaded.any():
             # the weight may have landed before its load was written: the reading says where
             landed = late_stamp_row(raw, idx, loaded, renamed_reading, readout, decimal_comma)
             if landed is not None:
@@ -222,7 +227,7 @@ def rig_tests(
         first = int(np.argmax(loaded))
         load = level[first]
         changes = first + 1 + np.flatnonzero(np.diff(level[first:]) != 0)
-        if onset is None and required and changes.size and changes.size < MAX_LOAD_STEPS:
+        if readable and changes.size and changes.size < MAX_LOAD_STEPS:
             # each later weight, too, lands where the reading reaches its level
             level = late_changes(raw, idx, level, first, changes, renamed_reading, readout,
                                   decimal_comma)  # fmt: skip

@@ -428,3 +428,31 @@ def test_taps_before_the_first_weight_are_seen_and_a_quiet_start_is_not(tmp_path
     log = simulate_real_rig("A", "hold", seed=seed, duration_s=20.0, rate_hz=10.0)
     csv_path, _ = write_real_rig(log, tmp_path / "a.csv")
     assert all(t.pressed_before_s == 0.0 for t in read_csv(csv_path).tests)
+
+
+def test_a_logged_staircase_predicted_again_lands_its_weights_where_its_fit_does(tmp_path):
+    """``predict`` reads its protocol with the readings optional. A rig-B log whose readings are
+    there is read as ``fit`` reads it: each weight where the counts moved, 9–11 s before its late
+    stamp, so the prediction of a fitted log lines up with the fit. With the readings left out
+    nothing says where the weights landed: they stay at their stamps."""
+    log = simulate_real_rig("B", "staircase", seed=1421, n_specimens=1)
+    csv_path, truth_path = write_real_rig(log, tmp_path / "b.csv")
+    truth = json.loads(truth_path.read_text())["tests"][0]
+    (fitted,) = read_csv(csv_path).tests
+    (again,) = read_csv(csv_path, readings="optional").tests
+    assert again.onset_s == fitted.onset_s
+    for mine, theirs in zip(again.load_steps, fitted.load_steps, strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+    landings = [c for c, k in zip(truth["force_history"]["t_s"], truth["force_history"]["kind"],
+                                  strict=True) if k == "weight"]  # fmt: skip
+    stamps = [s["stamp_s"] for s in truth["stamps"] if s["grams"] > 0]
+    moved = again.onset_s + again.load_steps[0][: len(landings)]  # then the unloading
+    assert np.all(np.abs(moved - landings) <= 0.25)  # two rows at 10 Hz
+    header, *rows = csv_path.read_text().splitlines()
+    column = header.split(",").index("adc_counts")
+    blank = [",".join(f if i != column else "" for i, f in enumerate(r.split(","))) for r in rows]
+    protocol = tmp_path / "protocol.csv"
+    protocol.write_text("\n".join([header, *blank]) + "\n")
+    (stamped,) = read_csv(protocol, readings="optional").tests
+    at = stamped.onset_s + stamped.load_steps[0][: len(stamps)]
+    assert np.all(np.abs(at - stamps) <= 0.25) and np.all(np.asarray(stamps) - landings >= 8.9)
