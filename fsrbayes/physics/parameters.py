@@ -102,6 +102,9 @@ for _entry in (
     Parameter("kd", "Pa", "physical", None, "log-spectrum delayed modulus (compliance 1/kd)"),
     Parameter("tau_max", "s", "physical", None, "log-spectrum longest retardation time"),
     Parameter(
+        "spectrum_tilt", "–", "physical", None, "log-spectrum tilt: the spectrum's weights ∝ τ^−γ"
+    ),
+    Parameter(
         "eps_sat", "–", "physical", None, "log-spectrum-sat delayed gap strain at saturation"
     ),
     Parameter(

@@ -26,7 +26,8 @@ so that Zener is the point ``inv_b1 = 0`` of the Burgers parameter space and
 ``b1 = inf`` gives exactly the same numbers. Nutting (eq. 13) has ``psi`` in
 1/(Pa·s^n) and the exponent ``n``. The ``log-spectrum`` law (a box retardation spectrum, creep
 linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the delayed modulus
-``kd`` in Pa and the longest retardation time ``tau_max`` in s; ``log-spectrum-sat``, the same
+``kd`` in Pa, the longest retardation time ``tau_max`` in s and the spectrum's tilt
+``spectrum_tilt`` (weights ∝ τ^(−γ); 0 where absent: the box); ``log-spectrum-sat``, the same
 spectrum driven by g(σ) = σ/(σ + σ_c)·[1 − a·σ^m/(σ^m + σ_d^m)], has ``k1``, ``eps_sat`` (the
 delayed strain at saturation), ``sigma_c`` in Pa, the high-stress drop a = ``creep_drop``
 around σ_d = ``sigma_drop`` in Pa with steepness m = ``drop_steepness``, and ``tau_max``.
@@ -41,11 +42,17 @@ ch. 7 (Schapery's nonlinear single-integral representation); Schapery, *Polym. E
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from .parameters import PARAMETERS
-from .spectrum import log_spectrum_compliance, log_spectrum_ramp_compliance, saturating_drive
+from .spectrum import (
+    log_spectrum_compliance,
+    log_spectrum_ramp_compliance,
+    saturating_drive,
+    spectrum_law_compliance,
+)
 
 __all__ = [
     "CREEP_LAWS",
@@ -294,20 +301,10 @@ def _nutting_ramp(t, params):
     return nutting_ramp_compliance(t, params["k1"], params["psi"], params["n"])
 
 
-def _log_spectrum(t, params):
-    return log_spectrum_compliance(t, params["k1"], params["kd"], params["tau_max"])
-
-
-def _log_spectrum_ramp(t, params):
-    return log_spectrum_ramp_compliance(t, params["k1"], params["kd"], params["tau_max"])
-
-
-def _log_spectrum_sat(t, params):
-    return log_spectrum_compliance(t, params["k1"], 1.0 / params["eps_sat"], params["tau_max"])
-
-
-def _log_spectrum_sat_ramp(t, params):
-    return log_spectrum_ramp_compliance(t, params["k1"], 1.0 / params["eps_sat"], params["tau_max"])
+_log_spectrum = partial(spectrum_law_compliance)
+_log_spectrum_ramp = partial(spectrum_law_compliance, ramp=True)
+_log_spectrum_sat = partial(spectrum_law_compliance, saturating=True)
+_log_spectrum_sat_ramp = partial(spectrum_law_compliance, saturating=True, ramp=True)
 
 
 def _saturating(stress, params):
@@ -389,7 +386,7 @@ NUTTING = register_creep_law(
 LOG_SPECTRUM = register_creep_law(
     CreepLaw(
         "log-spectrum",
-        ("k1", "kd", "tau_max"),
+        ("k1", "kd", "tau_max", "spectrum_tilt"),
         _log_spectrum,
         _log_spectrum_ramp,
         "log-spectrum: Kelvin chain with a box spectrum in ln tau, creep linear in ln t, bounded",
@@ -399,7 +396,8 @@ LOG_SPECTRUM = register_creep_law(
 LOG_SPECTRUM_SAT = register_creep_law(
     CreepLaw(
         "log-spectrum-sat",
-        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max"),
+        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max",
+         "spectrum_tilt"),  # fmt: skip
         _log_spectrum_sat,
         _log_spectrum_sat_ramp,
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "

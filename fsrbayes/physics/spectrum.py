@@ -28,6 +28,31 @@ prior draw and every time. The same holds for any loading history with 0 ≤ σ(
 parts, ε(t) = σ(t)·J(0) + ∫₀ᵗ σ(s)·J'(t − s) ds ≤ σ_max·J(t), as J' ≥ 0. :func:`gap_bound`
 returns the supremum.
 
+The tilted spectrum
+-------------------
+Real FSRs creep by about the same amount per decade of time from a second to an hour, but not
+exactly: the rate drifts by up to a fifth over those decades, one way or the other, and a
+load–unload cycle's recovery weighs the long retardation times more than a hold does. The
+spectrum's weights may therefore go as τ^(−γ), γ = ``spectrum_tilt`` (|γ| < 1; 0 is the box):
+
+    F(t) = ∫ (1 − e^(−t/τ))·τ^(−γ) d ln τ / Z,   Z = ∫ τ^(−γ) d ln τ = (τ_min^(−γ) − τ_max^(−γ))/γ,
+
+and with u = t/τ, F(t) = t^(−γ)·[G_γ(t/τ_min) − G_γ(t/τ_max)]/Z, where
+
+    G_γ(x) = ∫₀ˣ (1 − e^(−u))·u^(γ−1) du = (x^γ − 1)/γ + (1 − Γ(1 + γ))/γ + Γ(γ, x),
+
+Γ(γ, x) the upper incomplete gamma function (G_0 = Ein). Between τ_min and τ_max the creep per
+e-fold of time, t·F'(t), goes as t^(−γ). F still rises from 0 to 1, so the gap bound below holds
+for every tilt. Past τ_max the powers' difference is Z·t^γ exactly and F = 1 + t^(−γ)·[Γ(γ,
+t/τ_min) − Γ(γ, t/τ_max)]/Z. By parts, with k(x) = x − (1 − e^(−x)),
+
+    ∫₀ᵗ F = [t·F(t) − (τ_min^(1−γ)·k(t/τ_min) − τ_max^(1−γ)·k(t/τ_max))/Z]/(1 − γ).
+
+Numerics: G_γ by its series Σ (−1)^(k+1) x^(k+γ)/(k!·(k + γ)) up to x = 1; above, the two
+quotients with expm1, (1 − Γ(1 + γ))/γ from the series of ln Γ(1 + γ) (Abramowitz & Stegun
+6.1.33) so that nothing cancels as γ → 0, and Γ(γ, x) by its continued fraction (E1's at γ = 0).
+γ = 0 takes the box's own path.
+
 Saturating creep: ``log-spectrum-sat``
 -------------------------------------
 Real FSRs creep by about the same share of their resistance per decade of time at 7 kPa as at
@@ -75,6 +100,7 @@ import math
 
 import numba
 import numpy as np
+from scipy.special import zeta
 
 __all__ = [
     "GAP_STRESS_CAP",
@@ -86,6 +112,7 @@ __all__ = [
     "saturating_drive",
     "saturating_gap_bound",
     "spectrum_fraction",
+    "spectrum_law_compliance",
     "spectrum_ramp_fraction",
 ]
 
@@ -145,11 +172,76 @@ def _ein(x):
     return _ein_scalar(x)
 
 
-@numba.vectorize(["float64(float64, float64)"], cache=True)
-def _fraction(t, tau_max):
+_TILT_TERMS = 25  # x ≤ 1: the 25th term of G's series is < 1e-25
+_LGAMMA_TERMS = 60  # |g| ≤ 0.5: the 60th term of ln Γ(1 + g)'s series is < 1e-19
+_LGAMMA_COEF = np.array(
+    [(-1.0) ** k * float(zeta(k)) / k for k in range(2, _LGAMMA_TERMS)]
+)  # ln Γ(1 + g) = −γ_E·g + Σ_k (−1)^k·ζ(k)·g^k/k (Abramowitz & Stegun 6.1.33)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gamma_gap(g):
+    """(1 − Γ(1 + g))/g for 0 < |g| < 1, without the cancellation of its terms as g → 0."""
+    if abs(g) > 0.5:
+        return -math.expm1(math.lgamma(1.0 + g)) / g
+    out = 0.0
+    for j in range(_LGAMMA_COEF.size - 1, -1, -1):
+        out = out * g + _LGAMMA_COEF[j]
+    per_g = -_EULER + out * g  # ln Γ(1 + g)/g
+    return -math.expm1(g * per_g) / g
+
+
+@numba.njit(cache=True, nogil=True)
+def _upper_gamma(g, x):
+    """Γ(g, x) for x ≥ 1 by its continued fraction (modified Lentz; E1 at g = 0)."""
+    b = x + 1.0 - g
+    c = 1.0 / _CF_TINY
+    d = 1.0 / b
+    h = d
+    for i in range(1, _CF_TERMS):
+        a = -i * (i - g)
+        b += 2.0
+        d = 1.0 / (a * d + b)
+        c = b + a / c
+        step = c * d
+        h *= step
+        if abs(step - 1.0) < 1e-16:
+            break
+    return h * math.exp(-x + g * math.log(x))
+
+
+@numba.njit(cache=True, nogil=True)
+def _tilted_scalar(x, g):
+    """G_g(x) = ∫₀ˣ (1 − e^(−u))·u^(g−1) du at one x ≥ 0, for 0 < |g| < 1 (module docstring).
+
+    Series up to x = 1; above it (x^g − 1)/g + (1 − Γ(1 + g))/g + Γ(g, x), the two quotients
+    taken with expm1 so that nothing cancels as g → 0 (where G → Ein).
+    """
+    if x <= 1.0:
+        term = 1.0
+        out = 0.0
+        for k in range(1, _TILT_TERMS):
+            term *= x / k
+            out += (term if k % 2 == 1 else -term) / (k + g)
+        return out * x**g
+    rise = math.expm1(g * math.log(x)) / g
+    return rise + _gamma_gap(g) + _upper_gamma(g, x)
+
+
+@numba.vectorize(["float64(float64, float64, float64)"], cache=True)
+def _fraction(t, tau_max, tilt):
     if not t > 0.0:
         return 0.0
-    return (_ein_scalar(t / TAU_MIN) - _ein_scalar(t / tau_max)) / math.log(tau_max / TAU_MIN)
+    if tilt == 0.0:
+        return (_ein_scalar(t / TAU_MIN) - _ein_scalar(t / tau_max)) / math.log(tau_max / TAU_MIN)
+    low = math.exp(-tilt * math.log(TAU_MIN))
+    norm = low * -math.expm1(-tilt * math.log(tau_max / TAU_MIN)) / tilt
+    scale = math.exp(-tilt * math.log(t))
+    if t > tau_max:  # both ends past the series: the powers' difference is Z·t^γ exactly
+        tail = _upper_gamma(tilt, t / TAU_MIN) - _upper_gamma(tilt, t / tau_max)
+        return 1.0 + scale * tail / norm
+    inner = _tilted_scalar(t / TAU_MIN, tilt) - _tilted_scalar(t / tau_max, tilt)
+    return scale * inner / norm
 
 
 def ein(x):
@@ -168,34 +260,42 @@ def _kelvin_ramp(x):
     return np.where(small, xs * _horner(xs, _KR_COEF), x + np.expm1(-x))
 
 
-def _span(tau_max):
-    """L = ln(τ_max/τ_min)."""
-    return np.log(np.asarray(tau_max, dtype=float) / TAU_MIN)
+def spectrum_fraction(t, tau_max, tilt=0.0):
+    """Return F(t), the share of the delayed compliance 1/kd reached at t; 0 for t ≤ 0.
 
-
-def spectrum_fraction(t, tau_max):
-    """Return F(t) = [Ein(t/τ_min) − Ein(t/τ_max)]/ln(τ_max/τ_min), 0 for t ≤ 0.
-
-    The share of the delayed compliance 1/kd reached at t (module docstring): increasing from 0
-    to 1, linear in ln t between τ_min and τ_max with slope 1/ln(τ_max/τ_min) per e-fold.
+    With ``tilt`` γ = 0 (the box), F = [Ein(t/τ_min) − Ein(t/τ_max)]/ln(τ_max/τ_min): linear in
+    ln t between τ_min and τ_max with slope 1/ln(τ_max/τ_min) per e-fold. With γ ≠ 0 the
+    spectrum's weights go as τ^(−γ) and F = t^(−γ)·[G_γ(t/τ_min) − G_γ(t/τ_max)]/Z, the creep
+    per e-fold of time going as t^(−γ) (module docstring). Increasing from 0 to 1 either way.
     """
-    return _fraction(np.asarray(t, dtype=float), np.asarray(tau_max, dtype=float))
+    return _fraction(
+        np.asarray(t, dtype=float), np.asarray(tau_max, dtype=float), np.asarray(tilt, float)
+    )
 
 
-def spectrum_ramp_fraction(t, tau_max):
-    """Return ∫₀ᵗ F(u) du = t·F(t) − [τ_min·k(t/τ_min) − τ_max·k(t/τ_max)]/L in s, 0 for t ≤ 0.
+def spectrum_ramp_fraction(t, tau_max, tilt=0.0):
+    """Return ∫₀ᵗ F(u) du in s, 0 for t ≤ 0.
 
-    By parts: u·F'(u) = (e^(−u/τ_max) − e^(−u/τ_min))/L, whose integral is written with
-    k(x) = x − (1 − e^(−x)) so that the leading t of each term cancels exactly.
+    ∫₀ᵗ F = [t·F(t) − (τ_min^(1−γ)·k(t/τ_min) − τ_max^(1−γ)·k(t/τ_max))/Z]/(1 − γ), with
+    k(x) = x − (1 − e^(−x)) so that the leading t of each term cancels exactly; at γ = 0,
+    Z = L = ln(τ_max/τ_min) and this is t·F(t) − [τ_min·k(t/τ_min) − τ_max·k(t/τ_max)]/L
+    (by parts: u·F'(u) = (e^(−u/τ_max) − e^(−u/τ_min))/L).
     """
     tp = np.maximum(np.asarray(t, dtype=float), 0.0)
     tau_max = np.asarray(tau_max, dtype=float)
-    inner = TAU_MIN * _kelvin_ramp(tp / TAU_MIN) - tau_max * _kelvin_ramp(tp / tau_max)
-    return tp * spectrum_fraction(tp, tau_max) - inner / _span(tau_max)
+    tilt = np.asarray(tilt, dtype=float)
+    span = np.log(tau_max / TAU_MIN)
+    flat = tilt == 0.0
+    safe = np.where(flat, 1.0, tilt)
+    norm = np.where(flat, span, -np.expm1(-safe * span) / safe)  # Z·τ_min^γ
+    top = (tau_max / TAU_MIN) ** -tilt  # τ_max^(1−γ)/τ_min^(1−γ) · τ_min/τ_max
+    inner = TAU_MIN * (_kelvin_ramp(tp / TAU_MIN) - top * tau_max / TAU_MIN
+                       * _kelvin_ramp(tp / tau_max))  # fmt: skip
+    return (tp * spectrum_fraction(tp, tau_max, tilt) - inner / norm) / (1.0 - tilt)
 
 
-def log_spectrum_compliance(t, k1, kd, tau_max):
-    """Box-spectrum creep compliance J(t) = 1/k1 + F(t)/kd, 0 for t < 0.
+def log_spectrum_compliance(t, k1, kd, tau_max, tilt=0.0):
+    """Retardation-spectrum creep compliance J(t) = 1/k1 + F(t)/kd, 0 for t < 0.
 
     Parameters
     ----------
@@ -207,6 +307,8 @@ def log_spectrum_compliance(t, k1, kd, tau_max):
         Delayed modulus in Pa: the chain's total delayed compliance is 1/kd.
     tau_max : array_like
         Longest retardation time in s (> :data:`TAU_MIN`).
+    tilt : array_like, default 0
+        The spectrum's tilt γ, weights ∝ τ^(−γ), |γ| < 1 (0: the box; :func:`spectrum_fraction`).
 
     Returns
     -------
@@ -215,17 +317,28 @@ def log_spectrum_compliance(t, k1, kd, tau_max):
 
     References
     ----------
-    Paper eqs. (7), (17) (one Kelvin element; here a log-uniform continuum of them).
+    Paper eqs. (7), (17) (one Kelvin element; here a continuum of them in ln τ).
     """
     t = np.asarray(t, dtype=float)
-    value = 1.0 / np.asarray(k1, dtype=float) + spectrum_fraction(t, tau_max) / kd
+    value = 1.0 / np.asarray(k1, dtype=float) + spectrum_fraction(t, tau_max, tilt) / kd
     return np.where(t >= 0, value, 0.0)
 
 
-def log_spectrum_ramp_compliance(t, k1, kd, tau_max):
+def log_spectrum_ramp_compliance(t, k1, kd, tau_max, tilt=0.0):
     """Ĵ(t) = ∫₀ᵗ J = t/k1 + (1/kd)·∫₀ᵗ F in s/Pa, 0 for t ≤ 0 (:func:`spectrum_ramp_fraction`)."""
     tp = np.maximum(np.asarray(t, dtype=float), 0.0)
-    return tp / np.asarray(k1, dtype=float) + spectrum_ramp_fraction(tp, tau_max) / kd
+    return tp / np.asarray(k1, dtype=float) + spectrum_ramp_fraction(tp, tau_max, tilt) / kd
+
+
+def spectrum_law_compliance(t, params, *, saturating=False, ramp=False):
+    """J(t) (Ĵ(t) with ``ramp``) of the ``log-spectrum`` laws from a parameter mapping.
+
+    ``k1``, ``kd`` (``saturating``: 1/``eps_sat``, the ``log-spectrum-sat`` law's delayed
+    strain at saturation per unit drive), ``tau_max`` and ``spectrum_tilt`` (0 where absent).
+    """
+    kd = 1.0 / params["eps_sat"] if saturating else params["kd"]
+    law = log_spectrum_ramp_compliance if ramp else log_spectrum_compliance
+    return law(t, params["k1"], kd, params["tau_max"], params.get("spectrum_tilt", 0.0))
 
 
 def gap_bound(k1, kd, stress=GAP_STRESS_CAP):
