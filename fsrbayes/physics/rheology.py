@@ -396,8 +396,8 @@ LOG_SPECTRUM = register_creep_law(
 LOG_SPECTRUM_SAT = register_creep_law(
     CreepLaw(
         "log-spectrum-sat",
-        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max",
-         "spectrum_tilt"),  # fmt: skip
+        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max")
+        + ("spectrum_tilt",),
         _log_spectrum_sat,
         _log_spectrum_sat_ramp,
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "

@@ -144,19 +144,17 @@ _CF_TERMS = 200  # at x = 1 the fraction meets rounding in ~40 terms, fewer abov
 
 
 @numba.njit(cache=True, nogil=True)
-def _ein_scalar(x):
-    """Ein at one x ≥ 0: the series up to x = 1, E1 + ln x + γ above (module docstring)."""
-    if x <= 1.0:
-        out = 0.0
-        for j in range(_EIN_COEF.size - 1, -1, -1):
-            out = (out + _EIN_COEF[j]) * x
-        return out
-    b = x + 1.0  # E1(x)·e^x = 1/(x + 1 − 1²/(x + 3 − 2²/(x + 5 − …)))
+def _upper_gamma(g, x):
+    """Γ(g, x) for x ≥ 1 by its continued fraction (modified Lentz; E1 at g = 0).
+
+    e^x·x^(−g)·Γ(g, x) = 1/(x + 1 − g − 1·(1 − g)/(x + 3 − g − 2·(2 − g)/(x + 5 − g − …))).
+    """
+    b = x + 1.0 - g
     c = 1.0 / _CF_TINY
     d = 1.0 / b
     h = d
     for i in range(1, _CF_TERMS):
-        a = -float(i * i)
+        a = -i * (i - g)
         b += 2.0
         d = 1.0 / (a * d + b)
         c = b + a / c
@@ -164,7 +162,18 @@ def _ein_scalar(x):
         h *= step
         if abs(step - 1.0) < 1e-16:
             break
-    return h * math.exp(-x) + math.log(x) + _EULER
+    return h * math.exp(-x + g * math.log(x))
+
+
+@numba.njit(cache=True, nogil=True)
+def _ein_scalar(x):
+    """Ein at one x ≥ 0: the series up to x = 1, E1 + ln x + γ above (module docstring)."""
+    if x <= 1.0:
+        out = 0.0
+        for j in range(_EIN_COEF.size - 1, -1, -1):
+            out = (out + _EIN_COEF[j]) * x
+        return out
+    return _upper_gamma(0.0, x) + math.log(x) + _EULER  # E1(x) = Γ(0, x)
 
 
 @numba.vectorize(["float64(float64)"], cache=True)
@@ -189,25 +198,6 @@ def _gamma_gap(g):
         out = out * g + _LGAMMA_COEF[j]
     per_g = -_EULER + out * g  # ln Γ(1 + g)/g
     return -math.expm1(g * per_g) / g
-
-
-@numba.njit(cache=True, nogil=True)
-def _upper_gamma(g, x):
-    """Γ(g, x) for x ≥ 1 by its continued fraction (modified Lentz; E1 at g = 0)."""
-    b = x + 1.0 - g
-    c = 1.0 / _CF_TINY
-    d = 1.0 / b
-    h = d
-    for i in range(1, _CF_TERMS):
-        a = -i * (i - g)
-        b += 2.0
-        d = 1.0 / (a * d + b)
-        c = b + a / c
-        step = c * d
-        h *= step
-        if abs(step - 1.0) < 1e-16:
-            break
-    return h * math.exp(-x + g * math.log(x))
 
 
 @numba.njit(cache=True, nogil=True)
