@@ -113,3 +113,17 @@ def test_vectorised_over_walkers_with_their_own_tilts():
         one = {**P, "spectrum_tilt": float(tilt[w, 0])}
         np.testing.assert_array_equal(both[0][w], rh.creep_compliance(t, one, "log-spectrum-sat"))
         np.testing.assert_array_equal(both[1][w], rh.ramp_compliance(t, one, "log-spectrum-sat"))
+
+
+def test_the_402_samples_the_tilt_for_its_default_law_and_holds_it_elsewhere():
+    from fsrbayes.data.sensors import load_sensor
+
+    fsr402, a201 = load_sensor("fsr402"), load_sensor("a201")
+    assert fsr402.default_model == "log-spectrum-sat"
+    assert "spectrum_tilt" in fsr402.free_parameters("log-spectrum-sat")
+    assert "spectrum_tilt" not in fsr402.free_parameters("log-spectrum")
+    assert "spectrum_tilt" not in a201.free_parameters("log-spectrum-sat")
+    draws = fsr402.prior_of("spectrum_tilt", "log-spectrum-sat").sample(
+        np.random.default_rng(5), 4000
+    )
+    assert np.all(np.abs(draws) <= 0.5) and 0.045 < np.std(draws) < 0.055
