@@ -3,8 +3,7 @@
 The specimen is one of the real-402 bench's spread (rig A: four weights × 60 s at 70 Hz through a
 3.3 kΩ divider, seed 11), packed as ``fsrbayes fit`` packs a hand-placed log (the first second
 after each load change out, each placement's own level and creep). Every law is timed on the
-same 64 prior draws, alternately, best of ``repeats`` (``log-spectrum-sat`` samples the
-spectrum's tilt, as the 402 file does). Beside them, the spectrum's F(t)
+same 64 prior draws, alternately, best of ``repeats``. Beside them, the spectrum's F(t)
 (:func:`fsrbayes.physics.spectrum.spectrum_fraction`) on the walkers' times: the box compiled
 against the numpy formula it replaced, and tilted (γ = −0.02) against the box.
 """

@@ -30,9 +30,11 @@ from .nuisance import (
 
 __all__ = ["LogPosterior", "PriorScaledTarget", "drift_between"]
 
-OPTIONAL_PARAMETERS = ("n_junctions",)
+OPTIONAL_PARAMETERS = ("n_junctions", "spectrum_tilt", "creep_drop", "sigma_drop", "drop_steepness")
 """Parameters a model may go without: without ``n_junctions`` the circuit has one junction (the
-paper's), so a sensor file that does not name it fits the paper's model."""
+paper's), without ``spectrum_tilt`` the log-spectrum laws keep the box spectrum, and without the
+drop's three ``log-spectrum-sat`` keeps its saturating drive; so a sensor file (or a fit folder
+written before them) that does not name them fits as it did."""
 
 
 def drift_between(log_start, log_end):

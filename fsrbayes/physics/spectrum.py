@@ -278,9 +278,8 @@ def spectrum_ramp_fraction(t, tau_max, tilt=0.0):
     flat = tilt == 0.0
     safe = np.where(flat, 1.0, tilt)
     norm = np.where(flat, span, -np.expm1(-safe * span) / safe)  # Z·τ_min^γ
-    top = (tau_max / TAU_MIN) ** -tilt  # τ_max^(1−γ)/τ_min^(1−γ) · τ_min/τ_max
-    inner = TAU_MIN * (_kelvin_ramp(tp / TAU_MIN) - top * tau_max / TAU_MIN
-                       * _kelvin_ramp(tp / tau_max))  # fmt: skip
+    top = (tau_max / TAU_MIN) ** -tilt  # the τ_max end's weight against the τ_min end's
+    inner = TAU_MIN * _kelvin_ramp(tp / TAU_MIN) - top * tau_max * _kelvin_ramp(tp / tau_max)
     return (tp * spectrum_fraction(tp, tau_max, tilt) - inner / norm) / (1.0 - tilt)
 
 

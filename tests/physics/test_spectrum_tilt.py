@@ -115,15 +115,49 @@ def test_vectorised_over_walkers_with_their_own_tilts():
         np.testing.assert_array_equal(both[1][w], rh.ramp_compliance(t, one, "log-spectrum-sat"))
 
 
-def test_the_402_samples_the_tilt_for_its_default_law_and_holds_it_elsewhere():
+def test_the_bundled_files_hold_the_tilt_and_the_402_gives_it_a_prior_to_free():
     from fsrbayes.data.sensors import load_sensor
 
     fsr402, a201 = load_sensor("fsr402"), load_sensor("a201")
-    assert fsr402.default_model == "log-spectrum-sat"
-    assert "spectrum_tilt" in fsr402.free_parameters("log-spectrum-sat")
-    assert "spectrum_tilt" not in fsr402.free_parameters("log-spectrum")
-    assert "spectrum_tilt" not in a201.free_parameters("log-spectrum-sat")
-    draws = fsr402.prior_of("spectrum_tilt", "log-spectrum-sat").sample(
-        np.random.default_rng(5), 4000
-    )
+    for sensor in (fsr402, a201):
+        for law in ("log-spectrum", "log-spectrum-sat"):
+            assert "spectrum_tilt" in rh.CREEP_LAWS[law].parameters
+            assert "spectrum_tilt" not in sensor.free_parameters(law)
+    draws = fsr402.priors["spectrum_tilt"].sample(np.random.default_rng(5), 4000)
     assert np.all(np.abs(draws) <= 0.5) and 0.045 < np.std(draws) < 0.055
+
+
+def test_a_sensor_file_without_the_tilt_or_the_drop_fits_as_with_them_held_at_zero(tmp_path):
+    """A user's file, or a fit folder, written before these parameters fits as it did."""
+    import warnings
+
+    from fsrbayes.data import read_csv
+    from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
+    from fsrbayes.data.sensors import load_sensor, models_directory
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.posterior import LogPosterior
+
+    dropped = ("spectrum_tilt", "creep_drop", "sigma_drop", "drop_steepness")
+    text = (models_directory() / "fsr402.toml").read_text()
+    lines = [line for line in text.splitlines() if not line.startswith(dropped)]
+    lines = [
+        'name = "old402"' if line.startswith("name =") else
+        "aliases = []" if line.startswith("aliases =") else line
+        for line in lines
+    ]  # fmt: skip
+    (tmp_path / "old402.toml").write_text("\n".join(lines) + "\n")
+    old, new = load_sensor(tmp_path / "old402.toml"), load_sensor("fsr402")
+    assert not set(dropped) & set(old.params)
+    log = simulate_real_rig("A", "hold", seed=1523, duration_s=30.0, rate_hz=10.0)
+    data = read_csv(write_real_rig(log, tmp_path / "a.csv")[0])
+    packed = SpecimenData.select(data, data.specimens[0], settle_s=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        posteriors = [
+            LogPosterior.for_sensor(packed, s, model="log-spectrum-sat", placement=True)
+            for s in (old, new)
+        ]
+    assert posteriors[0].prior.names == posteriors[1].prior.names
+    prior = posteriors[1].prior
+    walkers = prior.to_unconstrained(prior.sample(np.random.default_rng(7), 16))
+    np.testing.assert_array_equal(posteriors[0](walkers), posteriors[1](walkers))
