@@ -104,8 +104,8 @@ def rig_tests(
         SI column → (column in the file, factor to SI), for unit-suffixed columns.
     required : bool
         False for a protocol: the reading column may be absent or have empty fields (NaN). A
-        protocol's test whose readings are all there is read as a log is: its landings and
-        later weights where the readings say (a late load stamp moved, as ``fit`` moves it).
+        protocol's test whose readings are all there is read as a log: its landings and later
+        weights placed where the readings say (a late load stamp moved, as ``fit`` moves it).
 
     Returns
     -------
