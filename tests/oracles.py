@@ -9,6 +9,8 @@ operation on whole arrays (numpy and scipy), without the kernel's fusion into on
   count_kernels`);
 - :func:`map_forward` and :func:`map_inverse`: a triangular transport map evaluated stage by
   stage (:mod:`fsrbayes.inference.samplers.transport_kernels`);
+- :func:`spectrum_fraction_by_quadrature`: the log-spectrum laws' F(t), the (tilted) average of
+  Kelvin elements over ln τ integrated numerically (:mod:`fsrbayes.physics.spectrum`);
 - :func:`solve_bulk_numpy`: the bulk solver of :func:`fsrbayes.physics.solver.solve_bulk`
   solved block by block with numpy operations instead of point by point in numba
   (:mod:`fsrbayes.physics.compiled`, :mod:`fsrbayes.physics.compiled_paper`); the two make the
@@ -16,7 +18,7 @@ operation on whole arrays (numpy and scipy), without the kernel's fusion into on
 """
 
 import numpy as np
-from scipy import special
+from scipy import integrate, special
 
 from fsrbayes.data.distributions import density_constants, log_density
 from fsrbayes.inference.counts import log_normal_interval
@@ -164,6 +166,29 @@ def map_inverse(tmap, u):
 _BRANCH_NAME = {INTERMEDIATE: "intermediate", HIGH: "high", FORWARD: "forward"}
 CHUNK = 16384
 """Points solved together: the working arrays (~30 × 128 kB) stay in cache."""
+
+
+def spectrum_fraction_by_quadrature(t, tau_min, tau_max, tilt=0.0):
+    """∫ (1 − e^(−t/τ))·τ^(−γ) d ln τ / ∫ τ^(−γ) d ln τ over τ_min … τ_max, integrated numerically.
+
+    The integrand turns over where τ = t, a break point for the quadrature; at γ = 0 the
+    normalisation is ln(τ_max/τ_min).
+    """
+    lo, hi = np.log(tau_min), np.log(tau_max)
+    points = [np.log(t)] if lo < np.log(t) < hi else None
+    value, _ = integrate.quad(
+        lambda x: -np.expm1(-t / np.exp(x)) * np.exp(-tilt * x),
+        lo,
+        hi,
+        points=points,
+        epsabs=0.0,
+        epsrel=1e-13,
+        limit=400,
+    )
+    if tilt == 0.0:
+        return value / (hi - lo)
+    norm, _ = integrate.quad(lambda x: np.exp(-tilt * x), lo, hi, epsabs=0.0, epsrel=1e-13)
+    return value / norm
 
 
 def solve_bulk_numpy(

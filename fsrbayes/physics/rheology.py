@@ -301,7 +301,7 @@ def _nutting_ramp(t, params):
     return nutting_ramp_compliance(t, params["k1"], params["psi"], params["n"])
 
 
-_log_spectrum = partial(spectrum_law_compliance)
+_log_spectrum = spectrum_law_compliance
 _log_spectrum_ramp = partial(spectrum_law_compliance, ramp=True)
 _log_spectrum_sat = partial(spectrum_law_compliance, saturating=True)
 _log_spectrum_sat_ramp = partial(spectrum_law_compliance, saturating=True, ramp=True)

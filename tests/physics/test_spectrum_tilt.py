@@ -11,33 +11,17 @@ from scipy.special import gamma, gammainc
 
 from fsrbayes.physics import rheology as rh
 from fsrbayes.physics import spectrum as sp
+from tests.oracles import spectrum_fraction_by_quadrature
 
 TILTS = (-0.3, -0.02, 0.0157, 0.3)
 P = {"k1": 0.388e6, "eps_sat": 0.05, "sigma_c": 3.0e3, "tau_max": 1.0e5}
-
-
-def _fraction_by_quadrature(t, tau_max, tilt):
-    """∫ (1 − e^(−t/τ))·τ^(−γ) d ln τ / ∫ τ^(−γ) d ln τ over τ_min … τ_max, numerically."""
-    lo, hi = np.log(sp.TAU_MIN), np.log(tau_max)
-    points = [np.log(t)] if lo < np.log(t) < hi else None
-    value, _ = integrate.quad(
-        lambda x: -np.expm1(-t / np.exp(x)) * np.exp(-tilt * x),
-        lo,
-        hi,
-        points=points,
-        epsabs=0.0,
-        epsrel=1e-13,
-        limit=400,
-    )
-    norm, _ = integrate.quad(lambda x: np.exp(-tilt * x), lo, hi, epsabs=0.0, epsrel=1e-13)
-    return value / norm
 
 
 @pytest.mark.parametrize("tilt", TILTS)
 @pytest.mark.parametrize("tau_max", [1.0e4, 1.0e5])
 def test_the_fraction_is_the_tilted_average_of_kelvin_elements(tilt, tau_max):
     t = np.geomspace(1e-5 * sp.TAU_MIN, 1e3 * tau_max, 41)
-    quad = np.array([_fraction_by_quadrature(x, tau_max, tilt) for x in t])
+    quad = np.array([spectrum_fraction_by_quadrature(x, sp.TAU_MIN, tau_max, tilt) for x in t])
     np.testing.assert_allclose(sp.spectrum_fraction(t, tau_max, tilt), quad, rtol=1e-10, atol=0)
 
 
