@@ -13,7 +13,7 @@ __all__ = [
     "default_model",
     "drift_lines",
     "loading_notes",
-    "pressed_notes",
+    "log_effect_notes",
     "population_folders",
     "warn_out_of_domain",
     "UsageError",
@@ -175,24 +175,30 @@ def loading_notes(data, specimens, settle_s, placement):
     ]
 
 
-def pressed_notes(data, specimens, default):
-    """Return the line naming the specimens whose default fit adds ``unlogged-load``, or nothing.
+def log_effect_notes(data, specimens, default):
+    """Return lines naming the specimens whose default fit adds effects for what their logs show.
 
     A log that reads a load before a test's first loading while its load column holds none
-    (an operator's taps) is fitted with the effect added to ``default``
-    (:func:`fsrbayes.inference.nuisance.model_for_log`).
+    (an operator's taps) is fitted with ``unlogged-load`` added to ``default``; a log that
+    unloads the sensor and loads it again, with ``spectrum-tilt`` where ``default`` is a
+    log-spectrum law (:func:`fsrbayes.inference.nuisance.effects_for_log`).
     """
-    from ..inference.nuisance import model_for_log
+    from ..inference.nuisance import effects_for_log
 
-    pressed = [s for s in specimens if model_for_log(data, s, default) != default]
-    if not pressed:
-        return []
-    names = ", ".join(pressed[:4]) + (" …" if len(pressed) > 4 else "")
-    return [
-        f"note: the logs of {names} read a load before the first loading that the load column "
-        f"does not hold (taps): their fits add unlogged-load, the creep it left recovering; "
-        f"--model {default} fits without it"
-    ]
+    why = {
+        "unlogged-load": "read a load before the first loading that the load column does not "
+        "hold (taps): their fits add unlogged-load, the creep it left recovering",
+        "spectrum-tilt": "unload the sensor and load it again: their fits sample the retardation "
+        "spectrum's tilt (spectrum-tilt), which the reloads show",
+    }
+    added = {s: effects_for_log(data, s, default) for s in specimens}
+    lines = []
+    for effect, reason in why.items():
+        named = [s for s in specimens if effect in added[s]]
+        if named:
+            names = ", ".join(named[:4]) + (" …" if len(named) > 4 else "")
+            lines.append(f"note: the logs of {names} {reason}; --model {default} fits without it")
+    return lines
 
 
 def drift_lines(summary):

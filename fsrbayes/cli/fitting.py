@@ -28,8 +28,8 @@ from .common import (
     floats,
     install_sigterm_handler,
     loading_notes,
+    log_effect_notes,
     population_folders,
-    pressed_notes,
     warn_out_of_domain,
     writable,
 )
@@ -57,7 +57,7 @@ def cmd_fit(args):
     writable(out)
     named, args.model = args.model, args.model or default_model(data)
     if named is None and not args.hierarchical:
-        said += pressed_notes(data, specimens, args.model)
+        said += log_effect_notes(data, specimens, args.model)
     processes = args.processes or min(args.ensembles, os.cpu_count() or 1)
     settings = SamplerSettings(
         n_ensembles=args.ensembles,

@@ -52,9 +52,9 @@ def law_of(candidate):
 
 
 def swapped(model, law):
-    """Return ``model`` with its creep law replaced by ``law``, its effects kept."""
+    """Return ``model`` with its creep law replaced by ``law`` and the effects that act with it."""
     _, effects = parse_model(model)
-    return "+".join([law, *effects])
+    return "+".join([law, *(e for e in effects if EFFECTS[e].applies_to(law))])
 
 
 def effect_parameters(per_specimen, effect):

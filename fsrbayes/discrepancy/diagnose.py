@@ -359,9 +359,11 @@ def diagnose(
             f"takes none: use one of the creep laws {list(CREEP_LAWS)}"
         )
     effects = check_effects(
-        effects if effects is not None else [e for e in EFFECTS if e not in had]
+        effects
+        if effects is not None
+        else [e for e in EFFECTS if e not in had and EFFECTS[e].applies_to(family)]
     )
-    effects = tuple(e for e in effects if e not in had)
+    effects = tuple(e for e in effects if e not in had and parse_model(f"{base}+{e}"))
     laws = tuple(laws) if laws is not None else tuple(law for law in CREEP_LAWS if law != family)
     unknown = [law for law in laws if law not in CREEP_LAWS]
     if unknown:

@@ -10,12 +10,15 @@ specimen's data: a loading ramp ``ramp_s[k]`` (a hand-placed weight settling), a
 
 import numpy as np
 
+from ..physics.effects import EFFECTS
+from ..physics.models import parse_model
 from .likelihood import LIKELIHOODS, SpecimenData
 from .packing import pressed_flags
 
 __all__ = [
     "HAND_PLACED_SETTLE_S",
     "RAMPS",
+    "effects_for_log",
     "is_landing",
     "is_per_test",
     "is_placement",
@@ -34,6 +37,9 @@ __all__ = [
 
 PRESSED_EFFECT = "unlogged-load"
 """Added to a sensor's default model where a log shows presses before a first loading."""
+
+TILT_EFFECT = "spectrum-tilt"
+"""Added to a log-spectrum default model where a log unloads the sensor and reloads it."""
 
 
 RAMPS = ("given", "fitted")
@@ -187,14 +193,26 @@ def loading_treatment(data, specimen=None, settle_s=None, placement=None):
 def model_for_log(data, specimen=None, default="burgers"):
     """Return the model a fit of ``specimen`` uses when none is named: ``default`` from the log.
 
-    Where a test's log shows the sensor under load before its first loading while the load
-    column held none (an operator's taps: :attr:`~fsrbayes.data.creep.CreepTest.pressed_before_s`),
-    the creep those loads left recovers during the test: ``default`` gains the
-    ``unlogged-load`` effect (:mod:`fsrbayes.physics.unlogged`), which acts on those tests
-    only. Not where a test's load steps from one weight to another (a staircase): there the
-    first weight's creep is one of several, and the taps' timing would be searched against the
-    staircase's other misfits (docs/fitting.md); name the model to add it. Packed data
+    ``default`` gains what the log shows (:func:`effects_for_log`). Packed data
     (:class:`~.likelihood.SpecimenData`) read their ``pressed`` flags and load steps.
+    """
+    return "+".join([default, *effects_for_log(data, specimen, default)])
+
+
+def effects_for_log(data, specimen=None, default="burgers"):
+    """Return the effects a fit of ``specimen`` adds to ``default`` for what its log shows.
+
+    - ``unlogged-load`` (:mod:`fsrbayes.physics.unlogged`), where a test's log shows the sensor
+      under load before its first loading while the load column held none (an operator's taps:
+      :attr:`~fsrbayes.data.creep.CreepTest.pressed_before_s`): the creep those loads left
+      recovers during the test. Not where a test's load steps from one weight to another (a
+      staircase): there the first weight's creep is one of several, and the taps' timing would
+      be searched against the staircase's other misfits (docs/fitting.md).
+    - ``spectrum-tilt`` (:mod:`fsrbayes.physics.tilt`), for a log-spectrum law, where a test
+      unloads the sensor and loads it again: the recovery and the reloads tell the spectrum's
+      tilt, which a hold from rest leaves on a ridge with the area's stress law.
+
+    Effects ``default`` names already are not added again; name the model to fit without them.
     """
     if isinstance(data, SpecimenData):
         pressed = data.pressed is not None and bool(np.any(data.pressed))
@@ -203,9 +221,21 @@ def model_for_log(data, specimen=None, default="burgers"):
         tests = data.select(specimen=specimen).tests if specimen is not None else data.tests
         pressed = pressed_flags(tests) is not None
         steps = [t.load_steps[1] for t in tests if t.load_steps is not None]
-    if not pressed or PRESSED_EFFECT in default.split("+")[1:] or any(map(_stairs, steps)):
-        return default
-    return f"{default}+{PRESSED_EFFECT}"
+    family, had = parse_model(default)
+    added = []
+    if pressed and not any(map(_stairs, steps)):
+        added.append(PRESSED_EFFECT)
+    if EFFECTS[TILT_EFFECT].applies_to(family) and any(map(_reloads, steps)):
+        added.append(TILT_EFFECT)
+    return tuple(e for e in added if e not in had)
+
+
+def _reloads(step_size):
+    """Whether load steps of sizes ``step_size`` load the sensor again after unloading it."""
+    sizes = np.asarray(step_size, dtype=float)
+    loaded = np.cumsum(sizes)[sizes != 0] > 0  # after each change of the load
+    loadings = loaded & ~np.concatenate(([False], loaded[:-1]))  # from no load to a load
+    return int(np.count_nonzero(loadings)) >= 2
 
 
 def _stairs(step_size):

@@ -21,8 +21,9 @@ share the polymer's kinetics and scale with the load like the gap creep does.
 ``power-law-creep`` — ``plc_psi`` (null 0), ``plc_n``
     ε(t) gains ψ·σ·tⁿ (Nutting/Findley kinetics, eq. 13).
 ``voltage-degradation`` — ``deg_amp`` (null 0), ``deg_onset``, ``deg_tau``, ``deg_width``
-    I(t)·exp(−deg_amp·S(V)·(1 − e^(−t/τ))), S = clip((V − deg_onset)/deg_width, 0, 1): exactly
-    0 below the onset.
+    I(t)·exp(−deg_amp·S(V)·(1 − e^(−t/τ))), S = clip((V − deg_onset)/deg_width, 0, 1): 0 below
+    the onset; phenomenological (the paper gives no mechanism), after the sensitivity loss it
+    measures above ~3 V on A201 sensors (sections 4.2, 4.4).
 ``offset-stress`` — ``sigma0`` (null 0)
     Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
 ``area-growth`` — ``ag_amp`` (null 0), ``ag_tau``
@@ -35,21 +36,14 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     ε(t) gains σ·lc_comp·ln(1 + t/lc_tau): creep linear in ln t over decades of time.
 ``gain-drift`` — ``gd_amp`` (null 0), ``gd_tau``
     Every reading scaled by exp(gd_amp·g(t)), g as for ``area-growth``: the readout's gain
-    drifting with a time course of its own (linear in t to logarithmic), the same for every test
-    whatever its voltage and stress. A *readout* effect
-    (``kind = "readout"``): it describes the rig, not the sensor, so when it is what explains
-    the data the diagnosis says so.
-
+    drifting, the same for every test whatever its voltage and stress. A *readout* effect: it
+    describes the rig, not the sensor, and the diagnosis says so.
 ``contact-memory`` — ``mem_frac`` (null 0), ``mem_tau``
     Eqs. (5), (6) see σ(t) + mem_frac·E(t), E the recent past's excess load over σ(t), fading
     with mem_tau: a load that falls reads heavier (hysteresis).
 
-``unlogged-load`` (taps before the weight, whose creep recovers): :mod:`.unlogged`.
-
-``voltage-degradation`` is a loss of a fraction of the parallel conduction paths: for a
-bundle of identical paths at a fixed V_FSR the current scales with the number of paths, so the
-whole current is scaled. It is phenomenological — the paper gives no mechanism — and tied to
-the sensitivity degradation it measures above ~3 V on A201 sensors (sections 4.2, 4.4).
+Elsewhere: ``unlogged-load`` (taps before the weight, whose creep recovers): :mod:`.unlogged`;
+``spectrum-tilt`` (the log-spectrum laws' spectrum tilted): :mod:`.tilt`.
 
 References
 ----------
@@ -96,6 +90,8 @@ class Effect:
     kind : str
         ``"physics"`` (the sensor) or ``"readout"`` (the rig: an artefact of the measurement, which
         the diagnosis reports as such rather than as a property of the sensor).
+    laws : tuple of str
+        The creep laws it acts with (one that sets a law's own parameter); empty: every law.
     """
 
     name: str
@@ -103,6 +99,11 @@ class Effect:
     null: dict
     summary: str
     kind: str = "physics"
+    laws: tuple = ()
+
+    def applies_to(self, law):
+        """Return whether the effect acts with the creep law named ``law``."""
+        return not self.laws or law in self.laws
 
     def extra_strain(self, params, stress, time):
         """Creep strain added after a stress step of ``stress`` at t = 0 (None: none)."""

@@ -136,7 +136,14 @@ def parse_model(model):
             f"model {model!r}: the peer model {family!r} takes no +effect terms; the effect "
             f"catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
         )
-    return family, tuple(e.name for e in resolve_effects(effects))
+    resolved = resolve_effects(effects)
+    bound = [e for e in resolved if not e.applies_to(family)]
+    if bound:
+        raise ValueError(
+            f"model {model!r}: the effect {bound[0].name!r} acts only with the creep laws "
+            f"{list(bound[0].laws)}, got {family!r}"
+        )
+    return family, tuple(e.name for e in resolved)
 
 
 def creep_amplitude(model="burgers"):

@@ -26,8 +26,9 @@ so that Zener is the point ``inv_b1 = 0`` of the Burgers parameter space and
 ``b1 = inf`` gives exactly the same numbers. Nutting (eq. 13) has ``psi`` in
 1/(Pa·s^n) and the exponent ``n``. The ``log-spectrum`` law (a box retardation spectrum, creep
 linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the delayed modulus
-``kd`` in Pa, the longest retardation time ``tau_max`` in s and the spectrum's tilt
-``spectrum_tilt`` (weights ∝ τ^(−γ); 0 where absent: the box); ``log-spectrum-sat``, the same
+``kd`` in Pa and the longest retardation time ``tau_max`` in s, and reads the spectrum's tilt
+``spectrum_tilt`` where given (weights ∝ τ^(−γ), 0 where absent: the box; sampled by the
+``spectrum-tilt`` effect, :mod:`fsrbayes.physics.tilt`); ``log-spectrum-sat``, the same
 spectrum driven by g(σ) = σ/(σ + σ_c)·[1 − a·σ^m/(σ^m + σ_d^m)], has ``k1``, ``eps_sat`` (the
 delayed strain at saturation), ``sigma_c`` in Pa, the high-stress drop a = ``creep_drop``
 around σ_d = ``sigma_drop`` in Pa with steepness m = ``drop_steepness``, and ``tau_max``.
@@ -386,7 +387,7 @@ NUTTING = register_creep_law(
 LOG_SPECTRUM = register_creep_law(
     CreepLaw(
         "log-spectrum",
-        ("k1", "kd", "tau_max", "spectrum_tilt"),
+        ("k1", "kd", "tau_max"),
         _log_spectrum,
         _log_spectrum_ramp,
         "log-spectrum: Kelvin chain with a box spectrum in ln tau, creep linear in ln t, bounded",
@@ -396,8 +397,7 @@ LOG_SPECTRUM = register_creep_law(
 LOG_SPECTRUM_SAT = register_creep_law(
     CreepLaw(
         "log-spectrum-sat",
-        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max")
-        + ("spectrum_tilt",),
+        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max"),
         _log_spectrum_sat,
         _log_spectrum_sat_ramp,
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "

@@ -209,7 +209,8 @@ def test_a_staircase_is_the_superposition_of_its_steps():
 def test_the_law_is_a_registered_model_family():
     assert LAW in models.model_families()
     assert models.parse_model(f"{LAW}+area-creep") == (LAW, ("area-creep",))
-    assert models.model_parameters(LAW)[-4:] == ("k1", "kd", "tau_max", "spectrum_tilt")
+    assert models.model_parameters(LAW)[-3:] == ("k1", "kd", "tau_max")
+    assert models.model_parameters(f"{LAW}+spectrum-tilt")[-1] == "spectrum_tilt"
     assert rh.creep_law(LAW) is rh.LOG_SPECTRUM
 
 

@@ -99,16 +99,21 @@ def test_vectorised_over_walkers_with_their_own_tilts():
         np.testing.assert_array_equal(both[1][w], rh.ramp_compliance(t, one, "log-spectrum-sat"))
 
 
-def test_the_bundled_files_hold_the_tilt_and_the_402_gives_it_a_prior_to_free():
+def test_the_tilt_is_sampled_only_by_its_effect_and_only_with_the_spectrum_laws():
     from fsrbayes.data.sensors import load_sensor
+    from fsrbayes.physics.models import parse_model
 
-    fsr402, a201 = load_sensor("fsr402"), load_sensor("a201")
-    for sensor in (fsr402, a201):
+    for sensor in (load_sensor("fsr402"), load_sensor("a201")):
+        assert sensor.params["spectrum_tilt"] == 0.0
         for law in ("log-spectrum", "log-spectrum-sat"):
-            assert "spectrum_tilt" in rh.CREEP_LAWS[law].parameters
+            assert "spectrum_tilt" not in rh.CREEP_LAWS[law].parameters
             assert "spectrum_tilt" not in sensor.free_parameters(law)
-    draws = fsr402.priors["spectrum_tilt"].sample(np.random.default_rng(5), 4000)
-    assert np.all(np.abs(draws) <= 0.5) and 0.045 < np.std(draws) < 0.055
+            assert "spectrum_tilt" in sensor.free_parameters(f"{law}+spectrum-tilt")
+        draws = sensor.priors["spectrum_tilt"].sample(np.random.default_rng(5), 4000)
+        assert np.all(np.abs(draws) <= 0.5) and 0.045 < np.std(draws) < 0.055
+    for law in ("burgers", "zener", "nutting"):
+        with pytest.raises(ValueError, match="acts only with the creep laws"):
+            parse_model(f"{law}+spectrum-tilt")
 
 
 def test_a_sensor_file_without_the_tilt_or_the_drop_fits_as_with_them_held_at_zero(tmp_path):
@@ -145,3 +150,63 @@ def test_a_sensor_file_without_the_tilt_or_the_drop_fits_as_with_them_held_at_ze
     prior = posteriors[1].prior
     walkers = prior.to_unconstrained(prior.sample(np.random.default_rng(7), 16))
     np.testing.assert_array_equal(posteriors[0](walkers), posteriors[1](walkers))
+
+
+def test_fit_samples_the_tilt_where_a_log_unloads_and_reloads_and_nowhere_else(tmp_path):
+    """The bench's protocols: cycles reload the sensor; holds and staircases do not."""
+    from fsrbayes.cli.common import log_effect_notes
+    from fsrbayes.data import read_csv
+    from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.nuisance import effects_for_log, model_for_log
+
+    def log_of(rig, protocol, seed, **options):
+        log = simulate_real_rig(rig, protocol, seed=seed, rate_hz=2.0, **options)
+        return read_csv(write_real_rig(log, tmp_path / f"{rig}{protocol}{seed}.csv")[0])
+
+    cycles = log_of("A", "cycles", 2207, cycles=2)
+    hold = log_of("A", "hold", 2208, duration_s=120.0)
+    staircase = log_of("B", "staircase", 2209)
+    specimen = cycles.specimens[0]
+    assert model_for_log(cycles, specimen, "log-spectrum-sat") == "log-spectrum-sat+spectrum-tilt"
+    packed = SpecimenData.select(cycles, specimen, settle_s=1.0)
+    assert effects_for_log(packed, default="log-spectrum") == ("spectrum-tilt",)
+    # not twice, and never with a law that has no spectrum
+    assert model_for_log(cycles, specimen, "log-spectrum-sat+spectrum-tilt").count("tilt") == 1
+    assert model_for_log(cycles, specimen, "burgers") == "burgers"
+    for data in (hold, staircase):
+        for s in data.specimens:
+            assert "spectrum-tilt" not in effects_for_log(data, s, "log-spectrum-sat")
+    (note,) = [n for n in log_effect_notes(cycles, [specimen], "log-spectrum-sat") if "tilt" in n]
+    assert specimen in note and "--model log-spectrum-sat fits without it" in note
+    notes = log_effect_notes(hold, hold.specimens, "log-spectrum-sat")
+    assert not [n for n in notes if "tilt" in n]
+
+
+def test_the_effect_at_its_null_is_the_box_and_away_from_it_changes_the_fit(tmp_path):
+    import warnings
+
+    from fsrbayes.data import read_csv
+    from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
+    from fsrbayes.data.sensors import load_sensor
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.posterior import LogPosterior
+
+    log = simulate_real_rig("A", "cycles", seed=2210, cycles=2, rate_hz=2.0)
+    data = read_csv(write_real_rig(log, tmp_path / "c.csv")[0])
+    packed = SpecimenData.select(data, data.specimens[0], settle_s=1.0)
+    sensor = load_sensor("fsr402")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        box, tilted = (
+            LogPosterior.for_sensor(packed, sensor, model=m, placement=True)
+            for m in ("log-spectrum-sat", "log-spectrum-sat+spectrum-tilt")
+        )
+    names = list(tilted.names)
+    x = tilted.prior.sample(np.random.default_rng(11), 8)
+    x[:, names.index("spectrum_tilt")] = 0.0
+    shared = x[:, [names.index(n) for n in box.names]]
+    np.testing.assert_allclose(tilted.log_model_current(x), box.log_model_current(shared), rtol=0)
+    x[:, names.index("spectrum_tilt")] = -0.05
+    moved = np.abs(tilted.log_model_current(x) - box.log_model_current(shared))
+    assert np.nanmax(moved) > 1e-3
