@@ -199,12 +199,17 @@ def _solve_model(
     )  # fmt: skip
 
 
-def _check_effect_params(params, effects):
+def _check_effect_params(params, effects, family):
     effects = resolve_effects(effects)
     for effect in effects:
         missing = [p for p in effect.parameters if p not in params]
         if missing:
             raise KeyError(f"effect {effect.name!r} needs parameter(s) {missing}")
+        if not effect.applies_to(family.name):
+            raise ValueError(
+                f"the effect {effect.name!r} acts only with the creep laws {list(effect.laws)}, "
+                f"got {family.name!r}"
+            )
     return effects
 
 
@@ -234,7 +239,7 @@ def gap_strain(
     """
     params = _parameters(params)
     family = model_family(rheology)
-    effects = _check_effect_params(params, effects)
+    effects = _check_effect_params(params, effects, family)
     if load_steps is None:
         return _strain_step(params, stress, time, family, effects)
     step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
@@ -284,7 +289,7 @@ def solve_current(
     """
     params = _parameters(params)
     family = model_family(rheology)
-    effects = _check_effect_params(params, effects)
+    effects = _check_effect_params(params, effects, family)
     if load_steps is None and not near_first:  # scattered points: solved in a better order
         scattered = solve_scattered(
             lambda *a: _solve_current(*a[:4], family, tunneling, effects, a[4], None, None, False),
@@ -457,7 +462,7 @@ def current_history(
     """
     family = model_family(rheology)
     params = _parameters(params)
-    effects = _check_effect_params(params, effects)
+    effects = _check_effect_params(params, effects, family)
     time = np.asarray(time, dtype=float)
     stress = history.at(time)
     if np.any(stress <= 0):

@@ -210,3 +210,21 @@ def test_the_effect_at_its_null_is_the_box_and_away_from_it_changes_the_fit(tmp_
     x[:, names.index("spectrum_tilt")] = -0.05
     moved = np.abs(tilted.log_model_current(x) - box.log_model_current(shared))
     assert np.nanmax(moved) > 1e-3
+
+
+def test_simulate_refuses_the_tilt_on_a_law_without_a_spectrum_in_one_line(tmp_path):
+    from tests.commandline import fsrbayes_command
+
+    out = tmp_path / "s.csv"
+    run = fsrbayes_command("simulate", "-o", out, "--effect", "spectrum-tilt", "--samples", 5)
+    assert run.returncode == 2 and not out.exists()
+    assert run.stderr.strip().splitlines() == [
+        "fsrbayes simulate: error: the effect 'spectrum-tilt' acts only with the creep laws "
+        "['log-spectrum', 'log-spectrum-sat'], got 'burgers'"
+    ]
+    run = fsrbayes_command(
+        "simulate", "-o", out, "--rheology", "log-spectrum", "--effect",
+        "spectrum-tilt=spectrum_tilt=-0.05", "--samples", 5, "--n-specimens", 1,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "hidden effects: spectrum-tilt" in run.stdout and out.exists()
