@@ -69,7 +69,8 @@ def _add_fit(sub):
         "--model",
         help="creep law (burgers, zener, nutting, log-spectrum, log-spectrum-sat), optionally "
         "+effect terms; or kalantari (Kalantari et al.'s eq. 14) (default: the sensor file's "
-        "default_model)",
+        "default_model, with what the log shows: +unlogged-load where it reads taps before a "
+        "weight, +spectrum-tilt where it reloads the sensor)",
     )
     add_model_options(fit_)
     option(

@@ -94,8 +94,9 @@ def fit(
         A creep law (``"burgers"``, ``"zener"``, ``"nutting"``, ``"log-spectrum"``,
         ``"log-spectrum-sat"``), optionally ``+effect`` terms, or ``"kalantari"`` (eq. 14).
         Default: the sensor file's ``default_model``, with ``+unlogged-load`` where a test's log
-        shows the sensor pressed before its first loading (taps the load column does not hold;
-        :func:`~fsrbayes.inference.nuisance.model_for_log`).
+        shows the sensor pressed before its first loading (taps the load column does not hold)
+        and, for a log-spectrum law, ``+spectrum-tilt`` where a test unloads the sensor and loads
+        it again (:func:`~fsrbayes.inference.nuisance.effects_for_log`).
     tunneling : {"smooth", "paper"}
     likelihood : {"gaussian", "student"}
     sensor : Sensor or str, optional
