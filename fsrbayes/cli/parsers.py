@@ -254,7 +254,8 @@ def _add_diagnose(sub):
     option(
         dia,
         "--effects",
-        help=f"candidate effects, comma-separated (default all: {','.join(EFFECTS)})",
+        help="candidate effects, comma-separated (default: all that act with the base's creep "
+        f"law: {','.join(EFFECTS)})",
     )
     option(
         dia,

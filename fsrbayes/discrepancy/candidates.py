@@ -27,6 +27,7 @@ from .nullband import null_quarter_distances
 __all__ = [
     "LAW_PREFIX",
     "SpecimenDiagnosis",
+    "candidate_effects",
     "candidate_model",
     "effect_parameters",
     "fit_candidates",
@@ -49,6 +50,18 @@ def law_candidate(law):
 def law_of(candidate):
     """Return the creep law a candidate swaps in, or None for a catalogue effect."""
     return candidate[len(LAW_PREFIX) :] if candidate.startswith(LAW_PREFIX) else None
+
+
+def candidate_effects(base, effects=None):
+    """Return the catalogue effects a diagnosis of ``base`` tries, as names.
+
+    ``effects``: those named (each must act with ``base``'s law; ValueError otherwise), else
+    every registered effect that acts with it; the effects ``base`` has already are left out.
+    """
+    family, had = parse_model(base)
+    if effects is None:
+        effects = [e for e in EFFECTS if EFFECTS[e].applies_to(family)]
+    return tuple(e for e in effects if e not in had and parse_model(f"{family}+{e}"))
 
 
 def swapped(model, law):

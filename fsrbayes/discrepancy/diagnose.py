@@ -53,6 +53,7 @@ from ..physics.rheology import CREEP_LAWS
 from ..physics.unlogged import acts_before
 from ..utils import json_ready
 from .candidates import (
+    candidate_effects,
     candidate_model,
     fit_candidates,
     law_candidate,
@@ -358,12 +359,7 @@ def diagnose(
             f"diagnose extends the paper's model with catalogue effects; the peer model {family!r} "
             f"takes none: use one of the creep laws {list(CREEP_LAWS)}"
         )
-    effects = check_effects(
-        effects
-        if effects is not None
-        else [e for e in EFFECTS if e not in had and EFFECTS[e].applies_to(family)]
-    )
-    effects = tuple(e for e in effects if e not in had and parse_model(f"{base}+{e}"))
+    effects = candidate_effects(base, None if effects is None else check_effects(effects))
     laws = tuple(laws) if laws is not None else tuple(law for law in CREEP_LAWS if law != family)
     unknown = [law for law in laws if law not in CREEP_LAWS]
     if unknown:

@@ -228,3 +228,17 @@ def test_simulate_refuses_the_tilt_on_a_law_without_a_spectrum_in_one_line(tmp_p
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert "hidden effects: spectrum-tilt" in run.stdout and out.exists()
+
+
+def test_diagnose_tries_the_tilt_only_on_a_base_whose_law_has_a_spectrum():
+    from fsrbayes.discrepancy.candidates import candidate_effects, swapped
+
+    assert "spectrum-tilt" not in candidate_effects("burgers")
+    assert "area-creep" in candidate_effects("burgers")
+    assert "spectrum-tilt" in candidate_effects("log-spectrum-sat")
+    assert "spectrum-tilt" not in candidate_effects("log-spectrum-sat+spectrum-tilt")
+    with pytest.raises(ValueError, match="acts only with the creep laws"):
+        candidate_effects("zener", ["area-creep", "spectrum-tilt"])
+    # a law swapped in keeps the base's effects that act with it, and only those
+    assert swapped("log-spectrum-sat+spectrum-tilt+area-creep", "burgers") == "burgers+area-creep"
+    assert swapped("log-spectrum-sat+spectrum-tilt", "log-spectrum") == "log-spectrum+spectrum-tilt"
