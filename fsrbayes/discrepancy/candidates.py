@@ -17,8 +17,8 @@ from ..inference.evidence.laplace import laplace_fit
 from ..inference.likelihood import SpecimenData
 from ..inference.parallel import single_threaded_blas
 from ..inference.posterior import LogPosterior
-from ..physics.effects import EFFECTS
-from ..physics.models import parse_model, register_components
+from ..physics.effects import EFFECTS, resolve_effects
+from ..physics.models import check_effect_laws, parse_model, register_components
 from ..physics.rheology import CREEP_LAWS
 from .checks import predictive_checks
 from .gaps import drift_gap, failed_checks, gap
@@ -60,8 +60,9 @@ def candidate_effects(base, effects=None):
     """
     family, had = parse_model(base)
     if effects is None:
-        effects = [e for e in EFFECTS if EFFECTS[e].applies_to(family)]
-    return tuple(e for e in effects if e not in had and parse_model(f"{family}+{e}"))
+        return tuple(e for e in EFFECTS if e not in had and EFFECTS[e].applies_to(family))
+    chosen = check_effect_laws(resolve_effects(effects), family)
+    return tuple(e.name for e in chosen if e.name not in had)
 
 
 def swapped(model, law):

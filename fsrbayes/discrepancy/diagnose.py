@@ -47,7 +47,7 @@ from ..inference.nuisance import loading_treatment
 from ..inference.packing import pressed_flags
 from ..inference.parallel import map_jobs
 from ..physics.constants import DRIFT_TIME_S
-from ..physics.effects import EFFECTS, check_effects, remembers_loads
+from ..physics.effects import EFFECTS, remembers_loads
 from ..physics.models import PEER_MODELS, model_components, parse_model
 from ..physics.rheology import CREEP_LAWS
 from ..physics.unlogged import acts_before
@@ -359,7 +359,7 @@ def diagnose(
             f"diagnose extends the paper's model with catalogue effects; the peer model {family!r} "
             f"takes none: use one of the creep laws {list(CREEP_LAWS)}"
         )
-    effects = candidate_effects(base, None if effects is None else check_effects(effects))
+    effects = candidate_effects(base, effects)
     laws = tuple(laws) if laws is not None else tuple(law for law in CREEP_LAWS if law != family)
     unknown = [law for law in laws if law not in CREEP_LAWS]
     if unknown:

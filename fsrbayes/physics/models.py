@@ -20,6 +20,7 @@ __all__ = [
     "BASE_PARAMETERS",
     "PEER_MODELS",
     "PeerModel",
+    "check_effect_laws",
     "creep_amplitude",
     "model_components",
     "model_families",
@@ -136,14 +137,23 @@ def parse_model(model):
             f"model {model!r}: the peer model {family!r} takes no +effect terms; the effect "
             f"catalogue extends the paper's model ({', '.join(CREEP_LAWS)})"
         )
-    resolved = resolve_effects(effects)
-    bound = [e for e in resolved if not e.applies_to(family)]
-    if bound:
-        raise ValueError(
-            f"model {model!r}: the effect {bound[0].name!r} acts only with the creep laws "
-            f"{list(bound[0].laws)}, got {family!r}"
-        )
+    resolved = check_effect_laws(resolve_effects(effects), family, f"model {model!r}: ")
     return family, tuple(e.name for e in resolved)
+
+
+def check_effect_laws(effects, law, where=""):
+    """Return ``effects`` (:class:`Effect` objects) if each acts with the creep law ``law``.
+
+    Raises ValueError naming the first that does not (:attr:`Effect.laws`), its message led by
+    ``where``.
+    """
+    for effect in effects:
+        if not effect.applies_to(law):
+            raise ValueError(
+                f"{where}the effect {effect.name!r} acts only with the creep laws "
+                f"{list(effect.laws)}, got {law!r}"
+            )
+    return effects
 
 
 def creep_amplitude(model="burgers"):

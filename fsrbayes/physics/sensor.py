@@ -19,7 +19,7 @@ import numpy as np
 from .contact import contact_resistance, effective_area, gap
 from .domain import DomainError, DomainWarning, apply_policy
 from .effects import remembers_loads, resolve_effects, static_stress_of
-from .models import PeerModel, model_family
+from .models import PeerModel, check_effect_laws, model_family
 from .scattered import solve_scattered
 from .solver import solve_bulk as solve_exactly
 from .superposition import (
@@ -205,12 +205,7 @@ def _check_effect_params(params, effects, family):
         missing = [p for p in effect.parameters if p not in params]
         if missing:
             raise KeyError(f"effect {effect.name!r} needs parameter(s) {missing}")
-        if not effect.applies_to(family.name):
-            raise ValueError(
-                f"the effect {effect.name!r} acts only with the creep laws {list(effect.laws)}, "
-                f"got {family.name!r}"
-            )
-    return effects
+    return check_effect_laws(effects, family.name)
 
 
 def _creep_law(family):

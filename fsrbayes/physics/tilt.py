@@ -16,7 +16,7 @@ every tilt).
 A hold from rest tells the tilt only weakly: it trades with the tunnelling area's stress law
 and the series resistance, and the ensembles cross that ridge slowly. ``fsrbayes fit`` adds the
 effect where a log unloads the sensor and loads it again
-(:func:`fsrbayes.inference.nuisance.model_for_log`).
+(:func:`fsrbayes.inference.nuisance.effects_for_log`).
 """
 
 from .effects import Effect, register_effect
