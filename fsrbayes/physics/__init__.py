@@ -18,7 +18,7 @@ its engines, the registries (:mod:`.rheology`, :mod:`.effects`, :mod:`.models`,
 ``from fsrbayes.physics import rheology``.
 """
 
-from . import tilt  # noqa: F401  (registers the spectrum-tilt effect)
+from . import drop, tilt  # noqa: F401  (register the creep-drop and spectrum-tilt effects)
 from .circuits import amplifier_output, voltage_divider
 from .contact import contact_resistance
 from .domain import DomainError, DomainWarning

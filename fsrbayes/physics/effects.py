@@ -43,7 +43,7 @@ share the polymer's kinetics and scale with the load like the gap creep does.
     with mem_tau: a load that falls reads heavier (hysteresis).
 
 Elsewhere: ``unlogged-load`` (taps before the weight, whose creep recovers): :mod:`.unlogged`;
-``spectrum-tilt`` (the log-spectrum laws' spectrum tilted): :mod:`.tilt`.
+``spectrum-tilt`` (a tilted spectrum): :mod:`.tilt`; ``creep-drop`` (a falling drive): :mod:`.drop`.
 
 References
 ----------

@@ -30,8 +30,9 @@ linear in ln t and bounded; :mod:`fsrbayes.physics.spectrum`) has ``k1``, the de
 ``spectrum_tilt`` where given (weights ∝ τ^(−γ), 0 where absent: the box; sampled by the
 ``spectrum-tilt`` effect, :mod:`fsrbayes.physics.tilt`); ``log-spectrum-sat``, the same
 spectrum driven by g(σ) = σ/(σ + σ_c)·[1 − a·σ^m/(σ^m + σ_d^m)], has ``k1``, ``eps_sat`` (the
-delayed strain at saturation), ``sigma_c`` in Pa, the high-stress drop a = ``creep_drop``
-around σ_d = ``sigma_drop`` in Pa with steepness m = ``drop_steepness``, and ``tau_max``.
+delayed strain at saturation), ``sigma_c`` in Pa and ``tau_max``, and reads the high-stress drop
+a = ``creep_drop`` around σ_d = ``sigma_drop`` in Pa with steepness m = ``drop_steepness`` where
+given (a = 0 where absent; sampled by the ``creep-drop`` effect, :mod:`fsrbayes.physics.drop`).
 
 References
 ----------
@@ -397,11 +398,11 @@ LOG_SPECTRUM = register_creep_law(
 LOG_SPECTRUM_SAT = register_creep_law(
     CreepLaw(
         "log-spectrum-sat",
-        ("k1", "eps_sat", "sigma_c", "creep_drop", "sigma_drop", "drop_steepness", "tau_max"),
+        ("k1", "eps_sat", "sigma_c", "tau_max"),
         _log_spectrum_sat,
         _log_spectrum_sat_ramp,
         "log-spectrum-sat: the box spectrum driven by sigma/(sigma + sigma_c), creep saturating "
-        "in stress and falling by creep_drop around sigma_drop (Schapery)",
+        "in stress (Schapery; the creep-drop effect lets it fall at high stress)",
         drive=_saturating,
         amplitude=(("eps_sat", 1.0),),
     )

@@ -1,0 +1,41 @@
+"""The ``creep-drop`` effect: the ``log-spectrum-sat`` drive falling at high stress.
+
+Real FSR 402s creep less at higher stress: about 0.15 in ln R per decade of time held from rest
+at 7 kPa, half that at 14–110 kPa. The ``log-spectrum-sat`` law's drive g(σ) (Schapery's input
+function, :mod:`.spectrum`) saturates at σ_c; the effect lets it fall again by a share a around
+σ_d with Hill steepness m,
+
+    g(σ) = σ/(σ + σ_c) · [1 − a·σ^m/(σ^m + σ_d^m)]     (:func:`.spectrum.saturating_drive`),
+
+so that under Boltzmann superposition a step up across σ_d lowers the drive and part of the
+creep of the steps before recovers: the resistance climbs back for a minute or two after the
+step instead of falling on. The gap bound of the law holds for every a in [0, 1].
+
+``creep-drop`` — ``creep_drop`` a (null 0: the saturating drive alone), ``sigma_drop`` σ_d in
+Pa, ``drop_steepness`` m
+    Acts with ``log-spectrum-sat`` only (the law reads the parameters; without the effect it
+    takes the sensor file's ``[params]`` values).
+
+Tests that each hold one stress tell the drop only through their levels of creep, which
+per-placement creep factors take up as well. A staircase, whose steps are the drop itself,
+tells it best; but there the fit mixes slowly (the drop trades with the drive's
+half-saturation stress, its amplitude and the tunnelling barrier), so ``fsrbayes fit`` adds it
+nowhere by itself: name it (``--model log-spectrum-sat+creep-drop``), or let ``fsrbayes
+diagnose`` try it.
+"""
+
+from .effects import Effect, register_effect
+
+__all__ = ["CREEP_DROP"]
+
+
+CREEP_DROP = register_effect(
+    Effect(
+        "creep-drop",
+        ("creep_drop", "sigma_drop", "drop_steepness"),
+        {"creep_drop": 0.0},
+        "the creep's drive falls at high stress: a step up partly recovers the creep before it",
+        laws=("log-spectrum-sat",),
+    )
+)
+"""The effect: no hook of its own, its parameters are read by ``log-spectrum-sat``."""
