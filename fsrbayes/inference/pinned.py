@@ -261,7 +261,8 @@ class PinnedCoordinates:
         log_det = np.full(n, -np.inf)
         if found.any():
             jacobian = self._jacobian(u[found], self._solved, y=y[found])
-            sign, log_abs = np.linalg.slogdet(jacobian)
+            with np.errstate(invalid="ignore"):  # a NaN Jacobian (a walker off the domain): -inf
+                sign, log_abs = np.linalg.slogdet(jacobian)
             log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
             found &= np.isfinite(log_det)
         return found, u, log_det
