@@ -85,6 +85,8 @@ EFFECT_DEFAULTS = {
     "contact-growth": {"cg_amp": 0.2, "cg_tau": 300.0},
     "gain-drift": {"gd_amp": -0.03, "gd_tau": 1e5},
     "contact-memory": {"mem_frac": 0.15, "mem_tau": 300.0},
+    "spectrum-tilt": {"spectrum_tilt": -0.02},
+    "creep-drop": {"creep_drop": 0.5, "sigma_drop": None, "drop_steepness": None},
 }
 """Strength of each hidden effect when named without values (None: from the sensor file)."""
 

@@ -5,7 +5,7 @@ the model: its creep falls with stress through its own interpolated table, super
 load steps, which the ``log-spectrum-sat`` law can follow only with the ``creep-drop`` effect.
 Must: on rig A's staircase (133 → 174 → 215 → 255 g, 5 min each) the drop is named first and
 closes most of the gap. Must not: on two holds from rest of the same weights (each its own
-placement, whose creep factors already follow the fall) it is not named. Slow (~15 min on 2
+placement, whose creep factors already follow the fall) it is not named. Slow (~10 min on 2
 cores); the seeds are not the frozen acceptance set's, nor those VALIDATION.md's ``creep-drop``
 row was measured on.
 """

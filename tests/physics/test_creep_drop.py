@@ -32,7 +32,8 @@ def test_the_drop_is_sampled_only_by_its_effect_and_only_with_the_saturating_law
         assert sensor.params["creep_drop"] == 0.0  # held off without the effect
         assert not set(DROP) & set(sensor.free_parameters("log-spectrum-sat"))
         assert set(DROP) <= set(sensor.free_parameters("log-spectrum-sat+creep-drop"))
-        share = sensor.priors["creep_drop"].sample(np.random.default_rng(3), 4000)
+        prior = sensor.prior_of("creep_drop", "log-spectrum-sat+creep-drop")  # the one a fit uses
+        share = prior.sample(np.random.default_rng(3), 4000)
         assert share.min() >= 0.0 and share.max() <= 1.0  # the gap bound needs 0 <= a <= 1
     for law in ("burgers", "zener", "nutting", "log-spectrum"):
         with pytest.raises(ValueError, match="acts only with the creep laws"):
@@ -88,3 +89,19 @@ def test_at_its_null_the_effect_is_the_saturating_law_and_a_drop_makes_a_step_up
     assert np.all(falling < 0)  # every walker: the current falls after the step up
     before = packed.mask[0] & (t > 2.0) & (t < step)
     assert np.all(np.diff(log_i[:, before], axis=1) > 0)  # and rose while the first weight crept
+
+
+def test_simulate_hides_a_drop_by_its_name_alone(tmp_path):
+    from fsrbayes.data.synthetic import parse_effect
+    from tests.commandline import fsrbayes_command
+
+    name, values = parse_effect("creep-drop")
+    assert name == "creep-drop" and values["creep_drop"] == 0.5  # not the file's 0: a real drop
+    assert parse_effect("spectrum-tilt")[1]["spectrum_tilt"] != 0.0
+    out = tmp_path / "s.csv"
+    run = fsrbayes_command(
+        "simulate", "-o", out, "--rheology", "log-spectrum-sat", "--effect", "creep-drop",
+        "--samples", 5, "--n-specimens", 1,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "hidden effects: creep-drop" in run.stdout and out.exists()

@@ -200,9 +200,10 @@ def test_no_prior_draw_closes_the_gap_under_any_load_up_to_300_kpa():
     names = list(prior.names)
     draws = prior.sample(np.random.default_rng(83), 10_000)
     params = {n: draws[:, names.index(n)] for n in ("k1", "eps_sat", "sigma_c")}
-    for name in ("creep_drop", "sigma_drop", "drop_steepness"):  # the file's prior to free it
-        assert not sensor.priors[name].is_fixed
-        params[name] = sensor.priors[name].sample(np.random.default_rng(85), 10_000)
+    for name in ("creep_drop", "sigma_drop", "drop_steepness"):  # the creep-drop effect's prior
+        prior = sensor.prior_of(name, "log-spectrum-sat+creep-drop")
+        assert not prior.is_fixed
+        params[name] = prior.sample(np.random.default_rng(85), 10_000)
     assert params["creep_drop"].min() >= 0.0 and params["creep_drop"].max() <= 1.0
     assert "tau_max" not in names  # the 402 holds it; the bound must hold whatever its value
     rng = np.random.default_rng(84)
