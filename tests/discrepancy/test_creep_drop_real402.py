@@ -37,6 +37,7 @@ def _diagnose(tmp_path, protocol, seed, weights):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)  # ~9 min on 2 cores
 def test_the_drop_is_named_first_on_a_staircase(tmp_path):
     result, first = _diagnose(tmp_path, "staircase", 7301, "133,174,215,255")
     assert result["effect"] == "creep-drop" and result["effects"][0] == "creep-drop", result
