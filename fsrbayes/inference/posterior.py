@@ -30,11 +30,11 @@ from .nuisance import (
 
 __all__ = ["LogPosterior", "PriorScaledTarget", "drift_between"]
 
-OPTIONAL_PARAMETERS = ("n_junctions", "spectrum_tilt", "creep_drop", "sigma_drop", "drop_steepness")
+OPTIONAL_PARAMETERS = ("n_junctions",)
 """Parameters a model may go without: without ``n_junctions`` the circuit has one junction (the
-paper's), without ``spectrum_tilt`` the log-spectrum laws keep the box spectrum, and without the
-drop's three ``log-spectrum-sat`` keeps its saturating drive; so a sensor file (or a fit folder
-written before them) that does not name them fits as it did."""
+paper's), so a sensor file (or a fit folder written before it) that does not name it fits as it
+did. (The log-spectrum laws' tilt and drop are their effects' parameters, which a model without
+those effects does not ask for.)"""
 
 
 def drift_between(log_start, log_end):

@@ -34,7 +34,7 @@ CREEP_DROP = register_effect(
         "creep-drop",
         ("creep_drop", "sigma_drop", "drop_steepness"),
         {"creep_drop": 0.0},
-        "the creep's drive falls at high stress: a step up partly recovers the creep before it",
+        "the creep's drive falls at high stress: after a step up the earlier creep partly recovers",
         laws=("log-spectrum-sat",),
     )
 )

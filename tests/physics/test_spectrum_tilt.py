@@ -150,6 +150,10 @@ def test_a_sensor_file_without_the_tilt_or_the_drop_fits_as_with_them_held_at_ze
     prior = posteriors[1].prior
     walkers = prior.to_unconstrained(prior.sample(np.random.default_rng(7), 16))
     np.testing.assert_array_equal(posteriors[0](walkers), posteriors[1](walkers))
+    # naming the effects asks for their parameters: such a file cannot quietly fit without them
+    for effect in ("spectrum-tilt", "creep-drop"):
+        with pytest.raises(ValueError, match="neither sampled nor fixed"):
+            LogPosterior.for_sensor(packed, old, model=f"log-spectrum-sat+{effect}")
 
 
 def test_fit_samples_the_tilt_where_a_log_unloads_and_reloads_and_nowhere_else(tmp_path):
