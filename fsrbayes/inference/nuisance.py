@@ -41,6 +41,9 @@ PRESSED_EFFECT = "unlogged-load"
 TILT_EFFECT = "spectrum-tilt"
 """Added to a log-spectrum default model where a log unloads the sensor and reloads it."""
 
+DROP_EFFECT = "creep-drop"
+"""Added to a ``log-spectrum-sat`` default model where a log holds weights of two or more sizes."""
+
 
 RAMPS = ("given", "fitted")
 """How a test's first loading reaches its weight: ``"given"`` — a step at the onset, or the ramp
@@ -211,22 +214,34 @@ def effects_for_log(data, specimen=None, default="burgers"):
     - ``spectrum-tilt`` (:mod:`fsrbayes.physics.tilt`), for a log-spectrum law, where a test
       unloads the sensor and loads it again: the recovery and the reloads tell the spectrum's
       tilt, which a hold from rest leaves on a ridge with the area's stress law.
+    - ``creep-drop`` (:mod:`fsrbayes.physics.drop`), for ``log-spectrum-sat``, where the tests
+      hold weights of two or more sizes, none stepping from one weight to another: how much
+      each weight creeps tells how the drive falls with stress, which each placement's own
+      creep factor would otherwise take up (the sensor file keeps those factors narrow where
+      the drop is sampled). Not on staircases, whose fits with the drop do not converge
+      (docs/creep-laws.md).
 
     Effects ``default`` names already are not added again; name the model to fit without them.
     """
     if isinstance(data, SpecimenData):
         pressed = data.pressed is not None and bool(np.any(data.pressed))
         steps = [] if data.step_size is None else list(data.step_size)
+        stresses = data.stress_Pa
     else:
         tests = data.select(specimen=specimen).tests if specimen is not None else data.tests
         pressed = pressed_flags(tests) is not None
         steps = [t.load_steps[1] for t in tests if t.load_steps is not None]
+        stresses = [t.stress_Pa for t in tests]
     family, had = parse_model(default)
     added = []
-    if pressed and not any(map(_stairs, steps)):
+    stairs = any(map(_stairs, steps))
+    if pressed and not stairs:
         added.append(PRESSED_EFFECT)
     if EFFECTS[TILT_EFFECT].applies_to(family) and any(map(_reloads, steps)):
         added.append(TILT_EFFECT)
+    weights = np.unique(np.round(np.asarray(stresses, dtype=float), 6)).size
+    if EFFECTS[DROP_EFFECT].applies_to(family) and weights >= 2 and not stairs:
+        added.append(DROP_EFFECT)
     return tuple(e for e in added if e not in had)
 
 

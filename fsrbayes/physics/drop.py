@@ -16,12 +16,15 @@ Pa, ``drop_steepness`` m
     Acts with ``log-spectrum-sat`` only (the law reads the parameters; without the effect it
     takes the sensor file's ``[params]`` values).
 
-Tests that each hold one stress tell the drop only through their levels of creep, which
-per-placement creep factors take up as well. A staircase, whose steps are the drop itself,
-tells it best; but there the fit mixes slowly (the drop trades with the drive's
-half-saturation stress, its amplitude and the tunnelling barrier), so ``fsrbayes fit`` adds it
-nowhere by itself: name it (``--model log-spectrum-sat+creep-drop``), or let ``fsrbayes
-diagnose`` try it.
+Holds of several weights from rest tell the drop through how much each weight creeps, which
+per-placement creep factors could take up as well; the 402's file keeps those factors narrow
+(log-sd 0.03) for this law, so the drop is what follows the fall, and ``fsrbayes fit`` samples
+it wherever a log holds weights of two sizes or more
+(:func:`fsrbayes.inference.nuisance.effects_for_log`). A staircase, whose steps are the drop
+itself, tells it best; but there the fit mixes slowly (the drop trades with the drive's
+half-saturation stress, its amplitude and the tunnelling barrier), so ``fit`` does not add it
+to staircases: name it (``--model log-spectrum-sat+creep-drop``), or let ``fsrbayes diagnose``
+try it.
 """
 
 from .effects import Effect, register_effect

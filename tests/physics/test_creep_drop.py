@@ -40,15 +40,36 @@ def test_the_drop_is_sampled_only_by_its_effect_and_only_with_the_saturating_law
             parse_model(f"{law}+creep-drop")
 
 
-def test_fit_leaves_the_drop_to_the_user_and_diagnose_offers_it_with_its_law_only(tmp_path):
-    """A staircase's default fit keeps the saturating drive (with the drop sampled rig A's
-    staircase did not converge in 30,000 steps, docs/creep-laws.md); diagnose tries the drop as
-    a candidate where the base's law is log-spectrum-sat."""
+def test_fit_samples_the_drop_where_a_log_holds_weights_of_two_sizes_and_not_on_stairs(tmp_path):
+    """Holds of several weights from rest tell how the drive falls with stress: the default fit
+    samples the drop there, and the 402 keeps each placement's creep factor narrow where it
+    does. One weight tells nothing of it; a staircase's default fit keeps the saturating drive
+    (with the drop sampled rig A's staircase did not converge in 30,000 steps,
+    docs/creep-laws.md). Diagnose tries the drop as a candidate where the base's law is
+    log-spectrum-sat."""
+    from fsrbayes.data.sensors import RIG_PRIORS, load_sensor
     from fsrbayes.discrepancy.candidates import candidate_effects, swapped
-    from fsrbayes.inference.nuisance import model_for_log
+    from fsrbayes.inference.likelihood import SpecimenData
+    from fsrbayes.inference.nuisance import effects_for_log, model_for_log
 
+    holds = _log(tmp_path, "A", "hold", 2302, duration_s=20.0)
+    specimen = holds.specimens[0]
+    assert model_for_log(holds, specimen, "log-spectrum-sat") == "log-spectrum-sat+creep-drop"
+    assert effects_for_log(SpecimenData.select(holds, specimen), None, "log-spectrum-sat") == (
+        "creep-drop",
+    )
+    for law in ("burgers", "log-spectrum", "log-spectrum-sat+creep-drop"):
+        assert "creep-drop" not in effects_for_log(holds, specimen, law)
+    one = _log(tmp_path, "A", "hold", 2303, duration_s=20.0, weights_g=(215.0,))
+    assert model_for_log(one, one.specimens[0], "log-spectrum-sat") == "log-spectrum-sat"
     stairs = _log(tmp_path, "B", "staircase", 2301, duration_s=30.0)
     assert model_for_log(stairs, stairs.specimens[0], "log-spectrum-sat") == "log-spectrum-sat"
+    narrow = load_sensor("fsr402").prior_of("placement_creep", "log-spectrum-sat+creep-drop")
+    wide = load_sensor("fsr402").prior_of("placement_creep", "burgers")
+    assert narrow.sample(np.random.default_rng(1), 4000).std() == pytest.approx(0.03, rel=0.05)
+    assert wide.sample(np.random.default_rng(1), 4000).std() == pytest.approx(
+        RIG_PRIORS["placement_creep"]["sigma"], rel=0.05
+    )
     assert "creep-drop" in candidate_effects("log-spectrum-sat")
     assert "creep-drop" not in candidate_effects("log-spectrum-sat+creep-drop")
     for law in ("burgers", "log-spectrum"):
