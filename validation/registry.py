@@ -268,9 +268,10 @@ REAL402_LOGS = (
 
 REAL402_FORECASTS = (
     "A-hold-60min", "B-hold-60min", "A-cycles", "A-staircase", "A-hold-10min@staircase",
-    "A-hold-10min@cycles",
+    "A-hold-10min@cycles", "A-hold-10min-2@staircase", "A-hold-10min-2@cycles",
 )  # fmt: skip
-"""The forecasts: the rest of four logs, and two protocols a fit of 10-minute holds never saw."""
+"""The forecasts: the rest of four logs, and two protocols that fits of two sensors' 10-minute
+holds never saw."""
 
 
 def _real402_fit_summary(rows):

@@ -181,7 +181,8 @@ def log_effect_notes(data, specimens, default):
     A log that reads a load before a test's first loading while its load column holds none
     (an operator's taps) is fitted with ``unlogged-load`` added to ``default``; a log that
     unloads the sensor and loads it again, with ``spectrum-tilt`` where ``default`` is a
-    log-spectrum law (:func:`fsrbayes.inference.nuisance.effects_for_log`).
+    log-spectrum law; a log of weights of two sizes or more, with ``creep-drop`` where it is
+    ``log-spectrum-sat`` (:func:`fsrbayes.inference.nuisance.effects_for_log`).
     """
     from ..inference.nuisance import effects_for_log
 
@@ -190,6 +191,8 @@ def log_effect_notes(data, specimens, default):
         "hold (taps): their fits add unlogged-load, the creep it left recovering",
         "spectrum-tilt": "unload the sensor and load it again: their fits sample the retardation "
         "spectrum's tilt (spectrum-tilt), which the reloads show",
+        "creep-drop": "hold weights of two sizes or more: their fits sample how the creep's drive "
+        "falls with stress (creep-drop), which the weights' creeps show",
     }
     added = {s: effects_for_log(data, s, default) for s in specimens}
     lines = []

@@ -47,6 +47,7 @@ def test_fit_samples_the_drop_where_a_log_holds_weights_of_two_sizes_and_not_on_
     (with the drop sampled rig A's staircase did not converge in 30,000 steps,
     docs/creep-laws.md). Diagnose tries the drop as a candidate where the base's law is
     log-spectrum-sat."""
+    from fsrbayes.cli.common import log_effect_notes
     from fsrbayes.data.sensors import RIG_PRIORS, load_sensor
     from fsrbayes.discrepancy.candidates import candidate_effects, swapped
     from fsrbayes.inference.likelihood import SpecimenData
@@ -58,6 +59,8 @@ def test_fit_samples_the_drop_where_a_log_holds_weights_of_two_sizes_and_not_on_
     assert effects_for_log(SpecimenData.select(holds, specimen), None, "log-spectrum-sat") == (
         "creep-drop",
     )
+    (note,) = log_effect_notes(holds, [specimen], "log-spectrum-sat")  # fit says so in one line
+    assert "(creep-drop)" in note and "--model log-spectrum-sat fits without it" in note
     for law in ("burgers", "log-spectrum", "log-spectrum-sat+creep-drop"):
         assert "creep-drop" not in effects_for_log(holds, specimen, law)
     one = _log(tmp_path, "A", "hold", 2303, duration_s=20.0, weights_g=(215.0,))
