@@ -8,7 +8,9 @@ the model: its creep per decade of time falls with stress through its own interp
 Must: on rig A's staircase (133 → 174 → 215 → 255 g, 5 min each) the drop is named first and
 closes most of the gap; on two holds from rest of 133 g and 255 g (each its own placement, whose
 creep factor the 402's file keeps narrow for this law) it is named as well. Must not: on the same
-holds from a bench whose table creeps by the same amount at every stress, it is not named. Slow
+holds from a bench whose table creeps by the same amount at every stress, it is neither named nor
+the best candidate, and it leaves the gap outside its band (the base misses there too: the
+bench's spectrum tilts, and diagnose names that). Slow
 (~12 min on 2 cores); the seeds are not the frozen acceptance set's, nor those VALIDATION.md's
 ``creep-drop`` rows were measured on.
 """
@@ -73,4 +75,6 @@ def test_the_drop_is_not_named_where_the_creep_does_not_fall_with_stress(tmp_pat
     path = write_real_rig(log, tmp_path / "flat.csv")[0]
     result, first = _diagnose(path)
     assert "creep-drop" not in (result["effects"] or []), result
-    assert first["creep-drop"] < result["threshold_log_bf"], first
+    assert max(first, key=first.get) != "creep-drop", first
+    drop = next(c for c in result["candidates"] if c["effect"] == "creep-drop")
+    assert drop["gap_after"] > result["band"], drop  # the drop does not explain these data
