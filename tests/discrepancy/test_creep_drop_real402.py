@@ -2,7 +2,7 @@
 
 The logs come from the real-402 bench (``simulate-rig --preset real-402``), written apart from
 the model: its creep per decade of time falls with stress through its own interpolated table
-(:data:`fsrbayes.data.realfsr.CREEP_PER_DECADE`), superposed over the load steps, which the
+(:func:`fsrbayes.data.realfsr.creep_per_decade`), superposed over the load steps, which the
 ``log-spectrum-sat`` law can follow only with the ``creep-drop`` effect.
 
 Must: on rig A's staircase (133 → 174 → 215 → 255 g, 5 min each) the drop is named first and
@@ -17,6 +17,7 @@ bench's spectrum tilts, and diagnose names that). Slow
 
 import json
 
+import numpy as np
 import pytest
 
 from tests.commandline import fsrbayes_command
@@ -67,8 +68,11 @@ def test_the_drop_is_not_named_where_the_creep_does_not_fall_with_stress(tmp_pat
     from fsrbayes.data import realfsr
     from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 
-    flat = tuple((kpa, 0.12) for kpa, _ in realfsr.CREEP_PER_DECADE)
-    monkeypatch.setattr(realfsr, "CREEP_PER_DECADE", flat)
+    def flat(sigma_pa):  # the bench's table at 0.12 from 2 kPa up, ∝ σ below as the bench's
+        kpa = np.maximum(np.asarray(sigma_pa, dtype=float) / 1e3, 1e-12)
+        return np.where(kpa < 2.0, 0.12 * kpa / 2.0, 0.12)
+
+    monkeypatch.setattr(realfsr, "creep_per_decade", flat)
     log = simulate_real_rig(
         "A", "hold", seed=7304, weights_g=(133.0, 255.0), duration_s=300.0, rate_hz=10.0
     )
