@@ -178,25 +178,15 @@ def loading_notes(data, specimens, settle_s, placement):
 def log_effect_notes(data, specimens, default):
     """Return lines naming the specimens whose default fit adds effects for what their logs show.
 
-    A log that reads a load before a test's first loading while its load column holds none
-    (an operator's taps) is fitted with ``unlogged-load`` added to ``default``; a log that
-    unloads the sensor and loads it again, with ``spectrum-tilt`` where ``default`` is a
-    log-spectrum law; a log of weights of two sizes or more, with ``creep-drop`` where it is
-    ``log-spectrum-sat`` (:func:`fsrbayes.inference.nuisance.effects_for_log`).
+    One line per added effect, with what the log shows that adds it
+    (:data:`fsrbayes.inference.nuisance.LOG_EFFECT_REASONS`, the rule
+    :func:`fsrbayes.inference.nuisance.effects_for_log`).
     """
-    from ..inference.nuisance import effects_for_log
+    from ..inference.nuisance import LOG_EFFECT_REASONS, effects_for_log
 
-    why = {
-        "unlogged-load": "read a load before the first loading that the load column does not "
-        "hold (taps): their fits add unlogged-load, the creep it left recovering",
-        "spectrum-tilt": "unload the sensor and load it again: their fits sample the retardation "
-        "spectrum's tilt (spectrum-tilt), which the reloads show",
-        "creep-drop": "hold weights of two sizes or more: their fits sample how the creep's drive "
-        "falls with stress (creep-drop), which the weights' creeps show",
-    }
     added = {s: effects_for_log(data, s, default) for s in specimens}
     lines = []
-    for effect, reason in why.items():
+    for effect, reason in LOG_EFFECT_REASONS.items():
         named = [s for s in specimens if effect in added[s]]
         if named:
             names = ", ".join(named[:4]) + (" …" if len(named) > 4 else "")

@@ -17,6 +17,7 @@ from .packing import pressed_flags
 
 __all__ = [
     "HAND_PLACED_SETTLE_S",
+    "LOG_EFFECT_REASONS",
     "RAMPS",
     "effects_for_log",
     "is_landing",
@@ -43,6 +44,17 @@ TILT_EFFECT = "spectrum-tilt"
 
 DROP_EFFECT = "creep-drop"
 """Added to a ``log-spectrum-sat`` default model where a log holds weights of two or more sizes."""
+
+LOG_EFFECT_REASONS = {
+    PRESSED_EFFECT: "read a load before the first loading that the load column does not hold "
+    "(taps): their fits add unlogged-load, the creep it left recovering",
+    TILT_EFFECT: "unload the sensor and load it again: their fits sample the retardation "
+    "spectrum's tilt (spectrum-tilt), which the reloads show",
+    DROP_EFFECT: "hold weights of two sizes or more: their fits sample how the creep's drive "
+    "falls with stress (creep-drop), which the weights' creeps show",
+}
+"""Each effect :func:`effects_for_log` may add, and what the log shows that adds it (``fsrbayes
+fit`` says so in one line)."""
 
 
 RAMPS = ("given", "fitted")
@@ -239,7 +251,7 @@ def effects_for_log(data, specimen=None, default="burgers"):
         added.append(PRESSED_EFFECT)
     if EFFECTS[TILT_EFFECT].applies_to(family) and any(map(_reloads, steps)):
         added.append(TILT_EFFECT)
-    weights = np.unique(np.round(np.asarray(stresses, dtype=float), 6)).size
+    weights = np.unique(np.asarray(stresses, dtype=float)).size
     if EFFECTS[DROP_EFFECT].applies_to(family) and weights >= 2 and not stairs:
         added.append(DROP_EFFECT)
     return tuple(e for e in added if e not in had)

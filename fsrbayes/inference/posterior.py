@@ -32,9 +32,8 @@ __all__ = ["LogPosterior", "PriorScaledTarget", "drift_between"]
 
 OPTIONAL_PARAMETERS = ("n_junctions",)
 """Parameters a model may go without: without ``n_junctions`` the circuit has one junction (the
-paper's), so a sensor file (or a fit folder written before it) that does not name it fits as it
-did. (The log-spectrum laws' tilt and drop are their effects' parameters, which a model without
-those effects does not ask for.)"""
+paper's), so a sensor file or fit folder that does not name it fits with one. Effects' parameters
+are not listed: a model asks for them only where it names the effect."""
 
 
 def drift_between(log_start, log_end):

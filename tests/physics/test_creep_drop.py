@@ -44,9 +44,8 @@ def test_fit_samples_the_drop_where_a_log_holds_weights_of_two_sizes_and_not_on_
     """Holds of several weights from rest tell how the drive falls with stress: the default fit
     samples the drop there, and the 402 keeps each placement's creep factor narrow where it
     does. One weight tells nothing of it; a staircase's default fit keeps the saturating drive
-    (with the drop sampled rig A's staircase did not converge in 30,000 steps,
-    docs/creep-laws.md). Diagnose tries the drop as a candidate where the base's law is
-    log-spectrum-sat."""
+    (its fits with the drop mix too slowly, docs/creep-laws.md). Diagnose tries the drop as a
+    candidate where the base's law is log-spectrum-sat."""
     from fsrbayes.cli.common import log_effect_notes
     from fsrbayes.data.sensors import RIG_PRIORS, load_sensor
     from fsrbayes.discrepancy.candidates import candidate_effects, swapped
