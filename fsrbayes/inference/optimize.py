@@ -19,6 +19,7 @@ from .hessians import (
     covariance_root,
     root_covariance,
 )
+from .mode_starts import effect_mode_starts
 from .parallel import fork_pool, single_threaded_blas
 
 __all__ = [
@@ -187,7 +188,9 @@ def find_map(
         Vectorised log-density of u, with its ``prior``.
     rng : numpy.random.Generator
     n_starts : int
-        Starts, from the best of ``n_candidates`` prior draws (and the prior's centre).
+        Starts, from the best of ``n_candidates`` prior draws (and the prior's centre). The
+        starts the posterior's effects name (:func:`.mode_starts.effect_mode_starts`, from the
+        best of these optima) are optimised too, and the best ``n_starts`` of all returned.
     maxiter : int
         L-BFGS-B iterations per start before the polish.
     processes : int
@@ -212,10 +215,18 @@ def find_map(
         raise RuntimeError(
             "no prior draw gives a finite posterior: check the data against the model's domain"
         )
-    optima = _optimise_starts(posterior, starts, maxiter, processes, refine)
-    optima.sort(key=lambda item: -item[0])
+    optima = sorted(_optimise_starts(posterior, starts, maxiter, processes, refine), key=_first)
+    named = list(effect_mode_starts(posterior, optima[0][1]))
+    if named:
+        optima += _optimise_starts(posterior, named, maxiter, processes, refine)
+        optima.sort(key=_first)
     optima = [u for _, u in optima]
     return np.array([optima[i % len(optima)] for i in range(n_starts)])
+
+
+def _first(optimum):
+    """Sort key of an optimiser's (value, u): the highest value first."""
+    return -optimum[0]
 
 
 def _optimise_starts(posterior, starts, maxiter, processes, refine=None):

@@ -27,13 +27,43 @@ to staircases: name it (``--model log-spectrum-sat+creep-drop``), or let ``fsrba
 try it.
 """
 
+import numpy as np
+
 from .effects import Effect, register_effect
 
-__all__ = ["CREEP_DROP"]
+__all__ = ["CREEP_DROP", "CreepDrop"]
+
+DROP_WITHIN = 0.9
+"""A start's drop rises from 1 − DROP_WITHIN to DROP_WITHIN of its share between the two
+stresses it lies between (:meth:`CreepDrop.mode_starts`)."""
+
+
+class CreepDrop(Effect):
+    """The drive's drop; its parameters are read by ``log-spectrum-sat``.
+
+    Tests held at a few stresses see the drop only through how much each weight creeps: any
+    σ_d between two neighbouring stresses, with a steep drop, gives the same creeps, so the
+    posterior may hold a separate mode for each gap between the stresses, and optimiser starts
+    drawn from the prior can all miss the best. The MAP search therefore starts in each gap.
+    """
+
+    def mode_starts(self, stresses):
+        """Return one start per gap between neighbouring ``stresses`` (Pa).
+
+        σ_d at the gap's geometric middle, m steep enough that the drop rises from 10 % to 90 %
+        of its share across the gap (Hill's function: m = 2·ln 9 / ln(σ_hi/σ_lo)).
+        """
+        levels = np.unique(np.asarray(stresses, dtype=float))
+        levels = levels[levels > 0]
+        rise = 2.0 * np.log(DROP_WITHIN / (1.0 - DROP_WITHIN))
+        return [
+            {"sigma_drop": float(np.sqrt(lo * hi)), "drop_steepness": float(rise / np.log(hi / lo))}
+            for lo, hi in zip(levels[:-1], levels[1:], strict=True)
+        ]
 
 
 CREEP_DROP = register_effect(
-    Effect(
+    CreepDrop(
         "creep-drop",
         ("creep_drop", "sigma_drop", "drop_steepness"),
         {"creep_drop": 0.0},
@@ -41,4 +71,4 @@ CREEP_DROP = register_effect(
         laws=("log-spectrum-sat",),
     )
 )
-"""The effect: no hook of its own, its parameters are read by ``log-spectrum-sat``."""
+"""The effect (:class:`CreepDrop`)."""

@@ -133,6 +133,10 @@ class Effect:
         """Stress eqs. (5), (6) see under ``load_steps``; None: the momentary ``stress`` itself."""
         return None
 
+    def mode_starts(self, stresses):
+        """Return starts (dicts of values) where data held at ``stresses`` (Pa) may peak."""
+        return []
+
 
 class AreaCreep(Effect):
     """A(t) = A(σ)·exp(area_creep·Δε(t)); sign free, the paper expects < 0 (section 4.3)."""
@@ -199,11 +203,7 @@ class GainDrift(Effect):
 
 
 class OffsetStress(Effect):
-    """Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark).
-
-    The contact law reads ``sigma0`` itself (0 without the effect), so no hook is needed: the
-    effect only makes σ0 a model parameter.
-    """
+    """Rc = Rpar + Rc0/(σ + σ0)^alpha (eq. 5 remark): the contact law reads σ0 (0 if absent)."""
 
 
 class AreaGrowth(Effect):
@@ -257,9 +257,8 @@ class ContactMemory(Effect):
 
 
 def _kelvin(t, params):
-    t = np.asarray(t, dtype=float)
-    tp = np.maximum(t, 0.0)
-    return np.where(t >= 0, -params["kv2_comp"] * np.expm1(-tp / params["kv2_tau"]), 0.0)
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)  # 0 before the step
+    return -params["kv2_comp"] * np.expm1(-tp / params["kv2_tau"])
 
 
 def _kelvin_ramp(t, params):
@@ -268,9 +267,8 @@ def _kelvin_ramp(t, params):
 
 
 def _log_creep(t, params):
-    t = np.asarray(t, dtype=float)
-    tp = np.maximum(t, 0.0)
-    return np.where(t >= 0, params["lc_comp"] * np.log1p(tp / params["lc_tau"]), 0.0)
+    tp = np.maximum(np.asarray(t, dtype=float), 0.0)  # 0 before the step
+    return params["lc_comp"] * np.log1p(tp / params["lc_tau"])
 
 
 def _log_creep_ramp(t, params):
