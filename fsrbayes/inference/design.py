@@ -7,7 +7,13 @@ drift. :func:`~fsrbayes.inference.fit.fit` warns each note as a :class:`DesignWa
 
 import numpy as np
 
-__all__ = ["ADC_MIN_COUNTS", "AREA_COEFFICIENTS", "DesignWarning", "design_warnings"]
+__all__ = [
+    "ADC_MIN_COUNTS",
+    "AREA_COEFFICIENTS",
+    "DesignWarning",
+    "design_warnings",
+    "held_stresses",
+]
 
 
 class DesignWarning(UserWarning):
@@ -28,13 +34,17 @@ def _distinct_levels(values, rtol=0.01):
     return int(1 + np.sum(ordered[1:] > ordered[:-1] * (1 + rtol))) if ordered.size else 0
 
 
-def _held_stresses(data):
-    """Every stress the tests hold: each test's, and each load its steps reach (a staircase)."""
+def held_stresses(data):
+    """Return the sorted distinct stresses (Pa) the tests of packed ``data`` hold.
+
+    Each test's first load (``stress_Pa``) and, where the load changes within a test (a
+    staircase), each nonzero load its steps reach.
+    """
     held = np.asarray(data.stress_Pa, dtype=float).ravel()
     if getattr(data, "step_size", None) is None:
-        return held
+        return np.unique(held)
     loads = np.cumsum(data.step_size, axis=-1)
-    return np.concatenate([held, loads[(data.step_size != 0) & (loads > 0)]])
+    return np.unique(np.concatenate([held, loads[(data.step_size != 0) & (loads > 0)]]))
 
 
 def design_warnings(posterior):
@@ -56,7 +66,7 @@ def design_warnings(posterior):
     """
     notes = []
     sampled = [name for name in AREA_COEFFICIENTS if name in posterior.names]
-    levels = _distinct_levels(_held_stresses(posterior.data))
+    levels = _distinct_levels(held_stresses(posterior.data))
     if len(sampled) > levels:
         notes.append(
             f"the tests hold {levels} distinct stress level{'s' * (levels != 1)} but the area law "

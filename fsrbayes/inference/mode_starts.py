@@ -6,33 +6,15 @@ make posteriors whose separate modes sit where the data say, not where the prior
 stresses leave one mode for each gap between neighbouring stresses in which the drive's drop
 could sit. Each effect names its starts (:meth:`fsrbayes.physics.effects.Effect.mode_starts`)
 from the stresses the data hold; here they become points in the posterior's unconstrained
-coordinates, the other parameters taken from the best optimum so far.
+coordinates, the other parameters taken from the best optimum so far. The stresses are
+:func:`fsrbayes.inference.design.held_stresses`, those the design notes count.
 """
 
 import numpy as np
 
-__all__ = ["effect_mode_starts", "held_stresses"]
+from .design import held_stresses
 
-
-def held_stresses(data):
-    """Return the sorted distinct nonzero stresses (Pa) the tests of ``data`` hold.
-
-    Parameters
-    ----------
-    data : SpecimenData
-        Each test's first load (``stress_Pa``) and, where the load changes within a test, the
-        levels its load steps reach.
-
-    Returns
-    -------
-    ndarray
-    """
-    levels = [np.ravel(np.asarray(data.stress_Pa, dtype=float))]
-    if data.step_size is not None:
-        sizes = np.asarray(data.step_size, dtype=float)
-        levels.append(np.cumsum(sizes, axis=-1)[sizes != 0])
-    held = np.concatenate(levels)
-    return np.unique(held[held > 0])
+__all__ = ["effect_mode_starts"]
 
 
 def effect_mode_starts(posterior, u):
@@ -60,9 +42,10 @@ def effect_mode_starts(posterior, u):
     names = list(posterior.names)
     prior = posterior.prior
     x = prior.to_constrained(u[None])[0]
+    stresses = held_stresses(data)
     starts = []
     for effect in effects:
-        for values in effect.mode_starts(held_stresses(data)):
+        for values in effect.mode_starts(stresses):
             if not set(values) <= set(names):
                 continue  # a parameter the model holds fixed
             point = x.copy()

@@ -36,7 +36,7 @@ def test_the_drop_names_one_start_per_gap_between_neighbouring_stresses():
     assert CREEP_DROP.mode_starts([7.1e3]) == [] and CREEP_DROP.mode_starts([]) == []
 
 
-def _holds(tmp_path, seed, monkeypatch=None, flat=False):
+def _holds(tmp_path, seed, monkeypatch=None, flat=False, *, weights_g=WEIGHTS_G, **timing):
     from fsrbayes.data import read_csv, realfsr
     from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 
@@ -46,9 +46,8 @@ def _holds(tmp_path, seed, monkeypatch=None, flat=False):
             "creep_per_decade",
             lambda s: np.minimum(np.asarray(s, dtype=float) / 2e3, 1.0) * 0.12,
         )
-    log = simulate_real_rig(
-        "A", "hold", seed=seed, weights_g=WEIGHTS_G, duration_s=120.0, rate_hz=2.0
-    )
+    timing = {"duration_s": 120.0, "rate_hz": 2.0} | timing
+    log = simulate_real_rig("A", "hold", seed=seed, weights_g=weights_g, **timing)
     return read_csv(write_real_rig(log, tmp_path / f"holds{seed}.csv")[0])
 
 
@@ -61,7 +60,8 @@ def _posterior(data):
 
 
 def test_the_starts_move_only_the_parameters_the_effect_names(tmp_path):
-    from fsrbayes.inference.mode_starts import effect_mode_starts, held_stresses
+    from fsrbayes.inference.design import held_stresses
+    from fsrbayes.inference.mode_starts import effect_mode_starts
 
     posterior = _posterior(_holds(tmp_path, 8311))
     assert posterior.model == "log-spectrum-sat+creep-drop"
@@ -75,17 +75,11 @@ def test_the_starts_move_only_the_parameters_the_effect_names(tmp_path):
     assert np.array_equal(starts[:, kept], np.repeat(u[None, kept], 3, axis=0))
     x = posterior.prior.to_constrained(starts)
     assert x[:, posterior.names.index("sigma_drop")] == pytest.approx(np.sqrt(held[:-1] * held[1:]))
-    one_weight = _posterior(_holds_of_one_weight(tmp_path))
+    one_weight = _posterior(
+        _holds(tmp_path, 8313, weights_g=(208.0,), duration_s=60.0, rate_hz=None)
+    )
     assert "creep-drop" not in one_weight.model
     assert effect_mode_starts(one_weight, np.zeros(one_weight.ndim)).shape == (0, one_weight.ndim)
-
-
-def _holds_of_one_weight(tmp_path):
-    from fsrbayes.data import read_csv
-    from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
-
-    log = simulate_real_rig("A", "hold", seed=8313, weights_g=(208.0,), duration_s=60.0)
-    return read_csv(write_real_rig(log, tmp_path / "one.csv")[0])
 
 
 def _best_map(posterior):
