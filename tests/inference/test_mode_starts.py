@@ -106,6 +106,7 @@ def test_the_best_optimum_follows_the_creeps_fall_with_stress(tmp_path):
     assert np.all(np.abs(factors) < 0.1), factors
 
 
+@pytest.mark.validation  # two MAP searches, 50 s: in the tier (CONTRIBUTING.md)
 def test_the_gap_starts_find_a_higher_optimum_than_the_prior_draws_alone(tmp_path, monkeypatch):
     from fsrbayes.inference import optimize
 
