@@ -29,7 +29,6 @@ import json
 import subprocess
 import sys
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -75,40 +74,11 @@ def _summaries(folder):
     return [json.loads(p.read_text()) for p in paths]
 
 
-def _outside_prior(fit_folder, data_path):
-    """{specimen: [parameters whose posterior median is outside the prior's central 99 %]}."""
-    from fsrbayes.data import read_csv
-    from fsrbayes.data.sensors import load_sensor
-    from fsrbayes.inference.likelihood import SpecimenData
-    from fsrbayes.inference.posterior import LogPosterior
-    from fsrbayes.inference.predictive_draws import fit_folders
-
-    data = read_csv(data_path)
-    out = {}
-    for specimen, folder in sorted(fit_folders(fit_folder).items()):
-        summary = json.loads((folder / "summary.json").read_text())
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            posterior = LogPosterior.for_sensor(
-                SpecimenData.select(data, specimen, settle_s=summary["settle_s"]),
-                load_sensor(summary["sensor"]),
-                model=summary["model"],
-                likelihood=summary["likelihood"],
-                placement=any(n.startswith("placement[") for n in summary["parameters"]),
-            )
-        medians = np.array([[summary["parameters"][n]["median"] for n in posterior.names]])
-        cdf = posterior.prior.marginal_cdf(medians)[0]
-        names = zip(posterior.names, cdf, strict=True)
-        out[specimen] = [n for n, c in names if not 0.005 <= c <= 0.995]
-    return out
-
-
 def fit_log(frozen, name, out):
     """Default ``fsrbayes fit`` of one frozen log; one row per specimen."""
     data = Path(frozen) / f"{name}.csv"
     folder = Path(out) / f"fit-{name}"
     seconds = _fit_once(data, folder)
-    outside = _outside_prior(folder, data)
     return [
         {
             "log": name,
@@ -120,7 +90,7 @@ def fit_log(frozen, name, out):
             "steps": s["convergence"]["n_steps"],
             "seconds": seconds,
             "checks_failed": sorted({f["check"] for f in s["checks"]["failed"]}),
-            "outside_prior_99": outside[s["specimen"]],
+            "outside_prior_99": [p["name"] for p in s["checks"]["prior_tail"]["parameters"]],
         }
         for s in _summaries(folder)
     ]

@@ -296,7 +296,7 @@ def checked_fit(specimen, result, seed):
             "and 'fsrbayes diagnose' for where and what is missing",
             file=sys.stderr,
         )
-    trend = checks["placement_creep_trend"]
-    if trend and trend["note"]:
-        print(f"fsrbayes fit: note: {specimen}: {trend['note']}", file=sys.stderr)
+    for note in (checks["placement_creep_trend"] or {}).get("note"), checks["prior_tail"]["note"]:
+        if note:
+            print(f"fsrbayes fit: note: {specimen}: {note}", file=sys.stderr)
     return checks

@@ -21,6 +21,11 @@ wide and wrong together. :func:`fit_checks` looks for that in four ways:
   fraction of a second that the model takes as a step (fit its length: ``ramp="fitted"``), or a
   process faster than the model's creep.
 
+A posterior median in the outer 1 % of its own prior is a prior–data conflict: the data pull
+that parameter where its prior says it hardly ever lies — a prior made for other sensors or
+conditions, or a law bent to take up a misfit elsewhere. :func:`prior_tail` names such
+parameters; they are reported as a note, not a failure, as the data may well be right.
+
 A fit that gives each placement its own creep (``placement_creep[k]``) can follow every test
 whatever the creep law says of the stress; :func:`placement_creep_trend` reads the fitted
 factors against the tests' stresses, and a clear trend is reported as a note, not a failure:
@@ -42,7 +47,9 @@ __all__ = [
     "LOADING_WINDOW_S",
     "NOISE_RATIO_LIMIT",
     "fit_checks",
+    "PRIOR_TAIL_LEVEL",
     "placement_creep_trend",
+    "prior_tail",
     "residual_statistics",
 ]
 
@@ -50,6 +57,10 @@ NOISE_RATIO_LIMIT = 2.0
 """Fitted noise more than this many times the sample-to-sample scatter fails the check."""
 AUTOCORRELATION_LIMIT = 0.5
 """A lag-1 autocorrelation of the standardised residuals above this fails the check."""
+
+
+PRIOR_TAIL_LEVEL = 0.99
+"""A posterior median outside this central share of its prior is noted (:func:`prior_tail`)."""
 
 
 LOADING_WINDOW_S = 2.0
@@ -168,7 +179,48 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
         "n_checks": found["n_checks"],
         "alpha": alpha,
         "placement_creep_trend": placement_creep_trend(posterior, draws),
+        "prior_tail": prior_tail(posterior, result.draws()),
     }
+
+
+def prior_tail(posterior, draws, level=PRIOR_TAIL_LEVEL):
+    """Return the parameters whose posterior median lies outside its prior's central ``level``.
+
+    Parameters
+    ----------
+    posterior : fsrbayes.inference.posterior.LogPosterior
+    draws : ndarray, shape (..., ndim)
+        Posterior draws in physical units.
+    level : float
+        Central share of each parameter's prior (0.99: its 0.5 % and 99.5 % points).
+
+    Returns
+    -------
+    dict
+        ``level``; ``parameters``, a list of ``{name, median, prior_cdf}`` (the prior's CDF at
+        the posterior median: below (1 − level)/2 or above (1 + level)/2); ``note``, a sentence
+        naming them, or None when there are none.
+    """
+    medians = np.median(np.asarray(draws).reshape(-1, posterior.ndim), axis=0)
+    cdf = posterior.prior.marginal_cdf(medians[None])[0]
+    tail = (1.0 - level) / 2.0
+    outside = [
+        {"name": name, "median": float(m), "prior_cdf": float(c)}
+        for name, m, c in zip(posterior.names, medians, cdf, strict=True)
+        if not tail <= c <= 1.0 - tail
+    ]
+    note = None
+    if outside:
+        where = ", ".join(
+            f"{p['name']} {p['median']:.3g} (its prior's {100 * p['prior_cdf']:.3g} % point)"
+            for p in outside
+        )
+        note = (
+            f"posterior medians outside their prior's central {100 * level:g} %: {where}; the "
+            "data pull them where the sensor file's priors say they hardly lie: priors made for "
+            "other sensors or conditions, or a law bent to take up a misfit elsewhere"
+        )
+    return {"level": level, "parameters": outside, "note": note}
 
 
 def placement_creep_trend(posterior, draws):

@@ -66,6 +66,27 @@ def test_a_fit_of_the_model_s_own_data_passes_its_checks(null_fit):
     assert checks["passed"], checks["failed"]
     assert 0.7 < checks["noise_over_scatter"] < 1.5
     assert abs(checks["residual_lag1_autocorrelation"]) < 0.3
+    assert checks["prior_tail"] == {"level": 0.99, "parameters": [], "note": None}
+
+
+def test_a_median_in_its_prior_s_outer_percent_is_named_and_one_inside_is_not(null_fit):
+    from fsrbayes.discrepancy.fitcheck import prior_tail
+
+    posterior = null_fit.posterior
+    draws = null_fit.draws().reshape(-1, posterior.ndim)
+    prior_draws = posterior.prior.sample(np.random.default_rng(2), 200_000)
+    k = posterior.names.index("Va")
+    for share, named in ((0.999, ["Va"]), (0.98, []), (0.001, ["Va"])):
+        moved = draws.copy()
+        moved[:, k] = np.quantile(prior_draws[:, k], share)
+        tail = prior_tail(posterior, moved)
+        assert [p["name"] for p in tail["parameters"]] == named, (share, tail)
+        if named:
+            assert tail["parameters"][0]["prior_cdf"] == pytest.approx(share, abs=3e-4)
+            head = "posterior medians outside their prior's central 99 %: Va "
+            assert tail["note"].startswith(head)
+        else:
+            assert tail["note"] is None
 
 
 def _temperature_cycle(sim, amplitude=0.04, period_s=1500.0):
@@ -112,3 +133,4 @@ def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
     failed = {f["check"] for f in checks["failed"]}
     assert failed & {"residual_autocorrelation", "noise_level"}, failed
     assert "loading_misfit" not in failed  # a slow swing is not the loading's
+    assert set(checks["prior_tail"]) == {"level", "parameters", "note"}
