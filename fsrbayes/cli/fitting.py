@@ -120,7 +120,9 @@ def cmd_fit(args):
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
         print("\n".join(drift_lines(summaries[specimen])))
-        if not result.converged and checkpoint is not None:
+        if result.converged and checkpoint is not None:
+            checkpoint.unlink(missing_ok=True)  # every step's chain: nothing left to go on with
+        elif checkpoint is not None:
             print(
                 f"fsrbayes fit: {specimen}: its chains are kept in {checkpoint}; to go on from "
                 f"them, run the same command with --resume --max-steps {2 * args.max_steps}",

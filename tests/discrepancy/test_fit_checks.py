@@ -128,9 +128,27 @@ def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
     )
     assert run.returncode == 0, run.stderr
     assert "does not fit these data" in run.stderr
-    checks = json.loads((out / "summary.json").read_text())["checks"]
+    summary = json.loads((out / "summary.json").read_text())
+    checks = summary["checks"]
     assert not checks["passed"]
     failed = {f["check"] for f in checks["failed"]}
     assert failed & {"residual_autocorrelation", "noise_level"}, failed
     assert "loading_misfit" not in failed  # a slow swing is not the loading's
     assert set(checks["prior_tail"]) == {"level", "parameters", "note"}
+    assert not summary["converged"] and (out / "checkpoint.npz").exists()  # kept to go on with
+
+
+def test_a_converged_fit_leaves_no_checkpoint_behind(tmp_path):
+    """The checkpoint holds every step's chain (up to a GB on a long rig log) for --resume; a
+    converged fit has nothing to go on with, and its folder keeps the thinned draws only."""
+    sim = syn.simulate(
+        "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[1.96, 4.9, 9.8, 14.7], samples=13,
+        seed=11,
+    )  # fmt: skip
+    path = tmp_path / "own.csv"
+    write_csv(sim.data, path)
+    out = tmp_path / "fit"
+    run = fsrbayes_command("fit", path, "--out", out, "--seed", 3, "--no-plots")
+    assert run.returncode == 0, run.stderr
+    assert json.loads((out / "summary.json").read_text())["converged"], run.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["posterior.nc", "summary.json"]
