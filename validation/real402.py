@@ -74,6 +74,16 @@ def _summaries(folder):
     return [json.loads(p.read_text()) for p in paths]
 
 
+def _prior_tail(summary, folder):
+    """The ``prior_tail`` of a summary's checks; a folder fitted before it existed is refused."""
+    if "prior_tail" not in summary["checks"]:
+        raise RuntimeError(
+            f"{folder}: its summary.json has no checks.prior_tail (an older fit); remove the "
+            "folder to fit again"
+        )
+    return summary["checks"]["prior_tail"]
+
+
 def fit_log(frozen, name, out):
     """Default ``fsrbayes fit`` of one frozen log; one row per specimen."""
     data = Path(frozen) / f"{name}.csv"
@@ -90,7 +100,7 @@ def fit_log(frozen, name, out):
             "steps": s["convergence"]["n_steps"],
             "seconds": seconds,
             "checks_failed": sorted({f["check"] for f in s["checks"]["failed"]}),
-            "outside_prior_99": [p["name"] for p in s["checks"]["prior_tail"]["parameters"]],
+            "outside_prior_99": [p["name"] for p in _prior_tail(s, folder)["parameters"]],
         }
         for s in _summaries(folder)
     ]

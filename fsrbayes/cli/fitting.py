@@ -120,9 +120,7 @@ def cmd_fit(args):
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
         print("\n".join(drift_lines(summaries[specimen])))
-        if result.converged and checkpoint is not None:
-            checkpoint.unlink(missing_ok=True)  # every step's chain: nothing left to go on with
-        elif checkpoint is not None:
+        if checkpoint is not None and not result.converged:
             print(
                 f"fsrbayes fit: {specimen}: its chains are kept in {checkpoint}; to go on from "
                 f"them, run the same command with --resume --max-steps {2 * args.max_steps}",
@@ -133,6 +131,13 @@ def cmd_fit(args):
             out / "summary.json",
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
+    if sampler.checkpoints and all(s["converged"] for s in summaries.values()):
+        # every step's chain, kept for --resume: nothing is left to go on with. While one
+        # specimen is unconverged all are kept, as --resume goes through every specimen again.
+        for specimen in specimens:
+            (out if len(specimens) == 1 else out / specimen).joinpath(CHECKPOINT).unlink(
+                missing_ok=True
+            )
     return 0
 
 

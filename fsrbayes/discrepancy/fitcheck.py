@@ -46,8 +46,8 @@ __all__ = [
     "LOADING_RATIO_LIMIT",
     "LOADING_WINDOW_S",
     "NOISE_RATIO_LIMIT",
-    "fit_checks",
     "PRIOR_TAIL_LEVEL",
+    "fit_checks",
     "placement_creep_trend",
     "prior_tail",
     "residual_statistics",
@@ -120,7 +120,8 @@ def fit_checks(result, rng=None, *, n_draws=200, alpha=0.01):
         JSON-ready: ``passed`` (bool), ``failed`` (a list of ``{check, …, message}``),
         ``noise_over_scatter``, ``residual_lag1_autocorrelation``, ``loading_ratio`` (NaN
         where the data have too few samples in or after the loading window), ``n_checks``,
-        ``alpha``.
+        ``alpha``, ``placement_creep_trend`` (:func:`placement_creep_trend`) and
+        ``prior_tail`` (:func:`prior_tail`, from all of the run's draws).
     """
     rng = np.random.default_rng(rng)
     posterior = result.posterior

@@ -99,7 +99,7 @@ def _temperature_cycle(sim, amplitude=0.04, period_s=1500.0):
     return type(sim.data)(tuple(tests), "temperature cycle")
 
 
-def test_a_converged_fit_of_a_model_that_misses_the_data_warns(tmp_path):
+def test_a_fit_of_a_model_that_misses_the_data_warns(tmp_path):
     sim = syn.simulate(
         "a201",
         n_specimens=1,
