@@ -216,7 +216,8 @@ def test_output_estimate_counts_the_checkpoint_and_the_posterior(tmp_path):
     ndim = len(json.loads((out / "summary.json").read_text())["parameters"])
     settings = SamplerSettings(n_ensembles=2, chunk=50, max_steps=100)
     estimate = fit_output_bytes(22, 2, ndim, settings)
-    # the checkpoint alone is its part of the estimate: the step budget's chain (and a little npz)
+    # the checkpoint alone is its part of the estimate: the step budget's chain (and a little npz);
+    # 100 steps do not converge, so the fit keeps it
     checkpoint = fit_output_bytes(22, 2, ndim, settings, max_draws=0)
     assert 0.9 * checkpoint < (out / "checkpoint.npz").stat().st_size <= 1.2 * checkpoint
     assert written <= 1.2 * estimate, (written, estimate)

@@ -215,6 +215,7 @@ def test_killed_fit_resumes_from_its_checkpoint(csv_file, tmp_path, stop):
     assert hint and hint[0].endswith("--resume --max-steps 400"), result.stderr
     more = cli(*[("400" if a == "200" else a) for a in args[3:]], "--resume")
     assert more.returncode == 0, more.stderr
+    # 400 steps cannot hold 50 autocorrelation times either, so the checkpoint stays
     longer = np.load(checkpoint)["chain"]
     assert 200 < longer.shape[1] <= 400
     assert longer[:, :200].tobytes() == chain.tobytes()
