@@ -82,7 +82,7 @@ def cmd_fit(args):
         chosen = CreepData(tuple(t for t in data.tests if t.specimen in specimens), data.source)
         return _fit_hierarchical(args, chosen, settings, out, notes)
     install_sigterm_handler()
-    summaries = {}
+    summaries, checkpoints = {}, []
     for specimen in specimens:
         folder = out if len(specimens) == 1 else out / specimen
         folder.mkdir(parents=True, exist_ok=True)
@@ -90,6 +90,7 @@ def cmd_fit(args):
             warnings.simplefilter("always", ConvergenceWarning)
             warnings.simplefilter("always", DesignWarning)
             checkpoint = folder / CHECKPOINT if sampler.checkpoints else None
+            checkpoints.append(checkpoint)
             result = fit(
                 data,
                 specimen,
@@ -120,7 +121,7 @@ def cmd_fit(args):
         state = "converged" if result.converged else "NOT converged"
         print(f"{specimen}: {state}; {result.run.report.worst()}; wrote {folder / 'posterior.nc'}")
         print("\n".join(drift_lines(summaries[specimen])))
-        if checkpoint is not None and not result.converged:
+        if not result.converged and checkpoint is not None:
             print(
                 f"fsrbayes fit: {specimen}: its chains are kept in {checkpoint}; to go on from "
                 f"them, run the same command with --resume --max-steps {2 * args.max_steps}",
@@ -131,13 +132,11 @@ def cmd_fit(args):
             out / "summary.json",
             {"converged": all(s["converged"] for s in summaries.values()), "specimens": summaries},
         )
-    if sampler.checkpoints and all(s["converged"] for s in summaries.values()):
+    if all(s["converged"] for s in summaries.values()):
         # every step's chain, kept for --resume: nothing is left to go on with. While one
         # specimen is unconverged all are kept, as --resume goes through every specimen again.
-        for specimen in specimens:
-            (out if len(specimens) == 1 else out / specimen).joinpath(CHECKPOINT).unlink(
-                missing_ok=True
-            )
+        for checkpoint in filter(None, checkpoints):
+            checkpoint.unlink(missing_ok=True)
     return 0
 
 
