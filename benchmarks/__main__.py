@@ -1,7 +1,7 @@
 """Run the benchmarks and print the results: ``python -m benchmarks [--markdown [FILE]] [solver]
 [scattered] [csv] [rig-read] [predict] [force] [likelihood] [creep-laws] [engine] [map-search]
 [long-run] [fit] [rig-fit] [evidence] [evidence-seeds] [compare] [dynesty] [hierarchical]
-[population-sizes] [diagnose] [demo]``.
+[population-sizes] [transport-map] [diagnose] [demo]``.
 
 ``--markdown`` also writes each benchmark's result as a row of the current table of FILE
 (default BENCHMARKS.md, the table ``benchmarks``; :mod:`validation.tables`): the rows of the
@@ -47,6 +47,7 @@ from benchmarks import (  # noqa: E402
     rig_read,
     scattered,
     solver,
+    transport_map,
 )  # noqa: E402
 from fsrbayes.data.sensors import load_sensor  # noqa: E402
 from validation.tables import markdown_option, measured_on, write_rows  # noqa: E402
@@ -77,6 +78,7 @@ BENCHMARKS = {
     "dynesty": lambda: dynesty_check.report(dynesty_check.run()),
     "hierarchical": lambda: hierarchical.report(hierarchical.run()),
     "population-sizes": lambda: population_sizes.report(population_sizes.run()),
+    "transport-map": lambda: transport_map.report(transport_map.run()),
     "diagnose": lambda: diagnose.report(diagnose.run()),
     "demo": lambda: demo.report(demo.run()),
 }

@@ -32,9 +32,13 @@ __all__ = [
 ]
 
 
-QUADRATIC_MAX_DIM = 14
-"""Above this many dimensions maps are linear (a triangular whitening): a quadratic map's
-fit costs ~d⁵ (22-d hyper-posterior: minutes per refit) and its forward pass ~d³ per call."""
+QUADRATIC_MAX_DIM = 24
+"""Above this many dimensions maps are linear (a triangular whitening). A quadratic map's
+forward pass costs ~d³ per call and its fit ~d⁵, at 24 dimensions a fraction of a millisecond
+per call of 64 walkers and seconds per fit to 50,000 draws (``python -m benchmarks
+transport-map``): small beside a specimen fit's likelihood. A rig log of four hand-placed
+weights samples 23 parameters, and its curved ridges (the drive's drop) need the quadratic
+map (VALIDATION.md, real402_fit)."""
 
 
 @lru_cache(maxsize=64)

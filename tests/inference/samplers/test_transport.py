@@ -14,7 +14,11 @@ from fsrbayes.inference.samplers.moves.independence import (
     student_t_log_density,
 )
 from fsrbayes.inference.samplers.settings import SamplerSettings
-from fsrbayes.inference.samplers.transport import MappedLogProb, TriangularMap
+from fsrbayes.inference.samplers.transport import (
+    QUADRATIC_MAX_DIM,
+    MappedLogProb,
+    TriangularMap,
+)
 from fsrbayes.inference.samplers.warmup import map_settled, warmup_rounds
 from tests import oracles
 
@@ -147,6 +151,25 @@ def test_the_map_puts_the_curved_coordinate_last_and_straightens_it(banana_map):
     assert np.allclose(v.std(axis=0), 1.0, atol=0.03)
     assert abs(np.corrcoef(v[:, 0] ** 2, v[:, 1])[0, 1]) < 0.03  # no curvature left
     assert banana_map.diagonal[1] == pytest.approx(WIDTH, rel=0.05)
+
+
+def test_a_banana_among_23_coordinates_is_straightened_by_the_default_map():
+    """A rig log of four weights gives a specimen posterior of 23 coordinates with curved ridges:
+    the default map is quadratic there and straightens the ridge; forced linear, it cannot."""
+    rng = np.random.default_rng(4)
+    ndim = 23
+    draws = np.column_stack([banana_draws(20000, rng), rng.standard_normal((20000, ndim - 3))])
+    default = TriangularMap.fit(draws)
+    assert default.quadratic and ndim <= QUADRATIC_MAX_DIM
+    check = np.column_stack(
+        [banana_draws(20000, np.random.default_rng(2)), np.zeros((20000, ndim - 3))]
+    )
+    v = default.inverse(check)
+    assert abs(np.corrcoef(v[:, 0] ** 2, v[:, 1])[0, 1]) < 0.03  # no curvature left
+    assert default.diagonal[1] == pytest.approx(WIDTH, rel=0.05)
+    linear = TriangularMap.fit(draws, quadratic=False)
+    v = linear.inverse(check)
+    assert abs(np.corrcoef(v[:, 0] ** 2, v[:, 1])[0, 1]) > 0.5  # the ridge stays curved
 
 
 def test_mapped_density_is_the_target_times_the_jacobian(banana_map):
