@@ -158,11 +158,11 @@ def test_a_banana_among_23_coordinates_is_straightened_by_the_default_map():
     the default map is quadratic there and straightens the ridge; forced linear, it cannot."""
     rng = np.random.default_rng(4)
     ndim = 23
-    draws = np.column_stack([banana_draws(20000, rng), rng.standard_normal((20000, ndim - 3))])
+    draws = np.column_stack([banana_draws(8000, rng), rng.standard_normal((8000, ndim - 3))])
     default = TriangularMap.fit(draws)
     assert default.quadratic and ndim <= QUADRATIC_MAX_DIM
     check = np.column_stack(
-        [banana_draws(20000, np.random.default_rng(2)), np.zeros((20000, ndim - 3))]
+        [banana_draws(8000, np.random.default_rng(2)), np.zeros((8000, ndim - 3))]
     )
     v = default.inverse(check)
     assert abs(np.corrcoef(v[:, 0] ** 2, v[:, 1])[0, 1]) < 0.03  # no curvature left
