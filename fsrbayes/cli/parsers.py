@@ -313,7 +313,7 @@ def _add_calibrate(sub):
         "--map",
         choices=("auto", "affine"),
         default="auto",
-        help="--sampler ensemble: the transport map's form (auto: quadratic up to 14 parameters)",
+        help="--sampler ensemble: the transport map's form (auto: quadratic up to 24 parameters)",
     )
     option(
         cal,
