@@ -8,10 +8,9 @@ linear map at 24, fitted to 50,000 draws of a banana padded with standard normal
 dimension), and the forward pass of 64 walkers.
 """
 
-import time
-
 import numpy as np
 
+from benchmarks.solver import _time
 from fsrbayes.inference.samplers.transport import QUADRATIC_MAX_DIM, TriangularMap
 
 
@@ -19,16 +18,6 @@ def _draws(ndim, n, rng):
     x0 = rng.standard_normal(n)
     ridge = x0**2 - 1.0 + 0.05 * rng.standard_normal(n)
     return np.column_stack([x0, ridge, rng.standard_normal((n, ndim - 2))])
-
-
-def _best(repeats, action, *args, **kwargs):
-    """Shortest of ``repeats`` timings of ``action(*args, **kwargs)`` in s, and its last result."""
-    best, result = float("inf"), None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = action(*args, **kwargs)
-        best = min(best, time.perf_counter() - start)
-    return best, result
 
 
 def _forward_calls(tmap, v, calls):
@@ -44,10 +33,14 @@ def run(n_draws=50_000, walkers=64, calls=200, repeats=3):
     for form, ndim in cases:
         draws = _draws(ndim, n_draws, rng)
         quadratic = form == "quadratic"
-        fit_s, tmap = _best(repeats, TriangularMap.fit, draws, quadratic=quadratic)
-        v = rng.standard_normal((walkers, ndim))
+        fitted = []
+        fit_s = _time(
+            lambda d=draws, q=quadratic, f=fitted: f.append(TriangularMap.fit(d, quadratic=q)),
+            repeats,
+        )
+        tmap, v = fitted[-1], rng.standard_normal((walkers, ndim))
         tmap.forward(v)  # compiled on first use
-        per_call = _best(repeats, _forward_calls, tmap, v, calls)[0] / calls
+        per_call = _time(lambda m=tmap, w=v: _forward_calls(m, w, calls), repeats) / calls
         rows.append({"form": form, "ndim": ndim, "fit_s": fit_s, "forward_s": per_call})
     return {"n_draws": n_draws, "walkers": walkers, "rows": rows}
 
