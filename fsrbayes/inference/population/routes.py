@@ -37,6 +37,7 @@ __all__ = [
     "draw_error",
     "MIN_EFFECTIVE_DRAWS",
     "JOINT_WARMUP_TAU",
+    "HYPER_QUADRATIC_MAX_DIM",
 ]
 
 MIN_EFFECTIVE_DRAWS = 50
@@ -49,6 +50,22 @@ the two-stage posterior, which approximates the joint one; half the chain (50 τ
 converges) is far more than they need to forget the start. The kept chain is held to the same
 criteria; the route's answer with this warm-up and with half the chain discarded is compared in
 BENCHMARKS.md."""
+
+
+HYPER_QUADRATIC_MAX_DIM = 14
+"""Above this many sampled parameters a population posterior's transport map is linear, where the
+settings leave ``quadratic_map`` None (a specimen fit's map is quadratic up to
+:data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM`). Hyper-posteriors are close to
+Gaussian in the non-centred coordinates; a quadratic map there costs steps, not saves them: 16
+specimens of 11 population parameters (22 sampled) converge in 3,000 steps (τ 24) with the linear
+map and 5,000 (τ 62) with the quadratic one (BENCHMARKS.md, population-sizes)."""
+
+
+def _population_settings(settings, ndim):
+    """Return ``settings`` with a linear map above :data:`HYPER_QUADRATIC_MAX_DIM` parameters."""
+    if settings.quadratic_map is None and ndim > HYPER_QUADRATIC_MAX_DIM:
+        return replace(settings, quadratic_map=False)
+    return settings
 
 
 class SpecimenFitWarning(UserWarning):
@@ -255,7 +272,7 @@ def two_stage(
     if coordinates not in ("non-centred", "prior"):
         raise ValueError(f"coordinates must be 'non-centred' or 'prior', got {coordinates!r}")
     sampled = NonCentredCoordinates.for_target(target) if coordinates == "non-centred" else None
-    settings = settings or SamplerSettings()
+    settings = _population_settings(settings or SamplerSettings(), target.ndim)
     run = _sample(target, seed, settings, None, progress, sampled)
     result = HierarchicalResult(
         population, target, run, seed, "two-stage", labels, specimen_draws=full
@@ -365,6 +382,7 @@ def joint(
         )
     else:
         target = JointTarget(population, specimens)
+        settings = _population_settings(settings, target.ndim)
     start = None
     if start_from is not None:
         if settings.warmup_tau is None:

@@ -15,6 +15,7 @@ from fsrbayes.inference.population.coordinates import NonCentredCoordinates
 from fsrbayes.inference.population.gibbs import GIBBS_WALKERS, GibbsJointTarget
 from fsrbayes.inference.population.model import Population, TwoStageTarget
 from fsrbayes.inference.population.routes import (
+    HYPER_QUADRATIC_MAX_DIM,
     JOINT_WARMUP_TAU,
     ReweightingWarning,
     joint,
@@ -22,6 +23,7 @@ from fsrbayes.inference.population.routes import (
 )
 from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 from fsrbayes.inference.samplers.settings import SamplerSettings
+from fsrbayes.inference.samplers.transport import QUADRATIC_MAX_DIM, TriangularMap
 
 INTERIM = JointPrior(("theta",), (Distribution("normal", {"mu": 0.0, "sigma": 10.0}),))
 SIGMA = np.array([0.8, 1.0, 1.2, 0.6, 1.5, 1.0, 0.9, 1.3])
@@ -201,6 +203,29 @@ def test_non_centred_coordinates_are_an_exact_bijection_with_its_jacobian():
                 coordinates.from_sampled(up)[0] - coordinates.from_sampled(down)[0]
             ) / (2 * step)
         assert np.linalg.slogdet(jacobian)[1] == pytest.approx(expected, abs=1e-6)
+
+
+@pytest.mark.parametrize("n_parameters", [3, 8])
+def test_hyper_posteriors_above_14_parameters_get_a_linear_map(monkeypatch, n_parameters):
+    # A specimen of 16 parameters would get a quadratic map; its hyper-posterior of 16 does not.
+    assert HYPER_QUADRATIC_MAX_DIM < 2 * 8 <= QUADRATIC_MAX_DIM
+    forms = []
+    original = TriangularMap.fit.__func__
+
+    def recording_fit(cls, draws, quadratic=None, **kwargs):
+        forms.append(quadratic)
+        return original(cls, draws, quadratic=quadratic, **kwargs)
+
+    monkeypatch.setattr(TriangularMap, "fit", classmethod(recording_fit))
+    population, draws, _, _ = _funnel(n_parameters=n_parameters, n_draws=100)
+    settings = SamplerSettings(
+        n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1, processes=1
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        two_stage(draws, population, n_draws=100, settings=settings, seed=1)
+    expected = None if 2 * n_parameters <= HYPER_QUADRATIC_MAX_DIM else False
+    assert forms and set(forms) == {expected}
 
 
 @pytest.mark.validation  # a converged funnel run: the tier's (~9 s)
