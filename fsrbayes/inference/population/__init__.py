@@ -7,7 +7,7 @@
   dask), then :func:`two_stage` or :func:`joint`.
 - :mod:`.coordinates` — the non-centred coordinates the two-stage hyper-posterior is sampled in.
 - :mod:`.gibbs` — blocked Gibbs sweeps for the joint route; :mod:`.proposals` — the independence
-  proposals of its specimen blocks.
+  proposals of its specimen blocks; :mod:`.starts` — where its walkers start.
 - :mod:`.predictive` — new specimens drawn from the population: drift(3600 s) box plots per
   group and the sourcing voltage that minimises drift.
 

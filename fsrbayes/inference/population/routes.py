@@ -26,6 +26,7 @@ from ..samplers.settings import SamplerSettings
 from .coordinates import NonCentredCoordinates
 from .gibbs import GIBBS_WALKERS, GibbsJointTarget
 from .model import JointTarget, Population, TwoStageTarget
+from .starts import start_from_draws, start_from_two_stage
 
 __all__ = [
     "HierarchicalResult",
@@ -214,6 +215,10 @@ def _walkers(target, settings):
     return settings.walkers_for(target.ndim)
 
 
+def _shape(target, settings):
+    return settings.n_ensembles, _walkers(target, settings)
+
+
 def _thin(values, n):
     return values[even_index(len(values), n)]
 
@@ -387,54 +392,13 @@ def joint(
     if start_from is not None:
         if settings.warmup_tau is None:
             settings = replace(settings, warmup_tau=JOINT_WARMUP_TAU)
-        start = _start_from_two_stage(target, start_from, settings, rng)
+        start = start_from_two_stage(target, start_from, _shape(target, settings), rng)
     elif method == "gibbs":
-        start = _start_from_draws(target, proposal_draws, settings, rng)
+        start = start_from_draws(target, proposal_draws, _shape(target, settings), rng)
     run = _sample(target, seed, settings, start, progress)
     return HierarchicalResult(
         population, target, run, seed, "joint", list(labels or range(len(specimens)))
     )
-
-
-def _start_from_draws(target, draws, settings, rng):
-    """Return walkers started from per-specimen draws.
-
-    Walkers from per-specimen draws: a random draw per specimen, the hyper-parameters at those
-    draws' mean and spread (not a draw of the posterior: the warm-up is half the chain).
-    """
-    n_walk = _walkers(target, settings)
-    n = settings.n_ensembles * n_walk
-    population = target.population
-    picks = [np.asarray(d, dtype=float)[rng.integers(0, len(d), n)] for d in draws]
-    z = np.stack([population.to_z(p[:, population.index])[0] for p in picks], axis=1)  # (n, J, P)
-    mu = z.mean(axis=1)
-    omega = np.maximum(z.std(axis=1), 1e-3 * population.scale)
-    u = [population.hyper_prior.to_unconstrained(np.concatenate([mu, omega], axis=1))]
-    u += [spec.prior.to_unconstrained(p) for spec, p in zip(target.specimens, picks, strict=False)]
-    return np.concatenate(u, axis=1).reshape(settings.n_ensembles, n_walk, -1)
-
-
-def _start_from_two_stage(target, two, settings, rng):
-    """Return walkers from a two-stage result: hyper draws and a reweighted draw per specimen."""
-    n_walk = _walkers(target, settings)
-    n = settings.n_ensembles * n_walk
-    if two.specimen_draws is None or len(two.specimen_draws) != len(target.specimens):
-        raise ValueError(
-            "start_from needs a two-stage result built from fits of the same specimens"
-        )
-    pool = two.hyper_draws(max(n, 400))
-    hyper = pool[rng.integers(0, len(pool), n)]
-    population = target.population
-    u = [population.hyper_prior.to_unconstrained(hyper)]
-    mu, omega = population.split(hyper)
-    for spec, full in zip(target.specimens, two.specimen_draws, strict=False):
-        x_pop = full[:, population.index]
-        log_w = population.log_ratio(x_pop[None, :, :], mu[:, None, :], omega[:, None, :])
-        p = np.exp(log_w - log_w.max(axis=1, keepdims=True))
-        p /= p.sum(axis=1, keepdims=True)
-        pick = np.array([rng.choice(len(full), p=row) for row in p])
-        u.append(spec.prior.to_unconstrained(full[pick]))
-    return np.concatenate(u, axis=1).reshape(settings.n_ensembles, n_walk, -1)
 
 
 def _fit_one(args):
