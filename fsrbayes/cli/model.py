@@ -11,6 +11,7 @@ import numpy as np
 
 from .._version import __version__
 from ..data import DataError, csvio, embedded, paperlike, synthetic
+from ..data.creep_rates import DECADES, describe_creep
 from ..data.sensors import load_sensor
 from ..physics import sensor as fsr
 from ..physics.tunneling import paper_peak_voltage
@@ -348,7 +349,35 @@ def cmd_check(args):
     print(data.summary())
     for note in calibration_notes(data):
         print(f"  note: {note}")
+    _print_creep_rates(data)
     return 0
+
+
+CREEP_RATE_TESTS = 8
+"""``check`` prints the creep per decade of at most this many tests."""
+
+
+def _print_creep_rates(data):
+    """Print each test's ln R per decade of time after each loading (:mod:`~..data.creep_rates`)."""
+    windows = ", ".join(f"{a:g}–{b:g} s" for a, b in DECADES)
+    blocks = [(t, describe_creep(t)) for t in data.tests]
+    blocks = [(t, lines) for t, lines in blocks if lines]
+    if not blocks:
+        return
+    print(
+        f"  creep: ln R per decade of time over {windows} after each loading\n"
+        "    (negative: creeping; positive: recovering; the same in every window: linear in log t)"
+    )
+    for test, lines in blocks[:CREEP_RATE_TESTS]:
+        label = test.test or f"at {test.stress_Pa / 1e3:.4g} kPa, {test.voltage_V:g} V"
+        print(f"    {test.specimen} test {label}:")
+        for line in lines:
+            print(f"      {line}")
+    if len(blocks) > CREEP_RATE_TESTS:
+        print(
+            f"    … and {len(blocks) - CREEP_RATE_TESTS} more tests "
+            "(fsrbayes.data.creep_rates.creep_per_decade gives every one)"
+        )
 
 
 def _check_log(args):

@@ -1,6 +1,7 @@
 """Data layer: creep tests, CSV files, sensor definitions, priors, and the virtual test bench.
 
-- :mod:`.creep` — creep tests in memory (:class:`CreepTest`, :class:`CreepData`).
+- :mod:`.creep` — creep tests in memory (:class:`CreepTest`, :class:`CreepData`);
+  :mod:`.creep_rates` — how fast a test creeps per decade of time, from its readings alone.
 - :mod:`.csvio` — the tidy CSV format, read with validation (:func:`read_csv`); written by
   :mod:`.csvwrite` (:func:`write_csv`).
 - :mod:`.sensors` — sensor definitions from ``models/*.toml`` (``load_sensor``).
