@@ -23,7 +23,7 @@ DECADES = ((1.0, 10.0), (10.0, 100.0), (100.0, 1000.0), (1000.0, 10000.0))
 """The windows of time since a load change (s) over which a slope is fitted."""
 
 MIN_SAMPLES = 5
-"""A window's slope needs this many readings, spanning at least half of its decade."""
+"""A window's slope needs this many readings, spanning at least half of its width in log time."""
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,8 @@ def creep_per_decade(test, decades=DECADES):
     ----------
     test : CreepTest
     decades : sequence of (float, float)
-        Windows of the time since each load change, in s.
+        Windows of the time since each load change, in s (any width: a window's slope is per
+        decade whatever its span).
 
     Returns
     -------
@@ -67,6 +68,7 @@ def creep_per_decade(test, decades=DECADES):
         times, sizes = (np.asarray(a, dtype=float) for a in test.load_steps)
         moved = sizes != 0
         changes, levels = times[moved], np.cumsum(sizes)[moved]
+        levels[np.abs(levels) <= 1e-9 * np.abs(sizes).max()] = 0.0  # rounding of an unloading
     ends = np.append(changes[1:], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
         log_r = np.log(test.voltage_V / test.current_A - test.rm_ohm)
@@ -79,7 +81,7 @@ def creep_per_decade(test, decades=DECADES):
         for low, high in decades:
             chosen = (since >= low) & (since < high) & (test.time_s < end) & np.isfinite(log_r)
             x = np.log10(since[chosen])
-            if chosen.sum() < MIN_SAMPLES or np.ptp(x) < 0.5:
+            if chosen.sum() < MIN_SAMPLES or np.ptp(x) < 0.5 * np.log10(high / low):
                 slopes.append(float("nan"))
                 continue
             slopes.append(float(np.polyfit(x, log_r[chosen], 1)[0]))

@@ -27,11 +27,21 @@ def test_creep_linear_in_log_time_reads_the_same_slope_in_every_decade():
     assert steps[0].slopes == pytest.approx([-0.12] * 4, abs=1e-9)
 
 
-def test_creep_linear_in_time_steepens_decade_by_decade_and_short_windows_are_left_out():
+def test_creep_linear_in_time_steepens_decade_by_decade():
     t = np.geomspace(0.5, 600.0, 300)  # a Burgers dashpot: ln R falls linearly in t
     slopes = creep_per_decade(_divider_test(t, np.log(2000.0) - 2e-4 * t))[0].slopes
     assert np.isnan(slopes[3])  # 1000-10000 s: no reading
     assert slopes[0] < 0 and slopes[1] < 5 * slopes[0] and slopes[2] < 5 * slopes[1]
+
+
+def test_a_window_the_readings_cover_less_than_half_of_gets_no_slope():
+    t = np.geomspace(0.5, 250.0, 300)  # 100-250 s: many readings, 0.4 of a decade
+    log_r = np.log(2000.0) - 0.12 * np.log10(t)
+    slopes = creep_per_decade(_divider_test(t, log_r))[0].slopes
+    assert slopes[1] == pytest.approx(-0.12, abs=1e-9) and np.isnan(slopes[2])
+    # a window of any width: a third of a decade (10-20 s) is read per decade as well
+    narrow = creep_per_decade(_divider_test(t, log_r), decades=((10.0, 20.0),))[0].slopes
+    assert narrow == pytest.approx([-0.12], abs=1e-9)
 
 
 def test_each_loading_of_a_staircase_gets_its_own_slopes_and_unloaded_spans_none():
@@ -53,6 +63,18 @@ def test_each_loading_of_a_staircase_gets_its_own_slopes_and_unloaded_spans_none
         assert np.isnan(step.slopes[3])
     lines = describe_creep(test)
     assert len(lines) == 3 and "+0.030" in lines[1] and "from   1000.0 s" in lines[1]
+
+
+def test_an_unloading_whose_steps_do_not_sum_to_zero_exactly_is_still_unloaded():
+    loads = np.array([426.0, 471.0, 31.0, 0.0]) * 9.80665e-3 / 183.85e-6  # Pa, as a rig reads
+    sizes = np.diff(loads, prepend=0.0)
+    assert np.cumsum(sizes)[-1] > 0.0  # the rounding this test is about
+    t = np.geomspace(0.2, 3000.0, 400)
+    test = _divider_test(
+        t, np.log(1500.0) - 0.1 * np.log10(t),
+        load_steps=(np.array([0.0, 10.0, 20.0, 30.0]), sizes),
+    )  # fmt: skip
+    assert [round(s.stress_Pa) for s in creep_per_decade(test)] == [round(v) for v in loads[:3]]
 
 
 # The real-402 bench (fsrbayes.data.realfsr, written apart from the model), on seeds not among

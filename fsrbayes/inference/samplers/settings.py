@@ -69,10 +69,11 @@ class SamplerSettings:
         converging.
     quadratic_map : bool or None
         The transport map's form: quadratic (None: up to
-        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions) or affine
-        (False). A parabola fitted to a *kinked* ridge bends the arms' far ends in the map's
-        coordinates, which the chain then under-samples while reporting convergence; the affine
-        map does not (the closed-form bent ridge, VALIDATION.md).
+        :data:`~fsrbayes.inference.samplers.transport.QUADRATIC_MAX_DIM` dimensions; up to
+        :data:`~fsrbayes.inference.population.routes.HYPER_QUADRATIC_MAX_DIM` for a population
+        posterior) or affine (False). A parabola fitted to a *kinked* ridge bends the arms' far
+        ends in the map's coordinates, which the chain then under-samples while reporting
+        convergence; the affine map does not (the closed-form bent ridge, VALIDATION.md).
     map_starts : int
         Optimisations of the maximum-a-posteriori search a fit runs before sampling (from the
         best prior draws; at least ``n_ensembles``). Their optima are sorted into separate

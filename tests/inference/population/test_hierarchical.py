@@ -205,8 +205,8 @@ def test_non_centred_coordinates_are_an_exact_bijection_with_its_jacobian():
         assert np.linalg.slogdet(jacobian)[1] == pytest.approx(expected, abs=1e-6)
 
 
-@pytest.mark.parametrize("n_parameters", [3, 8])
-def test_hyper_posteriors_above_14_parameters_get_a_linear_map(monkeypatch, n_parameters):
+@pytest.mark.parametrize("n_parameters, asked", [(3, None), (8, None), (8, True)])
+def test_hyper_posteriors_above_14_parameters_get_a_linear_map(monkeypatch, n_parameters, asked):
     # A specimen of 16 parameters would get a quadratic map; its hyper-posterior of 16 does not.
     assert HYPER_QUADRATIC_MAX_DIM < 2 * 8 <= QUADRATIC_MAX_DIM
     forms = []
@@ -219,12 +219,14 @@ def test_hyper_posteriors_above_14_parameters_get_a_linear_map(monkeypatch, n_pa
     monkeypatch.setattr(TriangularMap, "fit", classmethod(recording_fit))
     population, draws, _, _ = _funnel(n_parameters=n_parameters, n_draws=100)
     settings = SamplerSettings(
-        n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1, processes=1
-    )
+        n_ensembles=2, chunk=100, max_steps=200, min_steps=200, transport_rounds=1, processes=1,
+        quadratic_map=asked,
+    )  # fmt: skip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         two_stage(draws, population, n_draws=100, settings=settings, seed=1)
-    expected = None if 2 * n_parameters <= HYPER_QUADRATIC_MAX_DIM else False
+    # asked for explicitly, the quadratic map is kept
+    expected = asked if asked else None if 2 * n_parameters <= HYPER_QUADRATIC_MAX_DIM else False
     assert forms and set(forms) == {expected}
 
 
