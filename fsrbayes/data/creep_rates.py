@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .readouts import log_resistance
+
 __all__ = ["DECADES", "MIN_SAMPLES", "StepCreep", "creep_per_decade", "describe_creep"]
 
 DECADES = ((1.0, 10.0), (10.0, 100.0), (100.0, 1000.0), (1000.0, 10000.0))
@@ -70,8 +72,8 @@ def creep_per_decade(test, decades=DECADES):
         changes, levels = times[moved], np.cumsum(sizes)[moved]
         levels[np.abs(levels) <= 1e-9 * np.abs(sizes).max()] = 0.0  # rounding of an unloading
     ends = np.append(changes[1:], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        log_r = np.log(test.voltage_V / test.current_A - test.rm_ohm)
+    with np.errstate(divide="ignore"):
+        log_r = log_resistance(np.log(test.current_A), test.voltage_V, test.rm_ohm)
     out = []
     for start, end, level in zip(changes, ends, levels, strict=True):
         if level <= 0:

@@ -30,6 +30,7 @@ __all__ = [
     "UNIT_COLUMNS",
     "Readout",
     "current_of",
+    "log_resistance",
     "reading_of",
 ]
 
@@ -172,3 +173,14 @@ def reading_of(readout, current_A):
         return current * readout.rm_ohm
     top = 2.0**readout.adc_bits - 1.0
     return np.clip(np.round(current / readout.quantum_A), 0.0, top)  # adc_counts
+
+
+def log_resistance(log_current, supply, series):
+    """Return log R = log(V_FSR/I) of a sensor in series with ``series`` Ω at ``supply`` V.
+
+    A divider's fixed resistor R_m takes its share of the supply V: V_FSR = V − I·R_m, so
+    R = V/I − R_m (R_m = 0 at a constant sourcing voltage). NaN where the current is out of
+    the circuit's reach.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log(supply * np.exp(-np.asarray(log_current)) - series)

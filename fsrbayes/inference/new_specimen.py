@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..data.readouts import log_resistance
 from ..data.sensors import load_sensor
 from ..utils import json_ready, write_json_atomic
 from .nuisance import is_placement
@@ -33,7 +34,7 @@ from .predictive_draws import (
     population_folders,
     population_members,
 )
-from .specimen_scatter import TEST_SD, calibrated_offsets, log_resistance, scatter_of, stress_at
+from .specimen_scatter import TEST_SD, calibrated_offsets, scatter_of, stress_at
 
 __all__ = ["CALIBRATION_DRAWS", "SETTLE_S", "calibrate", "test_sd_of"]
 

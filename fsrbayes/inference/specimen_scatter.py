@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..data.readouts import log_resistance
 from ..data.sensor_ranges import SpecimenScatter
 from ..physics.superposition import load_of_steps
 
@@ -37,7 +38,6 @@ __all__ = [
     "TEST_SD",
     "REFERENCE_TIME_S",
     "calibrated_offsets",
-    "log_resistance",
     "ScatterOffsets",
     "member_coordinates",
     "new_coordinates",
@@ -121,17 +121,6 @@ def reference_tests(test, scatter):
         )
         for k, s in enumerate(stresses)
     ]
-
-
-def log_resistance(log_current, supply, series):
-    """Return log R = log(V_FSR/I) of a sensor in series with ``series`` Ω at ``supply`` V.
-
-    A divider's fixed resistor R_m takes its share of the supply V: V_FSR = V − I·R_m, so
-    R = V/I − R_m (R_m = 0 at a constant sourcing voltage). NaN where the current is out of
-    the circuit's reach.
-    """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.log(supply * np.exp(-np.asarray(log_current)) - series)
 
 
 def _circuit(packed):
