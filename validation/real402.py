@@ -16,7 +16,10 @@ command line with its defaults:
   specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
   the specimen of a frozen log of seed S under a new protocol). A name ``LOG@PROTOCOL`` (e.g.
   ``A-hold-10min@staircase``) writes that log itself, with the frozen log's rig and seed, and
-  predicts it from the fit of ``LOG``.
+  predicts it from the fit of ``LOG``. A log named ``RIG-PROTOCOL-seedN`` (e.g.
+  ``A-hold-seed7401``) is not frozen: it is written into ``OUT/seeds`` by ``simulate-rig
+  --preset real-402 --rig RIG --protocol PROTOCOL --seed N``, so a forecast can be judged on
+  sensors the acceptance set does not hold (``A-hold-seed7401@cycles``).
 
 Run ``python -m validation.real402 OUT fit A-spread B-hold-12min`` or ``python -m
 validation.real402 OUT forecast A-hold-60min``; each fit takes minutes on 2 cores, and a fit
@@ -26,6 +29,7 @@ already in OUT is reused (its seconds are then not known). The rows are written 
 
 import csv
 import json
+import re
 import subprocess
 import sys
 import time
@@ -45,6 +49,30 @@ def frozen_set(folder):
         fsrbayes_command(
             "simulate-rig", "--preset", "real-402", "--acceptance-set", "model", "-o", folder
         )
+    return folder
+
+
+SEED_LOG = re.compile(r"^(?P<rig>[AB])-(?P<protocol>[a-z-]+)-seed(?P<seed>\d+)$")
+"""A log written from a bench seed rather than frozen: ``RIG-PROTOCOL-seedN``."""
+
+
+def log_folder(frozen, name, out):
+    """Return the folder holding log ``name``: ``frozen``, or ``out/seeds`` for a seed's log.
+
+    A name matching :data:`SEED_LOG` is written there once by ``simulate-rig --preset
+    real-402`` (with its truth file, as the frozen logs have).
+    """
+    match = SEED_LOG.match(name)
+    if match is None:
+        return Path(frozen)
+    folder = Path(out) / "seeds"
+    path = folder / f"{name}.csv"
+    if not path.is_file():
+        folder.mkdir(parents=True, exist_ok=True)
+        fsrbayes_command(
+            "simulate-rig", "--preset", "real-402", "--rig", match["rig"], "--protocol",
+            match["protocol"], "--seed", match["seed"], "-o", path,
+        )  # fmt: skip
     return folder
 
 
@@ -208,10 +236,11 @@ def run(out, mode, names, protocol=None):
     frozen = frozen_set(out / "frozen")
     rows = []
     for name in names:
+        folder = log_folder(frozen, name.split("@", 1)[0], out)
         if mode == "fit":
-            rows += fit_log(frozen, name, out)
+            rows += fit_log(folder, name, out)
         else:
-            rows += forecast(frozen, name, out, protocol)
+            rows += forecast(folder, name, out, protocol)
         print(format_rows(rows), flush=True)
     (out / f"{mode}.json").write_text(json.dumps(rows, indent=1))
     return rows

@@ -177,17 +177,53 @@ def placement_draws(seen, packed, attrs, rng):
 
     ``seen``: a list of the fit's placement levels and, where it sampled them, its creeps, each
     (S, K). A protocol test that is one of the fitted tests (same specimen, voltage, stress and
-    test label: a hold fitted on its first minutes, predicted to its end) keeps its own; any
-    other is a new placement and, draw by draw, lends the level and creep of one fitted test
-    picked at random, as a fresh placement lands and creeps like the ones seen.
+    test label: a hold fitted on its first minutes, predicted to its end) keeps its own. A new
+    placement of a weight the fit saw — every load of the test at the stress at which fitted
+    tests of the same specimen and voltage began (:data:`SAME_STRESS_RTOL`), say load–unload
+    cycles of one of the held weights — is centred on those tests' values, draw by draw, with the
+    spread of the placements seen added: a fitted test picked at random, less the mean of all.
+    Placement factors take up how each weight departs from the stress laws as well as how the
+    weight landed, so a weight placed again reads as it did before, give or take a landing. Any
+    other test (a staircase through several weights, a weight not held) lends the level and creep
+    of one fitted test picked at random, as a fresh placement lands and creeps like the ones seen.
     """
     keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
-    own = {}
+    loads = _test_loads(packed)
+    own, centre = {}, {}
     for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
         for j, key in enumerate(keys):
             if key[0] == specimen and key[3] == label and np.allclose(key[1:3], (voltage, stress)):
                 own[i] = j
-    return _lent(seen, packed.n_tests, rng, own)
+        if i in own:
+            continue
+        same = [
+            j
+            for j, key in enumerate(keys)
+            if key[0] == specimen
+            and np.isclose(key[1], voltage)
+            and np.allclose(loads[i], key[2], rtol=SAME_STRESS_RTOL, atol=0.0)
+        ]
+        if same:
+            centre[i] = same
+    lent = _lent(seen, packed.n_tests, rng, own)
+    for values, fitted in zip(lent, seen, strict=True):
+        spread = values - fitted.mean(axis=1, keepdims=True)
+        for i, same in centre.items():
+            values[:, i] = fitted[:, same].mean(axis=1) + spread[:, i]
+    return lent
+
+
+SAME_STRESS_RTOL = 0.02
+"""Relative tolerance within which a protocol test's loads count as a fitted test's stress
+(:func:`placement_draws`): the same weight, read through the rounding of a log's force column."""
+
+
+def _test_loads(packed):
+    """Per protocol test, the stresses (Pa) it holds: every level of its load steps above 0."""
+    if getattr(packed, "step_size", None) is None:
+        return [np.array([key[2]]) for key in packed.test_keys]
+    levels = np.cumsum(packed.step_size, axis=1)
+    return [np.unique(row[row > 0.0]) for row in levels]
 
 
 def _lent(seen, n_tests, rng, own=None):

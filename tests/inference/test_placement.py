@@ -141,6 +141,34 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     assert np.all(levels[:, 0] == 0.2)
 
 
+def test_a_weight_placed_again_reads_as_it_did_give_or_take_the_placements_spread():
+    """Cycles of a held weight centre on that weight's placement; a staircase lends at random."""
+    rng = np.random.default_rng(3)
+    seen = np.array([-0.04, 0.005, 0.018, 0.017]) + 0.002 * rng.standard_normal((2000, 4))
+    keys = [["s1", 4.9, s, f"w{k}"] for k, s in enumerate((7000.0, 9000.0, 11000.0, 13000.0))]
+    attrs = {"test_keys": json.dumps(keys)}
+    cycles = [11000.0, -11000.0, 11000.0 * 1.004, -11000.0 * 1.004]  # a force column's rounding
+    stairs = [7000.0, 2000.0, 2000.0, 2000.0]
+    packed = SimpleNamespace(
+        n_tests=3,
+        test_keys=(
+            ("s1", 4.9, 11000.0, "cycles"),
+            ("s1", 4.9, 7000.0, "staircase"),
+            ("s1", 3.3, 11000.0, "other-rig"),
+        ),
+        step_size=np.array([cycles, stairs, [11000.0, 0.0, 0.0, 0.0]]),
+    )
+    (got,) = placement_draws([seen], packed, attrs, np.random.default_rng(0))
+    spread = seen - seen.mean(axis=1, keepdims=True)
+    # centred on w2's level, spread as the four placements are about their mean
+    assert np.median(got[:, 0]) == pytest.approx(0.018 + np.median(spread), abs=0.004)
+    assert np.std(got[:, 0]) == pytest.approx(np.std(spread), rel=0.1)
+    # a staircase through four weights and a test at another voltage: one placement seen, as before
+    for column in (1, 2):
+        assert np.all(np.min(np.abs(got[:, column, None] - seen), axis=1) == 0.0)
+    assert np.mean(got[:, 1] < -0.03) == pytest.approx(0.25, abs=0.04)  # w0's, one draw in four
+
+
 def _fitted(stresses, creeps):
     """A stand-in posterior and its draws: a sampled creep factor per test at these stresses."""
     n = len(stresses)

@@ -571,3 +571,17 @@ def test_the_registry_imports_no_study_until_one_runs():
     )
     loaded = ["validation.__main__", "validation.registry", "validation.tables"]
     assert ast.literal_eval(done.stdout) == loaded
+
+
+def test_a_seed_log_is_written_from_its_name_and_a_frozen_one_is_left_where_it_is(tmp_path):
+    from validation.real402 import log_folder
+
+    frozen = tmp_path / "frozen"
+    assert log_folder(frozen, "B-hold-12min", tmp_path) == frozen
+    assert not (tmp_path / "seeds").exists()
+    folder = log_folder(frozen, "B-hold-seed5", tmp_path)
+    truth = json.loads((folder / "B-hold-seed5.truth.json").read_text())
+    assert (truth["seed"], truth["rig_name"], truth["protocol"]) == (5, "B", "hold")
+    stamp = (folder / "B-hold-seed5.csv").stat().st_mtime_ns
+    assert log_folder(frozen, "B-hold-seed5", tmp_path) == folder  # written once
+    assert (folder / "B-hold-seed5.csv").stat().st_mtime_ns == stamp
