@@ -10,8 +10,9 @@ command line with its defaults:
   many of its checks failed, and which posterior medians lie outside the prior's central 99 %;
 * **forecast**: ``fsrbayes fit`` on each test's first ``FIRST_S`` seconds after its load
   landed, then ``fsrbayes predict`` of the whole log — the share of the later readings inside
-  their 90 % band (target 0.80–0.98) and the band's median width relative to the reading, beside
-  the prior predictive's (``predict --prior``): a band that covers by being wide shows there.
+  their 90 % band (target 0.80–0.98), the readings' median over the band's median (how far off
+  its centre the forecast is) and the band's median width relative to the reading, beside the
+  prior predictive's (``predict --prior``): a band that covers by being wide shows there.
   ``--protocol LOG`` predicts another log of the same specimens instead (the bench draws a
   specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
   the specimen of a frozen log of seed S under a new protocol). A name ``LOG@PROTOCOL`` (e.g.
@@ -210,6 +211,9 @@ def forecast(frozen, name, out, protocol=None, first_s=FIRST_S):
                 "converged": fitted[after["specimen"]]["converged"],
                 "coverage_after": float(inside.mean()) if late.any() else None,
                 "width_90_rel": float(np.median((q["q95"] - q["q05"]) / np.abs(q["q50"]))),
+                "reading_over_median": (
+                    float(np.median(observed[late] / q["q50"])) if late.any() else None
+                ),
                 "prior_width_90_rel": float(np.median(prior_width[late])),
             }
         )

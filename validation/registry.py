@@ -273,6 +273,14 @@ REAL402_FORECASTS = (
 """The forecasts: the rest of four logs, and two protocols that fits of two sensors' 10-minute
 holds never saw."""
 
+REAL402_SEED_FORECASTS = tuple(
+    f"A-hold-seed{seed}@{protocol}"
+    for seed in range(7401, 7407)
+    for protocol in ("staircase", "cycles")
+)
+"""The same forecast from four 10-minute holds on six sensors outside the frozen set (bench seeds
+7401–7406, rig A): a staircase through the four weights and load–unload cycles of 215 g."""
+
 
 def _real402_fit_summary(rows):
     def named(r):
@@ -306,7 +314,8 @@ def _real402_forecast_summary(rows):
             f" {r['test']}" if predicted == r["log"] else f" → {predicted}"
         )
         return (
-            f"{what} {r['coverage_after']:.3f} ({100 * r['width_90_rel']:.1f} % wide, the prior "
+            f"{what} {r['coverage_after']:.3f} ({100 * r['width_90_rel']:.1f} % wide, the "
+            f"readings {100 * (r['reading_over_median'] - 1):+.1f} % off its median, the prior "
             f"predictive's {100 * r['prior_width_90_rel']:.0f} %)"
         )
 
@@ -445,6 +454,17 @@ STUDIES = {
         "simulate-rig --preset real-402 --protocol PROTOCOL` with the log's rig and seed); rows "
         "in OUT/forecast.json",
         run=_call("real402", "run", "real402-out", "forecast", list(REAL402_FORECASTS)),
+        table=_call("real402", "format_rows"),
+        summary=_real402_forecast_summary,
+    ),
+    "real402_forecast_seeds": Study(
+        module="real402",
+        how="the forecasts from four 10-minute holds on six bench sensors outside the frozen set "
+        "(`python -m validation.real402 OUT forecast A-hold-seed7401@staircase "
+        "A-hold-seed7401@cycles … A-hold-seed7406@cycles`: `A-hold-seedN` is `fsrbayes "
+        "simulate-rig --preset real-402 --rig A --protocol hold --seed N`); rows in "
+        "OUT/forecast.json",
+        run=_call("real402", "run", "real402-seeds-out", "forecast", list(REAL402_SEED_FORECASTS)),
         table=_call("real402", "format_rows"),
         summary=_real402_forecast_summary,
     ),

@@ -85,6 +85,7 @@ ROW_LITERALS = {
     "sbc_power": ("run", "rejected", set()),
     "real402_fit": ("fit_log", "outside_prior_99", set()),
     "real402_forecast": ("forecast", "coverage_after", set()),
+    "real402_forecast_seeds": ("forecast", "coverage_after", set()),
     "force_bench": ("_score_result", "inside_90", LATE),
     "new_sensor": ("side_row", "tests_held", set()),
     "force_new_sensor": ("_score_result", "inside_90", LATE),
@@ -364,16 +365,17 @@ def _real402_forecast():
     return [
         row
         | {"test": "t1", "coverage_after": 0.916, "width_90_rel": 0.025}
-        | {"prior_width_90_rel": 0.5},
+        | {"reading_over_median": 1.004, "prior_width_90_rel": 0.5},
         row
         | {"test": "t2", "coverage_after": 0.917, "width_90_rel": 0.032}
-        | {"prior_width_90_rel": 0.6},
+        | {"reading_over_median": 0.97, "prior_width_90_rel": 0.6},
         row
         | {"test": "t3", "coverage_after": None, "width_90_rel": 0.03}
-        | {"prior_width_90_rel": 0.55},
+        | {"reading_over_median": None, "prior_width_90_rel": 0.55},
         row
         | {"log": "A-hold-10min", "protocol": "A1-staircase.csv", "test": "staircase"}
-        | {"coverage_after": 0.972, "width_90_rel": 0.6, "prior_width_90_rel": 379.0},
+        | {"coverage_after": 0.972, "width_90_rel": 0.6, "reading_over_median": 1.0}
+        | {"prior_width_90_rel": 379.0},
     ]
 
 
@@ -481,11 +483,15 @@ SYNTHETIC = {
     "real402_forecast": (
         _real402_forecast,
         [
-            "A-hold-60min 402-A1 t1 0.916 (2.5 % wide",
-            "t2 0.917 (3.2 % wide, the prior predictive's 60 %)",
+            "A-hold-60min 402-A1 t1 0.916 (2.5 % wide, the readings +0.4 % off its median",
+            "t2 0.917 (3.2 % wide, the readings -3.0 % off its median, the prior predictive's 60",
             "A-hold-10min 402-A1 → A1-staircase 0.972 (60.0 % wide",
             "4 of 4",
         ],
+    ),
+    "real402_forecast_seeds": (
+        _real402_forecast,
+        ["A-hold-10min 402-A1 → A1-staircase 0.972 (60.0 % wide, the readings +0.0 %", "4 of 4"],
     ),
     "force_bench": (
         _force_bench,
