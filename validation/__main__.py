@@ -23,7 +23,8 @@ The studies (:data:`validation.registry.STUDIES`, each entry's ``how`` gives its
 - the rig likelihood and its circuit: ``score_check`` (scores at the truth), ``divider_bias``
   (a divider log fitted with its circuit and as if at constant voltage);
 - the real-402 bench: ``real402_fit`` and ``real402_forecast`` (``fsrbayes fit`` and ``predict``
-  on its frozen logs), ``force_bench`` (creep-compensated force on its load histories).
+  on its frozen logs), ``real402_forecast_seeds`` (the same forecasts on sensors outside the
+  frozen set), ``force_bench`` (creep-compensated force on its load histories).
 
 The other modules are not studies: :mod:`validation.closed_form` (test problems with known
 evidence, which the slow tests run) and :mod:`validation.importance` (a check of a fit's

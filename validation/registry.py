@@ -274,9 +274,7 @@ REAL402_FORECASTS = (
 holds never saw."""
 
 REAL402_SEED_FORECASTS = tuple(
-    f"A-hold-seed{seed}@{protocol}"
-    for seed in range(7401, 7407)
-    for protocol in ("staircase", "cycles")
+    f"A-hold-seed{seed}@{kind}" for seed in range(7401, 7407) for kind in ("staircase", "cycles")
 )
 """The same forecast from four 10-minute holds on six sensors outside the frozen set (bench seeds
 7401–7406, rig A): a staircase through the four weights and load–unload cycles of 215 g."""
