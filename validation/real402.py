@@ -10,8 +10,9 @@ command line with its defaults:
   many of its checks failed, and which posterior medians lie outside the prior's central 99 %;
 * **forecast**: ``fsrbayes fit`` on each test's first ``FIRST_S`` seconds after its load
   landed, then ``fsrbayes predict`` of the whole log — the share of the later readings inside
-  their 90 % band (target 0.80–0.98), the readings' median over the band's median (how far off
-  its centre the forecast is) and the band's median width relative to the reading, beside the
+  their 90 % band (target 0.80–0.98), the median of the readings over the band's median, reading
+  by reading (how far off its centre the forecast is), and the band's median width relative to
+  the reading, beside the
   prior predictive's (``predict --prior``): a band that covers by being wide shows there.
   ``--protocol LOG`` predicts another log of the same specimens instead (the bench draws a
   specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
@@ -162,7 +163,14 @@ def protocol_log(frozen, name, kind, out):
     """
     truth = json.loads((Path(frozen) / f"{name}.truth.json").read_text())
     path = Path(out) / f"{kind}-seed{truth['seed']}.csv"
-    if not path.is_file():
+    if path.is_file():
+        written = json.loads(path.with_suffix(".truth.json").read_text())["rig_name"]
+        if written != truth["rig_name"]:
+            raise RuntimeError(
+                f"{path} is rig {written}'s log, and {name} was logged on rig "
+                f"{truth['rig_name']}: forecast it into another folder"
+            )
+    else:
         fsrbayes_command(
             "simulate-rig", "--preset", "real-402", "--rig", truth["rig_name"], "--protocol",
             kind, "--seed", truth["seed"], "-o", path,
@@ -237,10 +245,11 @@ def run(out, mode, names, protocol=None):
     returns them (:func:`fit_log`'s or :func:`forecast`'s).
     """
     out = Path(out)
-    frozen = frozen_set(out / "frozen")
+    logs = [name.split("@", 1)[0] for name in names]
+    frozen = None if all(SEED_LOG.match(log) for log in logs) else frozen_set(out / "frozen")
     rows = []
-    for name in names:
-        folder = log_folder(frozen, name.split("@", 1)[0], out)
+    for name, log in zip(names, logs, strict=True):
+        folder = log_folder(frozen, log, out)
         if mode == "fit":
             rows += fit_log(folder, name, out)
         else:

@@ -274,10 +274,9 @@ REAL402_FORECASTS = (
 holds never saw."""
 
 REAL402_SEED_FORECASTS = tuple(
-    f"A-hold-seed{seed}@{kind}" for seed in range(7401, 7407) for kind in ("staircase", "cycles")
+    f"A-hold-seed{s}@{k}" for s in range(7401, 7407) for k in ("staircase", "cycles")
 )
-"""The same forecast from four 10-minute holds on six sensors outside the frozen set (bench seeds
-7401–7406, rig A): a staircase through the four weights and load–unload cycles of 215 g."""
+"""Hold-to-staircase and hold-to-cycles forecasts on six sensors outside the frozen set."""
 
 
 def _real402_fit_summary(rows):
@@ -311,10 +310,11 @@ def _real402_forecast_summary(rows):
         what = f"{r['log']} {r['specimen']}" + (
             f" {r['test']}" if predicted == r["log"] else f" → {predicted}"
         )
+        off = r.get("reading_over_median")  # absent from an older rows file: left unsaid
+        off = f"the readings {100 * (off - 1):+.1f} % off its median, " if off else ""
         return (
-            f"{what} {r['coverage_after']:.3f} ({100 * r['width_90_rel']:.1f} % wide, the "
-            f"readings {100 * (r['reading_over_median'] - 1):+.1f} % off its median, the prior "
-            f"predictive's {100 * r['prior_width_90_rel']:.0f} %)"
+            f"{what} {r['coverage_after']:.3f} ({100 * r['width_90_rel']:.1f} % wide, {off}the "
+            f"prior predictive's {100 * r['prior_width_90_rel']:.0f} %)"
         )
 
     return (

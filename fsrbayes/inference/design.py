@@ -13,6 +13,7 @@ __all__ = [
     "DesignWarning",
     "design_warnings",
     "held_stresses",
+    "stresses_per_test",
 ]
 
 
@@ -40,11 +41,20 @@ def held_stresses(data):
     Each test's first load (``stress_Pa``) and, where the load changes within a test (a
     staircase), each nonzero load its steps reach.
     """
+    return np.unique(np.concatenate(stresses_per_test(data)))
+
+
+def stresses_per_test(data):
+    """Return, per test of packed ``data``, the sorted distinct stresses (Pa) it holds.
+
+    The test's first load (``stress_Pa``) and each load above 0 that its steps reach.
+    """
     held = np.asarray(data.stress_Pa, dtype=float).ravel()
     if getattr(data, "step_size", None) is None:
-        return np.unique(held)
+        return [held[i : i + 1] for i in range(held.size)]
     loads = np.cumsum(data.step_size, axis=-1)
-    return np.unique(np.concatenate([held, loads[(data.step_size != 0) & (loads > 0)]]))
+    reached = (data.step_size != 0) & (loads > 0)
+    return [np.unique(np.append(loads[i][reached[i]], held[i])) for i in range(held.size)]
 
 
 def design_warnings(posterior):

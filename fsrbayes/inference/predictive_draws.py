@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.sensors import load_sensor
+from .design import stresses_per_test
 from .likelihood import SpecimenData
 from .nuisance import (
     is_per_test,
@@ -45,6 +46,7 @@ from .specimen_scatter import (
 __all__ = [
     "CALIBRATION_FILE",
     "CALIBRATION_FORMAT",
+    "SAME_STRESS_RTOL",
     "calibration_folders",
     "draw_sources",
     "evaluation_packing",
@@ -59,6 +61,10 @@ __all__ = [
     "read_calibration",
     "specimen_draws",
 ]
+
+SAME_STRESS_RTOL = 0.02
+"""Relative tolerance within which a protocol test's loads count as the stress at which a fitted
+test began (:func:`placement_draws`): the same weight, read through a force column's rounding."""
 
 CALIBRATION_FILE = "calibration.json"
 """A new specimen's calibration record, a folder per specimen (:func:`~.new_specimen.calibrate`)."""
@@ -181,14 +187,15 @@ def placement_draws(seen, packed, attrs, rng):
     placement of a weight the fit saw — every load of the test at the stress at which fitted
     tests of the same specimen and voltage began (:data:`SAME_STRESS_RTOL`), say load–unload
     cycles of one of the held weights — is centred on those tests' values, draw by draw, with the
-    spread of the placements seen added: a fitted test picked at random, less the mean of all.
-    Placement factors take up how each weight departs from the stress laws as well as how the
-    weight landed, so a weight placed again reads as it did before, give or take a landing. Any
-    other test (a staircase through several weights, a weight not held) lends the level and creep
-    of one fitted test picked at random, as a fresh placement lands and creeps like the ones seen.
+    whole spread of the placements seen added: a fitted test picked at random, less the mean of
+    all. Placement factors take up how each weight departs from the stress laws as well as how
+    it landed, so the centre follows the weight; the spread holds the other weights' departures
+    too, so the bands are as wide as a placement picked at random makes them. Any other test (a
+    staircase through several weights, a weight not held) lends the level and creep of one
+    fitted test picked at random, as a fresh placement lands and creeps like the ones seen.
     """
     keys = [tuple(k) for k in json.loads(attrs.get("test_keys", "[]"))]
-    loads = _test_loads(packed)
+    loads = stresses_per_test(packed)
     own, centre = {}, {}
     for i, (specimen, voltage, stress, label) in enumerate(packed.test_keys):
         for j, key in enumerate(keys):
@@ -201,6 +208,7 @@ def placement_draws(seen, packed, attrs, rng):
             for j, key in enumerate(keys)
             if key[0] == specimen
             and np.isclose(key[1], voltage)
+            and loads[i].size
             and np.allclose(loads[i], key[2], rtol=SAME_STRESS_RTOL, atol=0.0)
         ]
         if same:
@@ -211,19 +219,6 @@ def placement_draws(seen, packed, attrs, rng):
         for i, same in centre.items():
             values[:, i] = fitted[:, same].mean(axis=1) + spread[:, i]
     return lent
-
-
-SAME_STRESS_RTOL = 0.02
-"""Relative tolerance within which a protocol test's loads count as a fitted test's stress
-(:func:`placement_draws`): the same weight, read through the rounding of a log's force column."""
-
-
-def _test_loads(packed):
-    """Per protocol test, the stresses (Pa) it holds: every level of its load steps above 0."""
-    if getattr(packed, "step_size", None) is None:
-        return [np.array([key[2]]) for key in packed.test_keys]
-    levels = np.cumsum(packed.step_size, axis=1)
-    return [np.unique(row[row > 0.0]) for row in levels]
 
 
 def _lent(seen, n_tests, rng, own=None):

@@ -129,7 +129,9 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     keys = [["s1", 4.9, 7000.0, "w1"], ["s1", 4.9, 9000.0, "w2"], ["s1", 4.9, 11000.0, "w3"]]
     attrs = {"test_keys": json.dumps(keys)}
     packed = SimpleNamespace(
-        n_tests=2, test_keys=(("s1", 4.9, 9000.0, "w2"), ("s1", 4.9, 20000.0, "w9"))
+        n_tests=2,
+        test_keys=(("s1", 4.9, 9000.0, "w2"), ("s1", 4.9, 20000.0, "w9")),
+        stress_Pa=np.array([9000.0, 20000.0]),
     )
     (got,) = placement_draws([seen], packed, attrs, np.random.default_rng(0))
     assert np.all(got[:, 0] == 0.2)  # its own
@@ -141,32 +143,36 @@ def test_predict_keeps_a_fitted_tests_level_and_lends_a_new_placement_one_seen()
     assert np.all(levels[:, 0] == 0.2)
 
 
-def test_a_weight_placed_again_reads_as_it_did_give_or_take_the_placements_spread():
+def test_a_weight_placed_again_is_centred_on_its_placement_with_the_placements_spread():
     """Cycles of a held weight centre on that weight's placement; a staircase lends at random."""
     rng = np.random.default_rng(3)
-    seen = np.array([-0.04, 0.005, 0.018, 0.017]) + 0.002 * rng.standard_normal((2000, 4))
+    seen = np.array([-0.04, 0.005, 0.018, -0.01]) + 0.002 * rng.standard_normal((4000, 4))
     keys = [["s1", 4.9, s, f"w{k}"] for k, s in enumerate((7000.0, 9000.0, 11000.0, 13000.0))]
     attrs = {"test_keys": json.dumps(keys)}
     cycles = [11000.0, -11000.0, 11000.0 * 1.004, -11000.0 * 1.004]  # a force column's rounding
-    stairs = [7000.0, 2000.0, 2000.0, 2000.0]
     packed = SimpleNamespace(
-        n_tests=3,
+        n_tests=4,
         test_keys=(
             ("s1", 4.9, 11000.0, "cycles"),
             ("s1", 4.9, 7000.0, "staircase"),
             ("s1", 3.3, 11000.0, "other-rig"),
+            ("s1", 4.9, 11330.0, "heavier"),  # 3 % above w2: a weight not held
         ),
-        step_size=np.array([cycles, stairs, [11000.0, 0.0, 0.0, 0.0]]),
+        stress_Pa=np.array([11000.0, 7000.0, 11000.0, 11330.0]),
+        step_size=np.array(
+            [cycles, [7000.0, 2000.0, 2000.0, 2000.0], [11000.0, 0, 0, 0], [11330.0, 0, 0, 0]]
+        ),
     )
-    (got,) = placement_draws([seen], packed, attrs, np.random.default_rng(0))
+    levels, creeps = placement_draws([seen, 10.0 * seen], packed, attrs, np.random.default_rng(0))
     spread = seen - seen.mean(axis=1, keepdims=True)
-    # centred on w2's level, spread as the four placements are about their mean
-    assert np.median(got[:, 0]) == pytest.approx(0.018 + np.median(spread), abs=0.004)
-    assert np.std(got[:, 0]) == pytest.approx(np.std(spread), rel=0.1)
-    # a staircase through four weights and a test at another voltage: one placement seen, as before
-    for column in (1, 2):
-        assert np.all(np.min(np.abs(got[:, column, None] - seen), axis=1) == 0.0)
-    assert np.mean(got[:, 1] < -0.03) == pytest.approx(0.25, abs=0.04)  # w0's, one draw in four
+    # centred on w2's level (the spread averages to 0), spread as the placements about their mean
+    assert np.mean(levels[:, 0]) == pytest.approx(0.018, abs=0.002)
+    assert np.std(levels[:, 0]) == pytest.approx(np.std(spread), rel=0.1)
+    np.testing.assert_allclose(creeps, 10.0 * levels)  # level and creep of one placement
+    # a staircase, a test at another voltage and an unheld weight: one placement seen, at random
+    for column in (1, 2, 3):
+        assert np.all(np.min(np.abs(levels[:, column, None] - seen), axis=1) == 0.0)
+        assert np.mean(levels[:, column] < -0.03) == pytest.approx(0.25, abs=0.04)  # w0's
 
 
 def _fitted(stresses, creeps):
