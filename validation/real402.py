@@ -12,8 +12,8 @@ command line with its defaults:
   landed, then ``fsrbayes predict`` of the whole log — the share of the later readings inside
   their 90 % band (target 0.80–0.98), the median of the readings over the band's median, reading
   by reading (how far off its centre the forecast is), and the band's median width relative to
-  the reading, beside the
-  prior predictive's (``predict --prior``): a band that covers by being wide shows there.
+  the reading, beside the prior predictive's (``predict --prior``): a band that covers by being
+  wide shows there.
   ``--protocol LOG`` predicts another log of the same specimens instead (the bench draws a
   specimen from its seed: ``simulate-rig --preset real-402 --protocol staircase --seed S`` is
   the specimen of a frozen log of seed S under a new protocol). A name ``LOG@PROTOCOL`` (e.g.
@@ -68,14 +68,21 @@ def log_folder(frozen, name, out):
     if match is None:
         return Path(frozen)
     folder = Path(out) / "seeds"
-    path = folder / f"{name}.csv"
-    if not path.is_file():
-        folder.mkdir(parents=True, exist_ok=True)
-        fsrbayes_command(
-            "simulate-rig", "--preset", "real-402", "--rig", match["rig"], "--protocol",
-            match["protocol"], "--seed", match["seed"], "-o", path,
-        )  # fmt: skip
+    folder.mkdir(parents=True, exist_ok=True)
+    bench_log(folder / f"{name}.csv", match["rig"], match["protocol"], match["seed"])
     return folder
+
+
+def bench_log(path, rig, protocol, seed):
+    """Write the real-402 bench's log of ``rig``, ``protocol`` and ``seed`` to ``path`` (once).
+
+    Its truth file is written beside it; an existing log is kept.
+    """
+    if not Path(path).is_file():
+        fsrbayes_command(
+            "simulate-rig", "--preset", "real-402", "--rig", rig, "--protocol", protocol,
+            "--seed", seed, "-o", path,
+        )  # fmt: skip
 
 
 def fsrbayes_command(*args):
@@ -170,11 +177,7 @@ def protocol_log(frozen, name, kind, out):
                 f"{path} is rig {written}'s log, and {name} was logged on rig "
                 f"{truth['rig_name']}: forecast it into another folder"
             )
-    else:
-        fsrbayes_command(
-            "simulate-rig", "--preset", "real-402", "--rig", truth["rig_name"], "--protocol",
-            kind, "--seed", truth["seed"], "-o", path,
-        )  # fmt: skip
+    bench_log(path, truth["rig_name"], kind, truth["seed"])
     return path
 
 
