@@ -9,8 +9,9 @@ In the prior-scaled coordinates u the posterior is then a thin, curved sheet —
 a quadratic map straightens only in part.
 
 What. :class:`PinnedCoordinates` replaces K of the sampled parameters u_P by the K quantities the
-data pin hardest, y_k = log I(test c_k, t_k; u) at the first or the last sample of a test (the
-current at load and its drift), and keeps the other parameters u_F:
+data pin hardest, y_k = log I(test c_k, t_k; u) at the first, the middle (in log time) or the last
+sample of a test (the current at load, its drift and the drift's bend: :data:`REFERENCE_POINTS`),
+and keeps the other parameters u_F:
 
     w = (y_1 … y_K, u_F),      log p_w(w) = log p_u(u(w)) − log|det ∂y/∂u_P|,
 
@@ -42,7 +43,7 @@ import numpy as np
 import scipy.linalg
 
 from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
-from ..physics.rheology import BURGERS, ZENER
+from ..physics.rheology import BURGERS, LOG_SPECTRUM, LOG_SPECTRUM_SAT, ZENER
 from ..physics.solver import FINISH
 from .broyden import accept_steps, propose_steps
 from .nuisance import is_per_test, noise_parameters
@@ -56,6 +57,8 @@ __all__ = [
     "polish_along_pins",
     "map_refinement",
     "RANK_TOLERANCE",
+    "REFERENCE_POINTS",
+    "reference_points",
     "MAX_STEP",
 ]
 
@@ -82,12 +85,39 @@ MAX_ITER = 16
 still unsolved after this many has none nearby and stops costing model evaluations."""
 
 
+REFERENCE_POINTS = ("first", "middle", "last")
+"""Where in each test a log-current may be pinned: its first real sample, its sample halfway in
+log time between its first after t = 0 and its last, and its last. The first and the last pin the
+level at load and the drift; the middle one the drift's bend in log time (how the creep per
+decade changes), which a log-spectrum law shapes through its spectrum's tilt and its saturating
+drive, together with the series resistance: without it the ensembles of such a fit crawl along
+that bend (VALIDATION.md, ``pinned-middle``). The paper's laws (Burgers, Zener) and Nutting are
+pinned at the first and the last sample only (:func:`reference_points`)."""
+
+
+def reference_points(family):
+    """Return the samples of each test pinned for creep law ``family``.
+
+    All of :data:`REFERENCE_POINTS` for the log-spectrum laws; the first and the last otherwise.
+    """
+    if family is LOG_SPECTRUM or family is LOG_SPECTRUM_SAT:
+        return REFERENCE_POINTS
+    return ("first", "last")
+
+
 def _reference_times(data):
-    """Each test's first and last real sample times, shape (C, 2)."""
+    """Each test's real sample times at :data:`REFERENCE_POINTS`, shape (C, 3)."""
     rows = np.arange(data.n_tests)
     first = np.argmax(data.mask, axis=1)
     last = data.mask.shape[1] - 1 - np.argmax(data.mask[:, ::-1], axis=1)
-    return np.stack([data.time_s[rows, first], data.time_s[rows, last]], axis=1)
+    start, end = data.time_s[rows, first], data.time_s[rows, last]
+    after = data.mask & (data.time_s > 0)  # log time starts at the first sample after t = 0
+    earliest = np.min(np.where(after, data.time_s, np.inf), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = np.abs(np.log(data.time_s**2 / (earliest * end)[:, None]))
+    middle = np.argmin(np.where(after & np.isfinite(distance), distance, np.inf), axis=1)
+    middle = np.where(after.any(axis=1), middle, last)
+    return np.stack([start, data.time_s[rows, middle], end], axis=1)
 
 
 class PinnedCoordinates:
@@ -111,8 +141,10 @@ class PinnedCoordinates:
     solved : tuple of str
         The parameters replaced by log-currents, in pivot order.
     references : tuple of (int, str)
-        Where each log-current is taken: the test (row of the data) and its ``"first"`` or
-        ``"last"`` sample.
+        Where each log-current is taken: the test (row of the data) and its sample
+        (one of :attr:`points`).
+    points : tuple of str
+        The samples of each test a log-current may be taken at (:func:`reference_points`).
     names : tuple of str
         Names of the sampled coordinates w.
     """
@@ -120,7 +152,9 @@ class PinnedCoordinates:
     def __init__(self, posterior, anchor, max_solved=None):
         self.posterior = posterior
         self.anchor = np.asarray(anchor, dtype=float).copy()
-        self._times = _reference_times(posterior.data)
+        self.points = reference_points(posterior.family)
+        columns = [REFERENCE_POINTS.index(point) for point in self.points]
+        self._times = _reference_times(posterior.data)[:, columns]
         noise = set(noise_parameters(posterior.likelihood))
         candidates = np.array([i for i, n in enumerate(posterior.names) if n not in noise])
         everywhere = np.arange(self._times.size)
@@ -140,11 +174,12 @@ class PinnedCoordinates:
         self._rows = np.sort(rows[:k])
         self._free = np.array([i for i in range(posterior.ndim) if i not in set(self._solved)])
         self.solved = tuple(posterior.names[i] for i in self._solved)
-        self.references = tuple((int(r) // 2, ("first", "last")[r % 2]) for r in self._rows)
+        points = len(self.points)
+        self.references = tuple((int(r) // points, self.points[r % points]) for r in self._rows)
         self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
             posterior.names[i] for i in self._free
         )
-        data = posterior.data.take(self._rows // 2, self._times.flat[self._rows])
+        data = posterior.data.take(self._rows // points, self._times.flat[self._rows])
         self._at_references = LogPosterior(
             data,
             posterior.prior,
@@ -167,7 +202,7 @@ class PinnedCoordinates:
     def log_current(self, u, rows=None):
         """Return the pinned log-currents y(u), (W, ndim) → (W, K); NaN outside the domain.
 
-        ``rows``: other reference points (indices into every test's first and last sample).
+        ``rows``: other reference points (indices into the tests' :attr:`points`, test by test).
         """
         x = self.posterior.prior.to_constrained(np.atleast_2d(u))
         with np.errstate(all="ignore"):

@@ -23,7 +23,12 @@ from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish
 from fsrbayes.inference.output import save_fit
-from fsrbayes.inference.pinned import PinnedCoordinates, polish_along_pins
+from fsrbayes.inference.pinned import (
+    REFERENCE_POINTS,
+    PinnedCoordinates,
+    _reference_times,
+    polish_along_pins,
+)
 from fsrbayes.inference.posterior import LogPosterior
 from fsrbayes.inference.samplers.convergence import ConvergenceWarning
 from fsrbayes.inference.samplers.coordinates import SampledLogProb, round_trips
@@ -185,12 +190,36 @@ def pinned(rig_posterior):
 
 def test_pinned_coordinates_solve_for_what_the_rig_pins(pinned, rig_posterior):
     posterior, _ = rig_posterior
-    assert 2 <= len(pinned.solved) <= 2 * posterior.data.n_tests
+    assert 2 <= len(pinned.solved) <= len(pinned.points) * posterior.data.n_tests
     assert "sigma_rel" not in pinned.solved
     assert len(pinned.names) == posterior.ndim and pinned.names[0].startswith("log_I[")
     described = pinned.describe()
     assert described["solved"] == list(pinned.solved)
     assert len(described["reference_time_s"]) == len(pinned.solved)
+
+
+def test_a_log_spectrum_fit_is_pinned_in_the_middle_of_each_test_in_log_time(rig_posterior):
+    posterior, best = rig_posterior
+    data = posterior.data
+    times = _reference_times(data)
+    assert REFERENCE_POINTS == ("first", "middle", "last") and times.shape == (data.n_tests, 3)
+    for c in range(data.n_tests):
+        real = data.time_s[c][data.mask[c]]
+        assert times[c, 0] == real.min() and times[c, 2] == real.max()
+        after = real[real > 0]  # the middle of the test in log time
+        halfway = np.sqrt(after.min() * after.max())
+        assert times[c, 1] == after[np.argmin(np.abs(np.log(after / halfway)))]
+        assert after.min() < times[c, 1] < real.max()
+    assert PinnedCoordinates(posterior, best).points == ("first", "last")  # the paper's laws
+    # a log-spectrum law pins the middle too: there its log-current is the model's
+    spectrum = LogPosterior.for_sensor(data, load_sensor("fsr402"), model="log-spectrum-sat")
+    start = np.zeros(spectrum.ndim)
+    pins = PinnedCoordinates(spectrum, start)
+    assert pins.points == REFERENCE_POINTS
+    u = start + 0.01 * np.random.default_rng(3).standard_normal((4, spectrum.ndim))
+    full = spectrum.log_model_current(spectrum.prior.to_constrained(u), times)
+    middles = [3 * c + 1 for c in range(data.n_tests)]
+    np.testing.assert_allclose(pins.log_current(u, middles), full[:, :, 1], rtol=0, atol=1e-10)
 
 
 def test_the_model_at_a_few_tests_is_the_model_at_those_points(rig_posterior):
