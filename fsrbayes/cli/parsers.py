@@ -70,7 +70,8 @@ def _add_fit(sub):
         help="creep law (burgers, zener, nutting, log-spectrum, log-spectrum-sat), optionally "
         "+effect terms; or kalantari (Kalantari et al.'s eq. 14) (default: the sensor file's "
         "default_model, with what the log shows: +unlogged-load where it reads taps before a "
-        "weight, +spectrum-tilt where it reloads the sensor)",
+        "weight, +spectrum-tilt where no test steps from one weight to another, +creep-drop "
+        "where it holds weights of two sizes or more)",
     )
     add_model_options(fit_)
     option(

@@ -40,7 +40,7 @@ PRESSED_EFFECT = "unlogged-load"
 """Added to a sensor's default model where a log shows presses before a first loading."""
 
 TILT_EFFECT = "spectrum-tilt"
-"""Added to a log-spectrum default model where a log unloads the sensor and reloads it."""
+"""Added to a log-spectrum default model where no test of a log steps from one load to another."""
 
 DROP_EFFECT = "creep-drop"
 """Added to a ``log-spectrum-sat`` default model where a log holds weights of two or more sizes."""
@@ -48,8 +48,8 @@ DROP_EFFECT = "creep-drop"
 LOG_EFFECT_REASONS = {
     PRESSED_EFFECT: "read a load before the first loading that the load column does not hold "
     "(taps): their fits add unlogged-load, the creep it left recovering",
-    TILT_EFFECT: "unload the sensor and load it again: their fits sample the retardation "
-    "spectrum's tilt (spectrum-tilt), which the reloads show",
+    TILT_EFFECT: "hold loads from rest: their fits sample the retardation spectrum's tilt "
+    "(spectrum-tilt), how the creep per decade of time changes over the decades held",
     DROP_EFFECT: "hold weights of two sizes or more: their fits sample how the creep's drive "
     "falls with stress (creep-drop), which the weights' creeps show",
 }
@@ -223,9 +223,11 @@ def effects_for_log(data, specimen=None, default="burgers"):
       recovers during the test. Not where a test's load steps from one weight to another (a
       staircase): there the first weight's creep is one of several, and the taps' timing would
       be searched against the staircase's other misfits (docs/fitting.md).
-    - ``spectrum-tilt`` (:mod:`fsrbayes.physics.tilt`), for a log-spectrum law, where a test
-      unloads the sensor and loads it again: the recovery and the reloads tell the spectrum's
-      tilt, which a hold from rest leaves on a ridge with the area's stress law.
+    - ``spectrum-tilt`` (:mod:`fsrbayes.physics.tilt`), for a log-spectrum law, where no test
+      steps from one weight to another: a hold from rest shows how its creep per decade changes
+      over the decades it spans, and a cycle's recovery and reload weigh the long retardation
+      times against the short ones. Not on staircases, where the tilt takes up the steps' other
+      misfits (docs/creep-laws.md).
     - ``creep-drop`` (:mod:`fsrbayes.physics.drop`), for ``log-spectrum-sat``, where the tests
       hold weights of two or more sizes, none stepping from one weight to another: how much
       each weight creeps tells how the drive falls with stress, which each placement's own
@@ -249,20 +251,12 @@ def effects_for_log(data, specimen=None, default="burgers"):
     stairs = any(map(_stairs, steps))
     if pressed and not stairs:
         added.append(PRESSED_EFFECT)
-    if EFFECTS[TILT_EFFECT].applies_to(family) and any(map(_reloads, steps)):
+    if EFFECTS[TILT_EFFECT].applies_to(family) and not stairs:
         added.append(TILT_EFFECT)
     weights = np.unique(np.asarray(stresses, dtype=float)).size
     if EFFECTS[DROP_EFFECT].applies_to(family) and weights >= 2 and not stairs:
         added.append(DROP_EFFECT)
     return tuple(e for e in added if e not in had)
-
-
-def _reloads(step_size):
-    """Whether load steps of sizes ``step_size`` load the sensor again after unloading it."""
-    sizes = np.asarray(step_size, dtype=float)
-    loaded = np.cumsum(sizes)[sizes != 0] > 0  # after each change of the load
-    loadings = loaded & ~np.concatenate(([False], loaded[:-1]))  # from no load to a load
-    return int(np.count_nonzero(loadings)) >= 2
 
 
 def _stairs(step_size):

@@ -64,7 +64,7 @@ def test_the_starts_move_only_the_parameters_the_effect_names(tmp_path):
     from fsrbayes.inference.mode_starts import effect_mode_starts
 
     posterior = _posterior(_holds(tmp_path, 8311))
-    assert posterior.model == "log-spectrum-sat+creep-drop"
+    assert posterior.model == "log-spectrum-sat+spectrum-tilt+creep-drop"
     held = held_stresses(posterior.data)
     assert held / 1e3 == pytest.approx([5.76, 11.09, 16.43, 21.76], abs=0.01)
     u = posterior.prior.to_unconstrained(posterior.prior.sample(np.random.default_rng(1), 1))[0]

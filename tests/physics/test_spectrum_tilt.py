@@ -156,8 +156,8 @@ def test_a_sensor_file_without_the_tilt_or_the_drop_fits_as_with_them_held_at_ze
             LogPosterior.for_sensor(packed, old, model=f"log-spectrum-sat+{effect}")
 
 
-def test_fit_samples_the_tilt_where_a_log_unloads_and_reloads_and_nowhere_else(tmp_path):
-    """The bench's protocols: cycles reload the sensor; holds and staircases do not."""
+def test_fit_samples_the_tilt_where_no_test_steps_between_loads(tmp_path):
+    """The bench's protocols: holds from rest and cycles get the tilt; staircases do not."""
     from fsrbayes.cli.common import log_effect_notes
     from fsrbayes.data import read_csv
     from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
@@ -175,15 +175,18 @@ def test_fit_samples_the_tilt_where_a_log_unloads_and_reloads_and_nowhere_else(t
     assert model_for_log(cycles, specimen, "log-spectrum-sat") == "log-spectrum-sat+spectrum-tilt"
     packed = SpecimenData.select(cycles, specimen, settle_s=1.0)
     assert effects_for_log(packed, default="log-spectrum") == ("spectrum-tilt",)
-    # not twice, and never with a law that has no spectrum
+    for s in hold.specimens:  # four weights, each held from rest
+        assert effects_for_log(hold, s, "log-spectrum-sat") == ("spectrum-tilt", "creep-drop")
+        assert effects_for_log(hold, s, "log-spectrum") == ("spectrum-tilt",)
+    # not twice, and never with a law that has no spectrum or on a staircase
     assert model_for_log(cycles, specimen, "log-spectrum-sat+spectrum-tilt").count("tilt") == 1
     assert model_for_log(cycles, specimen, "burgers") == "burgers"
-    for data in (hold, staircase):
-        for s in data.specimens:
-            assert "spectrum-tilt" not in effects_for_log(data, s, "log-spectrum-sat")
-    (note,) = [n for n in log_effect_notes(cycles, [specimen], "log-spectrum-sat") if "tilt" in n]
-    assert specimen in note and "--model log-spectrum-sat fits without it" in note
-    notes = log_effect_notes(hold, hold.specimens, "log-spectrum-sat")
+    assert model_for_log(hold, hold.specimens[0], "zener") == "zener"
+    for s in staircase.specimens:
+        assert "spectrum-tilt" not in effects_for_log(staircase, s, "log-spectrum-sat")
+    (note,) = [n for n in log_effect_notes(hold, hold.specimens, "log-spectrum-sat") if "tilt" in n]
+    assert hold.specimens[0] in note and "--model log-spectrum-sat fits without it" in note
+    notes = log_effect_notes(staircase, staircase.specimens, "log-spectrum-sat")
     assert not [n for n in notes if "tilt" in n]
 
 

@@ -106,23 +106,22 @@ def _rig_tests(pressed):
 def test_a_fit_adds_the_effect_where_the_log_shows_presses_and_applies_it_to_those_tests():
     pressed = CreepData(_rig_tests([12.0, 0.0]))
     post = specimen_posterior(pressed, "s1")
-    assert post.model == "log-spectrum-sat+unlogged-load"
+    assert post.model == "log-spectrum-sat+unlogged-load+spectrum-tilt"  # holds show the tilt
     np.testing.assert_array_equal(post.data.pressed, [True, False])
     x = post.prior.to_constrained(np.zeros((1, post.ndim)))
-    base = specimen_posterior(pressed, "s1", model="log-spectrum-sat")
-    assert base.model == "log-spectrum-sat"
+    base = specimen_posterior(pressed, "s1", model="log-spectrum-sat+spectrum-tilt")
     shared = x[:, [list(post.names).index(n) for n in base.names]]
     with_taps, no_taps = post.log_model_current(x), base.log_model_current(shared)
     assert np.all(with_taps[0, 0] > no_taps[0, 0])  # the pressed test reads the taps' creep
     np.testing.assert_allclose(with_taps[0, 1], no_taps[0, 1], rtol=1e-13)  # the other: not
     quiet = CreepData(_rig_tests([0.0, 0.0]))
-    assert specimen_posterior(quiet, "s1").model == "log-spectrum-sat"
+    assert specimen_posterior(quiet, "s1").model == "log-spectrum-sat+spectrum-tilt"
     assert SpecimenData.from_tests(quiet.tests).pressed is None
     # a weight lifted and put back keeps it; a staircase (one weight to another) does not
     lifted = replace(pressed.tests[0], load_steps=(np.array([0.0, 30.0, 40.0]),
                                                    np.array([53e3, -53e3, 53e3])))  # fmt: skip
     stairs = replace(pressed.tests[0], load_steps=(np.array([0.0, 30.0]), np.array([53e3, 20e3])))
-    lifted_model = "log-spectrum-sat+unlogged-load+spectrum-tilt"  # a reload shows the tilt
+    lifted_model = "log-spectrum-sat+unlogged-load+spectrum-tilt"
     for test, want in ((lifted, lifted_model), (stairs, "log-spectrum-sat")):
         data = CreepData((test, pressed.tests[1]))
         assert specimen_posterior(data, "s1").model == want
