@@ -174,12 +174,12 @@ class PinnedCoordinates:
         self._rows = np.sort(rows[:k])
         self._free = np.array([i for i in range(posterior.ndim) if i not in set(self._solved)])
         self.solved = tuple(posterior.names[i] for i in self._solved)
-        points = len(self.points)
-        self.references = tuple((int(r) // points, self.points[r % points]) for r in self._rows)
+        per_test = len(self.points)
+        self.references = tuple((int(r) // per_test, self.points[r % per_test]) for r in self._rows)
         self.names = tuple(f"log_I[{c},{when}]" for c, when in self.references) + tuple(
             posterior.names[i] for i in self._free
         )
-        data = posterior.data.take(self._rows // points, self._times.flat[self._rows])
+        data = posterior.data.take(self._rows // per_test, self._times.flat[self._rows])
         self._at_references = LogPosterior(
             data,
             posterior.prior,

@@ -183,9 +183,8 @@ def test_the_402s_rig_priors_cover_its_envelope_and_the_papers_do_not():
     rig = _prior_resistance("log-spectrum-sat", 9.80665, [1.0, 720.0], 5.0, 2833.0)
     assert np.all(np.isfinite(rig))
     inside = ((rig >= low) & (rig <= high)).any(axis=1).mean()
-    # 2.6 % of draws read inside it at some time: the prior spreads R(1 kg) over decades, and
-    # the creep-free Rpar (around 20 Ohm) leaves less of it near 224-335 Ohm than one around 50
-    # did (~10 %), while keeping 2*Rpar below what a 402 reads
+    # ~2.6 % of draws read inside it at some time: the prior spreads R(1 kg) over decades, its
+    # creep-free Rpar (around 20 Ohm) keeping 2*Rpar below what a 402 reads
     assert inside > 0.015
     q01, q99 = np.percentile(rig, [1, 99])
     assert q01 < low and high < q99
