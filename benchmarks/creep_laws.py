@@ -5,7 +5,10 @@ The specimen is one of the real-402 bench's spread (rig A: four weights × 60 s 
 after each load change out, each placement's own level and creep). Every law is timed on the
 same 64 prior draws, alternately, best of ``repeats``. Beside them, the spectrum's F(t)
 (:func:`fsrbayes.physics.spectrum.spectrum_fraction`) on the walkers' times: the box compiled
-against the numpy formula it replaced, and tilted (γ = −0.02) against the box.
+against the numpy formula it replaced, and tilted (γ = −0.02) against the box; and the model at
+three reference points per test, as a root search in pinned coordinates evaluates it, for the
+default model of holds from rest (``log-spectrum-sat+spectrum-tilt+creep-drop``):
+:class:`~fsrbayes.inference.reference_model.ReferenceModel` against the generic path.
 """
 
 import tempfile
@@ -21,9 +24,12 @@ from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.reference_model import ReferenceModel
 from fsrbayes.physics import spectrum
 
 LAWS = ("burgers", "zener", "nutting", "log-spectrum", "log-spectrum-sat")
+HOLDS_MODEL = "log-spectrum-sat+spectrum-tilt+creep-drop"
+"""What ``fsrbayes fit`` samples on a 402's holds of several weights from rest."""
 
 
 def _numpy_fraction(t, tau_max):
@@ -83,7 +89,9 @@ def run(n_walkers=64, repeats=30):
     compiled = _best(lambda: spectrum.spectrum_fraction(t, tau_max), repeats)
     numpy_way = _best(lambda: _numpy_fraction(t, tau_max), repeats)
     tilted = _best(lambda: spectrum.spectrum_fraction(t, tau_max, -0.02), repeats)
+    reference_ms = _reference_model_ms(packed, sensor, n_walkers, repeats)
     return {
+        "reference_ms": reference_ms,
         "specimen": specimen,
         "walkers": n_walkers,
         "points": packed.n_obs,
@@ -96,6 +104,30 @@ def run(n_walkers=64, repeats=30):
             "tilted": 1e3 * tilted,
         },
     }
+
+
+def _reference_model_ms(packed, sensor, n_walkers, repeats):
+    """Milliseconds per call of the model at each test's first, middle and last sample."""
+    last = packed.time_s.shape[1] - 1
+    times = packed.time_s[:, [0, last // 2, last]]
+    tests = np.repeat(np.arange(packed.n_tests), 3)
+    at_points = packed.take(tests, times.ravel())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        posterior = LogPosterior.for_sensor(at_points, sensor, model=HOLDS_MODEL, placement=True)
+    x = posterior.prior.sample(np.random.default_rng(0), n_walkers)
+    compiled = ReferenceModel.of(posterior)
+    with np.errstate(all="ignore"):
+        generic = posterior.log_model_current(x)[..., 0]
+        np.testing.assert_allclose(compiled(x), np.where(np.isfinite(generic), generic, np.nan),
+                                   rtol=0, atol=1e-12)  # fmt: skip
+        ms = {"compiled": float("inf"), "generic": float("inf")}
+        for _ in range(3):
+            ms["compiled"] = min(ms["compiled"], 1e3 * _best(lambda: compiled(x), repeats))
+            ms["generic"] = min(
+                ms["generic"], 1e3 * _best(lambda: posterior.log_model_current(x), repeats)
+            )
+    return ms | {"points": len(tests)}
 
 
 def report(r):
@@ -114,5 +146,11 @@ def report(r):
         f"  F(t) on {r['walkers']} x {r['points']} times: compiled {ms['compiled']:.3f} ms, "
         f"numpy {ms['numpy']:.3f} ms ({ms['numpy'] / ms['compiled']:.1f}x); tilted (-0.02) "
         f"{ms['tilted']:.3f} ms ({ms['tilted'] / ms['compiled']:.1f}x the box)"
+    )
+    ref = r["reference_ms"]
+    lines.append(
+        f"  {HOLDS_MODEL} at {ref['points']} reference points, {r['walkers']} walkers: compiled "
+        f"from the strain on {ref['compiled']:.3f} ms, generic {ref['generic']:.3f} ms "
+        f"({ref['generic'] / ref['compiled']:.2f}x)"
     )
     return "\n".join(lines)

@@ -29,9 +29,9 @@ likelihood itself compares.
 The inverse u(w) is a K-dimensional root search, by Broyden's method from the linearisation at
 the anchor (the anchor's inverse Jacobian updated by every step, steps capped at :data:`MAX_STEP`
 prior widths, at most :data:`MAX_ITER` iterations), with the model evaluated at the K reference
-points only — compiled end to end for a stress step on a Burgers or Zener sensor
-(:mod:`fsrbayes.physics.compiled_creep`) — and the log-determinant from forward differences at
-the root.
+points only — compiled from the gap's strain on for any creep law with strain-only effects,
+and end to end for a stress step on a Burgers or Zener sensor (:mod:`.reference_model`) — and
+the log-determinant from forward differences at the root.
 Where no root is found the density is −inf — the proposal is rejected. The inverse is never
 needed on stored chains (:mod:`~fsrbayes.inference.samplers.coordinates`).
 
@@ -42,13 +42,12 @@ and draws its walkers' start in them (:func:`pinned_start`).
 import numpy as np
 import scipy.linalg
 
-from ..physics.compiled_creep import STEP_PARAMETERS, step_log_current
-from ..physics.rheology import BURGERS, LOG_SPECTRUM, LOG_SPECTRUM_SAT, ZENER
-from ..physics.solver import FINISH
+from ..physics.rheology import LOG_SPECTRUM, LOG_SPECTRUM_SAT
 from .broyden import accept_steps, propose_steps
-from .nuisance import is_per_test, noise_parameters
+from .nuisance import noise_parameters
 from .optimize import ensemble_start, polish
 from .posterior import LogPosterior
+from .reference_model import ReferenceModel
 from .samplers.coordinates import SampledLogProb
 
 __all__ = [
@@ -189,7 +188,7 @@ class PinnedCoordinates:
             likelihood=posterior.likelihood,
             centred_placements=posterior.centred_placements,
         )
-        self._step_model = _StepModel.of(self._at_references)
+        self._step_model = ReferenceModel.of(self._at_references)
         self._y0 = self.log_current(self.anchor[None])[0]
         self._inv_solved = np.linalg.inv(full[self._rows][:, self._solved])
         self._jac_free = full[self._rows][:, self._free]
@@ -309,65 +308,6 @@ class PinnedCoordinates:
             "reference_tests": [c for c, _ in self.references],
             "reference_time_s": [float(self._times.flat[r]) for r in self._rows],
         }
-
-
-class _StepModel:
-    """The model at the reference points compiled (:mod:`~fsrbayes.physics.compiled_creep`).
-
-    For a stress step on a Burgers or Zener sensor without effects or ramps, alone or in a
-    divider — the reference posterior's log-current to rounding, without the generic path's cost.
-    """
-
-    def __init__(self, posterior):
-        data = posterior.data
-        sampled = {name: i for i, name in enumerate(posterior.names)}
-        self.paper = posterior.tunneling == "paper"
-        fixed = {"Rpar": 0.0, "sigma0": 0.0, **posterior.fixed}  # solve_current's defaults
-        if not self.paper:
-            fixed["Vth"] = 0.0  # unused by the smooth law
-        if posterior.family is ZENER:
-            fixed["inv_b1"] = 0.0  # Burgers with b1 → ∞
-            sampled.pop("inv_b1", None)
-        self.source = np.array([sampled.get(n, -1) for n in STEP_PARAMETERS], dtype=np.int64)
-        self.fixed = np.array([fixed.get(n, np.nan) for n in STEP_PARAMETERS])
-        self.voltage = np.ascontiguousarray(data.voltage_V, dtype=float)
-        self.stress = np.ascontiguousarray(data.stress_Pa, dtype=float)
-        self.time = np.ascontiguousarray(data.time_s[:, 0], dtype=float)
-        self.extra = np.ascontiguousarray(data.series(), dtype=float)
-
-    @classmethod
-    def of(cls, posterior):
-        """Return the compiled model of ``posterior`` (one sample per test), or None."""
-        data = posterior.data
-        if (
-            not (posterior.family is BURGERS or posterior.family is ZENER)  # eq. 17's laws
-            or posterior.effect_objects
-            or data.step_time is not None
-            or data.first_ramps() is not None
-            or any(is_per_test(n) for n in posterior.names)
-            or data.time_s.shape != (data.n_tests, 1)
-            or "n_junctions" in posterior.names  # compiled for one junction only
-            or posterior.fixed.get("n_junctions", 1.0) != 1.0
-        ):
-            return None
-        model = cls(posterior)
-        unknown = np.isnan(model.fixed) & (model.source < 0)
-        return None if unknown.any() else model
-
-    def __call__(self, x):
-        """Log I at the reference points, (W, ndim) physical parameters → (W, K); NaN: invalid."""
-        return step_log_current(
-            np.ascontiguousarray(x, dtype=float),
-            self.source,
-            self.fixed,
-            self.voltage,
-            self.stress,
-            self.time,
-            self.extra,
-            self.paper,
-            FINISH,
-            100,
-        )
 
 
 def polish_along_pins(posterior, u, value, rounds=ALONG_PINS_ROUNDS, tol=1e-3):

@@ -1,10 +1,12 @@
-"""The log-current of a Burgers (or Zener) sensor after a stress step, at a few points, in one call.
+"""The log-current of a sensor at a few points for many parameter sets, in one call.
 
-The model of :func:`fsrbayes.physics.sensor.solve_current` for its simplest and commonest case —
-a stress step held from t = 0, a Burgers or Zener creep law, no effects, the sensor at its
-sourcing voltage or in a voltage divider — compiled end to end: creep compliance (eq. 17), gap
-(eq. 18), effective area (eq. 6), contact resistance (eq. 5) and the circuit (eq. 4,
-:func:`~.compiled.solve_points`).
+The model of :func:`fsrbayes.physics.sensor.solve_current` from the gap's strain on — gap (eq. 18),
+effective area (eq. 6), contact resistance (eq. 5) and the circuit (eq. 4,
+:func:`~.compiled.solve_points`; ``n_junctions`` identical junctions in series, each at V/N with
+R/N) — compiled, for the sensor at its sourcing voltage or in a voltage divider:
+:func:`log_current_at_strain`, whatever creep law and strain-only effects made the strain. For the
+commonest case — a stress step held from t = 0, a Burgers or Zener creep law, no effects — the
+strain is compiled too (eq. 17): :func:`step_log_current`.
 
 Why. A root search in the pinned coordinates (:mod:`fsrbayes.inference.pinned`) evaluates the
 model at ~10 reference points for a few dozen parameter sets, sixteen times per proposal. At that
@@ -23,7 +25,7 @@ import numpy as np
 from .compiled import solve_points
 from .compiled_kernels import INVALID, JIT, PEAK_TABLE
 
-__all__ = ["STEP_PARAMETERS", "step_log_current"]
+__all__ = ["STEP_PARAMETERS", "log_current_at_strain", "step_log_current"]
 
 STEP_PARAMETERS = (
     "k1",
@@ -40,6 +42,7 @@ STEP_PARAMETERS = (
     "sigma0",
     "Va",
     "Vth",
+    "n_junctions",
 )
 """The parameters :func:`step_log_current` reads, in the order of its ``source`` and ``fixed``."""
 
@@ -68,13 +71,29 @@ def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, fini
     -------
     ndarray, shape (W, K)
     """
-    return _step_log_current(
+    strain = _burgers_strain(x, source, fixed, stress, time)
+    return log_current_at_strain(
+        x, source, fixed, voltage, stress, strain, extra, paper, finish, max_iter
+    )
+
+
+def log_current_at_strain(
+    x, source, fixed, voltage, stress, strain, extra, paper, finish, max_iter
+):
+    """Return log I at every point from the gap's strain there, NaN outside the validity domain.
+
+    The gap s0·(1 − ε) (eq. 18) and the rest of the model, for a strain ε any creep law may give
+    (:meth:`fsrbayes.inference.posterior.LogPosterior.gap_strain`); ``stress`` is the momentary
+    load the area and contact laws see. Arguments as in :func:`step_log_current`, with
+    ``strain`` of shape (W, K) in place of ``time``.
+    """
+    return _log_current_at_strain(
         x,
         source,
         fixed,
         voltage,
         stress,
-        time,
+        np.ascontiguousarray(strain, dtype=float),
         extra,
         paper,
         finish,
@@ -84,10 +103,27 @@ def step_log_current(x, source, fixed, voltage, stress, time, extra, paper, fini
 
 
 @numba.njit(**JIT)
-def _step_log_current(
-    x, source, fixed, voltage, stress, time, extra, paper, finish, max_iter, peak_table
+def _burgers_strain(x, source, fixed, stress, time):
+    """σ·J(t) of eq. 17 at every point for every parameter set, 0 before the step."""
+    n, k = x.shape[0], stress.size
+    out = np.zeros((n, k))
+    for i in range(n):
+        k1 = fixed[0] if source[0] < 0 else x[i, source[0]]
+        k2 = fixed[1] if source[1] < 0 else x[i, source[1]]
+        b2 = fixed[2] if source[2] < 0 else x[i, source[2]]
+        inv_b1 = fixed[3] if source[3] < 0 else x[i, source[3]]
+        for c in range(k):
+            t = time[c]
+            if t >= 0:
+                out[i, c] = stress[c] * (1.0 / k1 + t * inv_b1 - math.expm1(-k2 * t / b2) / k2)
+    return out
+
+
+@numba.njit(**JIT)
+def _log_current_at_strain(
+    x, source, fixed, voltage, stress, strain, extra, paper, finish, max_iter, peak_table
 ):
-    """:func:`step_log_current` compiled, with eq. 11's peak table an argument.
+    """:func:`log_current_at_strain` compiled, with eq. 11's peak table an argument.
 
     numba freezes a global array as a read-only constant, and a read-only array would compile a
     second copy of the circuit solver (:func:`~.compiled.solve_points`).
@@ -104,11 +140,7 @@ def _step_log_current(
     for i in range(n):
         for j in range(source.size):
             p[j] = fixed[j] if source[j] < 0 else x[i, source[j]]
-        k1, k2, b2, inv_b1, s0, a0, a1, a2, rc0, alpha, rpar, sigma0, va, vth = (
-            p[0],
-            p[1],
-            p[2],
-            p[3],
+        s0, a0, a1, a2, rc0, alpha, rpar, sigma0, va, vth, count = (
             p[4],
             p[5],
             p[6],
@@ -119,20 +151,18 @@ def _step_log_current(
             p[11],
             p[12],
             p[13],
+            p[14],
         )
         for c in range(k):
             point = i * k + c
-            t, sigma = time[c], stress[c]
-            compliance = 0.0  # eq. 17, 0 before the step
-            if t >= 0:
-                compliance = 1.0 / k1 + t * inv_b1 - math.expm1(-k2 * t / b2) / k2
-            v[point] = voltage[c]
-            gap[point] = s0 * (1.0 - sigma * compliance)  # eq. 18
+            sigma = stress[c]
+            v[point] = voltage[c] / count  # N junctions in series: one of them at V/N, R/N
+            gap[point] = s0 * (1.0 - strain[i, c])  # eq. 18
             area[point] = a0 + a1 * sigma**a2  # eq. 6
             contacts = 2.0 * (rpar + rc0 / (sigma + sigma0) ** alpha)  # eq. 5, two contacts
-            series[point] = contacts + extra[c]
+            series[point] = (contacts + extra[c]) / count
             barrier[point] = va
-            threshold[point] = vth if paper else voltage[c]
+            threshold[point] = vth if paper else v[point]
     current = np.empty(m)
     v_bulk = np.empty(m)
     regime = np.empty(m, dtype=np.int8)

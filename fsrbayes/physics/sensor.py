@@ -38,6 +38,7 @@ __all__ = [
     "DomainWarning",
     "gap_strain",
     "sensor_state",
+    "momentary_stress",
     "solve_current",
     "current",
     "drift",
@@ -313,15 +314,25 @@ def _solve_current(
             np.asarray(time, dtype=float), (step_time.shape[-2], np.shape(time)[-1])
         )
         if stress is None:
-            stress = load_of_steps(step_time, step_size, time)
-            if first_ramp is not None:
-                weight = step_size[..., :1]
-                stress = ramped_load(stress, weight, first_ramp, time - step_time[..., :1])
+            stress = momentary_stress(steps, time, first_ramp)
     static = None if load_steps is None else static_stress_of(effects, params, stress, steps, time)
     return _solve_model(
         params, voltage, stress, strain, family, tunneling, effects, time, extra_series,
         near_first, static,
     )  # fmt: skip
+
+
+def momentary_stress(load_steps, time, first_ramp=None):
+    """Return the load (Pa) at ``time`` (C, T) under ``load_steps`` as :func:`solve_current` has it.
+
+    The steps' own load, each test's first step rising linearly over ``first_ramp`` s where given:
+    what the contact and area laws (eqs. 5, 6) see without an effect that remembers loads.
+    """
+    step_time, step_size = (np.asarray(a, dtype=float) for a in load_steps)
+    stress = load_of_steps(step_time, step_size, time)
+    if first_ramp is None:
+        return stress
+    return ramped_load(stress, step_size[..., :1], first_ramp, time - step_time[..., :1])
 
 
 def current(

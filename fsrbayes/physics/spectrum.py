@@ -141,6 +141,7 @@ def _horner(x, coefficients):
 
 _CF_TINY = 1e-300  # Lentz's start for a continued fraction whose first term is 0
 _CF_TERMS = 200  # at x = 1 the fraction meets rounding in ~40 terms, fewer above
+_EXP_UNDERFLOW = -746.0  # math.exp is exactly 0 below this
 
 
 @numba.njit(cache=True, nogil=True)
@@ -149,6 +150,9 @@ def _upper_gamma(g, x):
 
     e^x·x^(−g)·Γ(g, x) = 1/(x + 1 − g − 1·(1 − g)/(x + 3 − g − 2·(2 − g)/(x + 5 − g − …))).
     """
+    power = -x + g * math.log(x)
+    if power < _EXP_UNDERFLOW:  # e^power is 0 in doubles, and the fraction's h is below 1
+        return 0.0
     b = x + 1.0 - g
     c = 1.0 / _CF_TINY
     d = 1.0 / b
@@ -162,7 +166,7 @@ def _upper_gamma(g, x):
         h *= step
         if abs(step - 1.0) < 1e-16:
             break
-    return h * math.exp(-x + g * math.log(x))
+    return h * math.exp(power)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -182,6 +186,7 @@ def _ein(x):
 
 
 _TILT_TERMS = 25  # x ≤ 1: the 25th term of G's series is < 1e-25
+_SERIES_END = 1e-17  # G's series stops at a term below this share of its sum (under rounding)
 _LGAMMA_TERMS = 60  # |g| ≤ 0.5: the 60th term of ln Γ(1 + g)'s series is < 1e-19
 _LGAMMA_COEF = np.array(
     [(-1.0) ** k * float(zeta(k)) / k for k in range(2, _LGAMMA_TERMS)]
@@ -194,8 +199,13 @@ def _gamma_gap(g):
     if abs(g) > 0.5:
         return -math.expm1(math.lgamma(1.0 + g)) / g
     out = 0.0
-    for j in range(_LGAMMA_COEF.size - 1, -1, -1):
-        out = out * g + _LGAMMA_COEF[j]
+    power = 1.0
+    for j in range(_LGAMMA_COEF.size):  # terms fall at least as |g|^j: stop under rounding
+        part = _LGAMMA_COEF[j] * power
+        out += part
+        if abs(part) < _SERIES_END:
+            break
+        power *= g
     per_g = -_EULER + out * g  # ln Γ(1 + g)/g
     return -math.expm1(g * per_g) / g
 
@@ -212,7 +222,10 @@ def _tilted_scalar(x, g):
         out = 0.0
         for k in range(1, _TILT_TERMS):
             term *= x / k
-            out += (term if k % 2 == 1 else -term) / (k + g)
+            part = term / (k + g)
+            out += part if k % 2 == 1 else -part
+            if part <= _SERIES_END * out:  # alternating, falling: the rest is below `part`
+                break
         return out * x**g
     rise = math.expm1(g * math.log(x)) / g
     return rise + _gamma_gap(g) + _upper_gamma(g, x)

@@ -1,4 +1,9 @@
-"""The compiled stress-step model is the generic one (solve_current) to rounding, and is used."""
+"""The compiled model is the generic one (solve_current) to rounding, and is used.
+
+From a stress step on a Burgers or Zener sensor (strain compiled too), and from any creep law's
+strain (the log-spectrum laws with their tilt and drop, per-placement factors, load steps, taps
+before the weight) through the N junctions of a real 402.
+"""
 
 import numpy as np
 import pytest
@@ -9,7 +14,9 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.inference.likelihood import SpecimenData
 from fsrbayes.inference.pinned import PinnedCoordinates
 from fsrbayes.inference.posterior import LogPosterior
+from fsrbayes.inference.reference_model import ReferenceModel, strain_only
 from fsrbayes.physics.compiled_creep import STEP_PARAMETERS, step_log_current
+from fsrbayes.physics.effects import EFFECTS
 from fsrbayes.physics.sensor import solve_current
 from fsrbayes.physics.solver import FINISH
 
@@ -36,7 +43,8 @@ def test_the_compiled_step_is_solve_current_to_rounding(model, tunneling, load_o
     log_expected[~(expected.valid & (expected.current > 0))] = np.nan
     sampled = {n: i for i, n in enumerate(prior.names)}
     source = np.array([sampled.get(n, -1) for n in STEP_PARAMETERS], dtype=np.int64)
-    values = {"Rpar": 0.0, "sigma0": 0.0, **fixed, **({"inv_b1": 0.0} if model == "zener" else {})}
+    values = {"Rpar": 0.0, "sigma0": 0.0, "n_junctions": 1.0, **fixed}
+    values |= {"inv_b1": 0.0} if model == "zener" else {}
     if model == "zener":
         source[STEP_PARAMETERS.index("inv_b1")] = -1
     constants = np.array([values.get(n, np.nan) for n in STEP_PARAMETERS])
@@ -107,3 +115,45 @@ def _assert_pinned_agree(posterior, compiled):
     y = pins.log_current(u)
     assert np.isfinite(y).sum() > 0.9 * y.size
     np.testing.assert_allclose(y, pins.log_current(u, rows), rtol=0, atol=1e-12)
+    return pins
+
+
+@pytest.mark.parametrize(
+    ("rig", "protocol", "model"),
+    [
+        ("A", "hold", "log-spectrum-sat+spectrum-tilt+creep-drop"),  # placements, 100 junctions
+        ("A", "staircase", "log-spectrum-sat"),  # load steps: the momentary load
+        ("B", "cycles", "log-spectrum-sat+unlogged-load+spectrum-tilt"),  # taps before the weight
+        ("A", "hold", "log-spectrum"),
+        ("A", "hold", "nutting"),
+    ],
+)
+def test_pinned_coordinates_of_real_402_logs_use_it_from_the_strain_on(
+    tmp_path, rig, protocol, model
+):
+    from fsrbayes.data.realfsr_protocols import simulate_real_rig, write_real_rig
+
+    log = simulate_real_rig(rig, protocol, seed=11, rate_hz=2.0, duration_s=60.0)
+    data = read_csv(write_real_rig(log, tmp_path / "log.csv")[0])
+    packed = SpecimenData.select(data, data.specimens[0])
+    posterior = LogPosterior.for_sensor(
+        packed, fsrbayes.load_sensor("fsr402"), model=model, placement=protocol == "hold"
+    )
+    junctions = posterior.fixed.get("n_junctions", 1.0)
+    assert junctions > 1.0 if "-sat" in model else junctions == 1.0  # the 402 file's, per law
+    pins = _assert_pinned_agree(posterior, compiled=True)
+    assert not pins._step_model.compiled_strain  # the law's strain, through the generic path
+
+
+def test_only_effects_that_act_on_the_strain_alone_keep_it():
+    acting_beyond = {
+        name for name, effect in EFFECTS.items() if not strain_only(effect)
+    }  # area, contacts, current, the load the contacts see
+    assert {"area-creep", "contact-creep", "gain-drift", "contact-memory"} <= acting_beyond
+    assert not {"spectrum-tilt", "creep-drop", "unlogged-load", "log-creep"} & acting_beyond
+    sim = synthetic.simulate("a201", n_specimens=1, voltages=[1.0], forces=[4.9], samples=5, seed=3)
+    data = SpecimenData.select(sim.data, None)
+    for model in ("burgers+contact-creep", "burgers+voltage-degradation"):
+        posterior = LogPosterior.for_sensor(data, fsrbayes.load_sensor("a201"), model=model)
+        reference = PinnedCoordinates(posterior, np.zeros(posterior.ndim))._at_references
+        assert ReferenceModel.of(reference) is None
