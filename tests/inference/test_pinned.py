@@ -27,6 +27,7 @@ from fsrbayes.inference.pinned import (
     REFERENCE_POINTS,
     PinnedCoordinates,
     _reference_times,
+    pinned_start,
     polish_along_pins,
 )
 from fsrbayes.inference.posterior import LogPosterior
@@ -196,6 +197,29 @@ def test_pinned_coordinates_solve_for_what_the_rig_pins(pinned, rig_posterior):
     described = pinned.describe()
     assert described["solved"] == list(pinned.solved)
     assert len(described["reference_time_s"]) == len(pinned.solved)
+
+
+def test_a_pinned_start_draws_the_laplace_approximation_in_every_direction(pinned, rig_posterior):
+    """Walkers start where the posterior is, in its narrow log-currents and its wide parameters
+    alike: a Hessian stepping 1e-3 in every direction left the log-currents' support, no draw
+    mapped back, and the walkers started in a ball of 1e-3 in every coordinate."""
+    posterior, optimum = rig_posterior
+    n_walkers = 200
+    start, held = pinned_start(pinned, optimum[None], np.random.default_rng(2), n_walkers)
+    assert held == n_walkers  # every walker maps back to u
+    w = pinned.to_sampled(start[0])
+    spread = w.std(axis=0)
+    pinned_now = len(pinned.solved)
+    assert spread[:pinned_now].max() < 1e-2  # the data pin the log-currents
+    wide = [
+        i for i, name in enumerate(pinned.names[pinned_now:], pinned_now) if name != "sigma_rel"
+    ]
+    assert spread[wide].min() > 0.1  # the parameters spread as wide as the posterior lets them
+    centre = pinned.to_sampled(optimum[None])
+    log_p_w = SampledLogProb(posterior, pinned)(np.concatenate([centre, w]))[:, 0]
+    fall = log_p_w[0] - log_p_w[1:]
+    # drawn from the Laplace approximation: log p falls by chi2(ndim)/2, mean ndim/2
+    assert 0.5 * posterior.ndim / 2 < np.mean(fall) < 1.5 * posterior.ndim / 2
 
 
 def test_a_log_spectrum_fit_is_pinned_in_the_middle_of_each_test_in_log_time(rig_posterior):
