@@ -186,7 +186,7 @@ def _ein(x):
 
 
 _TILT_TERMS = 25  # x ≤ 1: the 25th term of G's series is < 1e-25
-_SERIES_END = 1e-17  # G's series stops at a term below this share of its sum (under rounding)
+_SERIES_END = 1e-17  # a series stops at a term below this share of its sum (under rounding)
 _LGAMMA_TERMS = 60  # |g| ≤ 0.5: the 60th term of ln Γ(1 + g)'s series is < 1e-19
 _LGAMMA_COEF = np.array(
     [(-1.0) ** k * float(zeta(k)) / k for k in range(2, _LGAMMA_TERMS)]
@@ -203,7 +203,7 @@ def _gamma_gap(g):
     for j in range(_LGAMMA_COEF.size):  # terms fall at least as |g|^j: stop under rounding
         part = _LGAMMA_COEF[j] * power
         out += part
-        if abs(part) < _SERIES_END:
+        if abs(part) < _SERIES_END:  # the sum lies in 0.67–1.14 for |g| ≤ 0.5
             break
         power *= g
     per_g = -_EULER + out * g  # ln Γ(1 + g)/g
