@@ -375,14 +375,13 @@ def pinned_start(pins, centres, rng, n_walkers):
     w(centre) (:func:`~fsrbayes.inference.optimize.laplace_start`) and mapped back to u. Drawn
     in u instead, a start spreads off the posterior's sheet in its wide directions, where the
     root search back from the log-currents fails for most walkers; drawn in w, every walker lies
-    on the sheet. The covariance is the MAP search's
-    (:func:`~fsrbayes.inference.optimize.whitening`), whose Hessians step by each direction's
-    own width: the data pin the log-currents to ~1e-4 while the other coordinates stay
-    prior-wide, and the Laplace covariance from one step of 1e-3 for all leaves the
-    log-currents' support and gives them the prior's scale — every walker then failed to map
-    back and started in a ball of 1e-3 instead, a thousandth of the posterior's width in the
-    other coordinates (VALIDATION.md, ``pinned-start``). Walkers are drawn at the covariance's
-    own scale, and those without a preimage again at each of :data:`START_SHRINKS` in turn.
+    on the sheet. The covariance's square root is :func:`~fsrbayes.inference.optimize.whitening`
+    of log p_w at w(centre), whose Hessians step by each direction's own width: the data pin the
+    log-currents to ~1e-4 while the other coordinates stay prior-wide, and a Hessian stepping
+    1e-3 in every direction leaves the log-currents' support (VALIDATION.md, ``pinned-start``).
+    Walkers are drawn at the covariance's own scale; those where log p_w is not finite (no
+    preimage, or outside the model's domain) again at each of :data:`START_SHRINKS` in turn,
+    and any left after the last in a ball of :data:`START_BALL` of it.
 
     Parameters
     ----------
@@ -395,44 +394,50 @@ def pinned_start(pins, centres, rng, n_walkers):
     Returns
     -------
     start : ndarray, shape (E, n_walkers, ndim)
-        Positions in u; NaN where the root search found none (the sampler starts those walkers
-        on copies of the others).
+        Positions in u; NaN where log p_w is not finite even in the ball (the sampler starts
+        those walkers on copies of the others).
     held : int
-        The fewest walkers of any ensemble that map back (0 where a centre has no image in w).
+        The fewest walkers of any ensemble with a finite log p_w (0 where a centre has none).
     """
+    sampled = SampledLogProb(pins.posterior, pins)
     density = _SampledColumn(pins, LOG_P_W)
     start = np.full((len(centres), n_walkers, pins.ndim), np.nan)
-    held = []
+    held, roots = [], {}
     for ensemble, centre in enumerate(centres):
         w_centre = pins.to_sampled(np.asarray(centre, dtype=float)[None])
         if not np.isfinite(density(w_centre)[0]):
             return start, 0
-        root = whitening(density, w_centre[0])
+        key = w_centre.tobytes()
+        if key not in roots:  # ensembles that share a centre share its covariance
+            roots[key] = whitening(density, w_centre[0])
         w = np.empty((n_walkers, pins.ndim))
+        values = np.full((n_walkers, 2 + pins.ndim), np.nan)  # log p_w, log p_u, u
         redraw = np.ones(n_walkers, dtype=bool)
-        for shrink in START_SHRINKS:  # walkers without a preimage are drawn again, closer in
+        for scale in (*START_SHRINKS, START_BALL):
             w[redraw] = laplace_start(
                 density,
                 w_centre[0],
                 rng,
                 (int(redraw.sum()),),
-                overdispersion=shrink,
-                root_cov=root,
+                overdispersion=scale,
+                root_cov=roots[key],
             )
-            redraw = ~np.isfinite(density(w))
+            values[redraw] = sampled(w[redraw])
+            redraw = ~np.isfinite(values[:, LOG_P_W])
             if not redraw.any():
                 break
-        u, log_det = pins.from_sampled(w)
-        found = np.isfinite(log_det)
-        start[ensemble, found] = u[found]
-        held.append(int(found.sum()))
+        start[ensemble, ~redraw] = values[~redraw, 2:]
+        held.append(int(np.count_nonzero(~redraw)))
     return start, min(held)
 
 
 START_SHRINKS = (1.0, 0.5, 0.25, 0.125)
 """Scales of the Laplace covariance a pinned start draws its walkers at, the first for all, the
-others for those still without a preimage. At twice it (the prior-scaled starts' overdispersion)
-two thirds of a 24-parameter 402 fit's draws have none, at once 7 %."""
+others for those still where log p_w is not finite. At twice it (the prior-scaled starts'
+overdispersion) two thirds of a 24-parameter 402 fit's draws have no preimage, at once 7 %."""
+START_BALL = 1e-3
+"""The scale, in Laplace widths, of the ball where a pinned start puts the walkers that no
+scale of :data:`START_SHRINKS` placed."""
 
 LOG_P_W, LOG_P_U = 0, 1
 """Columns of :class:`~fsrbayes.inference.samplers.coordinates.SampledLogProb`'s output."""

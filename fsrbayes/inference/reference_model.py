@@ -1,13 +1,15 @@
 """The model's log-current at the pinned reference points, compiled where it can be.
 
-A root search in pinned coordinates (:mod:`.pinned`) evaluates the model at its K reference
-points — one sample per test — for a few dozen parameter sets, up to seventeen times per
-proposal. At that size the generic path (:meth:`~.posterior.LogPosterior.log_model_current`)
-costs mostly numpy's per-call overhead. :class:`ReferenceModel` computes the same model in
-fewer calls:
+A root search in pinned coordinates (:mod:`.pinned`) evaluates the model at its K reference points —
+one sample per test — for a few dozen parameter sets, some twenty times per proposal (the root
+search's iterations and the Jacobian's differences). At that size numpy's per-call overhead is a
+share of the generic path's (:meth:`~.posterior.LogPosterior.log_model_current`) cost: two thirds of
+it for a Burgers step, a tenth for the 402's default model, whose circuit solve and spectrum take
+the rest (BENCHMARKS.md, ``creep-laws``). :class:`ReferenceModel` computes the same model in fewer
+calls:
 
 - the gap's strain: compiled for a stress step on a Burgers or Zener sensor without effects or
-  per-test factors (eq. 17, :func:`~fsrbayes.physics.compiled_creep.step_log_current`);
+  per-test creep factors (eq. 17, :func:`~fsrbayes.physics.compiled_creep.step_log_current`);
   otherwise the posterior's own :meth:`~.posterior.LogPosterior.gap_strain` — any creep law
   (the log-spectrum laws' spectrum, tilt and drop), strain-only effects, each test's creep
   factor, the load's steps;
@@ -19,7 +21,7 @@ fewer calls:
 It applies where those are the whole model: no effect that acts on the area, the contacts, the
 current or the load the contacts see (:func:`strain_only`), no sampled ramps or landings (which move
 the load in time), the paper's circuit rather than a peer model's. Results agree with the generic
-path to rounding (``tests/inference/test_pinned.py`` compares them).
+path to rounding (``tests/physics/test_compiled_creep.py`` compares them).
 """
 
 import numpy as np
@@ -29,10 +31,13 @@ from ..physics.effects import Effect
 from ..physics.rheology import BURGERS, ZENER, CreepLaw
 from ..physics.sensor import momentary_stress
 from ..physics.solver import FINISH
-from .nuisance import is_landing, is_per_test, is_ramp
+from .nuisance import is_landing, is_placement_creep, is_ramp
 
 __all__ = ["ReferenceModel", "strain_only"]
 
+STRAIN_PARAMETERS = 4
+"""The first of :data:`~fsrbayes.physics.compiled_creep.STEP_PARAMETERS` (k1, k2, b2, inv_b1)
+are read only where eq. 17's strain is compiled too."""
 MAX_ITER = 100
 """Iterations of the circuit's solve (as :func:`~fsrbayes.physics.solver.solve_bulk`'s)."""
 
@@ -81,7 +86,7 @@ class ReferenceModel:
             (posterior.family is BURGERS or posterior.family is ZENER)  # eq. 17's laws
             and not posterior.effect_objects
             and steps is None
-            and not any(is_per_test(n) for n in posterior.names)
+            and not any(is_placement_creep(n) for n in posterior.names)  # each test's own creep
         )
         self.placements = any(n.startswith("placement[") for n in posterior.names)
 
@@ -97,7 +102,8 @@ class ReferenceModel:
         ):
             return None
         model = cls(posterior)
-        unknown = np.isnan(model.fixed) & (model.source < 0)
+        read = slice(0 if model.compiled_strain else STRAIN_PARAMETERS, None)  # what is computed
+        unknown = np.isnan(model.fixed[read]) & (model.source[read] < 0)
         return None if unknown.any() else model
 
     def __call__(self, x):

@@ -8,9 +8,9 @@ R/N) — compiled, for the sensor at its sourcing voltage or in a voltage divide
 commonest case — a stress step held from t = 0, a Burgers or Zener creep law, no effects — the
 strain is compiled too (eq. 17): :func:`step_log_current`.
 
-Why. A root search in the pinned coordinates (:mod:`fsrbayes.inference.pinned`) evaluates the
-model at ~10 reference points for a few dozen parameter sets, sixteen times per proposal. At that
-size the generic path's numpy operations cost twice the solve itself; here they are one call.
+Why. A root search in the pinned coordinates (:mod:`fsrbayes.inference.pinned`) evaluates the model
+at ~10 reference points for a few dozen parameter sets, some twenty times per proposal. At that size
+the generic path's numpy operations cost twice the solve itself; here they are one call.
 
 It computes the same formulas in the same order; exp, expm1 and powers come from the C library
 instead of numpy's loops, so results agree with the generic path to rounding (the tests compare

@@ -21,7 +21,7 @@ from fsrbayes.data.rigsim import simulate_rig, write_rig
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.evidence.laplace import laplace_fit
 from fsrbayes.inference.likelihood import SpecimenData
-from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish
+from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish, whitening
 from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.pinned import (
     REFERENCE_POINTS,
@@ -200,26 +200,62 @@ def test_pinned_coordinates_solve_for_what_the_rig_pins(pinned, rig_posterior):
 
 
 def test_a_pinned_start_draws_the_laplace_approximation_in_every_direction(pinned, rig_posterior):
-    """Walkers start where the posterior is, in its narrow log-currents and its wide parameters
-    alike: a Hessian stepping 1e-3 in every direction left the log-currents' support, no draw
-    mapped back, and the walkers started in a ball of 1e-3 in every coordinate."""
+    """Walkers start as wide as the Laplace approximation of log p_w in each coordinate, the
+    log-currents the data pin to ~1e-4 and the parameters the prior holds alike, and log p_w
+    falls over them as over draws of that approximation."""
     posterior, optimum = rig_posterior
     n_walkers = 200
     start, held = pinned_start(pinned, optimum[None], np.random.default_rng(2), n_walkers)
-    assert held == n_walkers  # every walker maps back to u
+    assert held == n_walkers
     w = pinned.to_sampled(start[0])
-    spread = w.std(axis=0)
-    pinned_now = len(pinned.solved)
-    assert spread[:pinned_now].max() < 1e-2  # the data pin the log-currents
-    wide = [
-        i for i, name in enumerate(pinned.names[pinned_now:], pinned_now) if name != "sigma_rel"
-    ]
-    assert spread[wide].min() > 0.1  # the parameters spread as wide as the posterior lets them
     centre = pinned.to_sampled(optimum[None])
-    log_p_w = SampledLogProb(posterior, pinned)(np.concatenate([centre, w]))[:, 0]
-    fall = log_p_w[0] - log_p_w[1:]
+
+    def log_p_w(points):
+        return SampledLogProb(posterior, pinned)(points)[:, 0]
+
+    log_p_w.ndim = posterior.ndim
+    laplace_sd = np.sqrt(np.sum(whitening(log_p_w, centre[0]) ** 2, axis=1))
+    assert laplace_sd.min() < 1e-3 < 0.1 < laplace_sd.max()  # widths decades apart
+    ratio = w.std(axis=0) / laplace_sd  # below 1 where walkers were drawn again closer in
+    assert np.all((ratio > 0.4) & (ratio < 1.3)), ratio
+    fall = log_p_w(centre)[0] - log_p_w(w)
     # drawn from the Laplace approximation: log p falls by chi2(ndim)/2, mean ndim/2
     assert 0.5 * posterior.ndim / 2 < np.mean(fall) < 1.5 * posterior.ndim / 2
+
+
+class _Walled:
+    """Identity 'pinned coordinates' of a unit normal in 3-d that is −inf where |x0| > 0.05."""
+
+    ndim = 3
+
+    def __init__(self):
+        self.posterior = self.density
+
+    def density(self, u):
+        u = np.atleast_2d(u)
+        return np.where(np.abs(u[:, 0]) < 0.05, -0.5 * np.sum(u**2, axis=1), -np.inf)
+
+    def to_sampled(self, u):
+        return np.asarray(u, dtype=float)
+
+    def from_sampled(self, w):
+        return np.atleast_2d(w), np.zeros(len(np.atleast_2d(w)))
+
+
+_Walled.density.ndim = 3
+
+
+def test_a_pinned_start_draws_walkers_again_closer_in_until_every_one_has_a_density():
+    """Walkers drawn where log p_w is −inf are drawn again at each smaller scale, and those still
+    out after the last start in a ball of a thousandth of the Laplace widths: every walker of
+    the start has a density."""
+    walled = _Walled()
+    start, held = pinned_start(walled, np.zeros((2, 3)), np.random.default_rng(4), 400)
+    assert held == 400 and np.isfinite(start).all()
+    assert np.abs(start[..., 0]).max() < 0.05  # inside the wall
+    assert np.all(start[..., 1:].std(axis=1) > 0.1)  # far wider than the ball: drawn, not put
+    in_ball = np.abs(start).max(axis=-1) < 0.01
+    assert 0 < in_ball.sum() < start[..., 0].size  # some walkers needed the ball, not all
 
 
 def test_a_log_spectrum_fit_is_pinned_in_the_middle_of_each_test_in_log_time(rig_posterior):
