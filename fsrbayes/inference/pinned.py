@@ -399,8 +399,8 @@ def pinned_start(pins, centres, rng, n_walkers):
     held : int
         The fewest walkers of any ensemble with a finite log p_w (0 where a centre has none).
     """
-    sampled = SampledLogProb(pins.posterior, pins)
     density = _SampledColumn(pins, LOG_P_W)
+    sampled = density.sampled  # all its columns: log p_w, log p_u and u
     start = np.full((len(centres), n_walkers, pins.ndim), np.nan)
     held, roots = [], {}
     for ensemble, centre in enumerate(centres):

@@ -31,7 +31,7 @@ from ..physics.effects import Effect
 from ..physics.rheology import BURGERS, ZENER, CreepLaw
 from ..physics.sensor import momentary_stress
 from ..physics.solver import FINISH
-from .nuisance import is_landing, is_placement_creep, is_ramp
+from .nuisance import is_landing, is_placement, is_placement_creep, is_ramp
 
 __all__ = ["ReferenceModel", "strain_only"]
 
@@ -88,7 +88,7 @@ class ReferenceModel:
             and steps is None
             and not any(is_placement_creep(n) for n in posterior.names)  # each test's own creep
         )
-        self.placements = any(n.startswith("placement[") for n in posterior.names)
+        self.placements = any(is_placement(n) for n in posterior.names)
 
     @classmethod
     def of(cls, posterior):
