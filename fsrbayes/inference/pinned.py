@@ -261,6 +261,14 @@ class PinnedCoordinates:
         log_det[rows[found]] = det[found]
         return u, log_det
 
+    def reaches(self, u):
+        """Whether the root search maps w(u) back: (K, ndim) → (K,) bool.
+
+        A point where it does not (a second region far from the anchor) has no preimage, and
+        walkers moving in w never reach it.
+        """
+        return np.isfinite(self.from_sampled(self.to_sampled(np.atleast_2d(u)))[1])
+
     def _root(self, u, target):
         """Solve y(u_P, u_F) = target from u; return (found, u, −log|det ∂y/∂u_P| at the root).
 

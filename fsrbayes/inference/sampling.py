@@ -412,10 +412,13 @@ def _pinned(posterior, anchor, coordinates, start, centres, rng):
     leave the affine hull of the start). The ensembles start in every region the search found,
     a nested model's tail included, and a root search linearised at the anchor may not reach a
     second region with every pinned parameter solved for; the solved set then shrinks, last
-    pivot first, until it holds every ensemble's start. Where none does (a model far from the
-    data: a sharp, strongly curved posterior where the root search from the optimum fails),
-    ``"auto"`` returns None and the ``start`` drawn in u, and ``"pinned"`` raises; ``"prior"``
-    returns them at once.
+    pivot first, until it holds every ensemble's start. Where none does, the ensembles whose
+    centre has no preimage in the full set start at the anchor instead: walkers moving in
+    those coordinates cannot reach that region either, and a start drawn in u puts walkers
+    millions of nats down on a rig's data (VALIDATION.md, ``pinned-start``). Where even that
+    fails (a model far from the data: a sharp, strongly curved posterior where the root search
+    from the optimum fails), ``"auto"`` returns None and the ``start`` drawn in u, and
+    ``"pinned"`` raises; ``"prior"`` returns them at once.
     """
     if coordinates == "prior":
         return None, start
@@ -430,6 +433,12 @@ def _pinned(posterior, anchor, coordinates, start, centres, rng):
         pinned, held = pinned_start(pins, centres, rng, start.shape[1])
         if held > posterior.ndim:
             return pins, pinned
+    reached = full.reaches(centres)
+    if not reached.all():
+        centres = np.where(reached[:, None], centres, np.asarray(anchor, dtype=float))
+        pinned, held = pinned_start(full, centres, rng, start.shape[1])
+        if held > posterior.ndim:
+            return full, pinned
     if coordinates == "auto":
         return None, start
     raise ValueError(

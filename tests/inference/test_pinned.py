@@ -396,8 +396,17 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     assert 0 < len(fewer.solved) < len(pins.solved)
     assert fewer.solved == pins.solved[: len(fewer.solved)]
     assert min(round_trips(walkers, fewer)[1].sum() for walkers in start) > posterior.ndim
-    # ... and a centre no solved set maps falls back on the start drawn in u
+    # ... a centre no solved set maps gives its ensemble the anchor's start, every parameter
+    # solved for (walkers moving in w could not reach it either) ...
     nowhere = np.full(posterior.ndim, np.nan)
+    assert pins.reaches(np.array([anchor, far, nowhere])).tolist() == [True, False, False]
+    again, start = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
+    assert again.solved == pins.solved
+    assert all(round_trips(walkers, again)[1].all() for walkers in start)
+    spread = start[0].std(axis=0)  # the first ensemble's, drawn around the anchor
+    assert np.all(np.abs(np.median(start[1], axis=0) - anchor) < 2.0 * spread)
+    # ... and where not even the anchor's start maps back, the start drawn in u is kept
+    monkeypatch.setattr(sampling, "pinned_start", lambda pins, centres, *a: (None, 0))
     none, kept = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
     assert none is None and kept is u_start
     with pytest.raises(ValueError, match="no set of pinned parameters maps"):
