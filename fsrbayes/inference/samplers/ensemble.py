@@ -44,7 +44,7 @@ from .checkpoint import load_checkpoint, save_checkpoint
 from .convergence import SLOWEST, ConvergenceReport, ConvergenceWarning, convergence_report
 from .coordinates import SampledLogProb, sampled_start
 from .settings import SamplerSettings
-from .stepping import step_ensemble, steps_alone
+from .stepping import evaluate, step_ensemble, steps_alone
 from .transport import MappedLogProb
 from .warmup import MAP_CHECK, even_index, map_settled, transport_maps, warmup_rounds
 
@@ -95,6 +95,34 @@ def ensemble_moves(de_fraction, proposal=None, independence_fraction=0.0):
     ]
 
 
+def _start_with_density(target, position):
+    """Evaluate the target at a chunk's start: walkers without density take others' places.
+
+    In new coordinates the walkers' positions are mapped from u, and where the inverse is a
+    root search a walker at the edge of its reach can be missed there though it was found
+    before (the map's round trip shifts it by rounding). Such a walker would stay at −inf, its
+    stored u NaN, until it next moves; instead it takes the position, log-density and blobs of
+    another walker, in turn, as :func:`~.coordinates.sampled_start` does.
+
+    Returns
+    -------
+    position : ndarray, shape (W, ndim)
+    log_prob : ndarray, shape (W,)
+    blobs : ndarray, shape (W, …), or None
+    """
+    log_prob, blobs = evaluate(target, position)
+    good = np.isfinite(log_prob)
+    if not good.any():
+        raise ValueError("no walker has a finite log-density where this chunk of sampling starts")
+    bad = np.flatnonzero(~good)
+    donors = np.flatnonzero(good)[np.arange(bad.size) % good.sum()]
+    position = np.array(position, dtype=float)
+    position[bad], log_prob[bad] = position[donors], log_prob[donors]
+    if blobs is not None:
+        blobs[bad] = blobs[donors]
+    return position, log_prob, blobs
+
+
 def _advance(
     log_prob,
     position,
@@ -121,15 +149,14 @@ def _advance(
             "a target with its own emcee moves samples its own coordinates: set transport_rounds=0"
             " and coordinates=None"
         )
+    blobs_start = None
     if coordinates is not None:
         target = SampledLogProb(log_prob, coordinates)
-        position, log_prob_start = sampled_start(position, coordinates), None
+        position = sampled_start(position, coordinates)
     if transport is not None:
-        target, position, log_prob_start = (
-            MappedLogProb(target, transport),
-            transport.inverse(position),
-            None,
-        )
+        target, position = MappedLogProb(target, transport), transport.inverse(position)
+    if coordinates is not None or transport is not None:
+        position, log_prob_start, blobs_start = _start_with_density(target, position)
     moves = (
         own_moves()
         if own_moves is not None
@@ -138,12 +165,14 @@ def _advance(
     if steps_alone(moves):
         with single_threaded_blas():
             chain, values, blobs, accepted, random_state = step_ensemble(
-                target, moves, position, log_prob_start, random_state, steps
+                target, moves, position, log_prob_start, random_state, steps, blobs_start
             )
     else:
         sampler = emcee.EnsembleSampler(n_walk, ndim, target, vectorize=True, moves=moves)
         sampler.random_state = random_state
-        state = emcee.State(position, log_prob=log_prob_start, random_state=random_state)
+        state = emcee.State(
+            position, log_prob=log_prob_start, blobs=blobs_start, random_state=random_state
+        )
         with single_threaded_blas():
             sampler.run_mcmc(state, steps, skip_initial_state_check=True)
         chain, values, blobs = sampler.get_chain(), sampler.get_log_prob(), sampler.get_blobs()

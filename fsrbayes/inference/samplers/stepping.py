@@ -22,7 +22,7 @@ import numpy as np
 from .moves.differential import DifferentialMove
 from .moves.stretch import StretchMove
 
-__all__ = ["step_ensemble", "steps_alone"]
+__all__ = ["evaluate", "step_ensemble", "steps_alone"]
 
 _RED_BLUE = (emcee.moves.StretchMove, emcee.moves.DEMove)
 
@@ -36,7 +36,7 @@ def steps_alone(moves):
     )
 
 
-def _log_prob(target, coords):
+def evaluate(target, coords):
     """Return the target's log-densities (W,) and blobs (W, …) or None, as emcee reads them.
 
     A target may return (W,) values or (W, 1 + k) rows: the first column the log-density, the rest
@@ -105,7 +105,7 @@ def _red_blue(move, target, walkers, random):
         proposed, factors = proposer.propose(
             walkers.coords[chosen], walkers.coords[~chosen], random
         )
-        log_prob, blobs = _log_prob(target, proposed)
+        log_prob, blobs = evaluate(target, proposed)
         uniforms = random.rand(int(chosen.sum()))
         with np.errstate(invalid="ignore"):  # -inf against a walker at -inf: nan, rejected
             accepted[chosen] = factors + log_prob - walkers.log_prob[chosen] > np.log(uniforms)
@@ -119,13 +119,13 @@ def _metropolis(move, target, walkers, random):
     if move.ndim is not None and move.ndim != ndim:
         raise ValueError("Dimension mismatch in proposal")
     proposed, factors = move.get_proposal(walkers.coords, random)
-    log_prob, blobs = _log_prob(target, proposed)
+    log_prob, blobs = evaluate(target, proposed)
     accepted = np.log(random.rand(n_walk)) < log_prob - walkers.log_prob + factors
     walkers.take(np.ones(n_walk, dtype=bool), proposed, log_prob, blobs, accepted)
     return accepted
 
 
-def step_ensemble(target, moves, position, log_prob, random_state, steps):
+def step_ensemble(target, moves, position, log_prob, random_state, steps, blobs=None):
     """Run ``steps`` ensemble steps as :meth:`emcee.EnsembleSampler.run_mcmc` would.
 
     Parameters
@@ -140,6 +140,9 @@ def step_ensemble(target, moves, position, log_prob, random_state, steps):
     random_state : tuple
         A ``RandomState.get_state()``; the run draws from it in emcee's order.
     steps : int
+    blobs : ndarray, shape (W, …), optional
+        The target's blobs at ``position``, needed with a given ``log_prob`` when the target
+        returns blobs.
 
     Returns
     -------
@@ -157,9 +160,9 @@ def step_ensemble(target, moves, position, log_prob, random_state, steps):
     cdf /= cdf[-1]
     coords = np.array(position, dtype=float)
     n_walk, ndim = coords.shape
-    blobs = None
     if log_prob is None:
-        log_prob, blobs = _log_prob(target, coords)
+        log_prob, blobs = evaluate(target, coords)
+    blobs = None if blobs is None else np.array(blobs, dtype=float)
     walkers = _Walkers(coords, np.array(log_prob, dtype=float), blobs)
     chain = np.empty((steps, n_walk, ndim))
     values = np.empty((steps, n_walk))
