@@ -28,7 +28,8 @@ likelihood itself compares.
 
 The inverse u(w) is a K-dimensional root search, by Broyden's method from the linearisation at
 the anchor (the anchor's inverse Jacobian updated by every step, steps capped at :data:`MAX_STEP`
-prior widths, at most :data:`MAX_ITER` iterations), with the model evaluated at the K reference
+prior widths, at most :data:`MAX_ITER` iterations, then up to :data:`RESTARTS` times again from
+the Jacobian where it stopped), with the model evaluated at the K reference
 points only — compiled from the gap's strain on for any creep law with strain-only effects,
 and end to end for a stress step on a Burgers or Zener sensor (:mod:`.reference_model`) — and
 the log-determinant from forward differences at the root.
@@ -79,9 +80,12 @@ TOLERANCE = 1e-9
 ALONG_PINS_ROUNDS = 6
 """Most rounds of :func:`polish_along_pins` (each: new pins at the point, a whitened polish along
 them, one in u)."""
+RESTARTS = 2
+"""Times a root search still unsolved after :data:`MAX_ITER` iterations starts again from its own
+Jacobian (:meth:`PinnedCoordinates.from_sampled`)."""
 MAX_ITER = 16
-"""Iterations per root search: Broyden's method converges superlinearly near a root, so a row
-still unsolved after this many has none nearby and stops costing model evaluations."""
+"""Iterations per root search and restart: Broyden's method converges superlinearly near a root,
+so a row still unsolved after this many has none near the Jacobian it holds."""
 
 
 REFERENCE_POINTS = ("first", "middle", "last")
@@ -238,10 +242,11 @@ class PinnedCoordinates:
         w = np.concatenate([self.log_current(flat), flat[:, self._free]], axis=1)
         return w.reshape(u.shape)
 
-    def from_sampled(self, w):
+    def from_sampled(self, w, restarts=RESTARTS):
         """u(w) and log|det du/dw| = −log|det ∂y/∂u_P|: (W, ndim) → ((W, ndim), (W,)).
 
-        Rows without a root found have u NaN and log_det −inf.
+        Rows without a root found have u NaN and log_det −inf. ``restarts``: times a root search
+        still unsolved after :data:`MAX_ITER` iterations starts again from its own Jacobian.
         """
         w = np.atleast_2d(np.asarray(w, dtype=float))
         k = self._solved.size
@@ -256,7 +261,7 @@ class PinnedCoordinates:
             + (target[rows] - self._y0 - (free[rows] - self.anchor[self._free]) @ self._jac_free.T)
             @ self._inv_solved.T
         )
-        found, solution, det = self._root(trial, target[rows])
+        found, solution, det = self._root(trial, target[rows], restarts)
         u[rows[found]] = solution[found]
         log_det[rows[found]] = det[found]
         return u, log_det
@@ -269,7 +274,7 @@ class PinnedCoordinates:
         """
         return np.isfinite(self.from_sampled(self.to_sampled(np.atleast_2d(u)))[1])
 
-    def _root(self, u, target):
+    def _root(self, u, target, restarts):
         """Solve y(u_P, u_F) = target from u; return (found, u, −log|det ∂y/∂u_P| at the root).
 
         Broyden's method (:mod:`.broyden`): the inverse Jacobian starts as the anchor's and each
@@ -283,23 +288,26 @@ class PinnedCoordinates:
         y = self.log_current(u)
         active = np.isfinite(y).all(axis=1)
         shrink = np.ones(n)
-        for iteration in range(MAX_ITER + 1):
-            rows, trial, step = propose_steps(
-                u,
-                y,
-                target,
-                inverse,
-                shrink,
-                active,
-                found,
-                self._solved,
-                TOLERANCE,
-                MAX_STEP,
-                iteration == MAX_ITER,
-            )
-            if not trial.size:
+        for restart in range(restarts + 1):
+            if restart and not self._restart(u, y, inverse, shrink, active):
                 break
-            accept_steps(u, y, inverse, shrink, rows, trial, step, self.log_current(trial))
+            for iteration in range(MAX_ITER + 1):
+                rows, trial, step = propose_steps(
+                    u,
+                    y,
+                    target,
+                    inverse,
+                    shrink,
+                    active,
+                    found,
+                    self._solved,
+                    TOLERANCE,
+                    MAX_STEP,
+                    iteration == MAX_ITER,
+                )
+                if not trial.size:
+                    break
+                accept_steps(u, y, inverse, shrink, rows, trial, step, self.log_current(trial))
         log_det = np.full(n, -np.inf)
         if found.any():
             jacobian = self._jacobian(u[found], self._solved, y=y[found])
@@ -308,6 +316,26 @@ class PinnedCoordinates:
             log_det[found] = np.where(sign != 0, -log_abs, -np.inf)
             found &= np.isfinite(log_det)
         return found, u, log_det
+
+    def _restart(self, u, y, inverse, shrink, active):
+        """Give the searches still active the inverse of their own Jacobian; whether any are.
+
+        Broyden's updates start from the anchor's inverse Jacobian; a root far along a curved
+        sheet is reached once the search starts again from the Jacobian where it stopped.
+        """
+        rows = np.flatnonzero(active)
+        if not rows.size:
+            return False
+        jacobian = self._jacobian(u[rows], self._solved, y=y[rows])
+        with np.errstate(invalid="ignore"):
+            regular = np.isfinite(jacobian).all(axis=(1, 2)) & (
+                np.linalg.cond(np.where(np.isfinite(jacobian), jacobian, 1.0)) < 1e12
+            )
+        active[rows[~regular]] = False
+        rows, jacobian = rows[regular], jacobian[regular]
+        inverse[rows] = np.linalg.inv(jacobian)
+        shrink[rows] = 1.0
+        return bool(rows.size)
 
     def describe(self):
         """Return a JSON-ready summary: the solved parameters and their reference tests."""

@@ -25,6 +25,7 @@ from fsrbayes.inference.optimize import MAP_ITERATIONS, find_map, polish, whiten
 from fsrbayes.inference.output import save_fit
 from fsrbayes.inference.pinned import (
     REFERENCE_POINTS,
+    RESTARTS,
     PinnedCoordinates,
     _reference_times,
     pinned_start,
@@ -367,6 +368,28 @@ def test_round_trip_and_the_jacobian_of_the_inverse(pinned, rig_posterior):
         assert -np.linalg.slogdet(jac)[1] == pytest.approx(log_det[row], abs=1e-4)
 
 
+def test_a_root_search_starts_again_from_its_own_jacobian(pinned, rig_posterior):
+    """Broyden's method from the anchor's inverse Jacobian misses roots a third of a prior width
+    out; started again from the Jacobian where it stopped, it finds more of them, each one a
+    solution, none it found before lost."""
+    posterior, best = rig_posterior
+    u = best + 0.3 * np.random.default_rng(2).standard_normal((200, posterior.ndim))
+    w = pinned.to_sampled(u)
+    assert np.isfinite(w).all()
+
+    def solve(restarts):
+        roots, log_det = pinned.from_sampled(w, restarts)
+        found = np.isfinite(log_det)
+        assert np.abs(pinned.to_sampled(roots[found]) - w[found]).max() < 1e-8
+        return found, found & (np.abs(roots - u).max(axis=1) < 1e-6)
+
+    once, once_same = solve(0)
+    again, again_same = solve(RESTARTS)
+    assert RESTARTS >= 1 and not (once & ~again).any()
+    # 77 of 200 without restarts, 155 with two (the same u: 52 and 105)
+    assert again.sum() >= once.sum() + 40 and again_same.sum() >= once_same.sum() + 25
+
+
 def test_a_fit_in_pinned_coordinates_stores_the_posterior_in_its_own(tmp_path):
     small = syn.simulate(
         "a201", n_specimens=1, voltages=[0.5, 2.0], forces=[4.9, 9.8], samples=5, seed=2
@@ -412,8 +435,9 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     assert start.shape == u_start.shape and not np.allclose(start, u_start)
     assert all(round_trips(walkers, pins)[1].all() for walkers in start)
     # a second centre far from the anchor, where the root search with every pinned parameter
-    # solved for fails, gets fewer solved parameters (the first in pivot order) ...
-    far = anchor + 2.0 * rng.standard_normal(posterior.ndim)  # 0.5 fails to map on Intel only
+    # solved for fails for too many of its walkers, gets fewer solved parameters (the first in
+    # pivot order) ...
+    far = anchor + 4.0 * rng.standard_normal(posterior.ndim)
     fewer, start = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, far], rng)
     assert 0 < len(fewer.solved) < len(pins.solved)
     assert fewer.solved == pins.solved[: len(fewer.solved)]
@@ -421,7 +445,7 @@ def test_a_default_fit_pins_with_one_warm_up_round_and_falls_back_where_it_canno
     # ... a centre no solved set maps gives its ensemble the anchor's start, every parameter
     # solved for (walkers moving in w could not reach it either) ...
     nowhere = np.full(posterior.ndim, np.nan)
-    assert pins.reaches(np.array([anchor, far, nowhere])).tolist() == [True, False, False]
+    assert pins.reaches(np.array([anchor, nowhere])).tolist() == [True, False]
     again, start = sampling._pinned(posterior, anchor, "auto", u_start, [anchor, nowhere], rng)
     assert again.solved == pins.solved
     assert all(round_trips(walkers, again)[1].all() for walkers in start)
