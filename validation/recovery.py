@@ -16,6 +16,7 @@ import json
 import sys
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from fsrbayes.data import synthetic
 from fsrbayes.data.sensors import load_sensor
 from fsrbayes.inference.fit import fit
 from fsrbayes.inference.samplers.convergence import ConvergenceWarning
-from fsrbayes.inference.samplers.settings import SamplerSettings
+from fsrbayes.inference.sampling import FIT_SETTINGS
 from fsrbayes.physics.constants import DRIFT_TIME_S
 from fsrbayes.utils import json_ready
 
@@ -36,10 +37,9 @@ __all__ = [
     "format_rows",
 ]
 
-RECOVERY_SETTINGS = SamplerSettings(
-    n_ensembles=2, chunk=500, max_steps=8000, min_steps=2500, processes=2
-)
-"""Fast settings: two ensembles side by side; the criteria are the defaults, the budget is short."""
+RECOVERY_SETTINGS = replace(FIT_SETTINGS, processes=2)
+"""The fit's default settings (its convergence criteria and budget), its two ensembles side by
+side: the intervals scored are those a user's ``fit`` reports."""
 
 
 def recovery_study(

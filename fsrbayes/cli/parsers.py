@@ -320,7 +320,7 @@ def _add_calibrate(sub):
         cal,
         "--steps",
         type=int,
-        help="steps per ensemble and fit (default 1500), or per ladder rung with "
+        help="steps per ensemble and fit (default 1000), or per ladder rung with "
         "--sampler tempered (default 300)",
     )
     option(

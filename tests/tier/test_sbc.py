@@ -1,7 +1,7 @@
 """Validation tier: simulation-based calibration of the per-specimen fit with 40 replications.
 
 The design of VALIDATION.md's `sbc` (A201, Burgers, 3 voltages × 3 forces × 8 log-spaced samples, a
-fixed 1,500-step fit per replication; 12 parameters and 9 drifts(3600 s) ranked among 99 draws),
+fixed 1,000-step fit per replication; 12 parameters and 9 drifts(3600 s) ranked among 99 draws),
 with N = 40 instead of 100 and the verdict at family-wise level 0.001 (Bonferroni over the
 quantities), so that a calibrated fit fails it about once in a thousand runs and a change of CPU
 does not flip it. What N = 40 can see is simulated here, not assumed

@@ -1,8 +1,8 @@
 """Validation tier: a fit's 90 % intervals hold fresh simulated specimens' truths.
 
 Ten A201 specimens drawn from the sensor's population (3 voltages × 3 forces × 31 samples over
-the hour; seeds not those of the 20-specimen slow study), each fitted with the recovery study's
-settings (:mod:`validation.recovery`; the default convergence criteria). For every parameter the
+the hour; seeds not those of the 20-specimen slow study), each fitted with the fit's default
+settings, as the recovery study does (:mod:`validation.recovery`). For every parameter the
 data identify (posterior sd under half the prior's, in the prior-scaled coordinates) the 90 %
 interval must hold the truth in at least 6 of 10 specimens — a count a calibrated interval falls
 below with probability 0.0016 — and pooled over those parameters in at least 76 % (four binomial
