@@ -100,13 +100,14 @@ def _best_fall(posterior):
     return drive[1] / drive[0], np.array(factors), posterior(u[None])[0]
 
 
+@pytest.mark.validation  # one MAP search, 50 s: in the tier with the others of this file
 def test_the_best_optimum_follows_the_creeps_fall_with_stress(tmp_path):
     fall, factors, _ = _best_fall(_posterior(_holds(tmp_path, 8316)))
     assert fall < 0.75, fall  # the bench: 0.079 / 0.147 = 0.54 in ln R per decade
     assert np.all(np.abs(factors) < 0.1), factors
 
 
-@pytest.mark.validation  # two MAP searches, 50 s: in the tier (CONTRIBUTING.md)
+@pytest.mark.validation  # two MAP searches, 70 s: in the tier (CONTRIBUTING.md)
 def test_the_gap_starts_find_a_higher_optimum_than_the_prior_draws_alone(tmp_path, monkeypatch):
     from fsrbayes.inference import optimize
 
@@ -117,6 +118,7 @@ def test_the_gap_starts_find_a_higher_optimum_than_the_prior_draws_alone(tmp_pat
     assert with_gaps > posterior(_best_map(posterior)[None])[0] + 1.0
 
 
+@pytest.mark.validation  # one MAP search, 45 s
 def test_no_fall_is_found_where_the_creep_does_not_fall_with_stress(tmp_path, monkeypatch):
     fall, factors, _ = _best_fall(_posterior(_holds(tmp_path, 8312, monkeypatch, flat=True)))
     assert fall > 0.85, fall
