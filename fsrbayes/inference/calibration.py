@@ -72,8 +72,8 @@ SBC_SETTINGS = SamplerSettings(
 walkers, 500 warm-up steps with transport-map refits, 500 kept steps. On the default
 :class:`SBCDesign` the autocorrelation times are 8–18 steps, so the kept steps are 28–60 τ and
 the smallest bulk ESS of any quantity in 100 replications was 479, about five times the 99
-draws ranked (VALIDATION.md, ``sbc``). Replications run side by side, so each fit
-uses one process."""
+draws ranked (VALIDATION.md, ``sbc``). Replications run side by side, so each fit uses one
+process."""
 
 SBC_TEMPERED_SETTINGS = TemperedSettings(
     ladder=LadderSettings(
