@@ -5,6 +5,7 @@ fit, compare, diagnose, calibrate, drift, predict, force.
 
 from ..data.sensors import available_sensors
 from ..discrepancy.nullband import NULL_SETS
+from ..inference.calibration import SBC_SETTINGS, SBC_TEMPERED_SETTINGS
 from ..inference.estimators import ESTIMATORS
 from ..inference.fit import CHECK_EVERY, COORDINATES, FIT_COORDINATES, MAP_STARTS, SAMPLERS
 from ..inference.force.estimate import FORCE_UNITS
@@ -320,8 +321,8 @@ def _add_calibrate(sub):
         cal,
         "--steps",
         type=int,
-        help="steps per ensemble and fit (default 1000), or per ladder rung with "
-        "--sampler tempered (default 300)",
+        help=f"steps per ensemble and fit (default {SBC_SETTINGS.max_steps}), or per ladder rung "
+        f"with --sampler tempered (default {SBC_TEMPERED_SETTINGS.ladder.steps})",
     )
     option(
         cal,
