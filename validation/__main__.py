@@ -24,7 +24,8 @@ The studies (:data:`validation.registry.STUDIES`, each entry's ``how`` gives its
   (a divider log fitted with its circuit and as if at constant voltage);
 - the real-402 bench: ``real402_fit`` and ``real402_forecast`` (``fsrbayes fit`` and ``predict``
   on its frozen logs), ``real402_forecast_seeds`` (the same forecasts on sensors outside the
-  frozen set), ``force_bench`` (creep-compensated force on its load histories).
+  frozen set), ``staircase_forms`` (which forms of the law its staircases need, fitted to
+  their noise-free truth), ``force_bench`` (creep-compensated force on its load histories).
 
 The other modules are not studies: :mod:`validation.closed_form` (test problems with known
 evidence, which the slow tests run) and :mod:`validation.importance` (a check of a fit's

@@ -466,6 +466,16 @@ STUDIES = {
         table=_call("real402", "format_rows"),
         summary=_real402_forecast_summary,
     ),
+    "staircase_forms": Study(
+        module="staircase_forms",
+        how="forms of the static law, the creep's drive and its spectrum, written apart from the "
+        "package's laws, fitted by least squares to the noise-free resistance of rig A's bench "
+        "staircases (the frozen `A-staircase`'s seed and three others) from 1 s after each step "
+        "(`python -m validation.staircase_forms ROWS.json`)",
+        run=_call("staircase_forms", "run"),
+        table=_call("staircase_forms", "format_rows"),
+        summary=_call("staircase_forms", "summary"),
+    ),
     "force_new_sensor": Study(
         module="force_bench",
         how="the force bench's histories read by new sensors: a population of two other bench "

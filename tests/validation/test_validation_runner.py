@@ -86,6 +86,7 @@ ROW_LITERALS = {
     "real402_fit": ("fit_log", "outside_prior_99", set()),
     "real402_forecast": ("forecast", "coverage_after", set()),
     "real402_forecast_seeds": ("forecast", "coverage_after", set()),
+    "staircase_forms": ("fit_form", "late_rms_pct", {"seed"}),
     "force_bench": ("_score_result", "inside_90", LATE),
     "new_sensor": ("side_row", "tests_held", set()),
     "force_new_sensor": ("_score_result", "inside_90", LATE),
@@ -400,6 +401,18 @@ def _force_rows():
     ]
 
 
+def _staircase_forms():
+    def row(seed, static, rms, values):
+        return {"seed": seed, "static": static, "drive": "free", "spectrum": "tilted",
+                "rms_pct": rms, "max_pct": 3 * rms, "late_rms_pct": rms, "values": values}
+
+    return [
+        row(7501, "power", 0.015, {"c": 17.0, "n": 1.0}),
+        row(7502, "power", 0.018, {"c": 17.0, "n": 1.1}),
+        row(7501, "closure+series", 0.118, {"c": 17.0, "Rs_ohm": 192.0}),
+    ]  # fmt: skip
+
+
 def _new_sensor():
     row = {"sensors": 30, "tests": 120, "coverage_90": 0.912, "tests_held": 0.875}
     return [
@@ -500,6 +513,10 @@ SYNTHETIC = {
     "force_new_sensor": (
         lambda: _force_bench(("new, population", "new, one weight")),
         ["new, population: 90 % band covers the true force on 0.925", "; new, one weight: 90 %"],
+    ),
+    "staircase_forms": (
+        _staircase_forms,
+        ["seeds 7501, 7502:", "power/free/tilted 0.015–0.018 %;", "(R_s 192–192 Ω)"],
     ),
     "new_sensor": (
         _new_sensor,
