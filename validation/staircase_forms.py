@@ -71,8 +71,9 @@ FIRST_S = 1.0
 def staircase_truth(seed):
     """Return (times (s), ln R (noise-free), step times (s), step stresses (Pa)) of one staircase.
 
-    The bench's rig-A staircase of ``seed`` (:func:`~fsrbayes.data.realfsr_protocols.simulate_real_rig`),
-    its specimen's resistance at log-spaced times within each step.
+    The bench's rig-A staircase of ``seed``
+    (:func:`~fsrbayes.data.realfsr_protocols.simulate_real_rig`), its specimen's resistance at
+    log-spaced times within each step.
     """
     log = simulate_real_rig("A", "staircase", seed=seed)
     truth = log.truth

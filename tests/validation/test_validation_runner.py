@@ -403,8 +403,16 @@ def _force_rows():
 
 def _staircase_forms():
     def row(seed, static, rms, values):
-        return {"seed": seed, "static": static, "drive": "free", "spectrum": "tilted",
-                "rms_pct": rms, "max_pct": 3 * rms, "late_rms_pct": rms, "values": values}
+        return {
+            "seed": seed,
+            "static": static,
+            "drive": "free",
+            "spectrum": "tilted",
+            "rms_pct": rms,
+            "max_pct": 3 * rms,
+            "late_rms_pct": rms,
+            "values": values,
+        }
 
     return [
         row(7501, "power", 0.015, {"c": 17.0, "n": 1.0}),
