@@ -38,6 +38,7 @@ from scipy.optimize import least_squares
 from fsrbayes.data import realfsr
 from fsrbayes.data.readouts import STANDARD_GRAVITY
 from fsrbayes.data.realfsr_protocols import simulate_real_rig
+from fsrbayes.physics.constants import KAPPA
 
 __all__ = ["FORMS", "SEEDS", "fit_form", "format_rows", "run", "staircase_truth", "summary"]
 
@@ -55,8 +56,8 @@ FORMS = (
 )
 """(static, drive, spectrum) forms fitted to every staircase."""
 
-CLOSURE_EXPONENT = 21.6
-"""B: ln R falls by B per unit gap strain (2κ·s0·√Va of the FSR 402)."""
+CLOSURE_EXPONENT = KAPPA * 4.38e-9 * np.sqrt(0.231)
+"""B ≈ 21.6: ln R falls by B per unit gap strain (2κ·s0·√Va of the FSR 402)."""
 CLOSURE_K1_PA = 0.388e6
 """The elastic modulus of the paper's section 3.2."""
 STIFF_K1_PA = 10.0e6
